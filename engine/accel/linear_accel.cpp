@@ -1,0 +1,107 @@
+#include "engine/accel/linear_accel.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace raycastd::engine {
+
+std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t object,
+                                            const Ray& ray_in, bool want_normal) {
+    const Object& o = scene.objects[object];
+    std::optional<Hit> best;
+    if (o.kind == ObjectKind::sphere) {
+        best = intersect_sphere(o.sphere, ray_in, want_normal);
+    } else {
+        Ray ray = ray_in;
+        const TriangleMesh& mesh = *o.mesh;
+        for (std::size_t p = 0; p < mesh.size(); ++p) {
+            auto h = intersect_triangle(mesh.triangle(p), ray, want_normal);
+            // Strictly closer only: an exact tie keeps the lower primitive index.
+            if (h && (!best || h->t < best->t)) {
+                h->primitive = static_cast<std::uint32_t>(p);
+                best = h;
+                ray.tmax = h->t;
+            }
+        }
+    }
+    if (best) best->object = object;
+    return best;
+}
+
+std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray_in, bool want_normal) {
+    Ray ray = ray_in;
+    std::optional<Hit> best;
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        auto h = linear_closest_in_object(scene, i, ray, want_normal);
+        if (h && (!best || closer(*h, *best))) {
+            best = h;
+            ray.tmax = h->t;  // inclusive, so an exact tie with a later object is still seen
+        }
+    }
+    return best;
+}
+
+bool linear_any(const Scene& scene, const Ray& ray) {
+    for (const Object& o : scene.objects) {
+        if (o.kind == ObjectKind::sphere) {
+            if (intersect_sphere(o.sphere, ray, false)) return true;
+            continue;
+        }
+        for (std::size_t p = 0; p < o.mesh->size(); ++p) {
+            if (intersect_triangle(o.mesh->triangle(p), ray, false)) return true;
+        }
+    }
+    return false;
+}
+
+void sort_and_merge_edge_duplicates(std::vector<Hit>& hits) {
+    std::sort(hits.begin(), hits.end(), closer);
+    std::vector<Hit> kept;
+    kept.reserve(hits.size());
+    for (const Hit& h : hits) {
+        bool duplicate = false;
+        if (h.on_edge) {
+            // Hits sorted by t: only the tail of `kept` can be within the error band.
+            for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+                if (h.t - it->t > h.t_err + it->t_err) break;
+                if (it->object == h.object && it->on_edge && it->front_face == h.front_face) {
+                    duplicate = true;
+                    break;
+                }
+            }
+        }
+        if (!duplicate) kept.push_back(h);
+    }
+    hits.swap(kept);
+}
+
+void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vector<Hit>& out) {
+    out.clear();
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        if (o.kind == ObjectKind::sphere) {
+            const SphereRoots r = sphere_roots(o.sphere, ray);
+            for (int k = 0; k < r.count; ++k) {
+                if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax)) continue;
+                Hit h;
+                h.t = r.t[k];
+                h.t_err = r.t_err;
+                h.object = i;
+                h.primitive = 0;
+                sphere_normal(o.sphere, ray, h.t, h);  // front_face is needed for merging
+                out.push_back(h);
+            }
+            continue;
+        }
+        for (std::size_t p = 0; p < o.mesh->size(); ++p) {
+            if (auto h = intersect_triangle(o.mesh->triangle(p), ray, want_normal)) {
+                h->object = i;
+                h->primitive = static_cast<std::uint32_t>(p);
+                out.push_back(*h);
+            }
+        }
+    }
+    sort_and_merge_edge_duplicates(out);
+}
+
+}  // namespace raycastd::engine

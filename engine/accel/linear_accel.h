@@ -1,0 +1,35 @@
+#pragma once
+// Brute force over every primitive, in double precision: the exact path, and the fastest one
+// for tiny scenes ("no BVH for three spheres"). Objects are visited in index order and
+// primitives in file order, so the tie rules of the API (lower object, then lower primitive)
+// fall out of the `closer` ordering.
+
+#include <optional>
+#include <vector>
+
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine {
+
+/// Closest hit of the ray over the whole scene, or nullopt.
+std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray, bool want_normal);
+
+/// The hit (if any) of one object; `object` and `primitive` are filled in.
+std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t object,
+                                            const Ray& ray, bool want_normal);
+
+/// Whether anything is hit in [tmin, tmax]; stops at the first hit found.
+bool linear_any(const Scene& scene, const Ray& ray);
+
+/// Every hit along the ray, sorted by `closer`; a crossing of an edge or vertex shared by
+/// triangles of one mesh is listed once (the lower-numbered triangle), a tangent sphere once.
+void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vector<Hit>& out);
+
+/// Sorts hits by `closer` and drops the duplicates a shared edge or vertex produces: hits of the
+/// same object, both on an edge, facing the same way (both entering or both leaving), whose t
+/// agree within their error bounds. Keeping one entering and one leaving hit where a line only
+/// touches a closed mesh at a silhouette edge or vertex keeps every count along a line through
+/// a closed mesh even.
+void sort_and_merge_edge_duplicates(std::vector<Hit>& hits);
+
+}  // namespace raycastd::engine

@@ -1,0 +1,184 @@
+#include "engine/explain/explain.h"
+
+#include <cmath>
+
+#include "engine/accel/linear_accel.h"
+#include "engine/format.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+std::string num(double v) { return format_shortest(v); }
+
+std::string vec(const Vec3d& v) { return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")"; }
+
+/// The ray's coordinate p + t·v as a student writes it: "0", "t", "2t", "1+t", "1-0.5t".
+std::string coordinate(double p, double v) {
+    if (v == 0.0) return num(p);
+    std::string tv = v == 1.0 ? "t" : (v == -1.0 ? "-t" : num(v) + "t");
+    if (p == 0.0) return tv;
+    if (tv[0] == '-') return num(p) + tv;
+    return num(p) + "+" + tv;
+}
+
+/// "(X-a)^2" with a sign-aware minus: "(t-10)^2", "(0+3)^2".
+std::string squared_difference(const std::string& x, double a) {
+    if (a < 0.0) return "(" + x + "+" + num(-a) + ")^2";
+    return "(" + x + "-" + num(a) + ")^2";
+}
+
+std::string quadratic(double a, double b, double c) {
+    auto term = [](double k, const char* var, bool first) {
+        if (k == 0.0 && !first) return std::string();
+        std::string s;
+        if (!first) s += k < 0.0 ? " - " : " + ";
+        else if (k < 0.0) s += "-";
+        double m = std::abs(k);
+        if (*var == '\0' || m != 1.0) s += num(m);
+        return s + var;
+    };
+    return term(a, "t^2", true) + term(b, "t", false) + term(c, "", false) + " = 0";
+}
+
+ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
+    ObjectWork w;
+    const Vec3d& p = ray.origin;
+    const Vec3d& v = ray.direction;
+    const Vec3d& c = s.center;
+    w.steps.push_back("l(t) = " + vec(p) + " + t*" + vec(v));
+    w.steps.push_back(squared_difference("x", c.x) + "+" + squared_difference("y", c.y) + "+" +
+                      squared_difference("z", c.z) + " = " + num(s.radius) + "^2");
+    w.steps.push_back(squared_difference(coordinate(p.x, v.x), c.x) + "+" +
+                      squared_difference(coordinate(p.y, v.y), c.y) + "+" +
+                      squared_difference(coordinate(p.z, v.z), c.z) + " = " + num(s.radius) +
+                      "^2");
+    SphereWork sw;
+    const Vec3d f = p - c;
+    sw.a = dot(v, v);
+    sw.b = 2.0 * dot(f, v);
+    sw.c = dot(f, f) - s.radius * s.radius;
+    // B² − 4AC = 4A·(r − |l|)(r + |l|), l the closest-approach offset (see geometry/sphere.h):
+    // the same value the intersector decides on, without cancellation.
+    const Vec3d l = f - v * (dot(f, v) / sw.a);
+    const double len_l = length(l);
+    sw.discriminant = 4.0 * sw.a * ((s.radius - len_l) * (s.radius + len_l));
+    w.steps.push_back(quadratic(sw.a, sw.b, sw.c));
+    w.steps.push_back("discriminant B^2-4AC = " + num(sw.discriminant));
+
+    const SphereRoots r = sphere_roots(s, ray);
+    for (int i = 0; i < r.count; ++i) sw.roots.push_back(r.t[i]);
+    if (r.count == 0) {
+        w.reason = "no real roots: the ray misses";
+        w.steps.push_back(w.reason);
+    } else {
+        w.steps.push_back(r.count == 1 ? "t = " + num(r.t[0]) + " (tangent)"
+                                       : "t = " + num(r.t[0]) + " or t = " + num(r.t[1]));
+        for (int i = 0; i < r.count; ++i) {
+            if (r.t[i] >= ray.tmin && r.t[i] <= ray.tmax) {
+                w.hit = true;
+                w.t = r.t[i];
+                break;
+            }
+        }
+        if (!w.hit) {
+            w.reason = "both roots lie outside [tmin, tmax]: the ray misses";
+            w.steps.push_back(w.reason);
+        }
+    }
+    w.sphere = sw;
+    return w;
+}
+
+ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
+    ObjectWork w;
+    TriangleWork tw;
+    const Vec3d& p = ray.origin;
+    const Vec3d& v = ray.direction;
+    // Step 1: the plane ⟨n,x⟩ = ⟨n,a⟩ with n = ac × ab (tutorial, Question 3).
+    tw.normal = cross(tri.c - tri.a, tri.b - tri.a);
+    tw.plane_d = dot(tw.normal, tri.a);
+    w.steps.push_back("l(t) = " + vec(p) + " + t*" + vec(v));
+    w.steps.push_back("n = ac x ab = " + vec(tw.normal));
+    w.steps.push_back("plane: <n,x> = <n,a> = " + num(tw.plane_d));
+    if (tw.normal == Vec3d{0.0, 0.0, 0.0}) {
+        w.reason = "degenerate triangle (n = 0): never hit";
+        w.steps.push_back(w.reason);
+        w.triangle = tw;
+        return w;
+    }
+    // Step 2: substitute l(t): ⟨n,p⟩ + t·⟨n,v⟩ = ⟨n,a⟩.
+    tw.n_dot_v = dot(tw.normal, v);
+    if (tw.n_dot_v == 0.0) {
+        w.reason = "<n,v> = 0: the ray is parallel to the plane and misses";
+        w.steps.push_back(w.reason);
+        w.triangle = tw;
+        return w;
+    }
+    const double t = (tw.plane_d - dot(tw.normal, p)) / tw.n_dot_v;
+    tw.t = t;
+    const Vec3d d = ray.at(t);
+    tw.point = d;
+    w.steps.push_back("<n,p> + t<n,v> = <n,a>  =>  t = " + num(t));
+    w.steps.push_back("d = l(t) = " + vec(d));
+    // Step 3: d is inside iff da×db, db×dc, dc×da point the same way (pairwise dot ≥ 0; a zero
+    // vector, d on an edge line, agrees with any direction).
+    const Vec3d da = tri.a - d, db = tri.b - d, dc = tri.c - d;
+    tw.cross[0] = cross(da, db);
+    tw.cross[1] = cross(db, dc);
+    tw.cross[2] = cross(dc, da);
+    tw.same_direction = dot(tw.cross[0], tw.cross[1]) >= 0.0 &&
+                        dot(tw.cross[1], tw.cross[2]) >= 0.0 &&
+                        dot(tw.cross[2], tw.cross[0]) >= 0.0;
+    w.steps.push_back("da x db = " + vec(tw.cross[0]) + ", db x dc = " + vec(tw.cross[1]) +
+                      ", dc x da = " + vec(tw.cross[2]));
+    if (!tw.same_direction) {
+        w.reason = "the cross products do not point the same way: d is outside abc";
+    } else if (!(t >= ray.tmin && t <= ray.tmax)) {
+        w.reason = "d is inside abc but t lies outside [tmin, tmax]: the ray misses";
+    } else {
+        w.hit = true;
+        w.t = t;
+    }
+    w.steps.push_back(w.hit ? "same direction: d is inside abc, hit at t = " + num(t) : w.reason);
+    w.triangle = tw;
+    return w;
+}
+
+}  // namespace
+
+Explanation explain(const Scene& scene, const Ray& ray) {
+    Explanation ex;
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        ObjectWork w;
+        if (o.kind == ObjectKind::sphere) {
+            w = work_sphere(o.sphere, ray);
+        } else if (o.kind == ObjectKind::triangle) {
+            w = work_triangle(o.mesh->triangle(0), ray);
+        } else {
+            // A mesh has too many triangles for hand algebra: report the engine's answer.
+            w.triangles = o.mesh->size();
+            w.steps.push_back("mesh of " + std::to_string(w.triangles) +
+                              " triangles, each tested with the watertight ray/triangle test");
+            if (auto h = linear_closest_in_object(scene, i, ray, false)) {
+                w.hit = true;
+                w.t = h->t;
+                w.steps.push_back("closest hit: triangle " + std::to_string(h->primitive) +
+                                  " at t = " + num(h->t));
+            } else {
+                w.reason = "no triangle of the mesh is hit";
+                w.steps.push_back(w.reason);
+            }
+        }
+        w.index = i;
+        w.name = o.name;
+        w.kind = o.kind;
+        ex.objects.push_back(std::move(w));
+    }
+    ex.first_hit = linear_closest(scene, ray, true);
+    if (ex.first_hit) ex.first_point = ray.at(ex.first_hit->t);
+    return ex;
+}
+
+}  // namespace raycastd::engine

@@ -1,0 +1,79 @@
+#include "engine/explain/explain.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine {
+namespace {
+
+// The tutorial's worked solution of Question 1, number for number.
+TEST(Explain, TutorialQuestion1) {
+    Explanation ex = explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}});
+    ASSERT_EQ(ex.objects.size(), 3u);
+
+    const ObjectWork& s1 = ex.objects[0];
+    EXPECT_EQ(s1.name, "sphere 1");
+    ASSERT_TRUE(s1.sphere);
+    EXPECT_EQ(s1.sphere->a, 1.0);
+    EXPECT_EQ(s1.sphere->b, -20.0);
+    EXPECT_EQ(s1.sphere->c, 96.0);
+    EXPECT_EQ(s1.sphere->discriminant, 16.0);
+    EXPECT_EQ(s1.sphere->roots, (std::vector<double>{8.0, 12.0}));
+    EXPECT_TRUE(s1.hit);
+    EXPECT_EQ(*s1.t, 8.0);
+    EXPECT_NE(std::find(s1.steps.begin(), s1.steps.end(), "(0-0)^2+(0-0)^2+(t-10)^2 = 2^2"),
+              s1.steps.end());
+    EXPECT_NE(std::find(s1.steps.begin(), s1.steps.end(), "t^2 - 20t + 96 = 0"), s1.steps.end());
+
+    const ObjectWork& s2 = ex.objects[1];
+    EXPECT_FALSE(s2.hit);
+    EXPECT_TRUE(s2.sphere->roots.empty());
+    EXPECT_EQ(s2.reason, "no real roots: the ray misses");
+    EXPECT_NE(std::find(s2.steps.begin(), s2.steps.end(), "(0-0)^2+(0-3)^2+(t-8)^2 = 2^2"),
+              s2.steps.end());
+
+    const ObjectWork& s3 = ex.objects[2];
+    EXPECT_EQ(s3.sphere->discriminant, 12.0);
+    ASSERT_EQ(s3.sphere->roots.size(), 2u);
+    EXPECT_NEAR(s3.sphere->roots[1], 9 + std::sqrt(3.0), 1e-14);
+
+    ASSERT_TRUE(ex.first_hit);
+    EXPECT_EQ(ex.first_hit->object, 2u);
+    EXPECT_EQ(ex.first_hit->t, 7.267949192431123);
+    EXPECT_EQ(ex.first_point, (Vec3d{0, 0, 7.267949192431123}));
+}
+
+// The tutorial's Question 3 method on a triangle: n = ac × ab, plane, t, d, cross products.
+TEST(Explain, TriangleByThePlaneMethod) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::mesh_object("abc", {{0, 0, 5}, {2, 0, 5}, {0, 2, 5}}, {{0, 1, 2}}));
+    Explanation ex = explain(s, Ray{{0.5, 0.5, 0}, {0, 0, 1}});
+    const ObjectWork& w = ex.objects[0];
+    ASSERT_TRUE(w.triangle);
+    // ac × ab = (0,2,0) × (2,0,0) = (0,0,−4)
+    EXPECT_EQ(w.triangle->normal, (Vec3d{0, 0, -4}));
+    EXPECT_EQ(w.triangle->plane_d, -20.0);
+    EXPECT_EQ(*w.triangle->t, 5.0);
+    EXPECT_TRUE(w.triangle->same_direction);
+    EXPECT_TRUE(w.hit);
+    // For an inside point all three cross products point the same way, here along +z (the
+    // winding of abc seen from the ray's side): da×db = (−.5,−.5,0)×(1.5,−.5,0) = (0,0,1).
+    for (const Vec3d& c : w.triangle->cross) EXPECT_GT(c.z, 0.0);
+    EXPECT_EQ(w.triangle->cross[0], (Vec3d{0, 0, 1}));
+
+    Explanation miss = explain(s, Ray{{1.5, 1.5, 0}, {0, 0, 1}});
+    EXPECT_FALSE(miss.objects[0].triangle->same_direction);
+    EXPECT_FALSE(miss.objects[0].hit);
+    EXPECT_FALSE(miss.first_hit);
+
+    Explanation parallel = explain(s, Ray{{0, 0, 0}, {1, 0, 0}});
+    EXPECT_FALSE(parallel.objects[0].hit);
+    EXPECT_FALSE(parallel.objects[0].triangle->t);
+}
+
+}  // namespace
+}  // namespace raycastd::engine

@@ -1,0 +1,125 @@
+#include "engine/geometry/sphere.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace raycastd::engine {
+namespace {
+
+Ray ray_z() { return Ray{{0, 0, 0}, {0, 0, 1}}; }
+
+double ulp(double x) { return std::nextafter(std::abs(x), kInfinity) - std::abs(x); }
+
+// Tutorial Question 1, sphere 1: (t − 10)² = 2² gives t = 8 and t = 12.
+TEST(Sphere, TutorialSphere1) {
+    SphereRoots r = sphere_roots({{0, 0, 10}, 2}, ray_z());
+    ASSERT_EQ(r.count, 2);
+    EXPECT_EQ(r.t[0], 8.0);
+    EXPECT_EQ(r.t[1], 12.0);
+}
+
+// Sphere 2: 3² + (t − 8)² = 2² has no real roots.
+TEST(Sphere, TutorialSphere2Misses) {
+    EXPECT_EQ(sphere_roots({{0, 3, 8}, 2}, ray_z()).count, 0);
+    EXPECT_FALSE(intersect_sphere({{0, 3, 8}, 2}, ray_z()));
+}
+
+// Sphere 3: 1 + (t − 9)² = 4 gives t = 9 ± √3; the first hit is at (0, 0, 9 − √3).
+TEST(Sphere, TutorialSphere3) {
+    SphereRoots r = sphere_roots({{0, 1, 9}, 2}, ray_z());
+    ASSERT_EQ(r.count, 2);
+    EXPECT_EQ(r.t[0], 9.0 - std::sqrt(3.0));
+    EXPECT_NEAR(r.t[1], 9.0 + std::sqrt(3.0), ulp(10.7));
+    auto hit = intersect_sphere({{0, 1, 9}, 2}, ray_z());
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 7.267949192431123);
+    // Outward normal at (0, 0, 9 − √3): ((0, −1, −√3))/2.
+    EXPECT_NEAR(hit->normal.y, -0.5, 1e-15);
+    EXPECT_NEAR(hit->normal.z, -std::sqrt(3.0) / 2, 1e-15);
+    EXPECT_TRUE(hit->front_face);
+}
+
+// Radius 1 at distance 1e8: the roots are 1e8 ∓ 1, both exactly representable. The textbook
+// formula loses every digit of the near root here (b² and 4ac agree to 16 digits).
+TEST(Sphere, FarSphereNoCancellation) {
+    SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
+    ASSERT_EQ(r.count, 2);
+    EXPECT_NEAR(r.t[0], 1e8 - 1, 2 * ulp(1e8));
+    EXPECT_NEAR(r.t[1], 1e8 + 1, 2 * ulp(1e8));
+    // Off-centre ray at distance 1e8, offset 0.6 in y: roots 1e8 ∓ 0.8.
+    r = sphere_roots({{0, 0.6, 1e8}, 1}, ray_z());
+    ASSERT_EQ(r.count, 2);
+    EXPECT_NEAR(r.t[0], 1e8 - 0.8, 2 * ulp(1e8));
+    EXPECT_NEAR(r.t[1], 1e8 + 0.8, 2 * ulp(1e8));
+}
+
+// Radius 1e-6 at distance 1e3: t = 1000 ∓ 1e-6.
+TEST(Sphere, TinySphere) {
+    SphereRoots r = sphere_roots({{0, 0, 1e3}, 1e-6}, ray_z());
+    ASSERT_EQ(r.count, 2);
+    EXPECT_NEAR(r.t[0], 999.999999, 2 * ulp(1e3));
+    EXPECT_NEAR(r.t[1], 1000.000001, 2 * ulp(1e3));
+    EXPECT_LT(r.t[0], r.t[1]);
+}
+
+// A ray tangent to the sphere (closest approach exactly r) hits once, at the tangent point.
+TEST(Sphere, TangentHitsOnce) {
+    Sphere s{{0, 1, 5}, 1};
+    SphereRoots r = sphere_roots(s, ray_z());
+    ASSERT_EQ(r.count, 1);
+    EXPECT_EQ(r.t[0], 5.0);
+    auto hit = intersect_sphere(s, ray_z());
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 5.0);
+    EXPECT_NEAR(hit->normal.y, -1.0, 1e-15);
+}
+
+// Origin inside: the hit is the far root, seen from inside (front_face false).
+TEST(Sphere, OriginInsideTakesFarRoot) {
+    Ray ray{{0, 0, 0}, {0, 0, 2}};
+    auto hit = intersect_sphere({{0, 0, 0}, 1}, ray);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 0.5);  // t in units of the given (non-unit) direction
+    EXPECT_FALSE(hit->front_face);
+    EXPECT_EQ(hit->normal, (Vec3d{0, 0, 1}));
+}
+
+TEST(Sphere, BehindOriginMisses) {
+    EXPECT_FALSE(intersect_sphere({{0, 0, -10}, 2}, ray_z()));
+}
+
+TEST(Sphere, RespectsInclusiveRange) {
+    Ray ray = ray_z();
+    ray.tmax = 8.0;  // inclusive: t = 8 still counts
+    auto hit = intersect_sphere({{0, 0, 10}, 2}, ray);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 8.0);
+    ray.tmax = std::nextafter(8.0, 0.0);
+    EXPECT_FALSE(intersect_sphere({{0, 0, 10}, 2}, ray));
+    ray.tmin = 9.0;
+    ray.tmax = kInfinity;
+    hit = intersect_sphere({{0, 0, 10}, 2}, ray);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 12.0);
+}
+
+// Scaling the direction by k divides t by k, for extreme k.
+TEST(Sphere, DirectionScaleInvariance) {
+    for (double k : {1e-6, 1e-3, 0.5, 3.0, 1e3, 1e6}) {
+        Ray ray{{0, 0, 0}, {0, 0, k}};
+        auto hit = intersect_sphere({{0, 1, 9}, 2}, ray);
+        ASSERT_TRUE(hit) << k;
+        EXPECT_NEAR(hit->t * k, 9.0 - std::sqrt(3.0), 4 * ulp(7.27)) << k;
+    }
+}
+
+TEST(Sphere, ErrorBoundCoversFarSphere) {
+    SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
+    EXPECT_GT(r.t_err, 0.0);
+    EXPECT_LT(r.t_err, 1e-6);
+}
+
+}  // namespace
+}  // namespace raycastd::engine

@@ -1,0 +1,38 @@
+#pragma once
+// Triangle and the watertight ray/triangle test used by every query.
+//
+// Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013: the vertices
+// are translated to the ray origin, sheared so that the ray becomes the +z axis, and the 2-D
+// edge functions U, V, W decide inside/outside. Edges shared by two triangles produce exactly
+// negated edge functions, so a ray through a shared edge or vertex can never slip between them.
+// When an edge function is exactly zero it is recomputed in long double (as the paper does
+// with double for a float kernel). Edges and vertices belong to the triangle (closed test).
+// The t error bound follows pbrt-v4 §6.8.4.
+//
+// The tutorial's explained method (plane ⟨n,x⟩ = ⟨n,a⟩ with n = ac × ab, and the same-direction
+// cross-product test) lives in engine/explain, the only place that needs it.
+
+#include <optional>
+
+#include "engine/math/ray.h"
+
+namespace raycastd::engine {
+
+struct Triangle {
+    Vec3d a, b, c;
+};
+
+/// Unit geometric normal normalize((b−a)×(c−a)) (counter-clockwise front faces); zero vector
+/// for a degenerate triangle.
+Vec3d triangle_normal(const Triangle& tri);
+
+/// True when (b−a)×(c−a) is exactly zero: such a triangle is never hit.
+bool is_degenerate(const Triangle& tri);
+
+/// The hit with t in [ray.tmin, ray.tmax] as a Hit (object/primitive left for the caller):
+/// t, t_err, barycentrics u (weight of b) and v (weight of c); nullopt on a miss, for a ray in
+/// the triangle's plane, and for a degenerate triangle. Never produces NaN for finite input.
+/// front_face is always set; `want_normal = false` skips the normal.
+std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal = true);
+
+}  // namespace raycastd::engine

@@ -1,0 +1,115 @@
+#include "engine/geometry/triangle.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace raycastd::engine {
+namespace {
+
+// The triangle a = (0,0,5), b = (2,0,5), c = (0,2,5), facing −z ((b−a)×(c−a) = (0,0,4)).
+const Triangle kTri{{0, 0, 5}, {2, 0, 5}, {0, 2, 5}};
+
+Ray toward(double x, double y) { return Ray{{x, y, 0}, {0, 0, 1}}; }
+
+TEST(Triangle, Inside) {
+    auto hit = intersect_triangle(kTri, toward(0.5, 0.5));
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 5.0);
+    EXPECT_DOUBLE_EQ(hit->u, 0.25);  // weight of b: x / 2
+    EXPECT_DOUBLE_EQ(hit->v, 0.25);  // weight of c: y / 2
+    EXPECT_EQ(hit->normal, (Vec3d{0, 0, 1}));
+    EXPECT_FALSE(hit->front_face);  // the ray travels along +z, with the normal
+    EXPECT_FALSE(hit->on_edge);
+}
+
+TEST(Triangle, Outside) {
+    EXPECT_FALSE(intersect_triangle(kTri, toward(1.5, 1.5)));
+    EXPECT_FALSE(intersect_triangle(kTri, toward(-0.1, 0.5)));
+}
+
+TEST(Triangle, EdgeAndVertexAreInside) {
+    auto edge = intersect_triangle(kTri, toward(1.0, 1.0));  // on the hypotenuse bc
+    ASSERT_TRUE(edge);
+    EXPECT_TRUE(edge->on_edge);
+    auto edge_ab = intersect_triangle(kTri, toward(1.0, 0.0));
+    ASSERT_TRUE(edge_ab);
+    EXPECT_TRUE(edge_ab->on_edge);
+    for (const Vec3d& p : {kTri.a, kTri.b, kTri.c}) {
+        auto vertex = intersect_triangle(kTri, toward(p.x, p.y));
+        ASSERT_TRUE(vertex) << p.x << "," << p.y;
+        EXPECT_TRUE(vertex->on_edge);
+        EXPECT_EQ(vertex->t, 5.0);
+    }
+}
+
+TEST(Triangle, RayInPlaneMisses) {
+    Ray ray{{-1, 0.5, 5}, {1, 0, 0}};
+    EXPECT_FALSE(intersect_triangle(kTri, ray));
+}
+
+TEST(Triangle, ParallelOffPlaneMisses) {
+    Ray ray{{-1, 0.5, 4}, {1, 0, 0}};
+    EXPECT_FALSE(intersect_triangle(kTri, ray));
+}
+
+TEST(Triangle, BehindOriginMisses) {
+    Ray ray{{0.5, 0.5, 10}, {0, 0, 1}};
+    EXPECT_FALSE(intersect_triangle(kTri, ray));
+}
+
+TEST(Triangle, BackFaceHitIsReported) {
+    Ray ray{{0.5, 0.5, 10}, {0, 0, -1}};
+    auto hit = intersect_triangle(kTri, ray);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 5.0);
+    EXPECT_TRUE(hit->front_face);
+}
+
+TEST(Triangle, DegenerateNeverHitsNorNaN) {
+    const Triangle collinear{{0, 0, 5}, {1, 1, 5}, {2, 2, 5}};
+    const Triangle point{{1, 1, 5}, {1, 1, 5}, {1, 1, 5}};
+    for (const Triangle& t : {collinear, point}) {
+        EXPECT_TRUE(is_degenerate(t));
+        EXPECT_FALSE(intersect_triangle(t, toward(1, 1)));
+        EXPECT_FALSE(intersect_triangle(t, Ray{{0, 0, 0}, {1, 1, 5}}));
+        Vec3d n = triangle_normal(t);
+        EXPECT_FALSE(std::isnan(n.x) || std::isnan(n.y) || std::isnan(n.z));
+    }
+}
+
+TEST(Triangle, NonUnitDirection) {
+    Ray ray{{0.5, 0.5, 0}, {0, 0, 10}};
+    auto hit = intersect_triangle(kTri, ray);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 0.5);
+}
+
+TEST(Triangle, TErrorBoundHoldsForExactCase) {
+    auto hit = intersect_triangle(kTri, Ray{{0.3, 0.2, 0}, {0.01, 0.02, 1}});
+    ASSERT_TRUE(hit);
+    EXPECT_LE(std::abs(hit->t - 5.0), hit->t_err);
+    EXPECT_GT(hit->t_err, 0.0);
+}
+
+// Watertightness (Woop et al. 2013): a quad split along its diagonal; rays aimed exactly at
+// points of the shared diagonal, with jittered origins, always hit at least one of the two.
+TEST(Triangle, SharedEdgeNeverLeaks) {
+    const Vec3d p0{0.1, 0.3, 2}, p1{3.7, 0.2, 2.5}, p2{3.3, 2.9, 3}, p3{0.2, 3.1, 2.2};
+    const Triangle t0{p0, p1, p2}, t1{p0, p2, p3};
+    std::mt19937_64 rng(12345);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), jitter(-5.0, 5.0);
+    int leaks = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const double s = unit(rng);
+        const Vec3d target = p0 + (p2 - p0) * s;
+        const Vec3d origin{jitter(rng), jitter(rng), -10.0 + jitter(rng)};
+        const Ray ray{origin, target - origin};
+        if (!intersect_triangle(t0, ray) && !intersect_triangle(t1, ray)) ++leaks;
+    }
+    EXPECT_EQ(leaks, 0);
+}
+
+}  // namespace
+}  // namespace raycastd::engine

@@ -1,0 +1,90 @@
+#pragma once
+// Vec3<T>: the one small vector type of the engine, for float (Embree's world) and double
+// (the precise world). Conversions between the two are explicit so that no precision is lost or
+// invented silently.
+
+#include <cmath>
+#include <cstddef>
+
+namespace raycastd::engine {
+
+template <class T>
+struct Vec3 {
+    T x{}, y{}, z{};
+
+    constexpr Vec3() = default;
+    constexpr Vec3(T x_, T y_, T z_) : x(x_), y(y_), z(z_) {}
+    template <class U>
+    constexpr explicit Vec3(const Vec3<U>& o)
+        : x(static_cast<T>(o.x)), y(static_cast<T>(o.y)), z(static_cast<T>(o.z)) {}
+
+    constexpr T operator[](std::size_t i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    constexpr T& operator[](std::size_t i) { return i == 0 ? x : (i == 1 ? y : z); }
+
+    constexpr Vec3 operator+(const Vec3& o) const { return {x + o.x, y + o.y, z + o.z}; }
+    constexpr Vec3 operator-(const Vec3& o) const { return {x - o.x, y - o.y, z - o.z}; }
+    constexpr Vec3 operator-() const { return {-x, -y, -z}; }
+    constexpr Vec3 operator*(T s) const { return {x * s, y * s, z * s}; }
+    constexpr Vec3 operator/(T s) const { return {x / s, y / s, z / s}; }
+    constexpr Vec3 operator*(const Vec3& o) const { return {x * o.x, y * o.y, z * o.z}; }
+    Vec3& operator+=(const Vec3& o) { return *this = *this + o; }
+    Vec3& operator-=(const Vec3& o) { return *this = *this - o; }
+    Vec3& operator*=(T s) { return *this = *this * s; }
+    constexpr bool operator==(const Vec3& o) const { return x == o.x && y == o.y && z == o.z; }
+    constexpr bool operator!=(const Vec3& o) const { return !(*this == o); }
+};
+
+using Vec3f = Vec3<float>;
+using Vec3d = Vec3<double>;
+
+template <class T>
+constexpr Vec3<T> operator*(T s, const Vec3<T>& v) {
+    return v * s;
+}
+template <class T>
+constexpr T dot(const Vec3<T>& a, const Vec3<T>& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+template <class T>
+constexpr Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+template <class T>
+T length(const Vec3<T>& v) {
+    return std::sqrt(dot(v, v));
+}
+/// v / |v|; the zero vector stays zero rather than becoming NaN.
+template <class T>
+Vec3<T> normalize(const Vec3<T>& v) {
+    T len = length(v);
+    return len > T(0) ? v / len : v;
+}
+template <class T>
+Vec3<T> abs(const Vec3<T>& v) {
+    return {std::abs(v.x), std::abs(v.y), std::abs(v.z)};
+}
+template <class T>
+T max_component(const Vec3<T>& v) {
+    return std::fmax(v.x, std::fmax(v.y, v.z));
+}
+/// Index (0..2) of the component with the largest absolute value; ties go to the lower index.
+template <class T>
+std::size_t max_abs_dimension(const Vec3<T>& v) {
+    T ax = std::abs(v.x), ay = std::abs(v.y), az = std::abs(v.z);
+    if (ax >= ay && ax >= az) return 0;
+    return ay >= az ? 1 : 2;
+}
+template <class T>
+bool is_finite(const Vec3<T>& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+template <class T>
+Vec3<T> min(const Vec3<T>& a, const Vec3<T>& b) {
+    return {std::fmin(a.x, b.x), std::fmin(a.y, b.y), std::fmin(a.z, b.z)};
+}
+template <class T>
+Vec3<T> max(const Vec3<T>& a, const Vec3<T>& b) {
+    return {std::fmax(a.x, b.x), std::fmax(a.y, b.y), std::fmax(a.z, b.z)};
+}
+
+}  // namespace raycastd::engine

@@ -1,0 +1,82 @@
+#include "engine/query/intersect.h"
+
+#include <gtest/gtest.h>
+
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine {
+namespace {
+
+std::shared_ptr<const QueryEngine> build(Scene s) {
+    auto e = QueryEngine::build(std::make_shared<Scene>(std::move(s)));
+    EXPECT_TRUE(e.ok());
+    return *e;
+}
+
+TEST(Query, ModesOnTutorialScene) {
+    auto engine = build(testing::tutorial_spheres());
+    std::vector<Ray> rays = {Ray{{0, 0, 0}, {0, 0, 1}}, Ray{{0, 0, 0}, {0, 0, -1}}};
+    QueryOptions opt;
+    QueryResult r = engine->intersect(rays, opt);
+    ASSERT_EQ(r.hits.size(), 2u);
+    EXPECT_EQ(r.hits[0].object, 2u);
+    EXPECT_EQ(r.hits[0].t, 7.267949192431123);
+    EXPECT_FALSE(r.hits[1].valid());
+    EXPECT_EQ(r.precision, Precision::exact);
+
+    opt.mode = Mode::any;
+    r = engine->intersect(rays, opt);
+    EXPECT_TRUE(r.hits[0].valid());
+    EXPECT_FALSE(r.hits[1].valid());
+
+    opt.mode = Mode::count;
+    r = engine->intersect(rays, opt);
+    EXPECT_EQ(r.counts, (std::vector<std::uint32_t>{4, 0}));
+
+    opt.mode = Mode::all;
+    r = engine->intersect(rays, opt);
+    EXPECT_EQ(r.offsets, (std::vector<std::uint32_t>{0, 4, 4}));
+    EXPECT_EQ(r.hits[1].t, 8.0);
+}
+
+// A batch big enough to run in parallel gives the same answers as one ray at a time.
+TEST(Query, ParallelBatchMatchesSerial) {
+    auto engine = build(testing::tutorial_spheres());
+    std::vector<Ray> rays;
+    for (int i = 0; i < 5000; ++i) {
+        rays.push_back(Ray{{0, 0, 0}, {0.0005 * (i % 100) - 0.025, 0.0005 * (i / 100) - 0.0125, 1}});
+    }
+    QueryOptions opt;
+    QueryResult batch = engine->intersect(rays, opt);
+    for (std::size_t i = 0; i < rays.size(); i += 37) {
+        QueryResult one = engine->intersect({rays[i]}, opt);
+        EXPECT_EQ(one.hits[0].t, batch.hits[i].t);
+        EXPECT_EQ(one.hits[0].object, batch.hits[i].object);
+    }
+}
+
+TEST(Query, ValidateRay) {
+    EXPECT_TRUE(validate_ray(Ray{{0, 0, 0}, {0, 0, 1}}, 0).ok());
+    Status zero = validate_ray(Ray{{0, 0, 0}, {0, 0, 0}}, 3);
+    EXPECT_EQ(zero.code, Code::invalid_ray);
+    EXPECT_EQ(zero.path, "/rays/3/direction");
+    EXPECT_NE(zero.message.find("ray 3"), std::string::npos);
+    Status nan = validate_ray(Ray{{0, 0, std::nan("")}, {0, 0, 1}}, 0);
+    EXPECT_EQ(nan.path, "/rays/0/origin");
+    Status order = validate_ray(Ray{{0, 0, 0}, {0, 0, 1}, 2, 1}, 1);
+    EXPECT_EQ(order.code, Code::invalid_ray);
+    Status overflow = validate_ray(Ray{{0, 0, 0}, {1e200, 1e200, 0}}, 0);
+    EXPECT_EQ(overflow.code, Code::invalid_ray);
+}
+
+TEST(Query, BuildRejectsInvalidScene) {
+    Scene s = testing::tutorial_spheres();
+    s.objects[1].sphere.radius = -1;
+    auto e = QueryEngine::build(std::make_shared<Scene>(s));
+    ASSERT_FALSE(e.ok());
+    EXPECT_EQ(e.status().code, Code::invalid_scene);
+    EXPECT_EQ(e.status().path, "/objects/1/radius");
+}
+
+}  // namespace
+}  // namespace raycastd::engine

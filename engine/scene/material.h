@@ -1,0 +1,20 @@
+#pragma once
+// Phong material (Phong 1975) with the Whitted extensions: reflectivity and transparency with an
+// index of refraction (Whitted 1980).
+
+#include "engine/math/vec3.h"
+
+namespace raycastd::engine {
+
+struct Material {
+    Vec3d ambient{0.1, 0.1, 0.1};
+    Vec3d diffuse{0.7, 0.7, 0.7};
+    Vec3d specular{0.2, 0.2, 0.2};
+    double shininess = 32.0;
+    double reflectivity = 0.0;  ///< weight of the mirror-reflected ray, 0..1
+    double transparency = 0.0;  ///< weight of the refracted ray, 0..1
+    double ior = 1.0;           ///< index of refraction (Snell's law)
+    Vec3d emissive{0.0, 0.0, 0.0};
+};
+
+}  // namespace raycastd::engine

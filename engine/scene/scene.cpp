@@ -1,0 +1,111 @@
+#include "engine/scene/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace raycastd::engine {
+
+std::size_t Scene::triangle_count() const {
+    std::size_t n = 0;
+    for (const auto& o : objects) {
+        if (o.kind != ObjectKind::sphere) n += o.mesh->size();
+    }
+    return n;
+}
+
+std::size_t Scene::sphere_count() const {
+    return static_cast<std::size_t>(std::count_if(
+        objects.begin(), objects.end(), [](const Object& o) { return o.kind == ObjectKind::sphere; }));
+}
+
+Bounds3 Scene::bounds() const {
+    Bounds3 b;
+    for (const auto& o : objects) {
+        if (o.kind == ObjectKind::sphere) {
+            const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
+            b.extend(o.sphere.center - r);
+            b.extend(o.sphere.center + r);
+        } else {
+            b.extend(o.mesh->bounds());
+        }
+    }
+    return b;
+}
+
+Features Scene::features() const {
+    Features f;
+    for (const auto& l : lights) {
+        if (l.type != LightType::ambient) f.shadows = true;
+    }
+    f.shadows = f.shadows && !objects.empty();
+    for (const auto& m : materials) {
+        if (m.reflectivity > 0.0) f.reflection = true;
+        if (m.transparency > 0.0) f.refraction = true;
+    }
+    return f;
+}
+
+namespace {
+
+std::string object_path(std::size_t i) { return "/objects/" + std::to_string(i); }
+
+}  // namespace
+
+Status validate(const Scene& scene) {
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        if (o.material >= scene.materials.size()) {
+            return Status::error(Code::invalid_scene, "object " + std::to_string(i) +
+                                                          " names a material that does not exist",
+                                 object_path(i) + "/material");
+        }
+        if (o.kind == ObjectKind::sphere) {
+            if (!is_finite(o.sphere.center)) {
+                return Status::error(Code::invalid_scene, "sphere centre must be finite",
+                                     object_path(i) + "/center");
+            }
+            if (!(o.sphere.radius > 0.0) || !std::isfinite(o.sphere.radius)) {
+                return Status::error(Code::invalid_scene, "radius must be > 0 and finite",
+                                     object_path(i) + "/radius");
+            }
+            continue;
+        }
+        if (!o.mesh) {
+            return Status::error(Code::internal, "object without geometry", object_path(i));
+        }
+        const auto n = o.mesh->positions.size();
+        for (const auto& p : o.mesh->positions) {
+            if (!is_finite(p)) {
+                return Status::error(Code::invalid_scene, "vertex coordinates must be finite",
+                                     object_path(i));
+            }
+        }
+        for (const auto& t : o.mesh->triangles) {
+            if (t[0] >= n || t[1] >= n || t[2] >= n) {
+                return Status::error(Code::model_load_failed, "triangle index out of range",
+                                     object_path(i));
+            }
+        }
+        for (std::uint32_t m : o.mesh->triangle_material) {
+            if (m >= scene.materials.size()) {
+                return Status::error(Code::model_load_failed, "triangle material out of range",
+                                     object_path(i));
+            }
+        }
+    }
+    return {};
+}
+
+Camera default_camera(const Bounds3& bounds) {
+    Camera cam;
+    if (bounds.empty()) return cam;
+    const Vec3d c = bounds.center();
+    const double radius = std::max(0.5 * length(bounds.diagonal()), 1e-9);
+    const double half_fov = 0.5 * cam.fov_y_deg * M_PI / 180.0;
+    const double dist = radius / std::sin(half_fov);
+    cam.look_at = c;
+    cam.position = c - Vec3d{0.0, 0.0, dist};
+    return cam;
+}
+
+}  // namespace raycastd::engine
