@@ -43,10 +43,14 @@ SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
 }
 
 void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
-    // (p − c)/r with p formed from the ray; normalising rather than dividing by r keeps it unit
-    // length even when p carries rounding error far from the origin.
-    const Vec3d p = ray.origin - s.center + ray.direction * t;
-    hit.normal = normalize(p);
+    // (p − c)/r is exact for the points a reader checks by hand (the tutorial's (0, −1, −√3)/2
+    // gives −0.5, not −0.5000000000000001); when rounding in p leaves it visibly off unit
+    // length (far from the origin), normalise instead.
+    const Vec3d pc = ray.origin - s.center + ray.direction * t;
+    Vec3d n = pc / s.radius;
+    const double len2 = dot(n, n);
+    if (std::abs(len2 - 1.0) > 8.0 * kDoubleUnitRoundoff) n = normalize(pc);
+    hit.normal = n;
     hit.front_face = dot(ray.direction, hit.normal) < 0.0;
 }
 

@@ -1,0 +1,77 @@
+#pragma once
+// App: the HTTP front of raycastd. Builds the httplib::Server (routes, error and exception
+// handlers, request ids, limits) over the engine; owns the scene registry.
+
+#include <httplib.h>
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "engine/query/intersect.h"
+#include "server/api_error.h"
+#include "server/config.h"
+#include "server/schema/json_read.h"
+
+namespace raycastd::server {
+
+class App {
+public:
+    explicit App(Config config);
+    ~App();
+    App(const App&) = delete;
+    App& operator=(const App&) = delete;
+
+    /// Start-up work before binding: registers the --demo scenes. False (with `error`) when
+    /// one cannot be registered.
+    bool start(std::string& error);
+
+    /// Binds to config().host and config().port (0: any free port); returns the port or -1.
+    int bind();
+    /// Serves until stop(); returns false if the server could not run.
+    bool listen_after_bind();
+    void stop();
+
+    const Config& config() const { return config_; }
+    httplib::Server& http() { return http_; }
+
+    /// Runs `work` and turns what it throws into the API's JSON error responses.
+    /// `heavy` work takes one of the limited concurrent-work slots (503 busy when none is free).
+    void handle(const httplib::Request& req, httplib::Response& res, bool heavy,
+                const std::function<void()>& work);
+
+    /// The body parsed as JSON (bad_json with the byte offset on a syntax error).
+    static Json parse_json_body(const httplib::Request& req);
+
+    std::size_t requests_in_flight() const { return in_flight_.load(); }
+    std::size_t max_concurrent() const { return max_concurrent_; }
+    int worker_threads() const { return threads_; }
+
+    /// Parses a scene document of a stateless call and prepares it for queries (ApiError on
+    /// any problem; paths start with `prefix`).
+    std::shared_ptr<const engine::QueryEngine> build_stateless_scene(const Json& doc,
+                                                                     const std::string& prefix);
+    /// Adds the registry's figures (scenes, memory) to a /v1/info document.
+    void add_registry_info(Json& info) const;
+
+private:
+    void install_routes();
+
+    Config config_;
+    httplib::Server http_;
+    int threads_ = 0;
+    std::size_t max_concurrent_ = 0;
+    std::atomic<std::size_t> in_flight_{0};
+    std::atomic<std::uint64_t> next_request_id_{1};
+};
+
+// Route groups, one per file (routes_*.cpp).
+void install_meta_routes(App& app);
+void install_query_routes(App& app);
+void install_trace_routes(App& app);
+
+/// Sends `body` as application/json with the given status.
+void send_json(httplib::Response& res, std::string body, int status = 200);
+
+}  // namespace raycastd::server

@@ -1,0 +1,97 @@
+#include "server/config.h"
+
+#include <charconv>
+#include <cstring>
+
+namespace raycastd::server {
+
+std::string usage() {
+    return R"(raycastd: ray queries, previews, ray trees and worked solutions over HTTP
+
+usage: raycastd [options]
+
+  --host ADDR             address to listen on (default 127.0.0.1)
+  --port N                port (default 8080; 0 picks a free port and prints it)
+  --threads N             HTTP worker threads (default: hardware threads, at least 4)
+  --scene-root DIR        mesh "uri"s resolve inside DIR only (default .)
+  --data-dir DIR          persist registered scenes in DIR (default: memory only)
+  --demo FILE             register the scene document FILE at start-up (repeatable)
+  --max-body-mb N         largest request body (default 512)
+  --max-rays N            most rays per intersect request (default 16777216)
+  --max-pixels N          most width*height*spp per render (default 16777216)
+  --max-triangles N       most triangles per scene (default 50000000)
+  --max-concurrent N      work requests in flight before 503 busy (default 2*threads)
+  --memory-budget-mb N    resident scene memory before least-recently-used eviction (default 4096)
+  --access-log            log every request to stderr
+  --help                  this text
+)";
+}
+
+namespace {
+
+bool to_size(const char* s, std::size_t& out) {
+    const char* end = s + std::strlen(s);
+    auto r = std::from_chars(s, end, out);
+    return r.ec == std::errc() && r.ptr == end;
+}
+
+}  // namespace
+
+std::optional<Config> parse_args(int argc, char** argv, std::string& message, bool& error) {
+    Config c;
+    error = false;
+    auto fail = [&](const std::string& m) {
+        message = "raycastd: " + m + "\n(see raycastd --help)\n";
+        error = true;
+        return std::nullopt;
+    };
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--help" || a == "-h") {
+            message = usage();
+            return std::nullopt;
+        }
+        if (a == "--access-log") {
+            c.access_log = true;
+            continue;
+        }
+        if (i + 1 >= argc) return fail("missing value for " + a);
+        const char* v = argv[++i];
+        std::size_t n = 0;
+        const bool numeric = to_size(v, n);
+        if (a == "--host") {
+            c.host = v;
+        } else if (a == "--scene-root") {
+            c.scene_root = v;
+        } else if (a == "--data-dir") {
+            c.data_dir = v;
+        } else if (a == "--demo") {
+            c.demo.emplace_back(v);
+        } else if (!numeric) {
+            return fail(a + " needs a non-negative whole number, got \"" + v + "\"");
+        } else if (a == "--port") {
+            if (n > 65535) return fail("--port must be at most 65535");
+            c.port = static_cast<int>(n);
+        } else if (a == "--threads") {
+            if (n > 1024) return fail("--threads must be at most 1024");
+            c.threads = static_cast<int>(n);
+        } else if (a == "--max-body-mb") {
+            c.limits.max_body_bytes = n << 20;
+        } else if (a == "--max-rays") {
+            c.limits.max_rays = n;
+        } else if (a == "--max-pixels") {
+            c.limits.max_pixels = n;
+        } else if (a == "--max-triangles") {
+            c.limits.max_triangles = n;
+        } else if (a == "--max-concurrent") {
+            c.limits.max_concurrent = n;
+        } else if (a == "--memory-budget-mb") {
+            c.limits.memory_budget_bytes = n << 20;
+        } else {
+            return fail("unknown option " + a);
+        }
+    }
+    return c;
+}
+
+}  // namespace raycastd::server

@@ -1,0 +1,39 @@
+#pragma once
+// Command-line configuration of raycastd: where to listen, how many threads, and the limits
+// that keep one request from taking the whole machine.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace raycastd::server {
+
+struct Limits {
+    std::size_t max_body_bytes = 512u << 20;       ///< request body (413 too_large above)
+    std::size_t max_rays = 16u << 20;              ///< rays per intersect request
+    std::size_t max_pixels = 16u << 20;            ///< width × height × spp per render
+    std::size_t max_triangles = 50'000'000;        ///< triangles per scene
+    std::size_t max_concurrent = 0;                ///< work requests in flight (0: 2 × threads)
+    std::size_t memory_budget_bytes = 4ull << 30;  ///< resident scenes before LRU eviction
+};
+
+struct Config {
+    std::string host = "127.0.0.1";
+    int port = 8080;
+    int threads = 0;  ///< HTTP worker threads (0: hardware concurrency, at least 4)
+    std::string scene_root = ".";   ///< mesh `uri`s resolve inside this directory only
+    std::string data_dir;           ///< registered scenes persist here ("" = memory only)
+    std::vector<std::string> demo;  ///< scene documents registered at start-up
+    bool access_log = false;
+    Limits limits;
+};
+
+/// Parses argv. Returns nullopt and fills `message` for --help (exit 0) or a usage error
+/// (`error` set, exit 2).
+std::optional<Config> parse_args(int argc, char** argv, std::string& message, bool& error);
+
+/// The --help text.
+std::string usage();
+
+}  // namespace raycastd::server

@@ -1,0 +1,46 @@
+#include "server/config.h"
+
+#include <gtest/gtest.h>
+
+namespace raycastd::server {
+namespace {
+
+std::optional<Config> parse(std::vector<std::string> args, std::string& msg, bool& error) {
+    std::vector<char*> argv = {const_cast<char*>("raycastd")};
+    for (auto& a : args) argv.push_back(a.data());
+    return parse_args(static_cast<int>(argv.size()), argv.data(), msg, error);
+}
+
+TEST(Config, DefaultsAndFlags) {
+    std::string msg;
+    bool error = false;
+    auto c = parse({"--port", "0", "--threads", "3", "--max-rays", "10", "--demo", "a.json",
+                    "--demo", "b.json", "--access-log"},
+                   msg, error);
+    ASSERT_TRUE(c);
+    EXPECT_EQ(c->host, "127.0.0.1");
+    EXPECT_EQ(c->port, 0);
+    EXPECT_EQ(c->threads, 3);
+    EXPECT_EQ(c->limits.max_rays, 10u);
+    EXPECT_EQ(c->demo.size(), 2u);
+    EXPECT_TRUE(c->access_log);
+}
+
+TEST(Config, HelpAndErrors) {
+    std::string msg;
+    bool error = false;
+    EXPECT_FALSE(parse({"--help"}, msg, error));
+    EXPECT_FALSE(error);
+    EXPECT_NE(msg.find("--scene-root"), std::string::npos);
+    EXPECT_FALSE(parse({"--port", "http"}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_FALSE(parse({"--port", "70000"}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_FALSE(parse({"--bogus", "1"}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_FALSE(parse({"--port"}, msg, error));
+    EXPECT_TRUE(error);
+}
+
+}  // namespace
+}  // namespace raycastd::server

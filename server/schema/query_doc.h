@@ -1,0 +1,39 @@
+#pragma once
+// Intersect requests and responses (API.md, "POST /v1/scenes/{id}/intersect"), in JSON.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/query/intersect.h"
+#include "engine/scene/scene.h"
+#include "server/schema/json_read.h"
+
+namespace raycastd::server {
+
+/// Which parts of a hit record the client asked for (API `fields`; default: all).
+struct FieldMask {
+    bool t = true, t_err = true, point = true, normal = true, front_face = true, object = true,
+         name = true, primitive = true, barycentric = true;
+};
+
+struct IntersectRequest {
+    std::vector<engine::Ray> rays;
+    engine::QueryOptions options;
+    FieldMask fields;
+};
+
+/// Parses {"rays": [...], "mode", "precision", "fields"}; `prefix` is the pointer of the
+/// object holding them (empty for a whole body). Ray errors are invalid_ray naming the index;
+/// more than `max_rays` rays is too_large.
+IntersectRequest parse_intersect_request(const Json& body, const std::string& prefix,
+                                         std::size_t max_rays);
+
+engine::Mode parse_mode(const std::string& s, const std::string& path);
+engine::Precision parse_precision(const std::string& s, const std::string& path);
+
+/// {"precision": ..., "hits": [...]} with the record shape of the mode.
+std::string write_intersect_response(const engine::Scene& scene, const IntersectRequest& req,
+                                     const engine::QueryResult& result);
+
+}  // namespace raycastd::server

@@ -1,0 +1,26 @@
+#pragma once
+// The scene document of API.md ("Scene document") → engine::Scene. Every error is an ApiError
+// whose path is the JSON pointer of the offending field (prefixed, e.g. "/scene" in the
+// stateless calls). Unknown keys are not errors (clients may carry their own metadata) but are
+// listed in the scene's warnings, so a typo such as "difuse" does not pass unnoticed.
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "engine/scene/scene.h"
+#include "server/schema/json_read.h"
+
+namespace raycastd::server {
+
+/// Turns a `mesh` object (its JSON and pointer) into a world-space triangle mesh, appending any
+/// materials it brings to `scene` (and setting per-triangle material indices). Throws ApiError.
+using MeshObjectLoader = std::function<std::shared_ptr<const engine::TriangleMesh>(
+    const Json& object, const std::string& path, engine::Scene& scene)>;
+
+/// Parses and validates a scene document. `load_mesh` may be empty, in which case `mesh`
+/// objects are rejected with invalid_scene.
+engine::Scene parse_scene_doc(const Json& doc, const std::string& path_prefix,
+                              const MeshObjectLoader& load_mesh);
+
+}  // namespace raycastd::server
