@@ -8,7 +8,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double radians(double deg) { return deg * (kPi / 180.0); }
+double radians(double deg) {
+    return deg * (kPi / 180.0);
+}
 
 using Rows = std::array<std::array<double, 4>, 4>;
 
@@ -31,7 +33,8 @@ void sin_cos_deg(double deg, double& s, double& c) {
         static constexpr double kSin[4] = {0, 1, 0, -1};
         static constexpr double kCos[4] = {1, 0, -1, 0};
         double k = std::fmod(quarter, 4.0);
-        if (k < 0) k += 4.0;
+        if (k < 0)
+            k += 4.0;
         auto i = static_cast<std::size_t>(k);
         s = kSin[i];
         c = kCos[i];
@@ -66,7 +69,8 @@ Transform Transform::rotate_z_deg(double deg) {
 // with Quaternion Curves", SIGGRAPH 1985, eq. for Rot(q)).
 Transform Transform::rotate_quaternion(double x, double y, double z, double w) {
     double n = std::sqrt(x * x + y * y + z * z + w * w);
-    if (!(n > 0.0) || !std::isfinite(n)) return Transform();
+    if (!(n > 0.0) || !std::isfinite(n))
+        return Transform();
     x /= n;
     y /= n;
     z /= n;
@@ -85,7 +89,8 @@ Transform Transform::from_trs(const Vec3d& translation, const std::array<double,
 Transform Transform::from_column_major(const std::array<double, 16>& m) {
     Rows r{};
     for (std::size_t c = 0; c < 4; ++c) {
-        for (std::size_t row = 0; row < 4; ++row) r[row][c] = m[c * 4 + row];
+        for (std::size_t row = 0; row < 4; ++row)
+            r[row][c] = m[c * 4 + row];
     }
     return Transform(r);
 }
@@ -101,7 +106,8 @@ Transform Transform::operator*(const Transform& o) const {
     for (std::size_t i = 0; i < 4; ++i) {
         for (std::size_t j = 0; j < 4; ++j) {
             double sum = 0.0;
-            for (std::size_t k = 0; k < 4; ++k) sum += m_[i][k] * o.m_[k][j];
+            for (std::size_t k = 0; k < 4; ++k)
+                sum += m_[i][k] * o.m_[k][j];
             r[i][j] = sum;
         }
     }
@@ -129,7 +135,8 @@ Vec3d Transform::apply_normal(const Vec3d& n) const {
     Vec3d a2{m_[0][2], m_[1][2], m_[2][2]};
     Vec3d c0 = cross(a1, a2), c1 = cross(a2, a0), c2 = cross(a0, a1);
     Vec3d r = c0 * n.x + c1 * n.y + c2 * n.z;
-    if (determinant3() < 0.0) r = -r;
+    if (determinant3() < 0.0)
+        r = -r;
     return normalize(r);
 }
 
@@ -142,7 +149,8 @@ double Transform::determinant3() const {
 bool Transform::is_finite() const {
     for (const auto& row : m_) {
         for (double v : row) {
-            if (!std::isfinite(v)) return false;
+            if (!std::isfinite(v))
+                return false;
         }
     }
     return true;

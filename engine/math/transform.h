@@ -19,7 +19,7 @@
 namespace raycastd::engine {
 
 class Transform {
-public:
+  public:
     /// The identity.
     Transform() = default;
 
@@ -73,11 +73,11 @@ public:
     bool operator==(const Transform& o) const { return m_ == o.m_; }
     bool operator!=(const Transform& o) const { return !(*this == o); }
 
-private:
+  private:
     static std::size_t idx(int i) { return static_cast<std::size_t>(i); }
 
-    std::array<std::array<double, 4>, 4> m_{{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0},
-                                             {0, 0, 0, 1}}};
+    std::array<std::array<double, 4>, 4> m_{
+        {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
 };
 
 }  // namespace raycastd::engine

@@ -1,8 +1,8 @@
 #include "engine/math/transform.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
+
+#include <gtest/gtest.h>
 
 namespace raycastd::engine {
 namespace {
@@ -69,14 +69,12 @@ TEST(Transform, TrsAppliesScaleThenRotationThenTranslation) {
 
 // A glTF `matrix` is column-major: elements 12..14 are the translation.
 TEST(Transform, ColumnMajorMatrix) {
-    Transform t = Transform::from_column_major(
-        {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 6, 7, 1});
+    Transform t = Transform::from_column_major({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 6, 7, 1});
     EXPECT_EQ(t(0, 3), 5.0);
     EXPECT_EQ(t(2, 3), 7.0);
     EXPECT_EQ(t.apply_point({1, 1, 1}), Vec3d(6, 7, 8));
     // Column 0 is the image of +x.
-    Transform r = Transform::from_column_major(
-        {0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
+    Transform r = Transform::from_column_major({0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
     EXPECT_EQ(r.apply_vector({1, 0, 0}), Vec3d(0, 1, 0));
 }
 
