@@ -38,6 +38,8 @@ int main(int argc, char** argv) {
     g_app = &app;
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
+    // A client that hangs up mid-response, or a closed stdout, must not end the server.
+    std::signal(SIGPIPE, SIG_IGN);
     std::printf("raycastd listening on http://%s:%d\n", config->host.c_str(), port);
     std::fflush(stdout);
     return app.listen_after_bind() ? 0 : 1;

@@ -1,0 +1,128 @@
+// API.md's error table against the real binary: status, code and path for each bad input, and
+// the server still answering afterwards.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/server_process.h"
+
+namespace raycastd {
+namespace {
+
+using Json = nlohmann::json;
+
+const char* kScene = R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2}]})";
+
+class ApiErrors : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        server_ = new testing::ServerProcess({"--max-body-mb", "1", "--max-rays", "1000"});
+    }
+    static void TearDownTestSuite() {
+        delete server_;
+        server_ = nullptr;
+    }
+    /// POSTs and checks status, error code and (when given) path.
+    static void expect_error(const std::string& target, const std::string& body, int status,
+                             const std::string& code, const std::string& path = "") {
+        auto res = server_->client()->Post(target, body, "application/json");
+        ASSERT_TRUE(res) << "no response for " << body.substr(0, 200);
+        EXPECT_EQ(res->status, status) << res->body;
+        EXPECT_EQ(res->get_header_value("Content-Type"), "application/json");
+        Json j = Json::parse(res->body);
+        EXPECT_EQ(j.at("error").at("code"), code) << res->body;
+        EXPECT_FALSE(j.at("error").at("message").get<std::string>().empty());
+        if (!path.empty()) {
+            EXPECT_EQ(j.at("error").at("path"), path) << res->body;
+        }
+        auto health = server_->client()->Get("/v1/health");
+        ASSERT_TRUE(health) << "server stopped answering after " << body.substr(0, 200);
+        EXPECT_EQ(health->body, R"({"status":"ok"})");
+    }
+    static std::string intersect(const std::string& scene, const std::string& rays) {
+        return std::string(R"({"scene":)") + scene + R"(,"rays":)" + rays + "}";
+    }
+    static testing::ServerProcess* server_;
+};
+testing::ServerProcess* ApiErrors::server_ = nullptr;
+
+TEST_F(ApiErrors, BadJson) {
+    expect_error("/v1/intersect", "{\"scene\": ", 400, "bad_json");
+    expect_error("/v1/intersect", "[1, 2,]", 400, "bad_json");
+    expect_error("/v1/intersect", "", 400, "bad_json");
+    // JSON cannot carry NaN or infinity.
+    expect_error("/v1/intersect",
+                 intersect(kScene, R"([{"origin":[0,0,0],"direction":[NaN,0,1]}])"), 400,
+                 "bad_json");
+    expect_error("/v1/intersect",
+                 intersect(kScene, R"([{"origin":[0,0,0],"direction":[1e999,0,1]}])"), 400,
+                 "bad_json");
+}
+
+TEST_F(ApiErrors, InvalidRay) {
+    expect_error("/v1/intersect", intersect(kScene, R"([{"origin":[0,0,0],"direction":[0,0,1]},
+                                                      {"origin":[0,0,0],"direction":[0,0,0]}])"),
+                 400, "invalid_ray", "/rays/1/direction");
+    expect_error("/v1/intersect",
+                 intersect(kScene, R"([{"origin":[0,0,0],"direction":[0,0,1],"tmin":5,"tmax":1}])"),
+                 400, "invalid_ray", "/rays/0/tmin");
+    expect_error("/v1/intersect", intersect(kScene, R"([{"origin":[0,0],"direction":[0,0,1]}])"),
+                 400, "invalid_ray", "/rays/0/origin");
+}
+
+TEST_F(ApiErrors, InvalidScene) {
+    expect_error("/v1/intersect",
+                 intersect(R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":-1}]})",
+                           R"([{"origin":[0,0,0],"direction":[0,0,1]}])"),
+                 400, "invalid_scene", "/scene/objects/0/radius");
+    expect_error("/v1/intersect",
+                 intersect(R"({"objects":[{"type":"cylinder"}]})",
+                           R"([{"origin":[0,0,0],"direction":[0,0,1]}])"),
+                 400, "invalid_scene", "/scene/objects/0/type");
+    expect_error("/v1/intersect", R"({"rays":[]})", 400, "invalid_request", "/scene");
+}
+
+TEST_F(ApiErrors, InvalidRequest) {
+    expect_error("/v1/intersect",
+                 R"({"scene":{"objects":[]},"rays":[],"mode":"nearest"})", 400,
+                 "invalid_request", "/mode");
+    expect_error("/v1/explain?format=pdf", R"({})", 400, "unsupported_format");
+    expect_error("/v1/explain", R"({"scene":{"objects":[]}})", 400, "invalid_request", "/ray");
+}
+
+TEST_F(ApiErrors, TooLarge) {
+    std::string rays = "[";
+    for (int i = 0; i < 1001; ++i) rays += std::string(i ? "," : "") + R"({"origin":[0,0,0],"direction":[0,0,1]})";
+    rays += "]";
+    expect_error("/v1/intersect", intersect(kScene, rays), 413, "too_large", "/rays");
+    expect_error("/v1/intersect", std::string(2u << 20, ' '), 413, "too_large");
+}
+
+TEST_F(ApiErrors, UnknownEndpoint) {
+    auto res = server_->client()->Get("/v1/nothing-here");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 404);
+    EXPECT_EQ(Json::parse(res->body).at("error").at("code"), "not_found");
+}
+
+TEST_F(ApiErrors, EveryResponseHasARequestId) {
+    auto res = server_->client()->Get("/v1/health");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->get_header_value("X-Request-Id").rfind("rq_", 0), 0u);
+}
+
+TEST_F(ApiErrors, InfoAndOpenApi) {
+    auto res = server_->client()->Get("/v1/info");
+    ASSERT_TRUE(res);
+    Json info = Json::parse(res->body);
+    EXPECT_EQ(info.at("embree_version"), "3.13.5");
+    EXPECT_EQ(info.at("limits").at("max_rays"), 1000);
+    res = server_->client()->Get("/v1/openapi.json");
+    ASSERT_TRUE(res);
+    Json api = Json::parse(res->body);
+    EXPECT_EQ(api.at("openapi"), "3.0.3");
+    EXPECT_TRUE(api.at("paths").contains("/v1/intersect"));
+}
+
+}  // namespace
+}  // namespace raycastd
