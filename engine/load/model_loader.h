@@ -80,6 +80,8 @@ struct LoadedModel {
 struct LoadLimits {
     /// Triangles over all parts (glTF instancing can multiply a small file's triangles).
     std::size_t max_triangles = 50'000'000;
+    /// Vertices over all parts.
+    std::size_t max_vertices = 50'000'000;
 };
 
 /// Parses `bytes` as `format`. display_name names the parts and appears in messages (a file

@@ -1,0 +1,290 @@
+// glTF 2.0 → LoadedModel, through tinygltf 2.7 (Debian's libtinygltf).
+//
+// tinygltf parses the JSON and decodes buffers; everything after that is ours and checked
+// before use: the GLB container (tinygltf 2.7 lets a BIN chunk's 8-byte header run past the
+// declared length and ignores the version), every accessor and bufferView range
+// (gltf_accessors.cpp), every index against its vertex count, and the node graph (cycles,
+// shared children, depth). tinygltf's file access is routed to the caller's ResourceReader,
+// and images are neither read nor decoded (we do not texture).
+
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "engine/load/gltf_internal.h"
+#include "engine/load/loaders.h"
+
+namespace raycastd::engine::detail {
+
+namespace {
+
+constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
+constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
+constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
+constexpr std::size_t kMaxNodeDepth = 256;
+
+// Extensions whose absence of support cannot change the geometry or lighting we produce:
+// lights and quantized attributes we implement; texture transforms and emissive strength only
+// affect what we read (emissive) or ignore (textures).
+const std::set<std::string> kSupportedRequired = {"KHR_lights_punctual", "KHR_mesh_quantization",
+                                                  "KHR_texture_transform",
+                                                  "KHR_materials_emissive_strength"};
+
+std::uint32_t read_u32(std::string_view b, std::size_t at) {
+    return static_cast<std::uint32_t>(static_cast<unsigned char>(b[at])) |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(b[at + 1])) << 8 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(b[at + 2])) << 16 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(b[at + 3])) << 24;
+}
+
+/// The GLB container as tinygltf should see it, and the BIN chunk's length (0 if absent).
+struct Glb {
+    std::string_view original;
+    std::string patched;  ///< set when unknown trailing chunks were cut off (header rewritten)
+    std::size_t bin_length = 0;
+    bool has_bin = false;
+
+    /// Header + JSON [+ BIN], as tinygltf should see it.
+    std::string_view bytes() const { return patched.empty() ? original : patched; }
+};
+
+// Binary glTF layout, glTF 2.0 §4.4: a 12-byte header (magic, version 2, total length), then
+// chunks of (uint32 length, uint32 type, data); chunk 0 is JSON, an optional BIN chunk comes
+// second; chunk lengths are multiples of 4; unknown chunk types are ignored.
+Result<Glb> check_glb(std::string_view b, std::string_view name) {
+    if (b.size() < 12)
+        return load_error(name, "truncated GLB: " + std::to_string(b.size()) +
+                                    " bytes, the header alone needs 12");
+    if (read_u32(b, 0) != kGlbMagic)
+        return load_error(name, "not a GLB file (bad magic)");
+    const std::uint32_t version = read_u32(b, 4);
+    if (version != 2) {
+        return Status::error(Code::unsupported_format, std::string(name) + ": GLB version " +
+                                                           std::to_string(version) +
+                                                           " (only 2 is supported)");
+    }
+    const std::size_t length = read_u32(b, 8);
+    if (length > b.size()) {
+        return load_error(name, "truncated GLB: header declares " + std::to_string(length) +
+                                    " bytes, only " + std::to_string(b.size()) + " present");
+    }
+    if (length != b.size()) {
+        return load_error(name, "GLB header declares " + std::to_string(length) +
+                                    " bytes but the data has " + std::to_string(b.size()));
+    }
+    Glb glb;
+    std::size_t at = 12, keep = 12;
+    for (int chunk = 0; at < length; ++chunk) {
+        if (length - at < 8)
+            return load_error(name, "truncated GLB chunk header at byte " + std::to_string(at));
+        const std::size_t len = read_u32(b, at);
+        const std::uint32_t type = read_u32(b, at + 4);
+        if (len > length - at - 8) {
+            return load_error(name, "GLB chunk " + std::to_string(chunk) + " (" +
+                                        std::to_string(len) +
+                                        " bytes) runs past the end of the file");
+        }
+        if (len % 4 != 0)
+            return load_error(
+                name, "GLB chunk " + std::to_string(chunk) + " length is not a multiple of 4");
+        if (chunk == 0 && (type != kChunkJson || len == 0))
+            return load_error(name, "the first GLB chunk must be non-empty JSON");
+        if (chunk > 0 && type == kChunkJson)
+            return load_error(name, "GLB has a second JSON chunk");
+        if (type == kChunkBin) {
+            if (chunk != 1)
+                return load_error(name, "GLB BIN chunk must directly follow the JSON chunk");
+            glb.has_bin = true;
+            glb.bin_length = len;
+        }
+        at += 8 + len;
+        if (chunk == 0 || type == kChunkBin)
+            keep = at;
+    }
+    if (at == 12)
+        return load_error(name, "GLB has no JSON chunk");
+    glb.original = b;
+    if (keep != length) {
+        // Hand tinygltf only the chunks it understands, with the header length to match.
+        glb.patched.assign(b.data(), keep);
+        for (std::size_t i = 0; i < 4; ++i) {
+            glb.patched[8 + i] = static_cast<char>((keep >> (8 * i)) & 0xFF);
+        }
+    }
+    return glb;
+}
+
+/// tinygltf's file-system callbacks, answered from the ResourceReader. Each URI is read at
+/// most once (tinygltf asks "exists?" before "read"). Image files are reported missing without
+/// being read: we do not texture, and a missing image is only a warning to tinygltf.
+class ResourceBridge {
+  public:
+    explicit ResourceBridge(const ResourceReader& read) : read_(read) {}
+
+    tinygltf::FsCallbacks callbacks() {
+        return {&ResourceBridge::exists, &ResourceBridge::expand, &ResourceBridge::read_file,
+                &ResourceBridge::write_file, this};
+    }
+
+  private:
+    static bool is_image(const std::string& uri) {
+        static const char* const kExt[] = {".png", ".jpg",  ".jpeg", ".gif",   ".bmp", ".webp",
+                                           ".ktx", ".ktx2", ".dds",  ".basis", ".tga", ".hdr"};
+        std::string lower;
+        for (char c : uri)
+            lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        for (const char* e : kExt) {
+            std::string_view ext(e);
+            if (lower.size() >= ext.size() &&
+                lower.compare(lower.size() - ext.size(), ext.size(), ext) == 0)
+                return true;
+        }
+        return false;
+    }
+
+    const Result<std::string>& fetch(std::string path) {
+        // tinygltf retries a relative name as "./name"; both are the same resource.
+        if (path.rfind("./", 0) == 0)
+            path.erase(0, 2);
+        auto it = cache_.find(path);
+        if (it != cache_.end())
+            return it->second;
+        Status refused = check_resource_uri(path);
+        if (refused.ok() && is_image(path))
+            refused = Status::error(Code::not_found, "images are not loaded");
+        auto result = refused.ok() ? read_(path) : Result<std::string>(refused);
+        return cache_.emplace(path, std::move(result)).first->second;
+    }
+
+    static bool exists(const std::string& path, void* self) {
+        return static_cast<ResourceBridge*>(self)->fetch(path).ok();
+    }
+    static std::string expand(const std::string& path, void*) { return path; }
+    static bool read_file(std::vector<unsigned char>* out, std::string* err,
+                          const std::string& path, void* self) {
+        const auto& r = static_cast<ResourceBridge*>(self)->fetch(path);
+        if (!r.ok()) {
+            if (err)
+                *err = r.status().message;
+            return false;
+        }
+        out->assign(r->begin(), r->end());
+        return true;
+    }
+    static bool write_file(std::string*, const std::string&, const std::vector<unsigned char>&,
+                           void*) {
+        return false;
+    }
+
+    const ResourceReader& read_;
+    std::map<std::string, Result<std::string>> cache_;
+};
+
+bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                  const unsigned char*, int, void*) {
+    return true;
+}
+
+/// tinygltf's warnings, minus those about images (we never load them on purpose).
+void add_tinygltf_warnings(const std::string& warn, std::vector<std::string>& out) {
+    std::istringstream lines(warn);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty() || line.find("image[") != std::string::npos ||
+            line.find("File not found") != std::string::npos)
+            continue;
+        out.push_back("glTF: " + line);
+    }
+}
+
+Result<tinygltf::Model> parse(std::string_view bytes, bool binary, const ResourceReader& read,
+                              std::string_view name, std::vector<std::string>& warnings, Glb& glb) {
+    if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
+        return Status::error(Code::too_large,
+                             std::string(name) + ": glTF files over 4 GiB are not supported");
+    }
+    ResourceBridge bridge(read);
+    tinygltf::TinyGLTF loader;
+    loader.SetFsCallbacks(bridge.callbacks());
+    loader.SetImageLoader(&ignore_image, nullptr);
+    tinygltf::Model model;
+    std::string err, warn;
+    bool ok;
+    if (binary) {
+        auto checked = check_glb(bytes, name);
+        if (!checked)
+            return checked.status();
+        glb = std::move(*checked);
+        const std::string_view view = glb.bytes();
+        ok = loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                         reinterpret_cast<const unsigned char*>(view.data()),
+                                         static_cast<unsigned int>(view.size()), "");
+    } else {
+        ok = loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(),
+                                        static_cast<unsigned int>(bytes.size()), "");
+    }
+    add_tinygltf_warnings(warn, warnings);
+    if (!ok) {
+        while (!err.empty() && (err.back() == '\n' || err.back() == ' '))
+            err.pop_back();
+        return load_error(name, err.empty() ? "glTF parse failed" : err);
+    }
+    return model;
+}
+
+/// What tinygltf accepts but we must not: unknown required extensions, a wrong asset version,
+/// GLB buffers that do not match the BIN chunk (glTF 2.0 §4.4.3.3: the chunk may exceed the
+/// buffer's byteLength by at most 3 padding bytes; only buffer 0 may live in it).
+Status check_model(const tinygltf::Model& m, const Glb& glb, bool binary) {
+    for (const std::string& ext : m.extensionsRequired) {
+        if (!kSupportedRequired.count(ext))
+            return Status::error(Code::model_load_failed,
+                                 "required extension " + ext + " is not supported");
+    }
+    const std::string& v = m.asset.version;
+    if (v.empty() || v[0] != '2' || (v.size() > 1 && v[1] != '.')) {
+        return Status::error(Code::unsupported_format,
+                             "glTF asset version '" + v + "' (only 2.x is supported)");
+    }
+    if (binary) {
+        for (std::size_t i = 0; i < m.buffers.size(); ++i) {
+            if (!m.buffers[i].uri.empty())
+                continue;
+            if (i != 0)
+                return Status::error(Code::model_load_failed,
+                                     "/buffers/" + std::to_string(i) +
+                                         " has no uri (only buffer 0 may use the GLB BIN chunk)");
+            if (!glb.has_bin)
+                return Status::error(Code::model_load_failed,
+                                     "/buffers/0 refers to a GLB BIN chunk that is missing");
+            if (glb.bin_length > m.buffers[0].data.size() + 3) {
+                return Status::error(Code::model_load_failed,
+                                     "/buffers/0 byteLength " +
+                                         std::to_string(m.buffers[0].data.size()) +
+                                         " does not match the GLB BIN chunk (" +
+                                         std::to_string(glb.bin_length) + " bytes)");
+            }
+        }
+    }
+    return gltf::validate_buffers(m);
+}
+
+}  // namespace
+
+Result<LoadedModel> load_gltf(std::string_view bytes, bool binary, const ResourceReader& read,
+                              std::string_view name, const LoadLimits& limits) {
+    LoadedModel out;
+    Glb glb;
+    auto parsed = parse(bytes, binary, read, name, out.warnings, glb);
+    if (!parsed)
+        return parsed.status();
+    const tinygltf::Model& m = *parsed;
+    if (Status st = check_model(m, glb, binary); !st.ok())
+        return with_name(name, st);
+    if (Status st = gltf::build_model(m, name, limits, out); !st.ok())
+        return with_name(name, st);
+    if (Status st = finish_model(out, name, limits); !st.ok())
+        return st;
+    return out;
+}
+
+}  // namespace raycastd::engine::detail
