@@ -36,7 +36,12 @@ bool is_degenerate(const Triangle& tri) {
     return cross(tri.b - tri.a, tri.c - tri.a) == Vec3d{0.0, 0.0, 0.0};
 }
 
-std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal) {
+namespace {
+
+/// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
+/// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere).
+std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
+                        bool require_inside) {
     const ShearFrame s = make_shear(ray.direction);
     const Vec3d A = tri.a - ray.origin;
     const Vec3d B = tri.b - ray.origin;
@@ -60,7 +65,9 @@ std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool 
         v = static_cast<double>(LD(ax) * LD(cy) - LD(ay) * LD(cx));
         w = static_cast<double>(LD(bx) * LD(ay) - LD(by) * LD(ax));
     }
-    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return std::nullopt;
+    if (require_inside && (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return std::nullopt;
+    }
     const double det = u + v + w;
     // det == 0: the ray lies in the triangle's plane or the triangle is degenerate (as seen
     // along the ray); both miss by contract.
@@ -70,7 +77,7 @@ std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool 
     const double t_scaled = u * az + v * bz + w * cz;
     const double inv_det = 1.0 / det;
     const double t = t_scaled * inv_det;
-    if (!(t >= ray.tmin && t <= ray.tmax)) return std::nullopt;
+    if (require_inside && !(t >= ray.tmin && t <= ray.tmax)) return std::nullopt;
     if (is_degenerate(tri)) return std::nullopt;
 
     Hit hit;
@@ -100,6 +107,16 @@ std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool 
         hit.normal = triangle_normal(tri);
     }
     return hit;
+}
+
+}  // namespace
+
+std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal) {
+    return woop(tri, ray, want_normal, /*require_inside=*/true);
+}
+
+std::optional<Hit> triangle_plane_hit(const Triangle& tri, const Ray& ray, bool want_normal) {
+    return woop(tri, ray, want_normal, /*require_inside=*/false);
 }
 
 }  // namespace raycastd::engine

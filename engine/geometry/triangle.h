@@ -35,4 +35,10 @@ bool is_degenerate(const Triangle& tri);
 /// front_face is always set; `want_normal = false` skips the normal.
 std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal = true);
 
+/// Where the ray's line meets the triangle's plane, in double precision, whether or not that
+/// point is inside: t and the barycentrics u, v (possibly negative), with the same arithmetic as
+/// intersect_triangle. Used to refine a hit another (single-precision) test already decided.
+/// nullopt when the line is parallel to the plane or the triangle is degenerate.
+std::optional<Hit> triangle_plane_hit(const Triangle& tri, const Ray& ray, bool want_normal = true);
+
 }  // namespace raycastd::engine

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "engine/accel/embree_accel.h"
 #include "engine/accel/linear_accel.h"
 
 namespace raycastd::engine {
@@ -13,6 +14,12 @@ namespace {
 /// Below this many rays a batch runs on the calling thread: spawning TBB tasks costs more
 /// than tracing a few rays through a small scene.
 constexpr std::size_t kSerialBatch = 64;
+
+/// Scenes with at most this many primitives are answered by brute force in double precision
+/// (the exact path) without building a BVH: for the tutorial's three spheres a BVH costs more
+/// to build than it can ever save, and the exact answer is the cheapest one. Measured with
+/// bench/bench_intersect (see docs/benchmarks.md).
+constexpr std::size_t kBruteForceMaxPrimitives = 16;
 
 template <class F>
 void for_each_ray(std::size_t n, F&& f) {
@@ -76,42 +83,75 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
+QueryEngine::QueryEngine(std::shared_ptr<const Scene> scene) : scene_(std::move(scene)) {}
+QueryEngine::~QueryEngine() = default;
+
 Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<const Scene> scene) {
     if (!scene) return Status::error(Code::internal, "no scene");
     Status st = validate(*scene);
     if (!st.ok()) return st;
-    return std::shared_ptr<const QueryEngine>(new QueryEngine(std::move(scene)));
+    std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
+    const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
+    if (prims > kBruteForceMaxPrimitives) {
+        auto accel = EmbreeAccel::build(*engine->scene_);
+        if (!accel.ok()) return accel.status();
+        engine->accel_ = std::move(*accel);
+    }
+    return std::shared_ptr<const QueryEngine>(std::move(engine));
 }
 
-Precision QueryEngine::effective_precision(Precision) const {
-    // Every query is answered by the double-precision linear path for now, which is the exact
-    // path; the Embree-backed fast and refined paths arrive with the accelerator.
-    return Precision::exact;
+Precision QueryEngine::effective_precision(Precision asked) const {
+    return accel_ ? asked : Precision::exact;
+}
+
+std::size_t QueryEngine::memory_bytes() const {
+    std::size_t bytes = sizeof(Scene) + (accel_ ? accel_->memory_bytes() : 0);
+    for (const Object& o : scene_->objects) {
+        bytes += sizeof(Object) + o.name.size();
+        if (o.mesh) {
+            bytes += o.mesh->positions.capacity() * sizeof(Vec3d) +
+                     o.mesh->triangles.capacity() * sizeof(o.mesh->triangles[0]) +
+                     o.mesh->normals.capacity() * sizeof(Vec3f) +
+                     o.mesh->triangle_material.capacity() * sizeof(std::uint32_t);
+        }
+    }
+    return bytes;
 }
 
 QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt) const {
     QueryResult out;
     out.precision = effective_precision(opt.precision);
+    const Precision p = out.precision;
     const std::size_t n = rays.size();
     const Scene& s = *scene_;
+    const EmbreeAccel* accel = accel_.get();
     switch (opt.mode) {
         case Mode::closest:
             out.hits.resize(n);
             for_each_ray(n, [&](std::size_t i) {
-                if (auto h = linear_closest(s, rays[i], opt.want_normal)) out.hits[i] = *h;
+                auto h = accel ? accel->closest(rays[i], p, opt.want_normal)
+                               : linear_closest(s, rays[i], opt.want_normal);
+                if (h) out.hits[i] = *h;
             });
             break;
         case Mode::any:
             out.hits.resize(n);
             for_each_ray(n, [&](std::size_t i) {
-                if (linear_any(s, rays[i])) out.hits[i].object = 0;
+                // `any` never looks for the closest: it stops at the first hit found.
+                const bool hit = accel ? accel->any(rays[i], p) : linear_any(s, rays[i]);
+                if (hit) out.hits[i].object = 0;
             });
             break;
         case Mode::all:
         case Mode::count: {
+            const bool normals = opt.want_normal && opt.mode == Mode::all;
             std::vector<std::vector<Hit>> per_ray(n);
             for_each_ray(n, [&](std::size_t i) {
-                linear_all(s, rays[i], opt.want_normal && opt.mode == Mode::all, per_ray[i]);
+                if (accel) {
+                    accel->all(rays[i], p, normals, per_ray[i]);
+                } else {
+                    linear_all(s, rays[i], normals, per_ray[i]);
+                }
             });
             if (opt.mode == Mode::count) {
                 out.counts.resize(n);

@@ -7,34 +7,13 @@
 #include <memory>
 #include <vector>
 
+#include "engine/query/query_types.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
 
 namespace raycastd::engine {
 
-enum class Mode { closest, any, all, count };
-enum class Precision { fast, refined, exact };
-
-const char* to_string(Mode m);
-const char* to_string(Precision p);
-
-struct QueryOptions {
-    Mode mode = Mode::closest;
-    Precision precision = Precision::refined;
-    bool want_normal = true;  ///< compute normal and front_face (skipped when not asked)
-};
-
-/// The answers to a batch of rays.
-///   closest: hits[i] is ray i's closest hit (!valid() on a miss);
-///   any:     hits[i].valid() says whether ray i hits anything (nothing else is filled in);
-///   all:     ray i's hits, sorted, are hits[offsets[i] .. offsets[i+1]);
-///   count:   counts[i] is the number of hits of ray i (shared edges counted once).
-struct QueryResult {
-    Precision precision = Precision::exact;  ///< the path that answered
-    std::vector<Hit> hits;
-    std::vector<std::uint32_t> offsets;
-    std::vector<std::uint32_t> counts;
-};
+class EmbreeAccel;
 
 /// A scene made ready for queries.
 class QueryEngine {
@@ -51,9 +30,18 @@ public:
     /// The path a request asking for `asked` is answered by (tiny scenes always take exact).
     Precision effective_precision(Precision asked) const;
 
+    /// Estimated bytes held by the scene and its acceleration structure.
+    std::size_t memory_bytes() const;
+
+    /// True when the scene is small enough that brute force beats a BVH (no BVH is built).
+    bool brute_force() const { return accel_ == nullptr; }
+
+    ~QueryEngine();
+
 private:
-    explicit QueryEngine(std::shared_ptr<const Scene> scene) : scene_(std::move(scene)) {}
+    explicit QueryEngine(std::shared_ptr<const Scene> scene);
     std::shared_ptr<const Scene> scene_;
+    std::unique_ptr<EmbreeAccel> accel_;
 };
 
 /// Checks one ray against the API's rules; the message names the ray index.

@@ -1,7 +1,10 @@
 #pragma once
 // Small scenes shared by the engine's tests.
 
+#include <cmath>
+#include <map>
 #include <memory>
+#include <utility>
 
 #include "engine/scene/scene.h"
 
@@ -52,6 +55,43 @@ inline Object cube_object(double lo, double hi) {
         {1, 3, 5}, {3, 7, 5},  // x = hi
     };
     return mesh_object("cube", std::move(p), std::move(t));
+}
+
+/// A closed icosphere: the icosahedron subdivided `level` times (20·4^level triangles), shared
+/// vertices projected onto the sphere, faces counter-clockwise seen from outside.
+inline Object icosphere_object(int level, Vec3d center = {0, 0, 0}, double radius = 1.0) {
+    const double g = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<Vec3d> p = {{-1, g, 0}, {1, g, 0},  {-1, -g, 0}, {1, -g, 0},
+                            {0, -1, g}, {0, 1, g},  {0, -1, -g}, {0, 1, -g},
+                            {g, 0, -1}, {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
+    for (auto& v : p) v = normalize(v);
+    std::vector<std::array<std::uint32_t, 3>> t = {
+        {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+        {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+        {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+    for (int l = 0; l < level; ++l) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+        auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+            auto key = std::minmax(a, b);
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            p.push_back(normalize((p[a] + p[b]) * 0.5));
+            const auto id = static_cast<std::uint32_t>(p.size() - 1);
+            mid.emplace(key, id);
+            return id;
+        };
+        std::vector<std::array<std::uint32_t, 3>> next;
+        for (const auto& f : t) {
+            const auto a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
+            next.push_back({f[0], a, c});
+            next.push_back({f[1], b, a});
+            next.push_back({f[2], c, b});
+            next.push_back({a, b, c});
+        }
+        t.swap(next);
+    }
+    for (auto& v : p) v = center + v * radius;
+    return mesh_object("icosphere", std::move(p), std::move(t));
 }
 
 }  // namespace raycastd::engine::testing

@@ -1,0 +1,545 @@
+#include "engine/accel/embree_accel.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <string>
+
+#include "engine/accel/linear_accel.h"
+#include "engine/math/float_bounds.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// The device: one per process, created on first use. Embree reports errors through a callback;
+// we record the last one per thread so that a build turns it into a Status (nothing is printed).
+
+thread_local RTCError t_last_error = RTC_ERROR_NONE;
+thread_local std::string t_last_message;
+
+void on_embree_error(void*, RTCError code, const char* message) {
+    t_last_error = code;
+    t_last_message = message ? message : "";
+}
+
+RTCDevice shared_device() {
+    static RTCDevice device = [] {
+        RTCDevice d = rtcNewDevice("verbose=0");
+        if (d) rtcSetDeviceErrorFunction(d, on_embree_error, nullptr);
+        return d;
+    }();
+    return device;
+}
+
+Status take_embree_error(const char* what) {
+    const RTCError e = t_last_error;
+    const std::string msg = t_last_message;
+    t_last_error = RTC_ERROR_NONE;
+    t_last_message.clear();
+    if (e == RTC_ERROR_NONE) return {};
+    const Code code = e == RTC_ERROR_OUT_OF_MEMORY ? Code::too_large : Code::internal;
+    return Status::error(code, std::string(what) + ": Embree error " +
+                                   std::to_string(static_cast<int>(e)) +
+                                   (msg.empty() ? "" : " (" + msg + ")"));
+}
+
+float float_down(double v) {
+    const float f = static_cast<float>(v);
+    return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                                      : f;
+}
+float float_up(double v) {
+    const float f = static_cast<float>(v);
+    return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity())
+                                      : f;
+}
+
+/// Estimated Embree footprint per primitive (BVH nodes + leaves), from the measurements in
+/// PERFORMANCE.md (85.5 MB for 1M triangles); user-geometry leaves are smaller.
+constexpr std::size_t kBytesPerTriangle = 90;
+constexpr std::size_t kBytesPerUserPrimitive = 64;
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+/// What the callbacks of one geometry need: which object it is.
+struct GeomData {
+    const EmbreeAccel::Impl* accel;
+    std::uint32_t object;
+};
+
+struct EmbreeAccel::Impl {
+    const Scene* scene = nullptr;
+    RTCScene native = nullptr;  ///< float triangles + sphere user geometry (fast, refined)
+    mutable RTCScene exact = nullptr;  ///< every primitive as user geometry, double tests
+    mutable std::atomic<bool> exact_ready{false};
+    mutable std::once_flag exact_once;
+    mutable Status exact_status;
+    std::vector<GeomData> geoms;  ///< one per object, stable addresses (reserved up front)
+    Bounds3 padded_bounds;
+    /// Embree sees every coordinate relative to this point (the centre of the scene bounds):
+    /// float precision then follows the scene's size, not its distance from the origin.
+    Vec3d center;
+    double pad = 0;         ///< absolute padding of every box, in scene units (see build)
+    double float_scale = 0; ///< magnitude of scene coordinates, for the fast path's t_err
+    std::size_t triangles = 0, spheres = 0;
+
+    ~Impl() {
+        if (native) rtcReleaseScene(native);
+        if (exact) rtcReleaseScene(exact);
+    }
+    void build_exact() const;
+    RTCScene exact_scene() const {
+        std::call_once(exact_once, [this] { build_exact(); });
+        return exact_status.ok() ? exact : nullptr;
+    }
+};
+
+namespace {
+
+/// The context handed through Embree to our callbacks (Embree's documented way to pass per-ray
+/// data: a struct that starts with RTCIntersectContext).
+struct RayContext {
+    RTCIntersectContext rtc;
+    const EmbreeAccel::Impl* accel = nullptr;
+    const Ray* ray = nullptr;  ///< the double-precision ray
+    double shift = 0;          ///< the float ray starts at ray.at(shift)
+    double len = 1;            ///< |direction|: float t' (unit direction) ↔ t = shift + t'/len
+    double margin = 0;         ///< slack added to tfar, in unit-direction length
+    std::optional<Hit> best;   ///< closest so far (exact path)
+    std::vector<Hit>* collect = nullptr;  ///< all/count: every hit goes here
+    bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
+};
+
+RayContext& ctx_of(RTCIntersectContext* c) { return *reinterpret_cast<RayContext*>(c); }
+
+/// tfar for a candidate at double t: never below it, whatever the float rounding.
+float tfar_for(const RayContext& c, double t) {
+    return float_up((t - c.shift) * c.len + c.margin);
+}
+
+/// Candidates of one primitive decided in double: the sphere roots in range, or the triangle
+/// hit of the watertight test. `emit` returns false to stop.
+template <class F>
+void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t prim, F&& emit) {
+    const Object& o = c.accel->scene->objects[object];
+    const Ray& ray = *c.ray;
+    if (o.kind == ObjectKind::sphere) {
+        const SphereRoots r = sphere_roots(o.sphere, ray);
+        for (int k = 0; k < r.count; ++k) {
+            if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax)) continue;
+            Hit h;
+            h.t = r.t[k];
+            h.t_err = r.t_err;
+            h.object = object;
+            h.primitive = 0;
+            if (c.collect) sphere_normal(o.sphere, ray, h.t, h);  // front_face merges `all`
+            if (!emit(h)) return;
+        }
+        return;
+    }
+    if (auto h = intersect_triangle(o.mesh->triangle(prim), ray, false)) {
+        h->object = object;
+        h->primitive = prim;
+        emit(*h);
+    }
+}
+
+void user_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    const Object& o = g->accel->scene->objects[g->object];
+    Bounds3 b;
+    if (o.kind == ObjectKind::sphere) {
+        const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
+        b.extend(o.sphere.center - r);
+        b.extend(o.sphere.center + r);
+    } else {
+        const Triangle t = o.mesh->triangle(args->primID);
+        b.extend(t.a);
+        b.extend(t.b);
+        b.extend(t.c);
+    }
+    const double p = g->accel->pad;
+    b.lo -= g->accel->center;
+    b.hi -= g->accel->center;
+    RTCBounds* out = args->bounds_o;
+    out->lower_x = float_down(b.lo.x - p);
+    out->lower_y = float_down(b.lo.y - p);
+    out->lower_z = float_down(b.lo.z - p);
+    out->upper_x = float_up(b.hi.x + p);
+    out->upper_y = float_up(b.hi.y + p);
+    out->upper_z = float_up(b.hi.z + p);
+}
+
+void user_intersect(const RTCIntersectFunctionNArguments* args) {
+    if (!args->valid[0]) return;
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    RayContext& c = ctx_of(args->context);
+    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
+    double_candidates(c, g->object, args->primID, [&](const Hit& h) {
+        if (c.collect) {
+            c.collect->push_back(h);
+            return true;
+        }
+        if (c.exact) {
+            if (!c.best || closer(h, *c.best)) {
+                c.best = h;
+                rh->ray.tfar = std::min(rh->ray.tfar, tfar_for(c, h.t));
+                rh->hit.geomID = h.object;
+                rh->hit.primID = h.primitive;
+            }
+            return true;
+        }
+        // The native BVH: a sphere competes with Embree's float triangle hits by float t'.
+        const auto tf = static_cast<float>((h.t - c.shift) * c.len);
+        if (!(tf <= rh->ray.tfar)) return true;
+        rh->ray.tfar = tf;
+        rh->hit.geomID = h.object;
+        rh->hit.primID = h.primitive;
+        rh->hit.u = rh->hit.v = 0.0f;
+        c.best = h;
+        return false;  // the nearer root came first: the far one cannot be closer
+    });
+}
+
+void user_occluded(const RTCOccludedFunctionNArguments* args) {
+    if (!args->valid[0]) return;
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    RayContext& c = ctx_of(args->context);
+    auto* ray = reinterpret_cast<RTCRay*>(args->ray);
+    double_candidates(c, g->object, args->primID, [&](const Hit&) {
+        ray->tfar = -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
+        return false;
+    });
+}
+
+/// Context filter for `all` on native triangles: record the float hit, then reject it so the
+/// traversal goes on to the next one.
+void collect_filter(const RTCFilterFunctionNArguments* args) {
+    RayContext& c = ctx_of(args->context);
+    if (args->N != 1 || !args->valid[0] || !c.collect) return;
+    const auto* hit = reinterpret_cast<const RTCHit*>(args->hit);
+    const auto* ray = reinterpret_cast<const RTCRay*>(args->ray);
+    if (c.accel->scene->objects[hit->geomID].kind == ObjectKind::sphere) return;  // user geom
+    Hit h;
+    h.object = hit->geomID;
+    h.primitive = hit->primID;
+    h.t = c.shift + static_cast<double>(ray->tfar) / c.len;
+    h.u = hit->u;
+    h.v = hit->v;
+    c.collect->push_back(h);
+    args->valid[0] = 0;
+}
+
+RTCGeometry make_user_geometry(RTCDevice device, GeomData* data, unsigned prims) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, prims);
+    rtcSetGeometryUserData(g, data);
+    rtcSetGeometryBoundsFunction(g, user_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, user_intersect);
+    rtcSetGeometryOccludedFunction(g, user_occluded);
+    return g;
+}
+
+RTCGeometry make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Vec3d& center) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
+    if (!v || !idx) return g;  // the error callback has recorded why; commit reports it
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+        const Vec3d q = mesh.positions[i] - center;
+        v[3 * i + 0] = static_cast<float>(q.x);
+        v[3 * i + 1] = static_cast<float>(q.y);
+        v[3 * i + 2] = static_cast<float>(q.z);
+    }
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+        idx[3 * i + 0] = mesh.triangles[i][0];
+        idx[3 * i + 1] = mesh.triangles[i][1];
+        idx[3 * i + 2] = mesh.triangles[i][2];
+    }
+    return g;
+}
+
+/// Sets up the float ray for a double ray: it starts where the double ray enters the padded
+/// scene bounds (or at tmin, if later), with a unit direction. False when the ray's segment
+/// misses the bounds altogether, so nothing can be hit.
+bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayContext& c,
+                 RTCRay& r) {
+    // Slab test in double (Kay & Kajiya 1986) against the padded bounds.
+    double t0 = ray.tmin, t1 = ray.tmax;
+    for (std::size_t k = 0; k < 3; ++k) {
+        const double o = ray.origin[k], d = ray.direction[k];
+        const double lo = a.padded_bounds.lo[k], hi = a.padded_bounds.hi[k];
+        if (d == 0.0) {
+            if (o < lo || o > hi) return false;
+            continue;
+        }
+        double ta = (lo - o) / d, tb = (hi - o) / d;
+        if (ta > tb) std::swap(ta, tb);
+        // Widen by a few ulps: the divisions round, and a hit at the slab's edge must survive.
+        t0 = std::max(t0, ta - gamma(3) * std::abs(ta));
+        t1 = std::min(t1, tb + gamma(3) * std::abs(tb));
+    }
+    if (!(t0 <= t1)) return false;
+    c.ray = &ray;
+    c.len = length(ray.direction);
+    c.margin = 4.0 * a.pad;
+    // The exact path backs the origin off by the padding so that a hit at exactly tmin lies
+    // strictly inside the float segment; its double test still enforces tmin.
+    c.shift = back_off ? t0 - c.margin / c.len : t0;
+    const Vec3d org = ray.at(c.shift) - a.center;
+    const Vec3d dir = ray.direction / c.len;
+    r.org_x = static_cast<float>(org.x);
+    r.org_y = static_cast<float>(org.y);
+    r.org_z = static_cast<float>(org.z);
+    r.dir_x = static_cast<float>(dir.x);
+    r.dir_y = static_cast<float>(dir.y);
+    r.dir_z = static_cast<float>(dir.z);
+    r.tnear = 0.0f;
+    r.tfar = std::isinf(t1) ? std::numeric_limits<float>::infinity() : tfar_for(c, t1);
+    r.time = 0.0f;
+    r.mask = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: 0 would hit nothing
+    r.id = 0;
+    r.flags = 0;
+    return true;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+EmbreeAccel::EmbreeAccel(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+EmbreeAccel::~EmbreeAccel() = default;
+
+Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
+    RTCDevice device = shared_device();
+    if (!device) return Status::error(Code::internal, "cannot create the Embree device");
+    auto impl = std::make_unique<Impl>();
+    impl->scene = &scene;
+    impl->geoms.reserve(scene.objects.size());
+
+    // Padding of the exact BVH's boxes: the float ray differs from the double one by the
+    // rounding of its origin (inside the bounds, relative to their centre, so ≤ u_f·diagonal)
+    // and of its unit direction (≤ u_f per component, times at most the diagonal along the
+    // segment); boxes round outward. 8·u_f·(2·diagonal) covers all three with room to spare.
+    const Bounds3 b = scene.bounds();
+    if (!b.empty()) {
+        impl->center = b.center();
+        impl->float_scale = 2.0 * length(b.diagonal()) + 1e-300;
+        impl->pad = 8.0 * kFloatUnitRoundoff * impl->float_scale + 1e-300;
+        impl->padded_bounds = b;
+        impl->padded_bounds.lo -= Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
+        impl->padded_bounds.hi += Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
+    }
+
+    take_embree_error("");  // start clean on this thread
+    impl->native = rtcNewScene(device);
+    rtcSetSceneFlags(impl->native, static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST |
+                                                             RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        impl->geoms.push_back(GeomData{impl.get(), i});
+        RTCGeometry g;
+        if (o.kind == ObjectKind::sphere) {
+            g = make_user_geometry(device, &impl->geoms.back(), 1);
+            ++impl->spheres;
+        } else {
+            g = make_triangle_geometry(device, *o.mesh, impl->center);
+            impl->triangles += o.mesh->size();
+        }
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(impl->native, g, i);  // geomID == object index
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(impl->native);
+    Status st = take_embree_error("building the BVH");
+    if (!st.ok()) return st;
+    return std::unique_ptr<EmbreeAccel>(new EmbreeAccel(std::move(impl)));
+}
+
+void EmbreeAccel::Impl::build_exact() const {
+    RTCDevice device = shared_device();
+    take_embree_error("");
+    RTCScene s = rtcNewScene(device);
+    rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
+    for (std::uint32_t i = 0; i < scene->objects.size(); ++i) {
+        const Object& o = scene->objects[i];
+        RTCGeometry g = make_user_geometry(device, const_cast<GeomData*>(&geoms[i]),
+                                           static_cast<unsigned>(o.primitive_count()));
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(s, g, i);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(s);
+    exact_status = take_embree_error("building the exact BVH");
+    exact = s;  // written once, under call_once, before any query can read it
+    exact_ready = true;
+}
+
+std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
+                                        bool want_normal) const {
+    const Impl& a = *impl_;
+    RayContext c;
+    rtcInitIntersectContext(&c.rtc);
+    c.accel = &a;
+    RTCRayHit rh;
+    if (precision == Precision::exact) {
+        RTCScene s = a.exact_scene();
+        if (!s) return linear_closest(*a.scene, ray, want_normal);  // could not build: still exact
+        c.exact = true;
+        if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray)) return std::nullopt;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(s, &c.rtc, &rh);
+        if (!c.best) return std::nullopt;
+        Hit h = *c.best;
+        if (want_normal) {
+            const Object& o = a.scene->objects[h.object];
+            if (o.kind == ObjectKind::sphere) {
+                sphere_normal(o.sphere, ray, h.t, h);
+            } else {
+                h.normal = triangle_normal(o.mesh->triangle(h.primitive));
+            }
+        }
+        return h;
+    }
+
+    if (!prepare_ray(a, ray, /*back_off=*/false, c, rh.ray)) return std::nullopt;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(a.native, &c.rtc, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+        // Embree's float test can let a ray through a shared vertex (measured: about 1 in 2,000
+        // rays aimed exactly at vertices). refined promises no such leak, so a float miss is
+        // confirmed by the exact traversal, which is cheap for rays that really miss.
+        return precision == Precision::refined ? closest(ray, Precision::exact, want_normal)
+                                               : std::nullopt;
+    }
+    const std::uint32_t object = rh.hit.geomID;
+    const Object& o = a.scene->objects[object];
+    if (o.kind == ObjectKind::sphere) {
+        // The sphere callback already decided in double; c.best holds its hit.
+        Hit h = *c.best;
+        if (want_normal) sphere_normal(o.sphere, ray, h.t, h);
+        return h;
+    }
+    const Triangle tri = o.mesh->triangle(rh.hit.primID);
+    Hit h;
+    h.t = c.shift + static_cast<double>(rh.ray.tfar) / c.len;
+    h.u = rh.hit.u;
+    h.v = rh.hit.v;
+    // A float kernel: relative error of a few float ulps of the scene's coordinates.
+    h.t_err = gamma_float(12) * (a.float_scale / c.len + std::abs(h.t));
+    // Embree's Ng = cross(v2−v0, v0−v1) = (b−a)×(c−a) up to rounding: its sign gives the side.
+    const Vec3d ng{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    h.front_face = dot(ray.direction, ng) < 0.0;
+    if (want_normal) h.normal = triangle_normal(tri);
+    if (precision == Precision::refined) {
+        // Embree chose the primitive; the hit on it is recomputed in double. Near an edge the
+        // double test may put the point a hair outside: keep Embree's verdict, and take the
+        // plane crossing for t.
+        auto d = intersect_triangle(tri, ray, want_normal);
+        if (!d) d = triangle_plane_hit(tri, ray, want_normal);
+        if (d) h = *d;
+        // The float origin can round across tmin (or the float t across tmax): a primitive
+        // whose double t lies outside the range was the wrong choice. Decide exactly.
+        if (!(h.t >= ray.tmin && h.t <= ray.tmax)) {
+            return closest(ray, Precision::exact, want_normal);
+        }
+    } else {
+        // fast reports float t; keep it inside the range the client asked for.
+        h.t = std::min(std::max(h.t, ray.tmin), ray.tmax);
+    }
+    h.object = object;
+    h.primitive = rh.hit.primID;
+    return h;
+}
+
+bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
+    const Impl& a = *impl_;
+    RayContext c;
+    rtcInitIntersectContext(&c.rtc);
+    c.accel = &a;
+    RTCScene s = a.native;
+    if (precision == Precision::exact) {
+        s = a.exact_scene();
+        if (!s) return linear_any(*a.scene, ray);
+    }
+    RTCRay r;
+    if (!prepare_ray(a, ray, precision == Precision::exact, c, r)) return false;
+    rtcOccluded1(s, &c.rtc, &r);
+    const bool hit = r.tfar == -std::numeric_limits<float>::infinity();
+    // As in closest: a float miss is confirmed by the exact traversal before refined says so.
+    if (!hit && precision == Precision::refined) return any(ray, Precision::exact);
+    return hit;
+}
+
+void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
+                      std::vector<Hit>& out) const {
+    out.clear();
+    const Impl& a = *impl_;
+    RayContext c;
+    rtcInitIntersectContext(&c.rtc);
+    c.accel = &a;
+    c.collect = &out;
+    RTCRayHit rh;
+    // Counting crossings must not leak through shared vertices, which Embree's float test
+    // occasionally does: refined counts on the exact path. fast shows what float gives.
+    if (precision != Precision::fast) {
+        RTCScene s = a.exact_scene();
+        if (!s) return linear_all(*a.scene, ray, want_normal, out);
+        c.exact = true;
+        if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray)) return;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(s, &c.rtc, &rh);
+        for (Hit& h : out) {
+            const Object& o = a.scene->objects[h.object];
+            if (want_normal && o.kind != ObjectKind::sphere) {
+                h.normal = triangle_normal(o.mesh->triangle(h.primitive));
+            }
+        }
+        sort_and_merge_edge_duplicates(out);
+        return;
+    }
+    if (!prepare_ray(a, ray, /*back_off=*/false, c, rh.ray)) return;
+    c.rtc.filter = collect_filter;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(a.native, &c.rtc, &rh);
+    // Float hits on triangles are recomputed in double. Which triangles of a shared edge the
+    // float test reports is its own business, so "on an edge" is judged with a float-sized
+    // tolerance on the barycentrics, and such hits of one object that agree in t merge.
+    constexpr double kEdgeTolerance = 1e-5;
+    for (Hit& h : out) {
+        const Object& o = a.scene->objects[h.object];
+        if (o.kind == ObjectKind::sphere) continue;
+        const Triangle tri = o.mesh->triangle(h.primitive);
+        const double fu = h.u, fv = h.v;
+        auto d = triangle_plane_hit(tri, ray, want_normal);
+        if (d) {
+            const std::uint32_t object = h.object, prim = h.primitive;
+            h = *d;
+            h.object = object;
+            h.primitive = prim;
+        }
+        h.on_edge = fu <= kEdgeTolerance || fv <= kEdgeTolerance || 1.0 - fu - fv <= kEdgeTolerance;
+        h.t_err = std::max(h.t_err, gamma_float(12) * (a.float_scale / c.len + std::abs(h.t)));
+    }
+    sort_and_merge_edge_duplicates(out);
+}
+
+std::size_t EmbreeAccel::memory_bytes() const {
+    const Impl& a = *impl_;
+    std::size_t bytes = a.triangles * (kBytesPerTriangle + 12 * sizeof(float)) +
+                        a.spheres * kBytesPerUserPrimitive;
+    if (a.exact_ready) bytes += (a.triangles + a.spheres) * kBytesPerUserPrimitive;
+    return bytes;
+}
+
+}  // namespace raycastd::engine
