@@ -1,0 +1,400 @@
+// bench_intersect: raycastd's engine called in-process against raw Embree (the ceiling), on the
+// same workloads and the same rays in the same run. Prints one line per measurement and, with
+// --json, writes every figure for bench/run_all.py; with --data-dir it also writes the meshes,
+// rays and raw Embree's hits that the out-of-process peers (HTTP, Open3D) are run on.
+//
+//   bench_intersect                 full size: A 81,920 / B 1,024,000 triangles, C 1000 spheres,
+//                                   1M coherent + 1M incoherent rays each
+//   bench_intersect --quick         small sizes (seconds)
+//   bench_intersect --smoke         tiny sizes, < 1 s; exits 1 if the engine disagrees with
+//                                   Embree (this is the CTest `bench_smoke`)
+//   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "bench/bench_files.h"
+#include "bench/raw_embree.h"
+#include "bench/timing.h"
+#include "bench/workloads.h"
+#include "engine/query/intersect.h"
+
+namespace rb = raycastd::bench;
+namespace re = raycastd::engine;
+using nlohmann::json;
+
+namespace {
+
+/// The sizes of one preset.
+struct Sizes {
+    const char* name;
+    int ico_level;            ///< A: 20·4^level triangles
+    int field_count;          ///< B: this many icospheres ...
+    int field_level;          ///< ... of this level
+    int spheres;              ///< C
+    int image;                ///< coherent rays: image × image pixels
+    std::size_t random_rays;  ///< incoherent rays
+    double budget_s;          ///< per engine measurement
+    int reps;                 ///< timed repetitions of each raw Embree measurement
+};
+
+constexpr Sizes kFull{"full", 6, 200, 4, 1000, 1024, std::size_t{1} << 20, 1.5, 5};
+constexpr Sizes kQuick{"quick", 4, 50, 3, 200, 256, std::size_t{1} << 16, 0.3, 3};
+constexpr Sizes kSmoke{"smoke", 2, 8, 1, 20, 64, 4096, 0.02, 1};
+
+constexpr std::uint64_t kFieldSeed = 0x5eed0001;
+constexpr std::uint64_t kSphereSeed = 0x5eed0002;
+constexpr std::uint64_t kRaySeed = 0x5eed0003;
+constexpr std::uint32_t kMiss = 0xFFFFFFFFu;
+/// The smoke test fails below this agreement with Embree. Not 1: Embree's single-precision test
+/// and the engine may legitimately disagree on rays that graze an edge or a silhouette.
+constexpr double kMinAgreement = 0.99;
+
+struct Args {
+    Sizes sizes = kFull;
+    int threads = static_cast<int>(std::thread::hardware_concurrency());
+    double budget_s = -1.0;  ///< < 0: the preset's
+    std::string workloads = "ABC";
+    std::string data_dir;
+    std::string json_path;
+};
+
+bool parse_args(int argc, char** argv, Args& a) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        auto value = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
+        if (arg == "--smoke") {
+            a.sizes = kSmoke;
+        } else if (arg == "--quick") {
+            a.sizes = kQuick;
+        } else if (arg == "--threads") {
+            a.threads = std::atoi(value().c_str());
+        } else if (arg == "--budget") {
+            a.budget_s = std::atof(value().c_str());
+        } else if (arg == "--workloads") {
+            a.workloads = value();
+        } else if (arg == "--data-dir") {
+            a.data_dir = value();
+        } else if (arg == "--json") {
+            a.json_path = value();
+        } else {
+            std::fprintf(stderr, "bench_intersect: unknown argument %s\n", arg.c_str());
+            return false;
+        }
+    }
+    if (a.budget_s < 0.0)
+        a.budget_s = a.sizes.budget_s;
+    return a.threads > 0;
+}
+
+/// Collects the measurements, printing each as it arrives.
+class Report {
+  public:
+    void trace(const std::string& workload, const std::string& rays, const std::string& peer,
+               const std::string& variant, const std::string& mode, const std::string& precision,
+               const rb::BudgetedTiming& t, json extra) {
+        json row = {
+            {"kind", "trace"},        {"workload", workload},       {"rays", rays},
+            {"peer", peer},           {"variant", variant},         {"mode", mode},
+            {"precision", precision}, {"mrays_s", t.mrays_per_s()}, {"measured_rays", t.rays},
+            {"total_rays", t.total},  {"sampled", t.sampled()}};
+        row.update(extra);
+        if (peer == "raw_embree" && variant == "rtcIntersect1")
+            ceiling_[workload + rays] = t.mrays_per_s();
+        const double ceiling = ceiling_.value(workload + rays, 0.0);
+        std::printf("%-2s %-10s %-10s %-22s %-7s %-7s %9.3f Mrays/s  %5.2fx%s\n", workload.c_str(),
+                    rays.c_str(), peer.c_str(), variant.c_str(), mode.c_str(), precision.c_str(),
+                    t.mrays_per_s(), ceiling > 0 ? t.mrays_per_s() / ceiling : 0.0,
+                    t.sampled() ? ("  (sample of " + std::to_string(t.rays) + ")").c_str() : "");
+        std::fflush(stdout);
+        rows_.push_back(std::move(row));
+    }
+    void build(const std::string& workload, const std::string& peer, const std::string& variant,
+               double ms) {
+        std::printf("%-2s %-10s %-10s %-30s %20.1f ms\n", workload.c_str(), "build", peer.c_str(),
+                    variant.c_str(), ms);
+        rows_.push_back({{"kind", "build"},
+                         {"workload", workload},
+                         {"peer", peer},
+                         {"variant", variant},
+                         {"ms", ms}});
+    }
+    json& meta() { return meta_; }
+    bool write(const std::string& path) const {
+        std::ofstream out(path);
+        out << json{{"meta", meta_}, {"rows", rows_}}.dump(1) << "\n";
+        return static_cast<bool>(out);
+    }
+
+  private:
+    json meta_ = json::object();
+    json rows_ = json::array();
+    json ceiling_ = json::object();
+};
+
+/// Fraction of the sampled rays on which the engine's closest hit matches Embree's: same
+/// hit/miss, and the same primitive or (a neighbour across a shared edge) the same t.
+double closest_agreement(const re::QueryResult& r, const std::vector<std::size_t>& idx,
+                         const rb::RawHits& ref) {
+    std::size_t agree = 0;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const re::Hit& h = r.hits[k];
+        const std::size_t i = idx[k];
+        const bool ref_hit = ref.object[i] != kMiss;
+        if (h.valid() != ref_hit)
+            continue;
+        if (!ref_hit || (h.object == ref.object[i] && h.primitive == ref.primitive[i]) ||
+            std::abs(h.t - ref.t[i]) <= 1e-4 * std::max(1.0, std::abs(h.t))) {
+            ++agree;
+        }
+    }
+    return idx.empty() ? 1.0 : static_cast<double>(agree) / idx.size();
+}
+
+double any_agreement(const re::QueryResult& r, const std::vector<std::size_t>& idx,
+                     const std::vector<std::uint8_t>& ref) {
+    std::size_t agree = 0;
+    for (std::size_t k = 0; k < idx.size(); ++k)
+        agree += r.hits[k].valid() == (ref[idx[k]] != 0);
+    return idx.empty() ? 1.0 : static_cast<double>(agree) / idx.size();
+}
+
+/// Hits per ray in the engine's answer (for `all`/`count`: crossings per ray).
+double hits_per_ray(const re::QueryResult& r, re::Mode mode, std::size_t n) {
+    if (n == 0)
+        return 0.0;
+    double hits = 0;
+    if (mode == re::Mode::count) {
+        for (auto c : r.counts)
+            hits += c;
+    } else if (mode == re::Mode::all) {
+        hits = r.offsets.empty() ? 0.0 : r.offsets.back();
+    } else {
+        for (const auto& h : r.hits)
+            hits += h.valid();
+    }
+    return hits / static_cast<double>(n);
+}
+
+struct RaySetRefs {
+    rb::RawHits closest;
+    std::vector<std::uint8_t> occluded;
+};
+
+/// Raw Embree on one ray set: the four call kinds, plus rtcIntersect1 on a ROBUST scene.
+RaySetRefs bench_raw(Report& report, const rb::Workload& w, const std::string& rays_name,
+                     const std::vector<rb::RayRecord>& rays, const rb::RawEmbree& embree,
+                     const rb::RawEmbree& robust, int reps) {
+    const bool coherent = rays_name == "coherent";
+    const std::size_t n = rays.size();
+    RaySetRefs refs;
+    refs.closest.prepare(n);
+    refs.occluded.assign(n, 0);
+    auto timing = [&](double s) { return rb::BudgetedTiming{s, n, n}; };
+    auto row = [&](const char* variant, const char* mode, double s, double hit_fraction) {
+        report.trace(w.name, rays_name, "raw_embree", variant, mode, "fast", timing(s),
+                     {{"hits_per_ray", hit_fraction}});
+    };
+    double s = rb::median_seconds(reps, [&] { embree.intersect1(rays, refs.closest); });
+    row("rtcIntersect1", "closest", s, double(refs.closest.hit_count()) / n);
+    rb::RawHits packets;
+    packets.prepare(n);
+    s = rb::median_seconds(reps, [&] { embree.intersect16(rays, coherent, packets); });
+    row("rtcIntersect16", "closest", s, double(packets.hit_count()) / n);
+    s = rb::median_seconds(reps, [&] { embree.occluded1(rays, refs.occluded); });
+    auto occluded_fraction = [&](const std::vector<std::uint8_t>& o) {
+        std::size_t c = 0;
+        for (auto x : o)
+            c += x;
+        return double(c) / n;
+    };
+    row("rtcOccluded1", "any", s, occluded_fraction(refs.occluded));
+    std::vector<std::uint8_t> occluded16(n, 0);
+    s = rb::median_seconds(reps, [&] { embree.occluded16(rays, coherent, occluded16); });
+    row("rtcOccluded16", "any", s, occluded_fraction(occluded16));
+    rb::RawHits robust_hits;
+    robust_hits.prepare(n);
+    s = rb::median_seconds(reps, [&] { robust.intersect1(rays, robust_hits); });
+    row("rtcIntersect1 ROBUST", "closest", s, double(robust_hits.hit_count()) / n);
+    return refs;
+}
+
+/// The engine in-process on one ray set: every mode at every precision, time-budgeted.
+/// Returns the lowest agreement with Embree seen (closest and any).
+double bench_engine(Report& report, const rb::Workload& w, const std::string& rays_name,
+                    const std::vector<rb::RayRecord>& rays, const re::QueryEngine& engine,
+                    const RaySetRefs& refs, double budget_s) {
+    const std::vector<re::Ray> all = rb::to_engine_rays(rays);
+    double worst = 1.0;
+    for (re::Mode mode : {re::Mode::closest, re::Mode::any, re::Mode::all, re::Mode::count}) {
+        for (re::Precision p :
+             {re::Precision::fast, re::Precision::refined, re::Precision::exact}) {
+            const re::QueryOptions opt{mode, p, /*want_normal=*/true};
+            std::vector<re::Ray> sample;
+            std::vector<std::size_t> idx;
+            re::QueryResult last;
+            const auto t = rb::budgeted_seconds(all.size(), budget_s, [&](std::size_t n) {
+                if (idx.size() != n) {
+                    idx = rb::strided_sample(all.size(), n);
+                    sample.clear();
+                    if (n < all.size()) {
+                        for (std::size_t i : idx)
+                            sample.push_back(all[i]);
+                    }
+                }
+                const std::vector<re::Ray>& input = n < all.size() ? sample : all;
+                re::QueryResult r;
+                const double s = rb::seconds([&] { r = engine.intersect(input, opt); });
+                last = std::move(r);  // frees the previous answer outside the timed region
+                return s;
+            });
+            json extra = {{"answered_precision", re::to_string(last.precision)},
+                          {"hits_per_ray", hits_per_ray(last, mode, t.rays)}};
+            if (mode == re::Mode::closest || mode == re::Mode::any) {
+                const double agree = mode == re::Mode::closest
+                                         ? closest_agreement(last, idx, refs.closest)
+                                         : any_agreement(last, idx, refs.occluded);
+                extra["agree_with_embree"] = agree;
+                worst = std::min(worst, agree);
+            }
+            report.trace(w.name, rays_name, "engine", "QueryEngine::intersect", re::to_string(mode),
+                         re::to_string(p), t, extra);
+        }
+    }
+    return worst;
+}
+
+rb::Workload make_workload(char name, const Sizes& s) {
+    switch (name) {
+        case 'A':
+            return rb::make_icosphere(s.ico_level);
+        case 'B':
+            return rb::make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
+        default:
+            return rb::make_sphere_field(s.spheres, kSphereSeed);
+    }
+}
+
+bool write_workload_files(const std::string& dir, const rb::Workload& w) {
+    const std::string stem = dir + "/" + w.name;
+    if (!w.spheres.empty())
+        return rb::write_sphere_scene(stem + "_scene.json", w);
+    return rb::write_ply(stem + ".ply", w) && rb::write_mesh_arrays(stem, w);
+}
+
+/// Everything for one workload. Returns false on an error that makes its figures meaningless.
+bool bench_workload(Report& report, const rb::Workload& w, const Args& args, double& worst) {
+    const Sizes& s = args.sizes;
+    json& meta = report.meta()["workloads"][w.name];
+    meta = {{"description", w.description},
+            {"triangles", w.triangles.size()},
+            {"spheres", w.spheres.size()}};
+    if (!args.data_dir.empty() && !write_workload_files(args.data_dir, w)) {
+        std::fprintf(stderr, "bench_intersect: cannot write %s's files to %s\n", w.name.c_str(),
+                     args.data_dir.c_str());
+        return false;
+    }
+
+    std::string error;
+    // The first build in the process also starts TBB's and Embree's threads: keep it untimed.
+    rb::RawEmbree::build(w, rb::BuildQuality::low, /*robust=*/false, error);
+    for (auto q : {rb::BuildQuality::low, rb::BuildQuality::high}) {
+        auto e = rb::RawEmbree::build(w, q, /*robust=*/false, error);
+        if (!e)
+            break;
+        report.build(w.name, "raw_embree", std::string("rtcCommitScene ") + to_string(q),
+                     e->build_ms());
+    }
+    auto embree = rb::RawEmbree::build(w, rb::BuildQuality::medium, /*robust=*/false, error);
+    auto robust = embree ? rb::RawEmbree::build(w, rb::BuildQuality::medium, true, error) : nullptr;
+    if (!embree || !robust) {
+        std::fprintf(stderr, "bench_intersect: %s\n", error.c_str());
+        return false;
+    }
+    report.build(w.name, "raw_embree", "rtcCommitScene medium", embree->build_ms());
+    report.build(w.name, "raw_embree", "rtcCommitScene medium ROBUST", robust->build_ms());
+
+    auto scene = std::make_shared<const re::Scene>(rb::to_engine_scene(w));
+    re::Result<std::shared_ptr<const re::QueryEngine>> built =
+        re::Status::error(re::Code::internal, "not built");
+    const double build_s =
+        rb::median_seconds(s.reps > 1 ? 3 : 1, [&] { built = re::QueryEngine::build(scene); });
+    if (!built.ok()) {
+        std::fprintf(stderr, "bench_intersect: QueryEngine::build: %s\n",
+                     built.status().message.c_str());
+        return false;
+    }
+    report.build(w.name, "engine", "QueryEngine::build", 1e3 * build_s);
+    const re::QueryEngine& engine = **built;
+
+    for (const std::string rays_name : {"coherent", "incoherent"}) {
+        const auto rays = rays_name == "coherent" ? rb::camera_rays(w, s.image, s.image)
+                                                  : rb::random_rays(w, s.random_rays, kRaySeed);
+        meta["rays"][rays_name] = rays.size();
+        const RaySetRefs refs = bench_raw(report, w, rays_name, rays, *embree, *robust, s.reps);
+        if (!args.data_dir.empty()) {
+            const std::string stem = args.data_dir + "/" + w.name + "_" + rays_name;
+            if (!rb::write_rays(stem + "_rays.npy", rays) ||
+                !rb::write_hits(stem + "_ref", refs.closest)) {
+                std::fprintf(stderr, "bench_intersect: cannot write %s\n", stem.c_str());
+                return false;
+            }
+        }
+        worst =
+            std::min(worst, bench_engine(report, w, rays_name, rays, engine, refs, args.budget_s));
+    }
+    return true;
+}
+
+std::string utc_now() {
+    const std::time_t now = std::time(nullptr);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+    return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Args args;
+    if (!parse_args(argc, argv, args))
+        return 2;
+    // Every TBB loop in the process (ours, the engine's, Embree's BVH build) uses this many
+    // threads.
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                static_cast<std::size_t>(args.threads));
+    Report report;
+    report.meta() = {{"preset", args.sizes.name},          {"threads", args.threads},
+                     {"embree", rb::RawEmbree::version()}, {"date", utc_now()},
+                     {"budget_s", args.budget_s},          {"workloads", json::object()}};
+    std::printf("bench_intersect: preset %s, %d threads, Embree %s\n", args.sizes.name,
+                args.threads, rb::RawEmbree::version().c_str());
+    double worst = 1.0;
+    bool ok = true;
+    for (char name : args.workloads) {
+        const rb::Workload w = make_workload(name, args.sizes);
+        std::printf("-- %s: %s\n", w.name.c_str(), w.description.c_str());
+        ok = bench_workload(report, w, args, worst) && ok;
+    }
+    report.meta()["worst_agreement"] = worst;
+    if (!args.json_path.empty() && !report.write(args.json_path)) {
+        std::fprintf(stderr, "bench_intersect: cannot write %s\n", args.json_path.c_str());
+        ok = false;
+    }
+    std::printf("worst agreement of the engine with Embree (closest, any): %.4f\n", worst);
+    if (worst < kMinAgreement) {
+        std::fprintf(stderr,
+                     "bench_intersect: the engine disagrees with Embree on %.2f%% of rays\n",
+                     100.0 * (1.0 - worst));
+        ok = false;
+    }
+    return ok ? 0 : 1;
+}
