@@ -47,7 +47,10 @@ void send_json(httplib::Response& res, std::string body, int status) {
     res.set_content(std::move(body), "application/json");
 }
 
-App::App(Config config) : config_(std::move(config)) {
+App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_root) {
+    registry_ = std::make_unique<SceneRegistry>(
+        config_.data_dir, config_.limits.memory_budget_bytes,
+        [this](const SceneSource& src, const FileSource& files) { return build_scene(src, files); });
     const int threads = threads_ = pick_worker_threads(config_);
     max_concurrent_ = config_.limits.max_concurrent ? config_.limits.max_concurrent
                                                     : static_cast<std::size_t>(2 * threads);
@@ -111,6 +114,7 @@ void App::install_routes() {
     install_meta_routes(*this);
     install_query_routes(*this);
     install_trace_routes(*this);
+    install_scene_routes(*this);
 }
 
 int App::bind() {
@@ -162,23 +166,110 @@ Json App::parse_json_body(const httplib::Request& req) {
 
 namespace raycastd::server {
 
-std::shared_ptr<const engine::QueryEngine> App::build_stateless_scene(const Json& doc,
-                                                                       const std::string& prefix) {
-    auto scene = std::make_shared<engine::Scene>(parse_scene_doc(doc, prefix, {}));
-    if (scene->triangle_count() > config_.limits.max_triangles) {
-        throw api_error("too_large", "the scene has " + std::to_string(scene->triangle_count()) +
+namespace {
+
+std::shared_ptr<const engine::QueryEngine> prepare(engine::Scene scene, const Limits& limits,
+                                                   const std::string& prefix) {
+    if (scene.triangle_count() > limits.max_triangles) {
+        throw api_error("too_large", "the scene has " + std::to_string(scene.triangle_count()) +
                                          " triangles, over the limit of " +
-                                         std::to_string(config_.limits.max_triangles),
+                                         std::to_string(limits.max_triangles),
                         prefix);
     }
-    auto built = engine::QueryEngine::build(std::move(scene));
+    auto built = engine::QueryEngine::build(std::make_shared<engine::Scene>(std::move(scene)));
     if (!built.ok()) throw from_status(built.status(), prefix);
     return *built;
 }
 
-void App::add_registry_info(Json& info) const { info["scenes_loaded"] = 0; }
+}  // namespace
+
+std::shared_ptr<const engine::QueryEngine> App::build_stateless_scene(
+    const Json& doc, const std::string& prefix) const {
+    return prepare(scene_from_document(doc, prefix, scene_root_files(), config_.limits),
+                   config_.limits, prefix);
+}
+
+std::shared_ptr<const engine::QueryEngine> App::build_scene(const SceneSource& src,
+                                                            const FileSource& files) const {
+    if (src.content_type == "application/json") {
+        Json doc;
+        try {
+            doc = Json::parse(src.body);
+        } catch (const Json::parse_error& e) {
+            throw api_error("bad_json", "body is not valid JSON: byte " + std::to_string(e.byte) +
+                                            ": " + e.what());
+        } catch (const Json::exception& e) {
+            throw api_error("bad_json", std::string("body is not usable JSON: ") + e.what());
+        }
+        return prepare(scene_from_document(doc, "", files, config_.limits), config_.limits, "");
+    }
+    auto format = format_from_content_type(src.content_type);
+    if (!format) throw api_error("unsupported_format", "cannot load " + src.content_type);
+    return prepare(scene_from_model(src.body, *format, "model", config_.limits), config_.limits, "");
+}
+
+FileSource App::scene_root_files() const {
+    return [this](const std::string& path) {
+        return scene_root_.read(path, config_.limits.max_body_bytes);
+    };
+}
+
+ApiError App::scene_not_found(const std::string& id) {
+    return api_error("scene_not_found", "no scene with id " + id);
+}
+
+std::shared_ptr<const engine::QueryEngine> App::scene_or_404(const std::string& id) {
+    auto engine = registry_->get(id);
+    if (!engine) throw scene_not_found(id);
+    return engine;
+}
+
+std::string App::classify_scene_body(const httplib::Request& req) const {
+    if (req.body.empty()) throw api_error("bad_json", "empty body: a scene document or model file is required");
+    std::string ct = req.get_header_value("Content-Type");
+    ct = ct.substr(0, ct.find(';'));
+    if (ct == "application/json") return ct;
+    if (format_from_content_type(ct)) return ct;
+    if (!ct.empty() && ct != "application/octet-stream" && ct != "application/x-www-form-urlencoded" &&
+        ct != "text/plain") {
+        throw api_error("unsupported_format",
+                        "Content-Type " + ct +
+                            " is not a scene document (application/json) or a model type "
+                            "(model/gltf-binary, model/gltf+json, model/obj, application/sla, "
+                            "application/x-ply, model/off)");
+    }
+    // No usable type (curl -d sends form-urlencoded): tell by the bytes.
+    if (auto f = engine::sniff_format(req.body)) {
+        switch (*f) {
+            case engine::ModelFormat::glb: return "model/gltf-binary";
+            case engine::ModelFormat::ply: return "application/x-ply";
+            case engine::ModelFormat::stl: return "application/sla";
+            case engine::ModelFormat::off: return "model/off";
+            case engine::ModelFormat::obj: return "model/obj";
+            case engine::ModelFormat::gltf: break;  // JSON: a glTF or a scene document
+        }
+    }
+    const auto first = req.body.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && req.body[first] == '{') {
+        // A glTF document has an "asset" object; a scene document has "objects".
+        try {
+            const Json j = Json::parse(req.body);
+            if (j.is_object() && j.contains("asset") && !j.contains("objects")) return "model/gltf+json";
+        } catch (const Json::exception&) {
+        }
+        return "application/json";
+    }
+    throw api_error("unsupported_format", "cannot tell what the body is; set Content-Type");
+}
+
+void App::add_registry_info(Json& info) const {
+    info["scenes_registered"] = registry_->size();
+    info["scenes_loaded"] = registry_->resident();
+    info["scene_memory_bytes"] = registry_->resident_bytes();
+}
 
 bool App::start(std::string& error) {
+    if (!registry_->open(error)) return false;
     for (const std::string& path : config_.demo) {
         std::ifstream f(path, std::ios::binary);
         if (!f) {
@@ -188,7 +279,9 @@ bool App::start(std::string& error) {
         std::stringstream ss;
         ss << f.rdbuf();
         try {
-            build_stateless_scene(Json::parse(ss.str()), "");
+            auto added = registry_->add(SceneSource{"application/json", ss.str()}, scene_root_files());
+            std::fprintf(stderr, "raycastd: demo scene %s registered as %s\n", path.c_str(),
+                         added.info.id.c_str());
         } catch (const std::exception& e) {
             error = "demo scene " + path + ": " + e.what();
             return false;
@@ -196,5 +289,4 @@ bool App::start(std::string& error) {
     }
     return true;
 }
-
 }  // namespace raycastd::server

@@ -12,7 +12,9 @@
 #include "engine/query/intersect.h"
 #include "server/api_error.h"
 #include "server/config.h"
+#include "server/scene_registry.h"
 #include "server/schema/json_read.h"
+#include "server/uri_resolver.h"
 
 namespace raycastd::server {
 
@@ -51,7 +53,20 @@ public:
     /// Parses a scene document of a stateless call and prepares it for queries (ApiError on
     /// any problem; paths start with `prefix`).
     std::shared_ptr<const engine::QueryEngine> build_stateless_scene(const Json& doc,
-                                                                     const std::string& prefix);
+                                                                     const std::string& prefix) const;
+    SceneRegistry& registry() { return *registry_; }
+    /// Reads files under --scene-root (confined; see uri_resolver.h).
+    FileSource scene_root_files() const;
+    /// The registered scene, or scene_not_found.
+    std::shared_ptr<const engine::QueryEngine> scene_or_404(const std::string& id);
+    static ApiError scene_not_found(const std::string& id);
+    /// "application/json" for a scene document, or the model content type of a raw model body
+    /// (sniffed when the client sent none or a generic one); unsupported_format otherwise.
+    std::string classify_scene_body(const httplib::Request& req) const;
+    /// Builds a prepared scene from a registry source (the registry's Builder).
+    std::shared_ptr<const engine::QueryEngine> build_scene(const SceneSource& source,
+                                                           const FileSource& files) const;
+
     /// Adds the registry's figures (scenes, memory) to a /v1/info document.
     void add_registry_info(Json& info) const;
 
@@ -64,12 +79,20 @@ private:
     std::size_t max_concurrent_ = 0;
     std::atomic<std::size_t> in_flight_{0};
     std::atomic<std::uint64_t> next_request_id_{1};
+    std::unique_ptr<SceneRegistry> registry_;
+    SceneRoot scene_root_;
 };
 
 // Route groups, one per file (routes_*.cpp).
 void install_meta_routes(App& app);
 void install_query_routes(App& app);
 void install_trace_routes(App& app);
+void install_scene_routes(App& app);
+
+/// Parses an intersect body and answers it over `engine` (shared by the stateless and the
+/// registered-scene routes).
+void answer_intersect(const engine::QueryEngine& engine, const Json& body,
+                      const std::string& prefix, std::size_t max_rays, httplib::Response& res);
 
 /// Sends `body` as application/json with the given status.
 void send_json(httplib::Response& res, std::string body, int status = 200);

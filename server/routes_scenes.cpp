@@ -1,0 +1,89 @@
+// POST/GET/DELETE /v1/scenes[/{id}] and POST /v1/scenes/{id}/intersect.
+
+#include "server/app.h"
+#include "server/scene_registry.h"
+#include "server/schema/json_writer.h"
+
+namespace raycastd::server {
+
+namespace {
+
+std::string info_body(const SceneInfo& i) {
+    std::string out;
+    JsonWriter w(out);
+    w.raw("{\"id\":").string(i.id);
+    w.raw(",\"objects\":").integer(i.objects);
+    w.raw(",\"triangles\":").integer(i.triangles);
+    w.raw(",\"spheres\":").integer(i.spheres);
+    w.raw(",\"bounds\":");
+    if (i.bounds.empty()) {
+        w.raw("null");
+    } else {
+        w.raw("{\"min\":").vec(i.bounds.lo).raw(",\"max\":").vec(i.bounds.hi).ch('}');
+    }
+    w.raw(",\"build_ms\":").number(i.build_ms);
+    w.raw(",\"features\":{\"shadows\":").boolean(i.features.shadows);
+    w.raw(",\"reflection\":").boolean(i.features.reflection);
+    w.raw(",\"refraction\":").boolean(i.features.refraction);
+    w.raw(",\"textures\":").boolean(i.features.textures).ch('}');
+    w.raw(",\"memory_bytes\":").integer(i.memory_bytes);
+    w.raw(",\"warnings\":[");
+    for (std::size_t k = 0; k < i.warnings.size(); ++k) {
+        if (k) w.ch(',');
+        w.string(i.warnings[k]);
+    }
+    w.raw("]}");
+    return out;
+}
+
+}  // namespace
+
+void install_scene_routes(App& app) {
+    auto& http = app.http();
+    http.Post("/v1/scenes", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, true, [&] {
+            SceneSource src{app.classify_scene_body(req), req.body};
+            SceneRegistry::Added added = app.registry().add(src, app.scene_root_files());
+            send_json(res, info_body(added.info), added.created ? 201 : 200);
+            res.set_header("Location", "/v1/scenes/" + added.info.id);
+        });
+    });
+    http.Get("/v1/scenes", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, false, [&] {
+            std::string out = "{\"scenes\":[";
+            bool first = true;
+            for (const SceneInfo& i : app.registry().list()) {
+                if (!first) out += ',';
+                first = false;
+                out += info_body(i);
+            }
+            send_json(res, out + "]}");
+        });
+    });
+    http.Get(R"(/v1/scenes/([A-Za-z0-9_]+))",
+             [&app](const httplib::Request& req, httplib::Response& res) {
+                 app.handle(req, res, false, [&] {
+                     auto info = app.registry().info(req.matches[1]);
+                     if (!info) throw App::scene_not_found(req.matches[1]);
+                     send_json(res, info_body(*info));
+                 });
+             });
+    http.Delete(R"(/v1/scenes/([A-Za-z0-9_]+))",
+                [&app](const httplib::Request& req, httplib::Response& res) {
+                    app.handle(req, res, false, [&] {
+                        const std::string id = req.matches[1];
+                        if (!app.registry().remove(id)) throw App::scene_not_found(id);
+                        send_json(res, "{\"id\":\"" + id + "\",\"deleted\":true}");
+                    });
+                });
+    http.Post(R"(/v1/scenes/([A-Za-z0-9_]+)/intersect)",
+              [&app](const httplib::Request& req, httplib::Response& res) {
+                  app.handle(req, res, true, [&] {
+                      auto engine = app.scene_or_404(req.matches[1]);
+                      const Json body = App::parse_json_body(req);
+                      answer_intersect(*engine, body, "", app.config().limits.max_rays, res);
+                  });
+              });
+}
+
+}  // namespace raycastd::server

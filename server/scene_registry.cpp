@@ -1,0 +1,418 @@
+#include "server/scene_registry.h"
+
+#include <fcntl.h>
+#include <openssl/evp.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "server/api_error.h"
+#include "server/schema/json_read.h"
+
+namespace raycastd::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Writes the whole buffer and fsyncs it: the data is on disk before the scene is acknowledged.
+bool write_synced(const fs::path& path, std::string_view bytes) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) return false;
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n <= 0) {
+            ::close(fd);
+            return false;
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    const bool ok = ::fsync(fd) == 0;
+    return ::close(fd) == 0 && ok;
+}
+
+bool fsync_dir(const fs::path& dir) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return false;
+    const bool ok = ::fsync(fd) == 0;
+    ::close(fd);
+    return ok;
+}
+
+std::optional<std::string> read_all(const fs::path& path) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) return std::nullopt;
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+/// Every number as a double, so that 2, 2.0 and 2e0 are one value (they are to the parser).
+void numbers_as_doubles(Json& j) {
+    if (j.is_number()) {
+        j = j.get<double>();
+    } else if (j.is_structured()) {
+        for (auto& child : j) numbers_as_doubles(child);
+    }
+}
+
+/// The request in canonical form: a document re-serialised (sorted keys, one spelling per
+/// number), a model file as its bytes. Two requests that mean the same scene hash the same.
+std::string canonical_request(const SceneSource& s) {
+    if (s.content_type != "application/json") return s.body;
+    try {
+        Json j = Json::parse(s.body);
+        numbers_as_doubles(j);
+        return j.dump();
+    } catch (const Json::exception&) {
+        return s.body;  // the builder reports the syntax error
+    }
+}
+
+Json info_json(const SceneInfo& i) {
+    Json j = {{"id", i.id},           {"objects", i.objects}, {"triangles", i.triangles},
+              {"spheres", i.spheres}, {"build_ms", i.build_ms},
+              {"features",
+               {{"shadows", i.features.shadows},
+                {"reflection", i.features.reflection},
+                {"refraction", i.features.refraction},
+                {"textures", i.features.textures}}},
+              {"warnings", i.warnings}, {"memory_bytes", i.memory_bytes}};
+    if (i.bounds.empty()) {
+        j["bounds"] = nullptr;
+    } else {
+        j["bounds"] = {{"min", {i.bounds.lo.x, i.bounds.lo.y, i.bounds.lo.z}},
+                       {"max", {i.bounds.hi.x, i.bounds.hi.y, i.bounds.hi.z}}};
+    }
+    return j;
+}
+
+SceneInfo info_from_json(const Json& j) {
+    SceneInfo i;
+    i.id = j.at("id").get<std::string>();
+    i.objects = j.at("objects").get<std::size_t>();
+    i.triangles = j.at("triangles").get<std::size_t>();
+    i.spheres = j.at("spheres").get<std::size_t>();
+    i.build_ms = j.at("build_ms").get<double>();
+    const Json& f = j.at("features");
+    i.features = {f.at("shadows").get<bool>(), f.at("reflection").get<bool>(),
+                  f.at("refraction").get<bool>(), f.at("textures").get<bool>()};
+    i.warnings = j.at("warnings").get<std::vector<std::string>>();
+    i.memory_bytes = j.at("memory_bytes").get<std::size_t>();
+    if (!j.at("bounds").is_null()) {
+        const auto lo = j.at("bounds").at("min").get<std::vector<double>>();
+        const auto hi = j.at("bounds").at("max").get<std::vector<double>>();
+        i.bounds.extend(engine::Vec3d{lo.at(0), lo.at(1), lo.at(2)});
+        i.bounds.extend(engine::Vec3d{hi.at(0), hi.at(1), hi.at(2)});
+    }
+    return i;
+}
+
+}  // namespace
+
+std::string sha256_hex(std::string_view bytes) {
+    unsigned char md[EVP_MAX_MD_SIZE];
+    unsigned int len = 0;
+    EVP_Digest(bytes.data(), bytes.size(), md, &len, EVP_sha256(), nullptr);
+    static const char kHex[] = "0123456789abcdef";
+    std::string out;
+    for (unsigned int i = 0; i < len; ++i) {
+        out.push_back(kHex[md[i] >> 4]);
+        out.push_back(kHex[md[i] & 15]);
+    }
+    return out;
+}
+
+SceneInfo describe(const engine::QueryEngine& engine) {
+    const engine::Scene& s = engine.scene();
+    SceneInfo i;
+    i.objects = s.objects.size();
+    i.triangles = s.triangle_count();
+    i.spheres = s.sphere_count();
+    i.bounds = s.bounds();
+    i.features = s.features();
+    i.warnings = s.warnings;
+    i.memory_bytes = engine.memory_bytes();
+    return i;
+}
+
+SceneRegistry::SceneRegistry(std::string data_dir, std::size_t memory_budget, Builder builder)
+    : data_dir_(std::move(data_dir)), budget_(memory_budget), builder_(std::move(builder)) {}
+
+bool SceneRegistry::open(std::string& error) {
+    if (data_dir_.empty()) return true;
+    std::error_code ec;
+    fs::create_directories(fs::path(data_dir_) / "scenes", ec);
+    fs::create_directories(fs::path(data_dir_) / "tmp", ec);
+    if (ec) {
+        error = "cannot create data directory " + data_dir_ + ": " + ec.message();
+        return false;
+    }
+    // Anything in tmp/ is a write that never reached its rename: never acknowledged.
+    for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "tmp", ec)) {
+        fs::remove_all(d.path(), ec);
+    }
+    std::lock_guard<std::mutex> lock(mu_);
+    for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "scenes", ec)) {
+        auto meta = read_all(d.path() / "meta.json");
+        if (!meta) continue;
+        try {
+            const Json m = Json::parse(*meta);
+            Entry e;
+            e.info = info_from_json(m.at("info"));
+            e.request_key = m.at("request_key").get<std::string>();
+            e.file_sha = m.at("file_sha").get<std::map<std::string, std::string>>();
+            e.lru = lru_.end();
+            by_request_key_.emplace(e.request_key, e.info.id);
+            entries_.emplace(e.info.id, std::move(e));
+        } catch (const std::exception& ex) {
+            std::fprintf(stderr, "raycastd: skipping unreadable saved scene %s: %s\n",
+                         d.path().c_str(), ex.what());
+        }
+    }
+    return true;
+}
+
+SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSource& root_files) {
+    const std::string request_key =
+        sha256_hex("raycastd-scene-v1\n" + source.content_type + "\n" + canonical_request(source));
+
+    // Same request as a registered scene, and every file it read still has the same bytes:
+    // the same scene, without building anything.
+    std::vector<std::pair<std::string, std::map<std::string, std::string>>> candidates;
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        auto range = by_request_key_.equal_range(request_key);
+        for (auto it = range.first; it != range.second; ++it) {
+            candidates.emplace_back(it->second, entries_.at(it->second).file_sha);
+        }
+    }
+    for (const auto& [id, files] : candidates) {
+        bool same = true;
+        for (const auto& [path, sha] : files) {
+            auto bytes = root_files(path);
+            if (!bytes.ok() || sha256_hex(*bytes) != sha) {
+                same = false;
+                break;
+            }
+        }
+        if (!same) continue;
+        std::lock_guard<std::mutex> lock(mu_);
+        auto it = entries_.find(id);
+        if (it != entries_.end()) return {it->second.info, false};
+    }
+
+    // Build, recording every file read; the id covers the request and those files.
+    std::map<std::string, std::string> read_files;
+    FileSource recording = [&](const std::string& path) -> engine::Result<std::string> {
+        auto bytes = root_files(path);
+        if (bytes.ok()) read_files[path] = *bytes;
+        return bytes;
+    };
+    const auto t0 = std::chrono::steady_clock::now();
+    std::shared_ptr<const engine::QueryEngine> engine = builder_(source, recording);
+    const double build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    Entry e;
+    e.request_key = request_key;
+    std::string id_material = request_key;
+    for (const auto& [path, bytes] : read_files) {
+        e.file_sha[path] = sha256_hex(bytes);
+        id_material += "\n" + path + "\n" + e.file_sha[path];
+    }
+    e.info = describe(*engine);
+    e.info.id = "sc_" + sha256_hex(id_material).substr(0, 32);
+    e.info.build_ms = build_ms;
+    e.lru = lru_.end();
+    const std::string id = e.info.id;
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        auto it = entries_.find(id);
+        if (it != entries_.end()) return {it->second.info, false};
+    }
+    std::string error;
+    if (!data_dir_.empty() && !persist(id, source, read_files, e, error)) {
+        throw api_error("internal", "cannot save the scene: " + error);
+    }
+    std::lock_guard<std::mutex> lock(mu_);
+    auto [it, inserted] = entries_.emplace(id, std::move(e));
+    if (!inserted) return {it->second.info, false};  // a concurrent post of the same content
+    by_request_key_.emplace(request_key, id);
+    make_resident(it->second, std::move(engine));
+    evict_over_budget(id);
+    return {it->second.info, true};
+}
+
+bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
+                            const std::map<std::string, std::string>& files, const Entry& e,
+                            std::string& error) const {
+    static std::atomic<std::uint64_t> counter{0};
+    const fs::path scenes = fs::path(data_dir_) / "scenes";
+    const fs::path final_dir = scenes / id;
+    std::error_code ec;
+    if (fs::exists(final_dir / "meta.json", ec)) return true;  // saved by an earlier run
+    const fs::path tmp = fs::path(data_dir_) / "tmp" /
+                         (id + "." + std::to_string(::getpid()) + "." + std::to_string(counter++));
+    fs::create_directories(tmp, ec);
+    if (ec) {
+        error = ec.message();
+        return false;
+    }
+    Json file_names = Json::object();
+    std::size_t k = 0;
+    bool ok = write_synced(tmp / "body", source.body);
+    for (const auto& [path, bytes] : files) {
+        const std::string name = "file" + std::to_string(k++);
+        file_names[path] = name;
+        ok = ok && write_synced(tmp / name, bytes);
+    }
+    const Json meta = {{"format", 1},
+                       {"content_type", source.content_type},
+                       {"request_key", e.request_key},
+                       {"file_sha", e.file_sha},
+                       {"files", file_names},
+                       {"info", info_json(e.info)}};
+    ok = ok && write_synced(tmp / "meta.json", meta.dump(1));
+    ok = ok && fsync_dir(tmp);
+    if (ok) {
+        fs::remove_all(final_dir, ec);  // a partial directory cannot exist, but be sure
+        fs::rename(tmp, final_dir, ec);
+        ok = !ec && fsync_dir(scenes);
+    }
+    if (!ok) {
+        error = "write to " + data_dir_ + " failed";
+        fs::remove_all(tmp, ec);
+    }
+    return ok;
+}
+
+std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::string& id) {
+    const fs::path dir = fs::path(data_dir_) / "scenes" / id;
+    auto meta_text = read_all(dir / "meta.json");
+    auto body = read_all(dir / "body");
+    if (!meta_text || !body) throw api_error("internal", "saved copy of " + id + " is missing");
+    const Json meta = Json::parse(*meta_text);
+    const auto names = meta.at("files").get<std::map<std::string, std::string>>();
+    // Replay exactly the bytes the scene was built from, not today's files under the root.
+    FileSource saved = [&](const std::string& path) -> engine::Result<std::string> {
+        auto it = names.find(path);
+        if (it == names.end()) {
+            return engine::Status::error(engine::Code::invalid_scene,
+                                         "\"" + path + "\" was not part of the saved scene");
+        }
+        auto bytes = read_all(dir / it->second);
+        if (!bytes) return engine::Status::error(engine::Code::internal, "saved file missing");
+        return *bytes;
+    };
+    return builder_(SceneSource{meta.at("content_type").get<std::string>(), *body}, saved);
+}
+
+std::shared_ptr<const engine::QueryEngine> SceneRegistry::get(const std::string& id) {
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        auto it = entries_.find(id);
+        if (it == entries_.end()) return nullptr;
+        if (it->second.engine) {
+            touch(it->second);
+            return it->second.engine;
+        }
+    }
+    // Rebuilt outside the lock: other scenes stay available meanwhile. Two threads may rebuild
+    // the same scene at once; the first to finish is kept.
+    auto engine = rebuild(id);
+    std::lock_guard<std::mutex> lock(mu_);
+    auto it = entries_.find(id);
+    if (it == entries_.end()) return engine;  // deleted meanwhile: serve this request only
+    if (!it->second.engine) make_resident(it->second, engine);
+    touch(it->second);
+    evict_over_budget(id);
+    return it->second.engine;
+}
+
+void SceneRegistry::make_resident(Entry& e, std::shared_ptr<const engine::QueryEngine> engine) {
+    e.engine = std::move(engine);
+    lru_.push_front(e.info.id);
+    e.lru = lru_.begin();
+    resident_bytes_ += e.info.memory_bytes;
+}
+
+void SceneRegistry::touch(Entry& e) {
+    if (e.lru != lru_.end()) lru_.splice(lru_.begin(), lru_, e.lru);
+}
+
+void SceneRegistry::evict_over_budget(const std::string& keep) {
+    if (data_dir_.empty()) return;  // nothing to reload from
+    while (resident_bytes_ > budget_ && !lru_.empty()) {
+        const std::string victim = lru_.back();
+        if (victim == keep) break;
+        Entry& e = entries_.at(victim);
+        lru_.pop_back();
+        e.lru = lru_.end();
+        e.engine.reset();  // requests still holding it finish with their own reference
+        resident_bytes_ -= e.info.memory_bytes;
+    }
+}
+
+std::optional<SceneInfo> SceneRegistry::info(const std::string& id) const {
+    std::lock_guard<std::mutex> lock(mu_);
+    auto it = entries_.find(id);
+    if (it == entries_.end()) return std::nullopt;
+    return it->second.info;
+}
+
+std::vector<SceneInfo> SceneRegistry::list() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    std::vector<SceneInfo> out;
+    for (const auto& [id, e] : entries_) out.push_back(e.info);
+    return out;
+}
+
+bool SceneRegistry::remove(const std::string& id) {
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        auto it = entries_.find(id);
+        if (it == entries_.end()) return false;
+        Entry& e = it->second;
+        if (e.engine) resident_bytes_ -= e.info.memory_bytes;
+        if (e.lru != lru_.end()) lru_.erase(e.lru);
+        auto range = by_request_key_.equal_range(e.request_key);
+        for (auto k = range.first; k != range.second; ++k) {
+            if (k->second == id) {
+                by_request_key_.erase(k);
+                break;
+            }
+        }
+        entries_.erase(it);
+    }
+    if (!data_dir_.empty()) {
+        // Rename first so a crash mid-delete never leaves a half-deleted scene to reload.
+        std::error_code ec;
+        const fs::path tmp = fs::path(data_dir_) / "tmp" / (id + ".deleted");
+        fs::rename(fs::path(data_dir_) / "scenes" / id, tmp, ec);
+        fsync_dir(fs::path(data_dir_) / "scenes");
+        fs::remove_all(tmp, ec);
+    }
+    return true;
+}
+
+std::size_t SceneRegistry::size() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return entries_.size();
+}
+
+std::size_t SceneRegistry::resident() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return lru_.size();
+}
+
+std::size_t SceneRegistry::resident_bytes() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return resident_bytes_;
+}
+
+}  // namespace raycastd::server

@@ -1,0 +1,111 @@
+#pragma once
+// SceneRegistry: the only shared mutable state of the server. Content hash → prepared scene.
+//
+//  * Ids are content hashes of the canonical request (a scene document re-serialised with sorted
+//    keys, or the model bytes) and of every file the scene read while loading, so posting the
+//    same thing twice gives the same id and, the second time, does no build at all.
+//  * A scene is built completely before it is inserted (all-or-nothing): a failed build leaves
+//    the registry as it was, and no request ever sees a half-built scene.
+//  * With a data directory, every acknowledged scene is first written to disk (temp dir, fsync,
+//    rename, fsync of the parent), together with copies of the files it read, so a restarted
+//    server (even after kill -9) answers for it, from exactly the bytes it was built from.
+//  * A memory budget evicts the least recently used scenes from memory; they are rebuilt from
+//    their saved copies on next use. Without a data directory nothing is evicted.
+
+#include <chrono>
+#include <functional>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/query/intersect.h"
+#include "server/model_source.h"
+
+namespace raycastd::server {
+
+/// Everything needed to (re)build a registered scene.
+struct SceneSource {
+    std::string content_type;  ///< "application/json" for scene documents, else a model type
+    std::string body;
+};
+
+/// What the API reports about a registered scene.
+struct SceneInfo {
+    std::string id;
+    std::size_t objects = 0, triangles = 0, spheres = 0;
+    engine::Bounds3 bounds;
+    double build_ms = 0;
+    engine::Features features;
+    std::vector<std::string> warnings;
+    std::size_t memory_bytes = 0;  ///< estimate of the prepared scene's footprint
+};
+
+class SceneRegistry {
+public:
+    /// Builds a scene from its source, reading the files it refers to through `files`.
+    /// Throws ApiError for bad input.
+    using Builder = std::function<std::shared_ptr<const engine::QueryEngine>(
+        const SceneSource& source, const FileSource& files)>;
+
+    SceneRegistry(std::string data_dir, std::size_t memory_budget, Builder builder);
+
+    /// Loads the index of the scenes saved in the data directory (their engines are built on
+    /// first use). False with `error` when the directory cannot be used.
+    bool open(std::string& error);
+
+    struct Added {
+        SceneInfo info;
+        bool created = false;  ///< false: the same content was already registered
+    };
+    /// Registers a scene; `root_files` reads files under the scene root. Throws ApiError.
+    Added add(const SceneSource& source, const FileSource& root_files);
+
+    /// The prepared scene, rebuilt from disk if it was evicted; nullptr for an unknown id.
+    std::shared_ptr<const engine::QueryEngine> get(const std::string& id);
+    std::optional<SceneInfo> info(const std::string& id) const;
+    std::vector<SceneInfo> list() const;
+    /// Forgets the scene and deletes its saved copy; false for an unknown id.
+    bool remove(const std::string& id);
+
+    std::size_t size() const;
+    std::size_t resident() const;
+    std::size_t resident_bytes() const;
+
+private:
+    struct Entry {
+        SceneInfo info;
+        std::string request_key;                     ///< hash of the canonical request alone
+        std::map<std::string, std::string> file_sha;  ///< files it read → their SHA-256
+        std::shared_ptr<const engine::QueryEngine> engine;  ///< null while evicted
+        std::list<std::string>::iterator lru;
+    };
+
+    std::shared_ptr<const engine::QueryEngine> rebuild(const std::string& id);
+    void make_resident(Entry& e, std::shared_ptr<const engine::QueryEngine> engine);
+    void touch(Entry& e);
+    void evict_over_budget(const std::string& keep);
+    bool persist(const std::string& id, const SceneSource& source,
+                 const std::map<std::string, std::string>& files, const Entry& e,
+                 std::string& error) const;
+
+    std::string data_dir_;
+    std::size_t budget_;
+    Builder builder_;
+    mutable std::mutex mu_;
+    std::map<std::string, Entry> entries_;
+    std::multimap<std::string, std::string> by_request_key_;
+    std::list<std::string> lru_;  ///< resident ids, most recently used first
+    std::size_t resident_bytes_ = 0;
+};
+
+/// A summary of a prepared scene (counts, bounds, features, memory estimate).
+SceneInfo describe(const engine::QueryEngine& engine);
+
+/// Lower-case hex SHA-256 of the bytes.
+std::string sha256_hex(std::string_view bytes);
+
+}  // namespace raycastd::server

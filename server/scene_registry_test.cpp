@@ -1,0 +1,158 @@
+#include "server/scene_registry.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <thread>
+
+#include "server/app.h"
+
+namespace raycastd::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kSpheres = R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2},
+                                       {"type":"sphere","center":[0,1,9],"radius":2}]})";
+
+struct TempDir {
+    fs::path path = fs::temp_directory_path() /
+                    ("raycastd_reg_" + std::to_string(::getpid()) + "_" +
+                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    TempDir() { fs::remove_all(path); }
+    ~TempDir() { fs::remove_all(path); }
+};
+
+/// A registry whose builder is the server's own (App::build_scene), counting builds.
+struct Fixture {
+    explicit Fixture(const std::string& data_dir, std::size_t budget = 1u << 30)
+        : app(make_config()),
+          registry(data_dir, budget, [this](const SceneSource& s, const FileSource& f) {
+              ++builds;
+              return app.build_scene(s, f);
+          }) {
+        std::string error;
+        EXPECT_TRUE(registry.open(error)) << error;
+    }
+    static Config make_config() {
+        Config c;
+        c.port = 0;
+        return c;
+    }
+    App app;
+    std::atomic<int> builds{0};
+    SceneRegistry registry;
+};
+
+FileSource no_files() {
+    return [](const std::string& p) -> engine::Result<std::string> {
+        return engine::Status::error(engine::Code::invalid_scene, "no file " + p);
+    };
+}
+
+TEST(SceneRegistry, SameContentSameIdNoSecondBuild) {
+    Fixture f("");
+    auto a = f.registry.add({"application/json", kSpheres}, no_files());
+    EXPECT_TRUE(a.created);
+    EXPECT_EQ(a.info.id.rfind("sc_", 0), 0u);
+    EXPECT_EQ(a.info.spheres, 2u);
+    // The same document with other whitespace and key order is the same scene.
+    auto b = f.registry.add(
+        {"application/json",
+         R"({ "objects" : [ {"radius":2, "type":"sphere","center":[0,0,10]},
+                            {"type":"sphere","center":[0,1,9],"radius":2.0} ] })"},
+        no_files());
+    EXPECT_FALSE(b.created);
+    EXPECT_EQ(b.info.id, a.info.id);
+    EXPECT_EQ(f.builds.load(), 1);
+    EXPECT_TRUE(f.registry.get(a.info.id));
+    EXPECT_FALSE(f.registry.get("sc_nope"));
+}
+
+TEST(SceneRegistry, FailedBuildLeavesRegistryUntouched) {
+    Fixture f("");
+    auto a = f.registry.add({"application/json", kSpheres}, no_files());
+    EXPECT_THROW(f.registry.add({"application/json", R"({"objects":[{"type":"sphere"}]})"}, no_files()),
+                 ApiError);
+    EXPECT_THROW(f.registry.add({"application/json", "{oops"}, no_files()), ApiError);
+    EXPECT_EQ(f.registry.size(), 1u);
+    EXPECT_TRUE(f.registry.get(a.info.id));
+}
+
+TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
+    TempDir dir;
+    std::string id;
+    {
+        Fixture f(dir.path.string());
+        id = f.registry.add({"application/json", kSpheres}, no_files()).info.id;
+    }
+    Fixture g(dir.path.string());
+    EXPECT_EQ(g.registry.size(), 1u);
+    auto info = g.registry.info(id);
+    ASSERT_TRUE(info);
+    EXPECT_EQ(info->spheres, 2u);
+    EXPECT_EQ(g.builds.load(), 0);  // lazily rebuilt on first use
+    auto engine = g.registry.get(id);
+    ASSERT_TRUE(engine);
+    EXPECT_EQ(g.builds.load(), 1);
+    EXPECT_EQ(engine->scene().objects.size(), 2u);
+    // Leftovers of an unfinished write are ignored and cleaned up.
+    fs::create_directories(dir.path / "tmp" / "sc_half.123.0");
+    Fixture h(dir.path.string());
+    EXPECT_EQ(h.registry.size(), 1u);
+    EXPECT_FALSE(fs::exists(dir.path / "tmp" / "sc_half.123.0"));
+}
+
+TEST(SceneRegistry, DeleteRemovesSavedCopy) {
+    TempDir dir;
+    Fixture f(dir.path.string());
+    const std::string id = f.registry.add({"application/json", kSpheres}, no_files()).info.id;
+    EXPECT_TRUE(fs::exists(dir.path / "scenes" / id));
+    EXPECT_TRUE(f.registry.remove(id));
+    EXPECT_FALSE(f.registry.remove(id));
+    EXPECT_FALSE(fs::exists(dir.path / "scenes" / id));
+    EXPECT_FALSE(f.registry.get(id));
+}
+
+TEST(SceneRegistry, EvictsLeastRecentlyUsedAndReloads) {
+    TempDir dir;
+    Fixture f(dir.path.string(), /*budget=*/1);  // every scene is over budget but the newest
+    const std::string a = f.registry.add({"application/json", kSpheres}, no_files()).info.id;
+    const std::string b =
+        f.registry.add({"application/json", R"({"objects":[{"type":"sphere","center":[1,2,3],"radius":1}]})"},
+                       no_files())
+            .info.id;
+    EXPECT_EQ(f.registry.resident(), 1u);
+    EXPECT_EQ(f.builds.load(), 2);
+    auto engine = f.registry.get(a);  // evicted: rebuilt from the saved copy
+    ASSERT_TRUE(engine);
+    EXPECT_EQ(f.builds.load(), 3);
+    EXPECT_EQ(engine->scene().objects.size(), 2u);
+    EXPECT_EQ(f.registry.resident(), 1u);
+    EXPECT_TRUE(f.registry.get(b));
+}
+
+TEST(SceneRegistry, ConcurrentAddsAndGets) {
+    Fixture f("");
+    std::vector<std::thread> threads;
+    std::atomic<int> created{0};
+    for (int t = 0; t < 8; ++t) {
+        threads.emplace_back([&, t] {
+            for (int i = 0; i < 20; ++i) {
+                const std::string doc = R"({"objects":[{"type":"sphere","center":[0,0,)" +
+                                        std::to_string(i % 5) + R"(],"radius":1}]})";
+                auto added = f.registry.add({"application/json", doc}, no_files());
+                if (added.created) ++created;
+                EXPECT_TRUE(f.registry.get(added.info.id)) << t;
+            }
+        });
+    }
+    for (auto& th : threads) th.join();
+    EXPECT_EQ(f.registry.size(), 5u);
+    EXPECT_EQ(created.load(), 5);
+}
+
+}  // namespace
+}  // namespace raycastd::server

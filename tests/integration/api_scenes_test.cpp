@@ -1,0 +1,279 @@
+// The scene registry over HTTP with the real binary: registration (documents and raw models),
+// content addressing, confinement to the scene root, broken files, and restarts after kill -9.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "tests/support/server_process.h"
+
+namespace raycastd {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+const fs::path kModels = fs::path(RAYCASTD_SHARED_DIR) / "data" / "models";
+
+std::string read_file(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+#define REQUIRE_MODELS()                                                      \
+    if (!fs::exists(kModels)) {                                               \
+        GTEST_SKIP() << "models not found at " << kModels << " (../shared)"; \
+    }
+
+const char* kTutorial = R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2},
+    {"type":"sphere","center":[0,3,8],"radius":2},{"type":"sphere","center":[0,1,9],"radius":2}]})";
+
+struct Scenes : ::testing::Test {
+    fs::path data = fs::temp_directory_path() / ("raycastd_it_" + std::to_string(::getpid()) + "_" +
+                                                 ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::unique_ptr<testing::ServerProcess> server;
+
+    void SetUp() override {
+        fs::remove_all(data);
+        start();
+    }
+    void TearDown() override {
+        server.reset();
+        fs::remove_all(data);
+    }
+    void start() {
+        const std::string root = fs::exists(kModels) ? kModels.string() : std::string(RAYCASTD_SOURCE_DIR);
+        server = std::make_unique<testing::ServerProcess>(
+            std::vector<std::string>{"--data-dir", data.string(), "--scene-root", root});
+    }
+    httplib::Result post(const std::string& path, const std::string& body,
+                         const std::string& type = "application/json") {
+        return server->client()->Post(path.c_str(), body, type.c_str());
+    }
+    Json post_ok(const std::string& path, const std::string& body, int status,
+                 const std::string& type = "application/json") {
+        auto res = post(path, body, type);
+        EXPECT_TRUE(res);
+        if (!res) return Json();
+        EXPECT_EQ(res->status, status) << res->body;
+        return Json::parse(res->body);
+    }
+    std::string error_code(const std::string& path, const std::string& body, int status,
+                           const std::string& type = "application/json") {
+        auto res = post(path, body, type);
+        EXPECT_TRUE(res);
+        if (!res) return "";
+        EXPECT_EQ(res->status, status) << res->body;
+        return Json::parse(res->body).at("error").at("code").get<std::string>();
+    }
+    Json closest(const std::string& id, const Json& ray) {
+        return post_ok("/v1/scenes/" + id + "/intersect", Json{{"rays", {ray}}}.dump(), 200)
+            .at("hits")
+            .at(0);
+    }
+};
+
+TEST_F(Scenes, RegisterTwiceSameIdThenQueryListDelete) {
+    Json a = post_ok("/v1/scenes", kTutorial, 201);
+    EXPECT_EQ(a.at("spheres"), 3);
+    EXPECT_EQ(a.at("objects"), 3);
+    EXPECT_EQ(a.at("features").at("shadows"), false);
+    const std::string id = a.at("id");
+    Json b = post_ok("/v1/scenes", kTutorial, 200);
+    EXPECT_EQ(b.at("id"), id);
+
+    Json hit = closest(id, {{"origin", {0, 0, 0}}, {"direction", {0, 0, 1}}});
+    EXPECT_EQ(hit.at("name"), "sphere 3");
+    EXPECT_EQ(hit.at("t").get<double>(), 7.267949192431123);
+
+    auto list = server->client()->Get("/v1/scenes");
+    ASSERT_TRUE(list);
+    EXPECT_EQ(Json::parse(list->body).at("scenes").size(), 1u);
+    auto one = server->client()->Get(("/v1/scenes/" + id).c_str());
+    ASSERT_TRUE(one);
+    EXPECT_EQ(Json::parse(one->body).at("id"), id);
+
+    auto del = server->client()->Delete(("/v1/scenes/" + id).c_str());
+    ASSERT_TRUE(del);
+    EXPECT_EQ(del->status, 200);
+    auto gone = server->client()->Get(("/v1/scenes/" + id).c_str());
+    EXPECT_EQ(gone->status, 404);
+    EXPECT_EQ(Json::parse(gone->body).at("error").at("code"), "scene_not_found");
+    EXPECT_EQ(error_code("/v1/scenes/" + id + "/intersect", R"({"rays":[]})", 404), "scene_not_found");
+}
+
+TEST_F(Scenes, BadDocumentsLeaveTheRegistryAlone) {
+    post_ok("/v1/scenes", kTutorial, 201);
+    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"sphere","center":[0,0,0],"radius":-1}]})", 400),
+              "invalid_scene");
+    EXPECT_EQ(error_code("/v1/scenes", "{nope", 400), "bad_json");
+    EXPECT_EQ(error_code("/v1/scenes", "hello", 400, "text/html"), "unsupported_format");
+    auto list = server->client()->Get("/v1/scenes");
+    EXPECT_EQ(Json::parse(list->body).at("scenes").size(), 1u);
+}
+
+TEST_F(Scenes, RestartAfterKill9AnswersTheSameHits) {
+    REQUIRE_MODELS();
+    const std::string tutorial = post_ok("/v1/scenes", kTutorial, 201).at("id");
+    const Json duck_info = post_ok("/v1/scenes", read_file(kModels / "Duck/glTF-Binary/Duck.glb"),
+                                   201, "model/gltf-binary");
+    const std::string duck = duck_info.at("id");
+    const std::string box =
+        post_ok("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"Box/glTF/Box.gltf"}]})", 201).at("id");
+    // Down the z axis through the centre of the duck's bounds.
+    const Json& lo = duck_info.at("bounds").at("min");
+    const Json& hi = duck_info.at("bounds").at("max");
+    const double cx = 0.5 * (lo[0].get<double>() + hi[0].get<double>());
+    const double cy = 0.5 * (lo[1].get<double>() + hi[1].get<double>());
+    const Json ray = {{"origin", {cx, cy, hi[2].get<double>() + 100}}, {"direction", {0, 0, -1}}};
+    const Json duck_hit = closest(duck, ray);
+    ASSERT_EQ(duck_hit.at("hit"), true);
+    const Json box_hit = closest(box, {{"origin", {0.1, 0.2, 5}}, {"direction", {0, 0, -1}}});
+    ASSERT_EQ(box_hit.at("hit"), true);
+
+    server->stop(SIGKILL);
+    start();
+    auto list = server->client()->Get("/v1/scenes");
+    ASSERT_TRUE(list);
+    EXPECT_EQ(Json::parse(list->body).at("scenes").size(), 3u);
+    EXPECT_EQ(closest(duck, ray), duck_hit);
+    EXPECT_EQ(closest(box, {{"origin", {0.1, 0.2, 5}}, {"direction", {0, 0, -1}}}), box_hit);
+    EXPECT_EQ(closest(tutorial, {{"origin", {0, 0, 0}}, {"direction", {0, 0, 1}}}).at("name"), "sphere 3");
+    // Posting again after the restart still finds the same scene.
+    EXPECT_EQ(post_ok("/v1/scenes", kTutorial, 200).at("id"), tutorial);
+}
+
+TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
+    REQUIRE_MODELS();
+    Json duck = post_ok("/v1/scenes", read_file(kModels / "Duck/glTF-Binary/Duck.glb"), 201,
+                        "model/gltf-binary");
+    EXPECT_EQ(duck.at("triangles"), 4212);
+    Json bunny = post_ok("/v1/scenes", read_file(kModels / "stanford-bunny/stanford-bunny.obj"), 201,
+                         "model/obj");
+    EXPECT_EQ(bunny.at("triangles"), 69451);
+    Json stl = post_ok("/v1/scenes", read_file(kModels / "teapot_stl/teapot.stl"), 201, "application/sla");
+    EXPECT_EQ(stl.at("triangles"), 894);
+    // Without a content type the bytes tell.
+    Json ply = post_ok("/v1/scenes", read_file(kModels / "Wuson/Wuson.ply"), 201, "application/octet-stream");
+    EXPECT_EQ(ply.at("triangles"), 3732);
+}
+
+TEST_F(Scenes, SameGeometryInThreeGltfVariantsGivesIdenticalHits) {
+    REQUIRE_MODELS();
+    std::vector<std::string> ids;
+    for (const char* uri : {"BoxTextured/glTF/BoxTextured.gltf", "BoxTextured/glTF-Binary/BoxTextured.glb",
+                            "BoxTextured/glTF-Embedded/BoxTextured.gltf"}) {
+        Json doc = {{"objects", {{{"type", "mesh"}, {"uri", uri}, {"name", "box"}}}}};
+        ids.push_back(post_ok("/v1/scenes", doc.dump(), 201).at("id"));
+    }
+    for (const Json& ray : {Json{{"origin", {0.1, 0.2, 5}}, {"direction", {0, 0, -1}}},
+                            Json{{"origin", {3, 0.1, 0.05}}, {"direction", {-1, 0, 0}}},
+                            Json{{"origin", {0.2, -4, 0.1}}, {"direction", {0, 1, 0.01}}}}) {
+        const Json first = closest(ids[0], ray);
+        EXPECT_EQ(first.at("hit"), true) << ray;
+        EXPECT_EQ(closest(ids[1], ray), first);
+        EXPECT_EQ(closest(ids[2], ray), first);
+    }
+}
+
+TEST_F(Scenes, MeshTransformAndInlineData) {
+    REQUIRE_MODELS();
+    // Cube.off is the cube [-0.5, 0.5]³ (its file lists ±0.5); scaled by 2 and translated by
+    // (10, 0, 0) it spans x in [9, 11]: a ray along −x from x = 20 meets it at t = 9.
+    const std::string off = read_file(kModels / "cube_off/Cube.off");
+    Json doc = {{"objects",
+                 {{{"type", "mesh"},
+                   {"format", "off"},
+                   {"data_base64", ""},
+                   {"transform", {{"translate", {10, 0, 0}}, {"scale", 2}}}}}}};
+    // base64 of the OFF file, built here to keep the test self-contained.
+    static const char* kB64 = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string b64;
+    for (std::size_t i = 0; i < off.size(); i += 3) {
+        const unsigned n = (static_cast<unsigned char>(off[i]) << 16) |
+                           (i + 1 < off.size() ? static_cast<unsigned char>(off[i + 1]) << 8 : 0) |
+                           (i + 2 < off.size() ? static_cast<unsigned char>(off[i + 2]) : 0);
+        b64 += kB64[(n >> 18) & 63];
+        b64 += kB64[(n >> 12) & 63];
+        b64 += i + 1 < off.size() ? kB64[(n >> 6) & 63] : '=';
+        b64 += i + 2 < off.size() ? kB64[n & 63] : '=';
+    }
+    doc["objects"][0]["data_base64"] = b64;
+    Json s = post_ok("/v1/scenes", doc.dump(), 201);
+    EXPECT_EQ(s.at("bounds").at("min"), Json::parse("[9, -1, -1]"));
+    EXPECT_EQ(s.at("bounds").at("max"), Json::parse("[11, 1, 1]"));
+    EXPECT_EQ(s.at("triangles"), 12);
+    Json hit = closest(s.at("id"), {{"origin", {20, 0.1, 0.2}}, {"direction", {-1, 0, 0}}});
+    ASSERT_EQ(hit.at("hit"), true);
+    EXPECT_EQ(hit.at("t").get<double>(), 9.0);
+    EXPECT_EQ(hit.at("normal"), Json::parse("[1, 0, 0]"));
+    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","data_base64":"AAAA"}]})", 400),
+              "invalid_scene");
+    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","format":"obj","data_base64":"@@"}]})", 400),
+              "invalid_scene");
+}
+
+TEST_F(Scenes, PathTraversalIsRefused) {
+    for (const char* uri : {"../API.md", "/etc/passwd", "Box/../../API.md", "http://example.com/a.glb",
+                            "file:///etc/passwd"}) {
+        Json doc = {{"objects", {{{"type", "mesh"}, {"uri", uri}}}}};
+        auto res = post("/v1/scenes", doc.dump());
+        ASSERT_TRUE(res);
+        EXPECT_EQ(res->status, 400) << uri << " " << res->body;
+        Json e = Json::parse(res->body).at("error");
+        EXPECT_EQ(e.at("code"), "invalid_scene") << uri;
+        EXPECT_EQ(e.at("path"), "/objects/0/uri") << uri;
+    }
+}
+
+TEST_F(Scenes, SymlinkOutOfTheRootIsRefused) {
+    const fs::path root = data.string() + "_root";
+    fs::create_directories(root);
+    std::ofstream(data.string() + "_secret.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    fs::create_symlink(data.string() + "_secret.obj", root / "link.obj");
+    std::ofstream(root / "ok.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    server = std::make_unique<testing::ServerProcess>(std::vector<std::string>{"--scene-root", root.string()});
+    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"link.obj"}]})", 400), "invalid_scene");
+    EXPECT_EQ(post_ok("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"ok.obj"}]})", 201).at("triangles"), 1);
+    fs::remove_all(root);
+    fs::remove(data.string() + "_secret.obj");
+}
+
+TEST_F(Scenes, BrokenModelsGet422AndNeverCrash) {
+    REQUIRE_MODELS();
+    int tried = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(kModels / "invalid")) {
+        const std::string ext = entry.path().extension().string();
+        std::string type;
+        if (ext == ".glb") type = "model/gltf-binary";
+        if (ext == ".obj") type = "model/obj";
+        if (ext == ".stl") type = "application/sla";
+        if (ext == ".ply") type = "application/x-ply";
+        if (ext == ".off") type = "model/off";
+        if (type.empty() || !entry.is_regular_file()) continue;
+        auto res = post("/v1/scenes", read_file(entry.path()), type);
+        ASSERT_TRUE(res) << "server died on " << entry.path();
+        EXPECT_TRUE(res->status == 201 || res->status == 200 || (res->status >= 400 && res->status < 500))
+            << entry.path() << " " << res->status << " " << res->body;
+        if (res->status >= 400) {
+            Json e = Json::parse(res->body).at("error");
+            EXPECT_FALSE(e.at("message").get<std::string>().empty());
+        }
+        ++tried;
+    }
+    EXPECT_GT(tried, 10);
+    EXPECT_TRUE(server->alive());
+    // A truncated GLB is a model that cannot be loaded: 422.
+    std::string duck = read_file(kModels / "Duck/glTF-Binary/Duck.glb");
+    EXPECT_EQ(error_code("/v1/scenes", duck.substr(0, duck.size() / 2), 422, "model/gltf-binary"),
+              "model_load_failed");
+}
+
+}  // namespace
+}  // namespace raycastd
