@@ -39,9 +39,10 @@ static void resolve(const char* name, void* fn, size_t size) {
     memcpy(fn, &sym, size);
 }
 
-/* Resolved on the first call, not when the shim is preloaded: Python loads libembree3 only
- * when open3d is imported, long after the preload. Open3D traces from several threads, hence
- * pthread_once. */
+/* Resolved on the first call rather than in a constructor, so that nothing depends on the order
+ * in which the loader runs constructors; Open3D traces from several threads, hence pthread_once.
+ * The shim is linked against libembree3 so that the preload brings Embree into the global scope,
+ * where RTLD_NEXT looks (Python itself loads Open3D and its Embree with RTLD_LOCAL). */
 static pthread_once_t resolved = PTHREAD_ONCE_INIT;
 
 static void resolve_all(void) {
