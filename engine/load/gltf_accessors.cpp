@@ -68,8 +68,9 @@ int component_count(int type) {
     }
 }
 
-/// Bytes one element occupies. Matrix columns start on 4-byte boundaries, which pads MAT2 and
-/// MAT3 of 1-byte components and MAT3 of 2-byte components (glTF 2.0 §3.6.2.4).
+/// Bytes from one element to the next when tightly packed. Matrix columns start on 4-byte
+/// boundaries, which pads MAT2 and MAT3 of 1-byte components and MAT3 of 2-byte components
+/// (glTF 2.0 §3.6.2.4).
 std::size_t element_size(int type, std::size_t csize) {
     if (type == TINYGLTF_TYPE_MAT2 && csize == 1)
         return 8;
@@ -78,6 +79,18 @@ std::size_t element_size(int type, std::size_t csize) {
     if (type == TINYGLTF_TYPE_MAT3 && csize == 2)
         return 24;
     return static_cast<std::size_t>(component_count(type)) * csize;
+}
+
+/// Bytes the last element needs: its final column carries no padding after it (the
+/// glTF-Validator's ACCESSOR_TOO_LONG rule counts it so).
+std::size_t last_element_size(int type, std::size_t csize) {
+    if (type == TINYGLTF_TYPE_MAT2 && csize == 1)
+        return 6;
+    if (type == TINYGLTF_TYPE_MAT3 && csize == 1)
+        return 11;
+    if (type == TINYGLTF_TYPE_MAT3 && csize == 2)
+        return 22;
+    return element_size(type, csize);
 }
 
 /// True when [offset, offset + (count − 1)·stride + size) fits in `length` bytes; count ≥ 1.
@@ -168,7 +181,8 @@ Status validate_accessor(const tinygltf::Model& model, std::size_t i) {
                         std::to_string(esize) + " bytes)");
         }
         const std::size_t stride = view.byteStride != 0 ? view.byteStride : esize;
-        if (a.count > 0 && !range_fits(a.byteOffset, a.count, stride, esize, view.byteLength)) {
+        if (a.count > 0 && !range_fits(a.byteOffset, a.count, stride,
+                                       last_element_size(a.type, csize), view.byteLength)) {
             return fail(where + ": " + std::to_string(a.count) + " elements of " +
                         std::to_string(esize) + " bytes (stride " + std::to_string(stride) +
                         ", byteOffset " + std::to_string(a.byteOffset) +

@@ -386,24 +386,11 @@ Status add_camera_and_lights(const tinygltf::Model& m, const std::vector<Placed>
     return {};
 }
 
-}  // namespace
-
-Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLimits& limits,
-                   LoadedModel& out) {
-    if (Status st = check_hierarchy(m); !st.ok())
-        return st;
-    auto roots = scene_roots(m);
-    if (!roots)
-        return roots.status();
-    auto placed = place_nodes(m, *roots);
-    if (!placed)
-        return placed.status();
-
-    for (std::size_t i = 0; i < m.materials.size(); ++i) {
-        out.materials.push_back(to_phong(m.materials[i]));
-        out.material_names.push_back(m.materials[i].name.empty() ? "material " + std::to_string(i)
-                                                                 : m.materials[i].name);
-    }
+/// Builds each mesh once (at its default weights; again for nodes with their own weights) and
+/// places one part per mesh node, in traversal order. `built` records which meshes were read.
+Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& placed,
+                       std::string_view name, const LoadLimits& limits, std::vector<bool>& built,
+                       LoadedModel& out) {
     std::optional<std::uint32_t> default_index;
     auto default_material = [&]() {
         if (!default_index) {
@@ -413,29 +400,29 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLi
         }
         return *default_index;
     };
-
-    std::map<std::size_t, LocalMesh> cache;  // meshes at their own default weights
+    std::map<std::size_t, LocalMesh> cache;
     std::size_t triangles = 0, vertices = 0;
-    for (const Placed& p : *placed) {
+    for (const Placed& p : placed) {
         const tinygltf::Node& node = m.nodes[static_cast<std::size_t>(p.node)];
         if (node.mesh == -1)
             continue;
         const auto mesh = static_cast<std::size_t>(node.mesh);
+        built[mesh] = true;
         LocalMesh own;
         const LocalMesh* local = nullptr;
         if (!node.weights.empty()) {
-            auto built = build_local_mesh(m, mesh, node.weights, out.warnings);
-            if (!built)
-                return built.status();
-            own = std::move(*built);
+            auto local_mesh = build_local_mesh(m, mesh, node.weights, out.warnings);
+            if (!local_mesh)
+                return local_mesh.status();
+            own = std::move(*local_mesh);
             local = &own;
         } else if (auto it = cache.find(mesh); it != cache.end()) {
             local = &it->second;
         } else {
-            auto built = build_local_mesh(m, mesh, m.meshes[mesh].weights, out.warnings);
-            if (!built)
-                return built.status();
-            local = &cache.emplace(mesh, std::move(*built)).first->second;
+            auto local_mesh = build_local_mesh(m, mesh, m.meshes[mesh].weights, out.warnings);
+            if (!local_mesh)
+                return local_mesh.status();
+            local = &cache.emplace(mesh, std::move(*local_mesh)).first->second;
         }
         triangles += local->triangles.size();
         vertices += local->positions.size();
@@ -455,6 +442,41 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLi
         }
         out.parts.push_back(
             instance(*local, world, part_name(m, node, name, out.parts.size()), default_material));
+    }
+    return {};
+}
+
+}  // namespace
+
+Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLimits& limits,
+                   LoadedModel& out) {
+    if (Status st = check_hierarchy(m); !st.ok())
+        return st;
+    auto roots = scene_roots(m);
+    if (!roots)
+        return roots.status();
+    auto placed = place_nodes(m, *roots);
+    if (!placed)
+        return placed.status();
+
+    for (std::size_t i = 0; i < m.materials.size(); ++i) {
+        out.materials.push_back(to_phong(m.materials[i]));
+        out.material_names.push_back(m.materials[i].name.empty() ? "material " + std::to_string(i)
+                                                                 : m.materials[i].name);
+    }
+    std::vector<bool> built(m.meshes.size(), false);
+    if (Status st = instance_meshes(m, *placed, name, limits, built, out); !st.ok())
+        return st;
+    // Meshes no node instances are still checked (references, accessor types, index ranges),
+    // so a file is accepted or refused as a whole, as the glTF-Validator judges it; their
+    // warnings are not ours to report.
+    for (std::size_t mesh = 0; mesh < m.meshes.size(); ++mesh) {
+        if (built[mesh])
+            continue;
+        std::vector<std::string> unused_warnings;
+        auto checked = build_local_mesh(m, mesh, m.meshes[mesh].weights, unused_warnings);
+        if (!checked)
+            return checked.status();
     }
     return add_camera_and_lights(m, *placed, out);
 }

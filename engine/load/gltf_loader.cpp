@@ -4,12 +4,16 @@
 // before use: the GLB container (tinygltf 2.7 lets a BIN chunk's 8-byte header run past the
 // declared length and ignores the version), every accessor and bufferView range
 // (gltf_accessors.cpp), every index against its vertex count, and the node graph (cycles,
-// shared children, depth). tinygltf's file access is routed to the caller's ResourceReader,
-// and images are neither read nor decoded (we do not texture).
+// shared children, depth). tinygltf's file access is routed to the caller's ResourceReader
+// and allowed only for the URIs of the document's buffers, so images are neither read nor
+// decoded (we do not texture). nlohmann/json, tinygltf's own parser, is used beforehand to list
+// those URIs and, after a failed parse, to name an unsupported required extension.
 
 #include <map>
 #include <set>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "engine/load/gltf_internal.h"
 #include "engine/load/loaders.h"
@@ -21,7 +25,6 @@ namespace {
 constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
 constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
 constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
-constexpr std::size_t kMaxNodeDepth = 256;
 
 // Extensions whose absence of support cannot change the geometry or lighting we produce:
 // lights and quantized attributes we implement; texture transforms and emissive strength only
@@ -51,7 +54,8 @@ struct Glb {
 // Binary glTF layout, glTF 2.0 §4.4: a 12-byte header (magic, version 2, total length), then
 // chunks of (uint32 length, uint32 type, data); chunk 0 is JSON, an optional BIN chunk comes
 // second; chunk lengths are multiples of 4; unknown chunk types are ignored.
-Result<Glb> check_glb(std::string_view b, std::string_view name) {
+Result<Glb> check_glb(std::string_view b, std::string_view name,
+                      std::vector<std::string>& warnings) {
     if (b.size() < 12)
         return load_error(name, "truncated GLB: " + std::to_string(b.size()) +
                                     " bytes, the header alone needs 12");
@@ -68,9 +72,12 @@ Result<Glb> check_glb(std::string_view b, std::string_view name) {
         return load_error(name, "truncated GLB: header declares " + std::to_string(length) +
                                     " bytes, only " + std::to_string(b.size()) + " present");
     }
-    if (length != b.size()) {
-        return load_error(name, "GLB header declares " + std::to_string(length) +
-                                    " bytes but the data has " + std::to_string(b.size()));
+    if (length < 12)
+        return load_error(name, "GLB header declares fewer than 12 bytes");
+    if (length < b.size()) {
+        warnings.push_back(std::to_string(b.size() - length) +
+                           " bytes after the end of the GLB stream ignored");
+        b = b.substr(0, length);
     }
     Glb glb;
     std::size_t at = 12, keep = 12;
@@ -104,7 +111,7 @@ Result<Glb> check_glb(std::string_view b, std::string_view name) {
     if (at == 12)
         return load_error(name, "GLB has no JSON chunk");
     glb.original = b;
-    if (keep != length) {
+    if (keep != length || b.size() != read_u32(b, 8)) {
         // Hand tinygltf only the chunks it understands, with the header length to match.
         glb.patched.assign(b.data(), keep);
         for (std::size_t i = 0; i < 4; ++i) {
@@ -114,34 +121,66 @@ Result<Glb> check_glb(std::string_view b, std::string_view name) {
     return glb;
 }
 
-/// tinygltf's file-system callbacks, answered from the ResourceReader. Each URI is read at
-/// most once (tinygltf asks "exists?" before "read"). Image files are reported missing without
-/// being read: we do not texture, and a missing image is only a warning to tinygltf.
+/// The URI as tinygltf hands it to the file-system callbacks: its dlib::urldecode turns "%xx"
+/// into the byte and, unlike RFC 3986, '+' into a space.
+std::string tinygltf_urldecode(std::string_view uri) {
+    auto hex = [](char c) -> int {
+        if (c >= '0' && c <= '9')
+            return c - '0';
+        if (c >= 'a' && c <= 'f')
+            return c - 'a' + 10;
+        if (c >= 'A' && c <= 'F')
+            return c - 'A' + 10;
+        return 0;
+    };
+    std::string out;
+    for (std::size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '+') {
+            out += ' ';
+        } else if (uri[i] == '%' && i + 2 < uri.size()) {
+            out += static_cast<char>(hex(uri[i + 1]) << 4 | hex(uri[i + 2]));
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
+}
+
+/// The decoded URIs of the document's buffers. tinygltf decodes base64 data: URIs itself; any
+/// other data: URI reaches the file-system callbacks, which then explain the refusal.
+std::set<std::string> buffer_uris(const nlohmann::json& doc) {
+    std::set<std::string> out;
+    if (!doc.is_object() || !doc.contains("buffers") || !doc["buffers"].is_array())
+        return out;
+    for (const auto& b : doc["buffers"]) {
+        if (!b.is_object() || !b.contains("uri") || !b["uri"].is_string())
+            continue;
+        const std::string& uri = b["uri"].get_ref<const std::string&>();
+        if (uri.rfind("data:", 0) != 0)
+            out.insert(tinygltf_urldecode(uri));
+    }
+    return out;
+}
+
+/// tinygltf's file-system callbacks, answered from the ResourceReader for the buffers' URIs
+/// only. Each is read at most once (tinygltf asks "exists?" before "read"). Anything else is an
+/// image, reported missing without being read: a missing image is only a warning to tinygltf.
 class ResourceBridge {
   public:
-    explicit ResourceBridge(const ResourceReader& read) : read_(read) {}
+    ResourceBridge(const ResourceReader& read, std::set<std::string> buffers)
+        : read_(read), buffers_(std::move(buffers)) {}
 
     tinygltf::FsCallbacks callbacks() {
         return {&ResourceBridge::exists, &ResourceBridge::expand, &ResourceBridge::read_file,
                 &ResourceBridge::write_file, this};
     }
 
-  private:
-    static bool is_image(const std::string& uri) {
-        static const char* const kExt[] = {".png", ".jpg",  ".jpeg", ".gif",   ".bmp", ".webp",
-                                           ".ktx", ".ktx2", ".dds",  ".basis", ".tga", ".hdr"};
-        std::string lower;
-        for (char c : uri)
-            lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-        for (const char* e : kExt) {
-            std::string_view ext(e);
-            if (lower.size() >= ext.size() &&
-                lower.compare(lower.size() - ext.size(), ext.size(), ext) == 0)
-                return true;
-        }
-        return false;
-    }
+    /// Why the first buffer that could not be read failed (empty if none failed); tinygltf
+    /// only says "File not found".
+    const std::string& failure() const { return failure_; }
 
+  private:
     const Result<std::string>& fetch(std::string path) {
         // tinygltf retries a relative name as "./name"; both are the same resource.
         if (path.rfind("./", 0) == 0)
@@ -149,10 +188,18 @@ class ResourceBridge {
         auto it = cache_.find(path);
         if (it != cache_.end())
             return it->second;
-        Status refused = check_resource_uri(path);
-        if (refused.ok() && is_image(path))
-            refused = Status::error(Code::not_found, "images are not loaded");
+        Status refused =
+            path.rfind("data:", 0) == 0
+                ? Status::error(Code::model_load_failed, "only base64 data: URIs are supported")
+                : check_resource_uri(path);
+        if (refused.ok() && !buffers_.count(path)) {
+            refused = Status::error(Code::not_found,
+                                    "'" + path + "' is not a buffer; images are not loaded");
+        }
         auto result = refused.ok() ? read_(path) : Result<std::string>(refused);
+        if (!result.ok() && buffers_.count(path) && failure_.empty()) {
+            failure_ = "buffer '" + path + "': " + result.status().message;
+        }
         return cache_.emplace(path, std::move(result)).first->second;
     }
 
@@ -177,12 +224,29 @@ class ResourceBridge {
     }
 
     const ResourceReader& read_;
+    std::set<std::string> buffers_;
     std::map<std::string, Result<std::string>> cache_;
+    std::string failure_;
 };
 
 bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
                   const unsigned char*, int, void*) {
     return true;
+}
+
+/// The first entry of the document's extensionsRequired we do not support, if any; nullopt
+/// also when the JSON did not parse (the caller then reports tinygltf's own error).
+std::optional<std::string> unsupported_required_extension(const nlohmann::json& doc) {
+    if (!doc.is_object() || !doc.contains("extensionsRequired") ||
+        !doc["extensionsRequired"].is_array()) {
+        return std::nullopt;
+    }
+    for (const auto& ext : doc["extensionsRequired"]) {
+        if (ext.is_string() && !kSupportedRequired.count(ext.get<std::string>())) {
+            return ext.get<std::string>();
+        }
+    }
+    return std::nullopt;
 }
 
 /// tinygltf's warnings, minus those about images (we never load them on purpose).
@@ -202,7 +266,17 @@ Result<tinygltf::Model> parse(std::string_view bytes, bool binary, const Resourc
         return Status::error(Code::too_large,
                              std::string(name) + ": glTF files over 4 GiB are not supported");
     }
-    ResourceBridge bridge(read);
+    std::string_view json_text = bytes;
+    if (binary) {
+        auto checked = check_glb(bytes, name, warnings);
+        if (!checked)
+            return checked.status();
+        glb = std::move(*checked);
+        json_text = glb.bytes().substr(20, read_u32(glb.bytes(), 12));
+    }
+    const auto doc = nlohmann::json::parse(json_text.begin(), json_text.end(), nullptr,
+                                           /*allow_exceptions=*/false);
+    ResourceBridge bridge(read, buffer_uris(doc));
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks(bridge.callbacks());
     loader.SetImageLoader(&ignore_image, nullptr);
@@ -210,10 +284,6 @@ Result<tinygltf::Model> parse(std::string_view bytes, bool binary, const Resourc
     std::string err, warn;
     bool ok;
     if (binary) {
-        auto checked = check_glb(bytes, name);
-        if (!checked)
-            return checked.status();
-        glb = std::move(*checked);
         const std::string_view view = glb.bytes();
         ok = loader.LoadBinaryFromMemory(&model, &err, &warn,
                                          reinterpret_cast<const unsigned char*>(view.data()),
@@ -224,6 +294,13 @@ Result<tinygltf::Model> parse(std::string_view bytes, bool binary, const Resourc
     }
     add_tinygltf_warnings(warn, warnings);
     if (!ok) {
+        // tinygltf trips over what an unsupported required extension leaves out (a Draco mesh
+        // has accessors without bufferViews) before it reports the extension; say the cause.
+        if (auto ext = unsupported_required_extension(doc)) {
+            return load_error(name, "required extension " + *ext + " is not supported");
+        }
+        if (!bridge.failure().empty())
+            return load_error(name, bridge.failure());
         while (!err.empty() && (err.back() == '\n' || err.back() == ' '))
             err.pop_back();
         return load_error(name, err.empty() ? "glTF parse failed" : err);
@@ -232,9 +309,11 @@ Result<tinygltf::Model> parse(std::string_view bytes, bool binary, const Resourc
 }
 
 /// What tinygltf accepts but we must not: unknown required extensions, a wrong asset version,
-/// GLB buffers that do not match the BIN chunk (glTF 2.0 §4.4.3.3: the chunk may exceed the
-/// buffer's byteLength by at most 3 padding bytes; only buffer 0 may live in it).
-Status check_model(const tinygltf::Model& m, const Glb& glb, bool binary) {
+/// GLB buffers that do not match the BIN chunk (only buffer 0 may live in it; glTF 2.0
+/// §4.4.3.3 lets the chunk exceed the buffer's byteLength by up to 3 padding bytes, and more is
+/// a warning, as the glTF-Validator rates it).
+Status check_model(const tinygltf::Model& m, const Glb& glb, bool binary,
+                   std::vector<std::string>& warnings) {
     for (const std::string& ext : m.extensionsRequired) {
         if (!kSupportedRequired.count(ext))
             return Status::error(Code::model_load_failed,
@@ -257,11 +336,9 @@ Status check_model(const tinygltf::Model& m, const Glb& glb, bool binary) {
                 return Status::error(Code::model_load_failed,
                                      "/buffers/0 refers to a GLB BIN chunk that is missing");
             if (glb.bin_length > m.buffers[0].data.size() + 3) {
-                return Status::error(Code::model_load_failed,
-                                     "/buffers/0 byteLength " +
-                                         std::to_string(m.buffers[0].data.size()) +
-                                         " does not match the GLB BIN chunk (" +
-                                         std::to_string(glb.bin_length) + " bytes)");
+                warnings.push_back("GLB BIN chunk (" + std::to_string(glb.bin_length) +
+                                   " bytes) is longer than /buffers/0 (" +
+                                   std::to_string(m.buffers[0].data.size()) + " bytes)");
             }
         }
     }
@@ -278,7 +355,7 @@ Result<LoadedModel> load_gltf(std::string_view bytes, bool binary, const Resourc
     if (!parsed)
         return parsed.status();
     const tinygltf::Model& m = *parsed;
-    if (Status st = check_model(m, glb, binary); !st.ok())
+    if (Status st = check_model(m, glb, binary, out.warnings); !st.ok())
         return with_name(name, st);
     if (Status st = gltf::build_model(m, name, limits, out); !st.ok())
         return with_name(name, st);

@@ -16,11 +16,15 @@ set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/../math/transform.cpp
     PROPERTIES COMPILE_OPTIONS "-Wconversion;-Wsign-conversion")
 # tinygltf parses glTF; OBJ, PLY, STL and OFF have their own small readers (see their headers
 # for why OpenMesh's readers are not used), so OpenMesh is not linked.
-target_link_libraries(raycastd_engine PRIVATE TinyGLTF::TinyGLTF)
+# nlohmann/json (tinygltf's own JSON parser) is used only to explain a failed parse.
+target_link_libraries(raycastd_engine PRIVATE TinyGLTF::TinyGLTF nlohmann_json::nlohmann_json)
 
 if(BUILD_TESTING)
     target_sources(engine_tests PRIVATE
         ${CMAKE_CURRENT_LIST_DIR}/../math/transform_test.cpp
         ${CMAKE_CURRENT_LIST_DIR}/model_loader_test.cpp
+        ${CMAKE_CURRENT_LIST_DIR}/model_invalid_test.cpp
     )
+    # The glTF-Validator oracle reports are JSON; only the tests read them.
+    target_link_libraries(engine_tests PRIVATE nlohmann_json::nlohmann_json)
 endif()

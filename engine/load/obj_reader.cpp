@@ -200,11 +200,15 @@ class ObjReader {
                 std::string_view rest = corner.substr(slash + 1);
                 const std::size_t slash2 = rest.find('/');
                 if (slash2 != std::string_view::npos && slash2 + 1 < rest.size()) {
-                    auto vn = resolve(rest.substr(slash2 + 1), normals_.size());
-                    if (!vn)
-                        return error(n, "face normal index in '" + std::string(corner) +
-                                            "' is out of range");
-                    normal = *vn;
+                    // A bad normal index costs the normals (shading only), not the geometry.
+                    if (auto vn = resolve(rest.substr(slash2 + 1), normals_.size())) {
+                        normal = *vn;
+                    } else if (!bad_normal_index_) {
+                        bad_normal_index_ = true;
+                        model_.warnings.push_back("line " + std::to_string(n) +
+                                                  ": normal index in '" + std::string(corner) +
+                                                  "' is out of range; normals dropped");
+                    }
                 }
             }
             std::uint32_t& assigned = vertex_normal_[*v];
@@ -314,6 +318,7 @@ class ObjReader {
     std::vector<Vec3d> normals_;
     std::vector<std::uint32_t> vertex_normal_;  ///< per vertex: its vn index, kNone if unseen
     bool normals_consistent_ = true;
+    bool bad_normal_index_ = false;
     std::vector<std::uint32_t> triangle_material_;
     std::vector<std::uint32_t> poly_;
     std::map<std::string, Material> library_;  ///< every material of every mtllib read
