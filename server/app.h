@@ -93,6 +93,11 @@ void install_scene_routes(App& app);
 /// registered-scene routes).
 void answer_intersect(const engine::QueryEngine& engine, const Json& body,
                       const std::string& prefix, std::size_t max_rays, httplib::Response& res);
+/// True when the request carries binary ray records (Content-Type: application/octet-stream).
+bool is_binary(const httplib::Request& req);
+/// Answers the binary form (see schema/binary_codec.h) from the query string and `body`.
+void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,
+                             std::string_view body, std::size_t max_rays, httplib::Response& res);
 
 /// Sends `body` as application/json with the given status.
 void send_json(httplib::Response& res, std::string body, int status = 200);

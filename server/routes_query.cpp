@@ -2,6 +2,7 @@
 
 #include "engine/query/intersect.h"
 #include "server/app.h"
+#include "server/schema/binary_codec.h"
 #include "server/schema/query_doc.h"
 #include "server/schema/scene_doc.h"
 
@@ -14,9 +15,52 @@ void answer_intersect(const engine::QueryEngine& engine, const Json& body,
     send_json(res, write_intersect_response(engine.scene(), req, result));
 }
 
+bool is_binary(const httplib::Request& req) {
+    const std::string ct = req.get_header_value("Content-Type");
+    return ct.rfind("application/octet-stream", 0) == 0;
+}
+
+void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,
+                             std::string_view body, std::size_t max_rays, httplib::Response& res) {
+    engine::QueryOptions opt;
+    const auto param = [&](const char* k) {
+        return req.has_param(k) ? req.get_param_value(k) : std::string();
+    };
+    if (req.has_param("mode")) opt.mode = parse_mode(param("mode"), "mode");
+    if (req.has_param("precision")) opt.precision = parse_precision(param("precision"), "precision");
+    const Dtype dtype = parse_dtype(param("dtype"));
+    opt.want_normal = true;
+    if (req.has_param("fields")) {
+        // ?fields=t,object: normals are left out (zeros) unless asked for.
+        const std::string f = param("fields");
+        opt.want_normal = f.find("normal") != std::string::npos;
+    }
+    thread_local std::vector<engine::Ray> rays;
+    thread_local engine::QueryResult result;
+    thread_local std::string out;
+    decode_rays(body, dtype, max_rays, rays);
+    engine.intersect(rays, opt, result);
+    encode_results(result, opt.mode, dtype, rays.size(), out);
+    res.status = 200;
+    res.set_header("X-Precision", engine::to_string(result.precision));
+    res.set_header("X-Mode", engine::to_string(opt.mode));
+    // `out` belongs to this worker thread, which also writes the response before it takes
+    // the next request, so it outlives the provider's use.
+    const std::string* data = &out;
+    res.set_content_provider(out.size(), "application/octet-stream",
+                             [data](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                                 return sink.write(data->data() + offset, length);
+                             });
+}
+
 void install_query_routes(App& app) {
     app.http().Post("/v1/intersect", [&app](const httplib::Request& req, httplib::Response& res) {
         app.handle(req, res, true, [&] {
+            if (is_binary(req)) {
+                throw api_error("unsupported_format",
+                                "binary rays need a registered scene: POST /v1/scenes, then "
+                                "/v1/scenes/{id}/intersect");
+            }
             const Json body = App::parse_json_body(req);
             require_object(body, "", "invalid_request");
             const Json* scene_doc = member(body, "scene");

@@ -76,12 +76,39 @@ void install_scene_routes(App& app) {
                         send_json(res, "{\"id\":\"" + id + "\",\"deleted\":true}");
                     });
                 });
+    // The body is streamed into a buffer this worker thread reuses, and binary answers are
+    // written from another: a 1M-ray batch moves 32-64 MB each way, and fresh buffers of that
+    // size cost more in page faults than tracing the rays (PERFORMANCE.md).
     http.Post(R"(/v1/scenes/([A-Za-z0-9_]+)/intersect)",
-              [&app](const httplib::Request& req, httplib::Response& res) {
+              [&app](const httplib::Request& req, httplib::Response& res,
+                     const httplib::ContentReader& read) {
                   app.handle(req, res, true, [&] {
+                      thread_local std::string body;
+                      body.clear();
+                      const std::size_t limit = app.config().limits.max_body_bytes;
+                      bool over = false;
+                      read([&](const char* data, std::size_t len) {
+                          if (body.size() + len > limit) {
+                              over = true;
+                              return false;
+                          }
+                          body.append(data, len);
+                          return true;
+                      });
+                      if (over) throw api_error("too_large", "request body is over the configured limit");
                       auto engine = app.scene_or_404(req.matches[1]);
-                      const Json body = App::parse_json_body(req);
-                      answer_intersect(*engine, body, "", app.config().limits.max_rays, res);
+                      if (is_binary(req)) {
+                          answer_binary_intersect(*engine, req, body, app.config().limits.max_rays, res);
+                          return;
+                      }
+                      if (body.empty()) throw api_error("bad_json", "empty body: a JSON document is required");
+                      Json doc;
+                      try {
+                          doc = Json::parse(body);
+                      } catch (const Json::exception& e) {
+                          throw api_error("bad_json", std::string("body is not valid JSON: ") + e.what());
+                      }
+                      answer_intersect(*engine, doc, "", app.config().limits.max_rays, res);
                   });
               });
 }

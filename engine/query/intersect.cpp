@@ -120,6 +120,15 @@ std::size_t QueryEngine::memory_bytes() const {
 
 QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt) const {
     QueryResult out;
+    intersect(rays, opt, out);
+    return out;
+}
+
+void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt,
+                            QueryResult& out) const {
+    out.hits.clear();
+    out.offsets.clear();
+    out.counts.clear();
     out.precision = effective_precision(opt.precision);
     const Precision p = out.precision;
     const std::size_t n = rays.size();
@@ -127,7 +136,7 @@ QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOpti
     const EmbreeAccel* accel = accel_.get();
     switch (opt.mode) {
         case Mode::closest:
-            out.hits.resize(n);
+            out.hits.assign(n, Hit{});
             for_each_ray(n, [&](std::size_t i) {
                 auto h = accel ? accel->closest(rays[i], p, opt.want_normal)
                                : linear_closest(s, rays[i], opt.want_normal);
@@ -135,7 +144,7 @@ QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOpti
             });
             break;
         case Mode::any:
-            out.hits.resize(n);
+            out.hits.assign(n, Hit{});
             for_each_ray(n, [&](std::size_t i) {
                 // `any` never looks for the closest: it stops at the first hit found.
                 const bool hit = accel ? accel->any(rays[i], p) : linear_any(s, rays[i]);
@@ -169,7 +178,6 @@ QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOpti
             break;
         }
     }
-    return out;
 }
 
 }  // namespace raycastd::engine

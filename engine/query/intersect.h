@@ -26,6 +26,10 @@ public:
 
     /// Answers every ray; rays must already be valid (finite, non-zero direction, tmin ≤ tmax).
     QueryResult intersect(const std::vector<Ray>& rays, const QueryOptions& options) const;
+    /// The same, into `out`, whose buffers keep their capacity: a server thread that reuses one
+    /// QueryResult does not page-fault fresh megabytes on every large batch.
+    void intersect(const std::vector<Ray>& rays, const QueryOptions& options,
+                   QueryResult& out) const;
 
     /// The path a request asking for `asked` is answered by (tiny scenes always take exact).
     Precision effective_precision(Precision asked) const;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "tests/support/encode.h"
 #include "tests/support/server_process.h"
 
 namespace raycastd {
@@ -192,18 +193,7 @@ TEST_F(Scenes, MeshTransformAndInlineData) {
                    {"format", "off"},
                    {"data_base64", ""},
                    {"transform", {{"translate", {10, 0, 0}}, {"scale", 2}}}}}}};
-    // base64 of the OFF file, built here to keep the test self-contained.
-    static const char* kB64 = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string b64;
-    for (std::size_t i = 0; i < off.size(); i += 3) {
-        const unsigned n = (static_cast<unsigned char>(off[i]) << 16) |
-                           (i + 1 < off.size() ? static_cast<unsigned char>(off[i + 1]) << 8 : 0) |
-                           (i + 2 < off.size() ? static_cast<unsigned char>(off[i + 2]) : 0);
-        b64 += kB64[(n >> 18) & 63];
-        b64 += kB64[(n >> 12) & 63];
-        b64 += i + 1 < off.size() ? kB64[(n >> 6) & 63] : '=';
-        b64 += i + 2 < off.size() ? kB64[n & 63] : '=';
-    }
+    const std::string b64 = testing::base64(off);
     doc["objects"][0]["data_base64"] = b64;
     Json s = post_ok("/v1/scenes", doc.dump(), 201);
     EXPECT_EQ(s.at("bounds").at("min"), Json::parse("[9, -1, -1]"));

@@ -1,0 +1,133 @@
+#include "server/schema/binary_codec.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "engine/query/intersect.h"
+#include "server/api_error.h"
+
+namespace raycastd::server {
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "the binary format is little-endian and is copied as is");
+
+namespace {
+
+template <class F>
+void decode_as(std::string_view body, std::vector<engine::Ray>& rays) {
+    const std::size_t n = rays.size();
+    const char* p = body.data();
+    for (std::size_t i = 0; i < n; ++i, p += 8 * sizeof(F)) {
+        F v[8];
+        std::memcpy(v, p, sizeof v);
+        engine::Ray& r = rays[i];
+        r.origin = {double(v[0]), double(v[1]), double(v[2])};
+        r.direction = {double(v[3]), double(v[4]), double(v[5])};
+        r.tmin = double(v[6]);
+        r.tmax = double(v[7]);
+    }
+}
+
+template <class F>
+char* put(char* p, F v) {
+    std::memcpy(p, &v, sizeof v);
+    return p + sizeof v;
+}
+
+template <class F>
+char* put_hit(char* p, const engine::Hit& h) {
+    if (!h.valid()) {
+        p = put<F>(p, std::numeric_limits<F>::infinity());
+        p = put<std::uint32_t>(p, engine::kInvalidId);
+        p = put<std::uint32_t>(p, engine::kInvalidId);
+        std::memset(p, 0, 5 * sizeof(F));
+        return p + 5 * sizeof(F);
+    }
+    p = put<F>(p, static_cast<F>(h.t));
+    p = put<std::uint32_t>(p, h.object);
+    p = put<std::uint32_t>(p, h.primitive);
+    p = put<F>(p, static_cast<F>(h.u));
+    p = put<F>(p, static_cast<F>(h.v));
+    p = put<F>(p, static_cast<F>(h.normal.x));
+    p = put<F>(p, static_cast<F>(h.normal.y));
+    return put<F>(p, static_cast<F>(h.normal.z));
+}
+
+template <class F>
+void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, std::string& out) {
+    constexpr std::size_t rec = 2 * sizeof(std::uint32_t) + 6 * sizeof(F);
+    switch (mode) {
+        case engine::Mode::closest: {
+            out.resize(n * rec);
+            char* p = out.data();
+            for (std::size_t i = 0; i < n; ++i) p = put_hit<F>(p, r.hits[i]);
+            break;
+        }
+        case engine::Mode::any:
+        case engine::Mode::count: {
+            out.resize(n * sizeof(std::uint32_t));
+            char* p = out.data();
+            for (std::size_t i = 0; i < n; ++i) {
+                const std::uint32_t v = mode == engine::Mode::any ? (r.hits[i].valid() ? 1u : 0u)
+                                                                   : r.counts[i];
+                p = put<std::uint32_t>(p, v);
+            }
+            break;
+        }
+        case engine::Mode::all: {
+            out.resize(n * sizeof(std::uint32_t) + r.hits.size() * rec);
+            char* p = out.data();
+            for (std::size_t i = 0; i < n; ++i) {
+                p = put<std::uint32_t>(p, r.offsets[i + 1] - r.offsets[i]);
+                for (std::uint32_t k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
+                    p = put_hit<F>(p, r.hits[k]);
+                }
+            }
+            break;
+        }
+    }
+}
+
+}  // namespace
+
+Dtype parse_dtype(const std::string& s) {
+    if (s.empty() || s == "float32") return Dtype::float32;
+    if (s == "float64") return Dtype::float64;
+    throw api_error("invalid_request", "dtype must be float32 or float64, got \"" + s + "\"");
+}
+
+void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
+                 std::vector<engine::Ray>& rays) {
+    const std::size_t rec = ray_record_bytes(dtype);
+    if (body.size() % rec != 0) {
+        throw api_error("invalid_ray", "body of " + std::to_string(body.size()) +
+                                           " bytes is not a whole number of " +
+                                           std::to_string(rec) + "-byte ray records");
+    }
+    const std::size_t n = body.size() / rec;
+    if (n > max_rays) {
+        throw api_error("too_large", std::to_string(n) + " rays is over the limit of " +
+                                         std::to_string(max_rays) + " per request");
+    }
+    rays.resize(n);
+    if (dtype == Dtype::float32) {
+        decode_as<float>(body, rays);
+    } else {
+        decode_as<double>(body, rays);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        engine::Status st = engine::validate_ray(rays[i], i);
+        if (!st.ok()) throw api_error("invalid_ray", st.message, "/rays/" + std::to_string(i));
+    }
+}
+
+void encode_results(const engine::QueryResult& result, engine::Mode mode, Dtype dtype,
+                    std::size_t ray_count, std::string& out) {
+    if (dtype == Dtype::float32) {
+        encode_as<float>(result, mode, ray_count, out);
+    } else {
+        encode_as<double>(result, mode, ray_count, out);
+    }
+}
+
+}  // namespace raycastd::server

@@ -1,0 +1,39 @@
+#pragma once
+// The binary form of intersect (API.md): packed little-endian records, no header, no padding.
+//   request:  N × {ox oy oz dx dy dz tmin tmax}            (8 floats of dtype)
+//   closest:  N × {t, object u32, primitive u32, u, v, nx, ny, nz}
+//             (floats of dtype; a miss is t = +inf, object = primitive = 0xFFFFFFFF, rest 0)
+//   any:      N × u32 (1 hit, 0 miss)
+//   count:    N × u32 (crossings, shared edges once)
+//   all:      per ray, u32 n followed by n closest-records, in ray order
+// Normals are written as zeros when the request asks for fields without them (?fields=...).
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/query/query_types.h"
+
+namespace raycastd::server {
+
+enum class Dtype { float32, float64 };
+
+/// Bytes of one request record.
+inline std::size_t ray_record_bytes(Dtype d) { return d == Dtype::float32 ? 32 : 64; }
+/// Bytes of one hit record.
+inline std::size_t hit_record_bytes(Dtype d) { return d == Dtype::float32 ? 32 : 56; }
+
+Dtype parse_dtype(const std::string& s);
+
+/// Decodes the body into `rays` (capacity reused). invalid_ray for a length that is not a whole
+/// number of records, and for a NaN/Inf origin or direction, a zero direction, NaN or inverted
+/// tmin/tmax (tmin may be −inf, tmax +inf), naming the ray index; too_large over max_rays.
+void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
+                 std::vector<engine::Ray>& rays);
+
+/// Encodes the answers of `mode` into `out` (cleared; capacity reused).
+void encode_results(const engine::QueryResult& result, engine::Mode mode, Dtype dtype,
+                    std::size_t ray_count, std::string& out);
+
+}  // namespace raycastd::server
