@@ -157,8 +157,7 @@ std::set<std::string> buffer_uris(const nlohmann::json& doc) {
         if (!b.is_object() || !b.contains("uri") || !b["uri"].is_string())
             continue;
         const std::string& uri = b["uri"].get_ref<const std::string&>();
-        if (uri.rfind("data:", 0) != 0)
-            out.insert(tinygltf_urldecode(uri));
+        out.insert(tinygltf_urldecode(uri));
     }
     return out;
 }
