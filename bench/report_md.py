@@ -1,0 +1,378 @@
+"""Renders the rows that bench/run_all.py collected as docs/benchmarks.md.
+
+A row is a dict. Tracing: {"kind": "trace", "workload", "rays", "peer", "variant", "mode",
+"precision", "mrays_s", "measured_rays", "total_rays", "sampled", "agree_with_embree"?,
+"answered_precision"?}. Build: {"kind": "build", "workload", "peer", "variant", "ms"}. A form a
+peer does not offer: {"kind": "unavailable", "workload", "rays", "peer", "variant", "reason"}.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+RAYS = ("coherent", "incoherent")
+CEILING = ("raw_embree", "rtcIntersect1")
+
+
+def find(rows: Iterable[dict], **match) -> dict | None:
+    for r in rows:
+        if all(r.get(k) == v for k, v in match.items()):
+            return r
+    return None
+
+
+def fmt_rate(row: dict | None) -> str:
+    if row is None:
+        return "—"
+    if row["kind"] == "unavailable":
+        return "n/a"
+    star = "\\*" if row.get("sampled") else ""
+    return f"{row['mrays_s']:.2f}{star}"
+
+
+def fmt_ratio(row: dict | None, ceiling: dict | None) -> str:
+    if row is None or ceiling is None or row["kind"] != "trace" or not ceiling["mrays_s"]:
+        return "—"
+    return f"{row['mrays_s'] / ceiling['mrays_s']:.2f}×"
+
+
+def fmt_agree(row: dict | None) -> str:
+    if row is None or row.get("agree_with_embree") is None:
+        return "—"
+    return f"{100 * row['agree_with_embree']:.2f}%"
+
+
+def trace_lookup(rows: list[dict], workload: str, rays: str, peer: str, variant: str,
+                 mode: str = "closest", precision: str | None = None) -> dict | None:
+    match = dict(workload=workload, rays=rays, peer=peer, variant=variant)
+    hit = find((r for r in rows if r["kind"] in ("trace", "unavailable")), **match,
+               **({"mode": mode} if mode else {}),
+               **({"precision": precision} if precision else {}))
+    if hit is None and mode:
+        hit = find((r for r in rows if r["kind"] == "unavailable"), **match)
+    return hit
+
+
+# (label, peer, variant, mode, precision) of the headline table, top to bottom.
+HEADLINE = [
+    ("raw Embree `rtcIntersect1` (the ceiling)", "raw_embree", "rtcIntersect1", "closest", None),
+    ("raw Embree `rtcIntersect16` packets", "raw_embree", "rtcIntersect16", "closest", None),
+    ("raw Embree `rtcIntersect1`, ROBUST scene", "raw_embree", "rtcIntersect1 ROBUST", "closest",
+     None),
+    ("engine in-process, `fast`", "engine", "QueryEngine::intersect", "closest", "fast"),
+    ("engine in-process, `refined`", "engine", "QueryEngine::intersect", "closest", "refined"),
+    ("engine in-process, `exact`", "engine", "QueryEngine::intersect", "closest", "exact"),
+    ("HTTP binary float32, whole ray set per request, `fast`", "http", "binary float32", "closest", "fast"),
+    ("HTTP JSON, 10k-ray requests, `fast`", "http", "JSON", "closest", "fast"),
+    ("Open3D `cast_rays` (with mask shim)", "open3d", "cast_rays", "closest", None),
+]
+
+
+def headline_table(rows: list[dict], workload: str) -> list[str]:
+    out = [
+        "| path | coherent Mrays/s | × ceiling | incoherent Mrays/s | × ceiling | agrees with Embree |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    ceilings = {r: trace_lookup(rows, workload, r, *CEILING) for r in RAYS}
+    for label, peer, variant, mode, precision in HEADLINE:
+        cells = [label]
+        agrees = []
+        found = False
+        for r in RAYS:
+            row = trace_lookup(rows, workload, r, peer, variant, mode, precision)
+            found = found or row is not None
+            cells += [fmt_rate(row), fmt_ratio(row, ceilings[r])]
+            if row is not None and row.get("agree_with_embree") is not None:
+                agrees.append(fmt_agree(row))
+        if not found:
+            continue
+        cells.append(" / ".join(agrees) if agrees else "—")
+        out.append("| " + " | ".join(cells) + " |")
+    return out
+
+
+def modes_table(rows: list[dict], workload: str) -> list[str]:
+    out = [
+        "| mode | precision | coherent Mrays/s | × ceiling | incoherent Mrays/s | × ceiling "
+        "| answered by |",
+        "|---|---|---:|---:|---:|---:|---|",
+    ]
+    ceilings = {r: trace_lookup(rows, workload, r, *CEILING) for r in RAYS}
+    for ref_variant, mode in (("rtcOccluded1", "any"), ("rtcOccluded16", "any")):
+        cells = [f"`{mode}` (raw `{ref_variant}`)", "—"]
+        for r in RAYS:
+            row = trace_lookup(rows, workload, r, "raw_embree", ref_variant, mode)
+            cells += [fmt_rate(row), fmt_ratio(row, ceilings[r])]
+        out.append("| " + " | ".join(cells + ["—"]) + " |")
+    for mode in ("closest", "any", "all", "count"):
+        for precision in ("fast", "refined", "exact"):
+            cells = [f"`{mode}`", f"`{precision}`"]
+            answered = set()
+            for r in RAYS:
+                row = trace_lookup(rows, workload, r, "engine", "QueryEngine::intersect", mode,
+                                   precision)
+                cells += [fmt_rate(row), fmt_ratio(row, ceilings[r])]
+                if row is not None and row.get("answered_precision"):
+                    answered.add(row["answered_precision"])
+            cells.append(", ".join(f"`{a}`" for a in sorted(answered)) or "—")
+            out.append("| " + " | ".join(cells) + " |")
+    return out
+
+
+def build_table(rows: list[dict], workloads: list[str]) -> list[str]:
+    variants: list[tuple[str, str]] = []
+    for r in rows:
+        if r["kind"] == "build" and (r["peer"], r["variant"]) not in variants:
+            variants.append((r["peer"], r["variant"]))
+    out = ["| what | " + " | ".join(workloads) + " |", "|---|" + "---:|" * len(workloads)]
+    for peer, variant in variants:
+        cells = [f"{peer}: {variant}"]
+        for w in workloads:
+            row = find((r for r in rows if r["kind"] == "build"), workload=w, peer=peer,
+                       variant=variant)
+            cells.append("—" if row is None or row["ms"] is None else f"{row['ms']:.1f} ms")
+        out.append("| " + " | ".join(cells) + " |")
+    return out
+
+
+def unavailable_notes(rows: list[dict]) -> list[str]:
+    seen = set()
+    out = []
+    for r in rows:
+        if r["kind"] == "unavailable":
+            key = (r["peer"], r["variant"], r["reason"])
+            if key not in seen:
+                seen.add(key)
+                out.append(f"- {r['peer']} {r['variant']}: not available ({r['reason']}).")
+    return out
+
+
+# --- targets of issue 4 --------------------------------------------------------------------------
+
+def ratio(rows: list[dict], workload: str, rays: str, peer: str, variant: str,
+          precision: str | None, against: tuple[str, str] = CEILING) -> float | None:
+    row = trace_lookup(rows, workload, rays, peer, variant, "closest", precision)
+    base = trace_lookup(rows, workload, rays, *against)
+    if not row or not base or row["kind"] != "trace" or base["kind"] != "trace":
+        return None
+    return row["mrays_s"] / base["mrays_s"] if base["mrays_s"] else None
+
+
+def targets_table(results: dict) -> list[str]:
+    rows = results["rows"]
+    mesh = [w for w in ("A", "B") if w in results["meta"]["workloads"]]
+    engine = ("engine", "QueryEngine::intersect", "fast")
+    binary = ("http", "binary float32", "fast")
+
+    def ratios(rays: str, who: tuple, against=CEILING) -> list[float | None]:
+        return [ratio(rows, w, rays, *who, against=against) for w in mesh]
+
+    def json_rates() -> list[float | None]:
+        out = []
+        for w in mesh:
+            rates = [trace_lookup(rows, w, r, "http", "JSON", "closest", "fast") for r in RAYS]
+            rates = [x["mrays_s"] for x in rates if x and x["kind"] == "trace"]
+            out.append(min(rates) if rates else None)
+        return out
+
+    load = results.get("small_requests") or {}
+    checks = [
+        ("engine in-process ≥ 1.5× `rtcIntersect1`, coherent", ratios("coherent", engine), 1.5,
+         "×"),
+        ("engine in-process ≥ 1.0× `rtcIntersect1`, incoherent", ratios("incoherent", engine),
+         1.0, "×"),
+        ("binary HTTP ≥ 0.5× `rtcIntersect1`, incoherent", ratios("incoherent", binary), 0.5,
+         "×"),
+        ("binary HTTP ≥ 2× Open3D, coherent",
+         ratios("coherent", binary, against=("open3d", "cast_rays")), 2.0, "×"),
+        ("JSON ≥ 0.5 Mrays/s end to end (slower ray set)", json_rates(), 0.5, " Mrays/s"),
+    ]
+    out = ["| target | " + " | ".join(mesh) + " | met |", "|---|" + "---:|" * len(mesh) + "---|"]
+    for label, values, goal, unit in checks:
+        cells = [("—" if v is None else f"{v:.2f}{unit}") for v in values]
+        known = [v for v in values if v is not None]
+        met = "—" if not known else ("yes" if all(v >= goal for v in known) else "**no**")
+        out.append(f"| {label} | " + " | ".join(cells) + f" | {met} |")
+    req_s = load.get("req_s")
+    cells = [f"{req_s:,.0f} req/s" if req_s is not None else "—"] + [""] * (len(mesh) - 1)
+    met = "—" if req_s is None else ("yes" if req_s >= 20000 else "**no**")
+    out.append("| ≥ 20,000 one-ray requests/s, 16 keep-alive connections (on A) | "
+               + " | ".join(cells) + f" | {met} |")
+    return out
+
+
+# --- the document --------------------------------------------------------------------------------
+
+def engine_status(rows: list[dict]) -> str:
+    answered = {r.get("answered_precision") for r in rows
+                if r["kind"] == "trace" and r["peer"] == "engine" and r["precision"] == "fast"}
+    sampled = any(r.get("sampled") for r in rows if r["kind"] == "trace")
+    if answered == {"exact"}:
+        text = ("**Measured before Embree acceleration landed in the engine**: every engine request, "
+                "whatever precision it asked for, was answered by the exact double-precision brute "
+                "force path (`answered by` = `exact`). Engine and HTTP figures are those of that "
+                "path, not of the Embree-backed one; re-run `bench/run_all.py` once it lands.")
+    else:
+        text = ("Engine paths that answered `fast` requests: "
+                + ", ".join(f"`{a}`" for a in sorted(a for a in answered if a)) + ".")
+    if sampled:
+        text += (" Figures marked \\* were measured on an evenly strided sample of the rays: "
+                 "JSON always (at most 200,000 rays per set), other paths when the whole set "
+                 "would not fit the time budget (see the notes).")
+    return text
+
+
+HOW_TO_RUN = """\
+```sh
+scripts/setup.sh --bench                              # once, as root: Open3D, NumPy, matplotlib, POV-Ray
+cmake --preset release && cmake --build build/release -j2
+bench/run_all.py                                      # the full run; rewrites this file
+bench/run_all.py --quick                              # small sizes, ~1 min; writes build/release/bench/benchmarks-quick.md
+ctest --test-dir build/release -R bench_smoke         # < 1 s: the intersect bench on tiny sizes
+```
+`run_all.py` builds nothing and must run under Debian's `/usr/bin/python3` (its shebang). Pieces
+run alone: `build/release/bench/bench_intersect [--quick|--smoke] [--workloads AB] [--json F]
+[--data-dir D]` (raw Embree and the engine in-process);
+`LD_PRELOAD=build/release/bench/libembree_mask_shim.so bench/peers/open3d_peer.py --data-dir D
+--workload A` (Open3D, on files `bench_intersect --data-dir D` wrote);
+`build/release/bench/bench_http_load --port P --path /v1/scenes/ID/intersect --body-file F`
+(small requests against a running server). Every intermediate file, including `results.json`
+with every figure, goes to `build/release/bench/data-<preset>/` and is never committed."""
+
+COLUMNS = """\
+- **Mrays/s**: rays answered per second of wall-clock time, median of several runs after a
+  warm-up (raw Embree: 5; engine and HTTP: 3 when the full set fits the time budget; Open3D: 3).
+  For HTTP the clock covers sending the request, the server's work and receiving the whole
+  response on loopback; bodies are encoded before and responses decoded after the clock.
+- **× ceiling**: that figure divided by raw Embree `rtcIntersect1` on the same workload and the
+  same rays in the same run (2 threads, TBB `parallel_for`, default scene flags, `MEDIUM` build).
+- **agrees with Embree**: share of the measured rays whose closest hit has the same hit/miss
+  decision as raw Embree's `rtcIntersect1` and the same object and primitive, or the same `t`
+  within 1e-4 relative (a neighbour across a shared edge); coherent / incoherent.
+- **answered by**: the precision path the engine reports having used (`QueryResult::precision`,
+  the `precision` field / `X-Precision` header over HTTP).
+- **raw `rtcIntersect16`**: 16-ray packets; the coherent rays come in 4×4 pixel tiles, so 16
+  consecutive rays are a tile. `rtcOccluded1/16` are the ceilings for `any`.
+- **\\***: measured on an evenly strided sample of the rays (JSON: always; see the notes).
+- Workloads: **A** icosphere level 6; **B** 200 icospheres of level 4 with random centres and
+  radii, merged into one mesh; **C** 1000 analytic spheres (Embree `SPHERE_POINT` in raw Embree).
+  Coherent rays: a pinhole camera (1024×1024 in the full run, 45° vertical field of view) whose
+  image height the bounding sphere just fills; incoherent rays (1,048,576 in the full run):
+  origins uniform in the bounds scaled 1.5× about their centre, directions uniform on the
+  sphere. Fixed seeds. `--quick` shrinks every workload and ray set (see the headings)."""
+
+
+def notes(results: dict) -> list[str]:
+    m = results["machine"]
+    out = [
+        f"- Noise: the machine is shared; load average {m['loadavg_start'][0]:.2f} at the start "
+        f"and {m['loadavg_end'][0]:.2f} at the end of this run (other engineers compile on it). "
+        "Ratios within one run are more trustworthy than absolute figures; PERFORMANCE.md's "
+        "ceilings (29.2 / 18.6 Mrays/s on A) were measured on a quieter machine.",
+        "- Open3D 0.16.1 from Debian leaves the Embree ray mask at 0 and Debian's Embree is built "
+        "with ray masks, so out of the box every ray misses. Its figures here are taken with "
+        "`bench/peers/embree_mask_shim.c` preloaded: it wraps the only two trace calls Open3D "
+        "makes (`rtcIntersect1M`, `rtcOccluded1M`, per `nm -D`), sets `mask = 0xFFFFFFFF` on "
+        "each ray and forwards to Embree; one store per ray, nothing else changes.",
+        "- Time budgets: each engine measurement gets ~1.5 s and each HTTP one ~6 s. A path too "
+        "slow to trace the whole set within that is measured on an evenly strided sample "
+        "(marked \\*), which loses the coherence of camera rays; that only matters once the path "
+        "is fast enough to trace every ray, and then the whole set is traced.",
+        "- HTTP JSON sends batches of 10,000 rays (up to 200,000 rays per ray set) asking for "
+        "`fields: [t, object, primitive]`; the binary form sends the whole set in one request. "
+        "The Python client (`http.client`, one keep-alive connection, TCP_NODELAY) shares the "
+        "two cores with the server. Small requests come from `bench_http_load` (C++, cpp-httplib, "
+        "16 threads), because a Python client would measure its own GIL.",
+        "- Build times: raw Embree is `rtcCommitScene` alone; the engine is "
+        "`QueryEngine::build` (validation and whatever acceleration it builds); the server's is "
+        "the whole `POST /v1/scenes` with a PLY body (upload, parse, hash, build); Open3D's is "
+        "its first one-ray query, which commits its scene.",
+    ]
+    if m.get("dirty"):
+        out.append(f"- The working tree at commit {m['commit']} had uncommitted changes (other "
+                   "engineers' work in progress) when this ran; the binaries are what was built "
+                   "from it.")
+    if results["meta"].get("worst_agreement", 1.0) < 0.99:
+        out.append(f"- The engine disagreed with Embree on more than 1% of some ray set (worst "
+                   f"agreement {100 * results['meta']['worst_agreement']:.2f}%).")
+    return out
+
+
+def render(results: dict, accuracy: str | None) -> str:
+    rows = results["rows"]
+    meta = results["meta"]
+    m = results["machine"]
+    workloads = list(meta["workloads"].keys())
+    date = meta["date"]
+    lines = [
+        "# Benchmarks",
+        "",
+        f"Generated by `bench/run_all.py` (preset `{results['preset']}`) on {date} in "
+        f"{m['run_seconds'] / 60:.1f} minutes, at commit `{m['commit']}`"
+        f"{' (with uncommitted changes in the tree)' if m.get('dirty') else ''}. "
+        "The figures below are rewritten by each run; the prose lives in `bench/report_md.py`.",
+        "",
+        engine_status(rows),
+        "",
+        "## How to run",
+        "",
+        HOW_TO_RUN,
+        "",
+        "## Machine",
+        "",
+        f"{m['cpu']}, {m['cores']} cores (all benches use both: TBB limited to "
+        f"{meta['threads']} threads), Linux {m['kernel']}, Embree {meta['embree']} and "
+        f"Open3D {results.get('open3d', {}).get('version', '—')} from Debian 12.",
+        "",
+        "## Targets of issue 4",
+        "",
+        *targets_table(results),
+        "",
+        "## Closest hit on each whole ray set (1M rays in the full run)",
+        "",
+    ]
+    for w in workloads:
+        info = meta["workloads"][w]
+        rays = info.get("rays", {})
+        lines += [f"### {w}: {info['description']} "
+                  f"({rays.get('coherent', 0):,} coherent, {rays.get('incoherent', 0):,} "
+                  "incoherent rays)", "", *headline_table(rows, w), ""]
+    lines += ["## Every mode and precision, engine in-process", ""]
+    for w in workloads:
+        lines += [f"### {w}: {meta['workloads'][w]['description']}", "",
+                  *modes_table(rows, w), ""]
+    lines += ["## Build times", "", *build_table(rows, workloads), ""]
+    load = results.get("small_requests") or {}
+    lines += ["## Small requests", ""]
+    if "req_s" in load:
+        lines.append(
+            f"One-ray JSON `closest` requests on A from {load['connections']} keep-alive "
+            f"connections for {load['seconds']:.1f} s: **{load['req_s']:,.0f} requests/s** "
+            f"({load['ok']:,} answered 200, {load['errors']:,} otherwise: "
+            f"{json_statuses(load['statuses'])}).")
+    else:
+        lines.append(f"Not measured ({load.get('error', 'no server run')}).")
+    lines += ["", "## Open3D and the Embree ray mask", ""]
+    check = results.get("open3d", {}).get("without_shim")
+    if check:
+        lines.append(
+            f"Without the shim, Open3D found {check['hits']:,} hits on the first "
+            f"{check['rays']:,} coherent rays of A, where raw Embree finds {check['ref_hits']:,}. "
+            "With it, its hits agree with raw Embree's as the tables show (column *agrees with "
+            "Embree*).")
+    else:
+        lines.append("Open3D was not run.")
+    lines += ["", "## Run time against error (issue 6)", ""]
+    lines.append(accuracy.strip() if accuracy else
+                 "Not measured yet: the accuracy bench of issue 6 (Mrays/s and error against a "
+                 "high-precision reference for each precision mode, on a stress ray set) is to be "
+                 "`bench/bench_accuracy`; `run_all.py` runs it through `run_accuracy_bench()` "
+                 "as soon as it is built.")
+    unavail = unavailable_notes(rows)
+    lines += ["", "## What the columns mean", "", COLUMNS, "", "## Notes", "", *notes(results),
+              *unavail, ""]
+    return "\n".join(lines)
+
+
+def json_statuses(statuses: dict) -> str:
+    return ", ".join(f"HTTP {k}: {v:,}" for k, v in statuses.items()) or "none"
