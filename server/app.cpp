@@ -115,6 +115,7 @@ void App::install_routes() {
     install_query_routes(*this);
     install_trace_routes(*this);
     install_scene_routes(*this);
+    install_render_routes(*this);
 }
 
 int App::bind() {

@@ -88,6 +88,7 @@ void install_meta_routes(App& app);
 void install_query_routes(App& app);
 void install_trace_routes(App& app);
 void install_scene_routes(App& app);
+void install_render_routes(App& app);
 
 /// Parses an intersect body and answers it over `engine` (shared by the stateless and the
 /// registered-scene routes).

@@ -1,0 +1,1 @@
+# Rendering: sources added to raycastd_engine / engine_tests here.

@@ -1,0 +1,1 @@
+# Shading (Phong, Whitted ray trees): sources added by engine/shade/shade.cmake.
