@@ -25,6 +25,7 @@ if(BUILD_TESTING)
         ${CMAKE_CURRENT_LIST_DIR}/model_loader_test.cpp
         ${CMAKE_CURRENT_LIST_DIR}/model_invalid_test.cpp
         ${CMAKE_CURRENT_LIST_DIR}/gltf_loader_test.cpp
+        ${CMAKE_CURRENT_LIST_DIR}/text_formats_test.cpp
     )
     # The glTF-Validator oracle reports are JSON; only the tests read them.
     target_link_libraries(engine_tests PRIVATE nlohmann_json::nlohmann_json)
