@@ -75,6 +75,13 @@ def machine_info() -> dict:
             "loadavg_start": os.getloadavg()}
 
 
+def wait_for_quiet(minutes: float) -> None:
+    deadline = time.time() + 60 * minutes
+    while time.time() < deadline and os.getloadavg()[0] >= 1.0:
+        log(f"load average {os.getloadavg()[0]:.2f}: waiting for a quieter machine")
+        time.sleep(15)
+
+
 # --- 1. raw Embree and the engine in-process ---------------------------------------------------
 
 def run_inprocess(build: str, preset: str, data_dir: str) -> dict:
@@ -262,6 +269,9 @@ def main() -> int:
                                   "run, <build>/bench/benchmarks-quick.md with --quick)")
     ap.add_argument("--skip-http", action="store_true")
     ap.add_argument("--skip-open3d", action="store_true")
+    ap.add_argument("--wait-quiet", type=float, default=0.0, metavar="MINUTES",
+                    help="first wait up to MINUTES for the 1-minute load average to fall below "
+                         "1 (the machine is shared with compiles); the run notes the load anyway")
     args = ap.parse_args()
 
     preset = "quick" if args.quick else "full"
@@ -270,6 +280,7 @@ def main() -> int:
     os.makedirs(data_dir, exist_ok=True)
     out = args.out or (os.path.join(build, "bench", "benchmarks-quick.md") if args.quick
                        else os.path.join(REPO, "docs", "benchmarks.md"))
+    wait_for_quiet(args.wait_quiet)
     started = time.time()
     machine = machine_info()
 
