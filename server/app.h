@@ -14,6 +14,7 @@
 #include "server/config.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_read.h"
+#include "server/schema/query_doc.h"
 #include "server/uri_resolver.h"
 
 namespace raycastd::server {
@@ -94,6 +95,9 @@ void install_render_routes(App& app);
 /// registered-scene routes).
 void answer_intersect(const engine::QueryEngine& engine, const Json& body,
                       const std::string& prefix, std::size_t max_rays, httplib::Response& res);
+/// Answers an already parsed intersect request in JSON.
+void answer_parsed_intersect(const engine::QueryEngine& engine, const IntersectRequest& req,
+                             httplib::Response& res);
 /// True when the request carries binary ray records (Content-Type: application/octet-stream).
 bool is_binary(const httplib::Request& req);
 /// Answers the binary form (see schema/binary_codec.h) from the query string and `body`.

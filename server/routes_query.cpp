@@ -8,11 +8,16 @@
 
 namespace raycastd::server {
 
+void answer_parsed_intersect(const engine::QueryEngine& engine, const IntersectRequest& req,
+                             httplib::Response& res) {
+    thread_local engine::QueryResult result;
+    engine.intersect(req.rays, req.options, result);
+    send_json(res, write_intersect_response(engine.scene(), req, result));
+}
+
 void answer_intersect(const engine::QueryEngine& engine, const Json& body,
                       const std::string& prefix, std::size_t max_rays, httplib::Response& res) {
-    IntersectRequest req = parse_intersect_request(body, prefix, max_rays);
-    engine::QueryResult result = engine.intersect(req.rays, req.options);
-    send_json(res, write_intersect_response(engine.scene(), req, result));
+    answer_parsed_intersect(engine, parse_intersect_request(body, prefix, max_rays), res);
 }
 
 bool is_binary(const httplib::Request& req) {

@@ -3,6 +3,7 @@
 #include "server/app.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_writer.h"
+#include "server/schema/ray_sax.h"
 
 namespace raycastd::server {
 
@@ -102,6 +103,15 @@ void install_scene_routes(App& app) {
                           return;
                       }
                       if (body.empty()) throw api_error("bad_json", "empty body: a JSON document is required");
+                      const std::size_t max_rays = app.config().limits.max_rays;
+                      thread_local IntersectRequest fast;
+                      fast.rays.clear();  // keeps its capacity for the next request
+                      fast.options = {};
+                      fast.fields = {};
+                      if (parse_intersect_request_fast(body, max_rays, fast)) {
+                          answer_parsed_intersect(*engine, fast, res);
+                          return;
+                      }
                       Json doc;
                       try {
                           doc = Json::parse(body);

@@ -1,5 +1,9 @@
 #include "server/schema/query_doc.h"
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
 #include "server/schema/json_writer.h"
 
 namespace raycastd::server {
@@ -29,6 +33,8 @@ engine::Ray parse_ray(const Json& j, const std::string& path, std::size_t index)
     return r;
 }
 
+}  // namespace
+
 FieldMask parse_fields(const Json& j, const std::string& path) {
     if (!j.is_array()) throw api_error(kInvalidRequest, path + " must be an array of names", path);
     FieldMask m{false, false, false, false, false, false, false, false, false};
@@ -54,6 +60,8 @@ FieldMask parse_fields(const Json& j, const std::string& path) {
     }
     return m;
 }
+
+namespace {
 
 void write_hit(JsonWriter& w, const engine::Scene& scene, const engine::Ray& ray,
                const engine::Hit& h, const FieldMask& f) {
@@ -120,14 +128,14 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
     return req;
 }
 
-std::string write_intersect_response(const engine::Scene& scene, const IntersectRequest& req,
-                                     const engine::QueryResult& r) {
-    std::string out;
-    out.reserve(64 + req.rays.size() * 200);
+namespace {
+
+/// Appends the result entries of rays [begin, end) to `out`.
+void write_entries(const engine::Scene& scene, const IntersectRequest& req,
+                   const engine::QueryResult& r, std::size_t begin, std::size_t end,
+                   std::string& out) {
     JsonWriter w(out);
-    w.raw("{\"precision\":").string(engine::to_string(r.precision));
-    w.raw(",\"mode\":").string(engine::to_string(req.options.mode)).raw(",\"hits\":[");
-    for (std::size_t i = 0; i < req.rays.size(); ++i) {
+    for (std::size_t i = begin; i < end; ++i) {
         if (i) w.ch(',');
         switch (req.options.mode) {
             case engine::Mode::closest:
@@ -154,6 +162,35 @@ std::string write_intersect_response(const engine::Scene& scene, const Intersect
                 break;
             }
         }
+    }
+}
+
+/// Rays per chunk when a large response is written on several threads.
+constexpr std::size_t kWriteChunk = 8192;
+
+}  // namespace
+
+std::string write_intersect_response(const engine::Scene& scene, const IntersectRequest& req,
+                                     const engine::QueryResult& r) {
+    std::string out;
+    const std::size_t n = req.rays.size();
+    out.reserve(64 + n * 220);
+    JsonWriter w(out);
+    w.raw("{\"precision\":").string(engine::to_string(r.precision));
+    w.raw(",\"mode\":").string(engine::to_string(req.options.mode)).raw(",\"hits\":[");
+    if (n <= kWriteChunk) {
+        write_entries(scene, req, r, 0, n, out);
+    } else {
+        // Formatting numbers costs more than tracing the rays: big responses are written in
+        // chunks on all cores, then joined.
+        const std::size_t chunks = (n + kWriteChunk - 1) / kWriteChunk;
+        std::vector<std::string> parts(chunks);
+        tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+            const std::size_t b = c * kWriteChunk, e = std::min(n, b + kWriteChunk);
+            parts[c].reserve((e - b) * 220);
+            write_entries(scene, req, r, b, e, parts[c]);
+        });
+        for (const auto& p : parts) out.append(p);
     }
     w.raw("]}");
     return out;

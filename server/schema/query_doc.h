@@ -30,6 +30,8 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
                                          std::size_t max_rays);
 
 engine::Mode parse_mode(const std::string& s, const std::string& path);
+/// The `fields` array (invalid_request naming the unknown entry).
+FieldMask parse_fields(const Json& j, const std::string& path);
 engine::Precision parse_precision(const std::string& s, const std::string& path);
 
 /// {"precision": ..., "hits": [...]} with the record shape of the mode.

@@ -1,0 +1,23 @@
+#pragma once
+// A streaming (SAX) reader for the body of POST /v1/scenes/{id}/intersect: rays go straight into
+// engine::Ray values without building a JSON DOM, which costs more than tracing them
+// (PERFORMANCE.md: a naive nlohmann DOM round trip caps near 0.25 Mrays/s).
+//
+// It accepts exactly the well-formed shape. On anything else — a syntax error, a field of the
+// wrong type, a number out of range — it gives up, and the caller parses the body again with
+// the DOM reader, whose errors (with JSON pointers) are the reference. So the fast path can
+// never change an answer or an error, only the time it takes.
+
+#include <string_view>
+
+#include "server/schema/query_doc.h"
+
+namespace raycastd::server {
+
+/// Parses `body` into `out` (ray count limited by max_rays, rays validated) when it has the
+/// expected shape; false when the caller must fall back to the DOM reader. May throw the same
+/// ApiErrors as parse_intersect_request for a well-formed body (invalid_ray, too_large, ...).
+bool parse_intersect_request_fast(std::string_view body, std::size_t max_rays,
+                                  IntersectRequest& out);
+
+}  // namespace raycastd::server
