@@ -186,8 +186,10 @@ std::shared_ptr<const engine::QueryEngine> prepare(engine::Scene scene, const Li
 
 std::shared_ptr<const engine::QueryEngine> App::build_stateless_scene(
     const Json& doc, const std::string& prefix) const {
-    return prepare(scene_from_document(doc, prefix, scene_root_files(), config_.limits),
-                   config_.limits, prefix);
+    return stateless_cache_.get_or_build(doc, [&] {
+        return prepare(scene_from_document(doc, prefix, scene_root_files(), config_.limits),
+                       config_.limits, prefix);
+    });
 }
 
 std::shared_ptr<const engine::QueryEngine> App::build_scene(const SceneSource& src,
@@ -267,6 +269,7 @@ void App::add_registry_info(Json& info) const {
     info["scenes_registered"] = registry_->size();
     info["scenes_loaded"] = registry_->resident();
     info["scene_memory_bytes"] = registry_->resident_bytes();
+    info["stateless_cache_hits"] = stateless_cache_.hits();
 }
 
 bool App::start(std::string& error) {

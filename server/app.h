@@ -12,6 +12,7 @@
 #include "engine/query/intersect.h"
 #include "server/api_error.h"
 #include "server/config.h"
+#include "server/scene_cache.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_read.h"
 #include "server/schema/query_doc.h"
@@ -81,6 +82,7 @@ private:
     std::atomic<std::size_t> in_flight_{0};
     std::atomic<std::uint64_t> next_request_id_{1};
     std::unique_ptr<SceneRegistry> registry_;
+    mutable SceneCache stateless_cache_{32};
     SceneRoot scene_root_;
 };
 

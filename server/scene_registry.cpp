@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "server/api_error.h"
+#include "server/scene_cache.h"
 #include "server/schema/json_read.h"
 
 namespace raycastd::server {
@@ -51,23 +52,12 @@ std::optional<std::string> read_all(const fs::path& path) {
     return ss.str();
 }
 
-/// Every number as a double, so that 2, 2.0 and 2e0 are one value (they are to the parser).
-void numbers_as_doubles(Json& j) {
-    if (j.is_number()) {
-        j = j.get<double>();
-    } else if (j.is_structured()) {
-        for (auto& child : j) numbers_as_doubles(child);
-    }
-}
-
 /// The request in canonical form: a document re-serialised (sorted keys, one spelling per
 /// number), a model file as its bytes. Two requests that mean the same scene hash the same.
 std::string canonical_request(const SceneSource& s) {
     if (s.content_type != "application/json") return s.body;
     try {
-        Json j = Json::parse(s.body);
-        numbers_as_doubles(j);
-        return j.dump();
+        return canonical_json(Json::parse(s.body));
     } catch (const Json::exception&) {
         return s.body;  // the builder reports the syntax error
     }
