@@ -227,6 +227,22 @@ RaySetRefs bench_raw(Report& report, const rb::Workload& w, const std::string& r
     return refs;
 }
 
+/// Written with every allocation bench_result_allocation times, so that it cannot be elided.
+const void* volatile g_escape = nullptr;
+
+/// What a fresh answer costs before any tracing: QueryResult::hits is a new std::vector<Hit>
+/// of one Hit per ray, and the first touch of fresh pages is ~2.5 ms per MB on this machine.
+/// Reported so that the engine's figures can be read against this floor.
+void bench_result_allocation(Report& report, const rb::Workload& w, const std::string& rays_name,
+                             std::size_t n, int reps) {
+    const double s = rb::median_seconds(reps, [&] {
+        std::vector<re::Hit> hits(n);
+        g_escape = hits.data();
+    });
+    report.trace(w.name, rays_name, "overhead", "fresh std::vector<Hit>", "closest", "-",
+                 rb::BudgetedTiming{s, n, n}, {{"bytes", n * sizeof(re::Hit)}});
+}
+
 /// The engine in-process on one ray set: every mode at every precision, time-budgeted.
 /// Returns the lowest agreement with Embree seen (closest and any).
 double bench_engine(Report& report, const rb::Workload& w, const std::string& rays_name,
@@ -348,6 +364,7 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
                 return false;
             }
         }
+        bench_result_allocation(report, w, rays_name, rays.size(), s.reps);
         worst =
             std::min(worst, bench_engine(report, w, rays_name, rays, engine, refs, args.budget_s));
     }

@@ -31,7 +31,12 @@ def fmt_rate(row: dict | None) -> str:
 
 
 def fmt_ratio(row: dict | None, ceiling: dict | None) -> str:
-    if row is None or ceiling is None or row["kind"] != "trace" or not ceiling["mrays_s"]:
+    if (
+        row is None
+        or ceiling is None
+        or row["kind"] != "trace"
+        or not ceiling["mrays_s"]
+    ):
         return "—"
     return f"{row['mrays_s'] / ceiling['mrays_s']:.2f}×"
 
@@ -42,12 +47,22 @@ def fmt_agree(row: dict | None) -> str:
     return f"{100 * row['agree_with_embree']:.2f}%"
 
 
-def trace_lookup(rows: list[dict], workload: str, rays: str, peer: str, variant: str,
-                 mode: str = "closest", precision: str | None = None) -> dict | None:
+def trace_lookup(
+    rows: list[dict],
+    workload: str,
+    rays: str,
+    peer: str,
+    variant: str,
+    mode: str = "closest",
+    precision: str | None = None,
+) -> dict | None:
     match = dict(workload=workload, rays=rays, peer=peer, variant=variant)
-    hit = find((r for r in rows if r["kind"] in ("trace", "unavailable")), **match,
-               **({"mode": mode} if mode else {}),
-               **({"precision": precision} if precision else {}))
+    hit = find(
+        (r for r in rows if r["kind"] in ("trace", "unavailable")),
+        **match,
+        **({"mode": mode} if mode else {}),
+        **({"precision": precision} if precision else {}),
+    )
     if hit is None and mode:
         hit = find((r for r in rows if r["kind"] == "unavailable"), **match)
     return hit
@@ -55,14 +70,62 @@ def trace_lookup(rows: list[dict], workload: str, rays: str, peer: str, variant:
 
 # (label, peer, variant, mode, precision) of the headline table, top to bottom.
 HEADLINE = [
-    ("raw Embree `rtcIntersect1` (the ceiling)", "raw_embree", "rtcIntersect1", "closest", None),
-    ("raw Embree `rtcIntersect16` packets", "raw_embree", "rtcIntersect16", "closest", None),
-    ("raw Embree `rtcIntersect1`, ROBUST scene", "raw_embree", "rtcIntersect1 ROBUST", "closest",
-     None),
-    ("engine in-process, `fast`", "engine", "QueryEngine::intersect", "closest", "fast"),
-    ("engine in-process, `refined`", "engine", "QueryEngine::intersect", "closest", "refined"),
-    ("engine in-process, `exact`", "engine", "QueryEngine::intersect", "closest", "exact"),
-    ("HTTP binary float32, whole ray set per request, `fast`", "http", "binary float32", "closest", "fast"),
+    (
+        "raw Embree `rtcIntersect1` (the ceiling)",
+        "raw_embree",
+        "rtcIntersect1",
+        "closest",
+        None,
+    ),
+    (
+        "raw Embree `rtcIntersect16` packets",
+        "raw_embree",
+        "rtcIntersect16",
+        "closest",
+        None,
+    ),
+    (
+        "raw Embree `rtcIntersect1`, ROBUST scene",
+        "raw_embree",
+        "rtcIntersect1 ROBUST",
+        "closest",
+        None,
+    ),
+    (
+        "engine in-process, `fast`",
+        "engine",
+        "QueryEngine::intersect",
+        "closest",
+        "fast",
+    ),
+    (
+        "engine in-process, `refined`",
+        "engine",
+        "QueryEngine::intersect",
+        "closest",
+        "refined",
+    ),
+    (
+        "engine in-process, `exact`",
+        "engine",
+        "QueryEngine::intersect",
+        "closest",
+        "exact",
+    ),
+    (
+        "allocating a fresh `std::vector<Hit>(n)` alone, no tracing (a floor for the engine)",
+        "overhead",
+        "fresh std::vector<Hit>",
+        "closest",
+        None,
+    ),
+    (
+        "HTTP binary float32, whole ray set per request, `fast`",
+        "http",
+        "binary float32",
+        "closest",
+        "fast",
+    ),
     ("HTTP JSON, 10k-ray requests, `fast`", "http", "JSON", "closest", "fast"),
     ("Open3D `cast_rays` (with mask shim)", "open3d", "cast_rays", "closest", None),
 ]
@@ -109,8 +172,15 @@ def modes_table(rows: list[dict], workload: str) -> list[str]:
             cells = [f"`{mode}`", f"`{precision}`"]
             answered = set()
             for r in RAYS:
-                row = trace_lookup(rows, workload, r, "engine", "QueryEngine::intersect", mode,
-                                   precision)
+                row = trace_lookup(
+                    rows,
+                    workload,
+                    r,
+                    "engine",
+                    "QueryEngine::intersect",
+                    mode,
+                    precision,
+                )
                 cells += [fmt_rate(row), fmt_ratio(row, ceilings[r])]
                 if row is not None and row.get("answered_precision"):
                     answered.add(row["answered_precision"])
@@ -124,13 +194,22 @@ def build_table(rows: list[dict], workloads: list[str]) -> list[str]:
     for r in rows:
         if r["kind"] == "build" and (r["peer"], r["variant"]) not in variants:
             variants.append((r["peer"], r["variant"]))
-    out = ["| what | " + " | ".join(workloads) + " |", "|---|" + "---:|" * len(workloads)]
+    out = [
+        "| what | " + " | ".join(workloads) + " |",
+        "|---|" + "---:|" * len(workloads),
+    ]
     for peer, variant in variants:
         cells = [f"{peer}: {variant}"]
         for w in workloads:
-            row = find((r for r in rows if r["kind"] == "build"), workload=w, peer=peer,
-                       variant=variant)
-            cells.append("—" if row is None or row["ms"] is None else f"{row['ms']:.1f} ms")
+            row = find(
+                (r for r in rows if r["kind"] == "build"),
+                workload=w,
+                peer=peer,
+                variant=variant,
+            )
+            cells.append(
+                "—" if row is None or row["ms"] is None else f"{row['ms']:.1f} ms"
+            )
         out.append("| " + " | ".join(cells) + " |")
     return out
 
@@ -143,14 +222,24 @@ def unavailable_notes(rows: list[dict]) -> list[str]:
             key = (r["peer"], r["variant"], r["reason"])
             if key not in seen:
                 seen.add(key)
-                out.append(f"- {r['peer']} {r['variant']}: not available ({r['reason']}).")
+                out.append(
+                    f"- {r['peer']} {r['variant']}: not available ({r['reason']})."
+                )
     return out
 
 
 # --- targets of issue 4 --------------------------------------------------------------------------
 
-def ratio(rows: list[dict], workload: str, rays: str, peer: str, variant: str,
-          precision: str | None, against: tuple[str, str] = CEILING) -> float | None:
+
+def ratio(
+    rows: list[dict],
+    workload: str,
+    rays: str,
+    peer: str,
+    variant: str,
+    precision: str | None,
+    against: tuple[str, str] = CEILING,
+) -> float | None:
     row = trace_lookup(rows, workload, rays, peer, variant, "closest", precision)
     base = trace_lookup(rows, workload, rays, *against)
     if not row or not base or row["kind"] != "trace" or base["kind"] != "trace":
@@ -170,55 +259,100 @@ def targets_table(results: dict) -> list[str]:
     def json_rates() -> list[float | None]:
         out = []
         for w in mesh:
-            rates = [trace_lookup(rows, w, r, "http", "JSON", "closest", "fast") for r in RAYS]
+            rates = [
+                trace_lookup(rows, w, r, "http", "JSON", "closest", "fast")
+                for r in RAYS
+            ]
             rates = [x["mrays_s"] for x in rates if x and x["kind"] == "trace"]
             out.append(min(rates) if rates else None)
         return out
 
     load = results.get("small_requests") or {}
     checks = [
-        ("engine in-process ≥ 1.5× `rtcIntersect1`, coherent", ratios("coherent", engine), 1.5,
-         "×"),
-        ("engine in-process ≥ 1.0× `rtcIntersect1`, incoherent", ratios("incoherent", engine),
-         1.0, "×"),
-        ("binary HTTP ≥ 0.5× `rtcIntersect1`, incoherent", ratios("incoherent", binary), 0.5,
-         "×"),
-        ("binary HTTP ≥ 2× Open3D, coherent",
-         ratios("coherent", binary, against=("open3d", "cast_rays")), 2.0, "×"),
-        ("JSON ≥ 0.5 Mrays/s end to end (slower ray set)", json_rates(), 0.5, " Mrays/s"),
+        (
+            "engine in-process ≥ 1.5× `rtcIntersect1`, coherent",
+            ratios("coherent", engine),
+            1.5,
+            "×",
+        ),
+        (
+            "engine in-process ≥ 1.0× `rtcIntersect1`, incoherent",
+            ratios("incoherent", engine),
+            1.0,
+            "×",
+        ),
+        (
+            "binary HTTP ≥ 0.5× `rtcIntersect1`, incoherent",
+            ratios("incoherent", binary),
+            0.5,
+            "×",
+        ),
+        (
+            "binary HTTP ≥ 2× Open3D, coherent",
+            ratios("coherent", binary, against=("open3d", "cast_rays")),
+            2.0,
+            "×",
+        ),
+        (
+            "JSON ≥ 0.5 Mrays/s end to end (slower ray set)",
+            json_rates(),
+            0.5,
+            " Mrays/s",
+        ),
     ]
-    out = ["| target | " + " | ".join(mesh) + " | met |", "|---|" + "---:|" * len(mesh) + "---|"]
+    out = [
+        "| target | " + " | ".join(mesh) + " | met |",
+        "|---|" + "---:|" * len(mesh) + "---|",
+    ]
     for label, values, goal, unit in checks:
         cells = [("—" if v is None else f"{v:.2f}{unit}") for v in values]
         known = [v for v in values if v is not None]
-        met = "—" if not known else ("yes" if all(v >= goal for v in known) else "**no**")
+        met = (
+            "—" if not known else ("yes" if all(v >= goal for v in known) else "**no**")
+        )
         out.append(f"| {label} | " + " | ".join(cells) + f" | {met} |")
     req_s = load.get("req_s")
-    cells = [f"{req_s:,.0f} req/s" if req_s is not None else "—"] + [""] * (len(mesh) - 1)
+    cells = [f"{req_s:,.0f} req/s" if req_s is not None else "—"] + [""] * (
+        len(mesh) - 1
+    )
     met = "—" if req_s is None else ("yes" if req_s >= 20000 else "**no**")
-    out.append("| ≥ 20,000 one-ray requests/s, 16 keep-alive connections (on A) | "
-               + " | ".join(cells) + f" | {met} |")
+    out.append(
+        "| ≥ 20,000 one-ray requests/s, 16 keep-alive connections (on A) | "
+        + " | ".join(cells)
+        + f" | {met} |"
+    )
     return out
 
 
 # --- the document --------------------------------------------------------------------------------
 
+
 def engine_status(rows: list[dict]) -> str:
-    answered = {r.get("answered_precision") for r in rows
-                if r["kind"] == "trace" and r["peer"] == "engine" and r["precision"] == "fast"}
+    answered = {
+        r.get("answered_precision")
+        for r in rows
+        if r["kind"] == "trace" and r["peer"] == "engine" and r["precision"] == "fast"
+    }
     sampled = any(r.get("sampled") for r in rows if r["kind"] == "trace")
     if answered == {"exact"}:
-        text = ("**Measured before Embree acceleration landed in the engine**: every engine request, "
-                "whatever precision it asked for, was answered by the exact double-precision brute "
-                "force path (`answered by` = `exact`). Engine and HTTP figures are those of that "
-                "path, not of the Embree-backed one; re-run `bench/run_all.py` once it lands.")
+        text = (
+            "**Measured before Embree acceleration landed in the engine**: every engine request, "
+            "whatever precision it asked for, was answered by the exact double-precision brute "
+            "force path (`answered by` = `exact`). Engine and HTTP figures are those of that "
+            "path, not of the Embree-backed one; re-run `bench/run_all.py` once it lands."
+        )
     else:
-        text = ("Engine paths that answered `fast` requests: "
-                + ", ".join(f"`{a}`" for a in sorted(a for a in answered if a)) + ".")
+        text = (
+            "Engine paths that answered `fast` requests: "
+            + ", ".join(f"`{a}`" for a in sorted(a for a in answered if a))
+            + "."
+        )
     if sampled:
-        text += (" Figures marked \\* were measured on an evenly strided sample of the rays: "
-                 "JSON always (at most 200,000 rays per set), other paths when the whole set "
-                 "would not fit the time budget (see the notes).")
+        text += (
+            " Figures marked \\* were measured on an evenly strided sample of the rays: "
+            "JSON always (at most 200,000 rays per set), other paths when the whole set "
+            "would not fit the time budget (see the notes)."
+        )
     return text
 
 
@@ -289,12 +423,16 @@ def notes(results: dict) -> list[str]:
         "its first one-ray query, which commits its scene.",
     ]
     if m.get("dirty"):
-        out.append(f"- The working tree at commit {m['commit']} had uncommitted changes (other "
-                   "engineers' work in progress) when this ran; the binaries are what was built "
-                   "from it.")
+        out.append(
+            f"- The working tree at commit {m['commit']} had uncommitted changes (other "
+            "engineers' work in progress) when this ran; the binaries are what was built "
+            "from it."
+        )
     if results["meta"].get("worst_agreement", 1.0) < 0.99:
-        out.append(f"- The engine disagreed with Embree on more than 1% of some ray set (worst "
-                   f"agreement {100 * results['meta']['worst_agreement']:.2f}%).")
+        out.append(
+            f"- The engine disagreed with Embree on more than 1% of some ray set (worst "
+            f"agreement {100 * results['meta']['worst_agreement']:.2f}%)."
+        )
     return out
 
 
@@ -334,13 +472,22 @@ def render(results: dict, accuracy: str | None) -> str:
     for w in workloads:
         info = meta["workloads"][w]
         rays = info.get("rays", {})
-        lines += [f"### {w}: {info['description']} "
-                  f"({rays.get('coherent', 0):,} coherent, {rays.get('incoherent', 0):,} "
-                  "incoherent rays)", "", *headline_table(rows, w), ""]
+        lines += [
+            f"### {w}: {info['description']} "
+            f"({rays.get('coherent', 0):,} coherent, {rays.get('incoherent', 0):,} "
+            "incoherent rays)",
+            "",
+            *headline_table(rows, w),
+            "",
+        ]
     lines += ["## Every mode and precision, engine in-process", ""]
     for w in workloads:
-        lines += [f"### {w}: {meta['workloads'][w]['description']}", "",
-                  *modes_table(rows, w), ""]
+        lines += [
+            f"### {w}: {meta['workloads'][w]['description']}",
+            "",
+            *modes_table(rows, w),
+            "",
+        ]
     lines += ["## Build times", "", *build_table(rows, workloads), ""]
     load = results.get("small_requests") or {}
     lines += ["## Small requests", ""]
@@ -349,7 +496,8 @@ def render(results: dict, accuracy: str | None) -> str:
             f"One-ray JSON `closest` requests on A from {load['connections']} keep-alive "
             f"connections for {load['seconds']:.1f} s: **{load['req_s']:,.0f} requests/s** "
             f"({load['ok']:,} answered 200, {load['errors']:,} otherwise: "
-            f"{json_statuses(load['statuses'])}).")
+            f"{json_statuses(load['statuses'])})."
+        )
     else:
         lines.append(f"Not measured ({load.get('error', 'no server run')}).")
     lines += ["", "## Open3D and the Embree ray mask", ""]
@@ -359,18 +507,32 @@ def render(results: dict, accuracy: str | None) -> str:
             f"Without the shim, Open3D found {check['hits']:,} hits on the first "
             f"{check['rays']:,} coherent rays of A, where raw Embree finds {check['ref_hits']:,}. "
             "With it, its hits agree with raw Embree's as the tables show (column *agrees with "
-            "Embree*).")
+            "Embree*)."
+        )
     else:
         lines.append("Open3D was not run.")
     lines += ["", "## Run time against error (issue 6)", ""]
-    lines.append(accuracy.strip() if accuracy else
-                 "Not measured yet: the accuracy bench of issue 6 (Mrays/s and error against a "
-                 "high-precision reference for each precision mode, on a stress ray set) is to be "
-                 "`bench/bench_accuracy`; `run_all.py` runs it through `run_accuracy_bench()` "
-                 "as soon as it is built.")
+    lines.append(
+        accuracy.strip()
+        if accuracy
+        else "Not measured yet: the accuracy bench of issue 6 (Mrays/s and error against a "
+        "high-precision reference for each precision mode, on a stress ray set) is to be "
+        "`bench/bench_accuracy`; `run_all.py` runs it through `run_accuracy_bench()` "
+        "as soon as it is built."
+    )
     unavail = unavailable_notes(rows)
-    lines += ["", "## What the columns mean", "", COLUMNS, "", "## Notes", "", *notes(results),
-              *unavail, ""]
+    lines += [
+        "",
+        "## What the columns mean",
+        "",
+        COLUMNS,
+        "",
+        "## Notes",
+        "",
+        *notes(results),
+        *unavail,
+        "",
+    ]
     return "\n".join(lines)
 
 

@@ -41,7 +41,12 @@ PRESETS = {
     # http_budget_s: per HTTP measurement; json_rays: most rays sent as JSON per ray set;
     # load_s: duration of the small-request test.
     "full": {"flag": [], "http_budget_s": 6.0, "json_rays": 200_000, "load_s": 5.0},
-    "quick": {"flag": ["--quick"], "http_budget_s": 1.5, "json_rays": 20_000, "load_s": 2.0},
+    "quick": {
+        "flag": ["--quick"],
+        "http_budget_s": 1.5,
+        "json_rays": 20_000,
+        "load_s": 2.0,
+    },
 }
 JSON_BATCH = 10_000
 LOAD_CONNECTIONS = 16
@@ -54,8 +59,10 @@ def log(msg: str) -> None:
 
 def need(path: str) -> str:
     if not os.path.exists(path):
-        sys.exit(f"run_all: {path} is missing; build first: "
-                 "cmake --preset release && cmake --build build/release -j2")
+        sys.exit(
+            f"run_all: {path} is missing; build first: "
+            "cmake --preset release && cmake --build build/release -j2"
+        )
     return path
 
 
@@ -66,13 +73,28 @@ def machine_info() -> dict:
             if line.startswith("model name"):
                 model = line.split(":", 1)[1].strip()
                 break
-    git = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"],
-                         capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "-C", REPO, "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip() != ""
-    return {"cpu": model, "cores": os.cpu_count(), "kernel": platform.release(),
-            "python": platform.python_version(), "commit": git, "dirty": dirty,
-            "loadavg_start": os.getloadavg()}
+    git = subprocess.run(
+        ["git", "-C", REPO, "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
+    dirty = (
+        subprocess.run(
+            ["git", "-C", REPO, "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+        ).stdout.strip()
+        != ""
+    )
+    return {
+        "cpu": model,
+        "cores": os.cpu_count(),
+        "kernel": platform.release(),
+        "python": platform.python_version(),
+        "commit": git,
+        "dirty": dirty,
+        "loadavg_start": os.getloadavg(),
+    }
 
 
 def wait_for_quiet(minutes: float) -> None:
@@ -84,10 +106,17 @@ def wait_for_quiet(minutes: float) -> None:
 
 # --- 1. raw Embree and the engine in-process ---------------------------------------------------
 
+
 def run_inprocess(build: str, preset: str, data_dir: str) -> dict:
     out_json = os.path.join(data_dir, "inproc.json")
-    cmd = [need(os.path.join(build, "bench", "bench_intersect")), *PRESETS[preset]["flag"],
-           "--data-dir", data_dir, "--json", out_json]
+    cmd = [
+        need(os.path.join(build, "bench", "bench_intersect")),
+        *PRESETS[preset]["flag"],
+        "--data-dir",
+        data_dir,
+        "--json",
+        out_json,
+    ]
     log(" ".join(cmd))
     proc = subprocess.run(cmd)
     if proc.returncode != 0 and not os.path.exists(out_json):
@@ -99,6 +128,7 @@ def run_inprocess(build: str, preset: str, data_dir: str) -> dict:
 
 
 # --- 2. raycastd over HTTP ---------------------------------------------------------------------
+
 
 def load_rays(data_dir: str, workload: str, rays: str) -> tuple[np.ndarray, dict]:
     stem = os.path.join(data_dir, f"{workload}_{rays}")
@@ -117,26 +147,48 @@ def scene_body(data_dir: str, workload: str) -> tuple[bytes, str]:
 
 
 def trace_row(workload: str, rays: str, variant: str, t: http_peer.Timing) -> dict:
-    return {"kind": "trace", "workload": workload, "rays": rays, "peer": "http",
-            "variant": variant, "mode": "closest", "precision": "fast", "mrays_s": t.mrays_s,
-            "measured_rays": t.rays, "total_rays": t.total, "sampled": t.sampled,
-            "hits_per_ray": t.hits / max(1, t.rays), "agree_with_embree": t.agree,
-            "answered_precision": t.precision}
+    return {
+        "kind": "trace",
+        "workload": workload,
+        "rays": rays,
+        "peer": "http",
+        "variant": variant,
+        "mode": "closest",
+        "precision": "fast",
+        "mrays_s": t.mrays_s,
+        "measured_rays": t.rays,
+        "total_rays": t.total,
+        "sampled": t.sampled,
+        "hits_per_ray": t.hits / max(1, t.rays),
+        "agree_with_embree": t.agree,
+        "answered_precision": t.precision,
+    }
 
 
 def unavailable(workload: str, rays: str, peer: str, variant: str, reason: str) -> dict:
     log(f"{workload} {rays} {peer} {variant}: not available ({reason})")
-    return {"kind": "unavailable", "workload": workload, "rays": rays, "peer": peer,
-            "variant": variant, "reason": reason}
+    return {
+        "kind": "unavailable",
+        "workload": workload,
+        "rays": rays,
+        "peer": peer,
+        "variant": variant,
+        "reason": reason,
+    }
 
 
-def run_http(build: str, preset: str, data_dir: str, workloads: list[str]) -> tuple[list, dict]:
+def run_http(
+    build: str, preset: str, data_dir: str, workloads: list[str]
+) -> tuple[list, dict]:
     cfg = PRESETS[preset]
     rows: list[dict] = []
     load: dict = {}
-    server = http_peer.RaycastdServer(need(os.path.join(build, "server", "raycastd")),
-                                      os.path.join(data_dir, "raycastd.log"))
+    server = http_peer.RaycastdServer(
+        need(os.path.join(build, "server", "raycastd")),
+        os.path.join(data_dir, "raycastd.log"),
+    )
     log(f"raycastd on port {server.port}")
+    conn = None
     try:
         conn = server.connect()
         scene_ids = {}
@@ -144,25 +196,49 @@ def run_http(build: str, preset: str, data_dir: str, workloads: list[str]) -> tu
             body, content_type = scene_body(data_dir, w)
             try:
                 reg = http_peer.register(conn, body, content_type)
-            except Exception as e:  # the server may not load this form yet; go on without it
+            # The server may not load this form yet: note it and go on without it.
+            except Exception as e:
                 rows.append(unavailable(w, "-", "http", "POST /v1/scenes", str(e)))
                 conn = server.connect()
                 continue
             scene_ids[w] = reg.scene_id
-            rows.append({"kind": "build", "workload": w, "peer": "http",
-                         "variant": f"POST /v1/scenes ({content_type}), wall clock",
-                         "ms": reg.seconds * 1e3})
-            rows.append({"kind": "build", "workload": w, "peer": "http",
-                         "variant": "server-reported build_ms", "ms": reg.build_ms})
+            rows.append(
+                {
+                    "kind": "build",
+                    "workload": w,
+                    "peer": "http",
+                    "variant": f"POST /v1/scenes ({content_type}), wall clock",
+                    "ms": reg.seconds * 1e3,
+                }
+            )
+            rows.append(
+                {
+                    "kind": "build",
+                    "workload": w,
+                    "peer": "http",
+                    "variant": "server-reported build_ms",
+                    "ms": reg.build_ms,
+                }
+            )
             for r in report_md.RAYS:
                 records, ref = load_rays(data_dir, w, r)
                 for variant, fn, kwargs in (
                     ("binary float32", http_peer.bench_binary, {}),
-                    ("JSON", http_peer.bench_json,
-                     {"batch": JSON_BATCH, "max_rays": cfg["json_rays"]}),
+                    (
+                        "JSON",
+                        http_peer.bench_json,
+                        {"batch": JSON_BATCH, "max_rays": cfg["json_rays"]},
+                    ),
                 ):
                     try:
-                        t = fn(conn, reg.scene_id, records, ref, cfg["http_budget_s"], **kwargs)
+                        t = fn(
+                            conn,
+                            reg.scene_id,
+                            records,
+                            ref,
+                            cfg["http_budget_s"],
+                            **kwargs,
+                        )
                     except http_peer.NotAvailable as e:
                         rows.append(unavailable(w, r, "http", variant, str(e)))
                         continue
@@ -171,27 +247,44 @@ def run_http(build: str, preset: str, data_dir: str, workloads: list[str]) -> tu
                         conn = server.connect()
                         continue
                     rows.append(trace_row(w, r, variant, t))
-                    log(f"{w} {r} http {variant}: {t.mrays_s:.3f} Mrays/s "
-                        f"({t.rays} rays, agree {t.agree:.4f})")
+                    log(
+                        f"{w} {r} http {variant}: {t.mrays_s:.3f} Mrays/s "
+                        f"({t.rays} rays, agree {t.agree:.4f})"
+                    )
         if "A" in scene_ids:
-            load = run_small_requests(build, server.port, scene_ids["A"], data_dir,
-                                      cfg["load_s"])
+            load = run_small_requests(
+                build, server.port, scene_ids["A"], data_dir, cfg["load_s"]
+            )
     finally:
+        # An open keep-alive connection holds a server worker until it times out: close it first.
+        if conn is not None:
+            conn.close()
         server.stop()
     return rows, load
 
 
-def run_small_requests(build: str, port: int, scene_id: str, data_dir: str,
-                       seconds: float) -> dict:
+def run_small_requests(
+    build: str, port: int, scene_id: str, data_dir: str, seconds: float
+) -> dict:
     """One ray per request (a camera ray that hits), JSON, 16 keep-alive connections."""
     records, ref = load_rays(data_dir, "A", "coherent")
     i = int(np.argmax(np.isfinite(ref["t"])))
     body_path = os.path.join(data_dir, "small_request.json")
     with open(body_path, "wb") as f:
-        f.write(http_peer.json_body(records[i:i + 1], "closest", "fast"))
-    cmd = [need(os.path.join(build, "bench", "bench_http_load")), "--port", str(port),
-           "--path", f"/v1/scenes/{scene_id}/intersect", "--body-file", body_path,
-           "--connections", str(LOAD_CONNECTIONS), "--seconds", str(seconds)]
+        f.write(http_peer.json_body(records[i : i + 1], "closest", "fast"))
+    cmd = [
+        need(os.path.join(build, "bench", "bench_http_load")),
+        "--port",
+        str(port),
+        "--path",
+        f"/v1/scenes/{scene_id}/intersect",
+        "--body-file",
+        body_path,
+        "--connections",
+        str(LOAD_CONNECTIONS),
+        "--seconds",
+        str(seconds),
+    ]
     log(" ".join(cmd))
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
@@ -203,6 +296,7 @@ def run_small_requests(build: str, port: int, scene_id: str, data_dir: str,
 
 # --- 3. Open3D ---------------------------------------------------------------------------------
 
+
 def run_open3d(build: str, data_dir: str, workloads: list[str]) -> tuple[list, dict]:
     peer = os.path.join(BENCH_DIR, "peers", "open3d_peer.py")
     shim = need(os.path.join(build, "bench", "libembree_mask_shim.so"))
@@ -212,45 +306,91 @@ def run_open3d(build: str, data_dir: str, workloads: list[str]) -> tuple[list, d
         if w not in MESH_WORKLOADS:
             continue
         env = dict(os.environ, LD_PRELOAD=shim)
-        proc = subprocess.run(["/usr/bin/python3", peer, "--data-dir", data_dir, "--workload", w],
-                              env=env, capture_output=True, text=True)
+        proc = subprocess.run(
+            ["/usr/bin/python3", peer, "--data-dir", data_dir, "--workload", w],
+            env=env,
+            capture_output=True,
+            text=True,
+        )
         if proc.returncode != 0:
             reason = (proc.stderr.strip().splitlines() or ["failed"])[-1]
             rows.append(unavailable(w, "-", "open3d", "cast_rays", reason))
             continue
         doc = json.loads(proc.stdout)
-        rows.append({"kind": "build", "workload": w, "peer": "open3d",
-                     "variant": "first cast_rays of 1 ray (BVH build)", "ms": doc["build_ms"]})
+        rows.append(
+            {
+                "kind": "build",
+                "workload": w,
+                "peer": "open3d",
+                "variant": "first cast_rays of 1 ray (BVH build)",
+                "ms": doc["build_ms"],
+            }
+        )
         for res in doc["results"]:
-            rows.append({"kind": "trace", "workload": w, "rays": res["rays"], "peer": "open3d",
-                         "variant": "cast_rays", "mode": "closest", "precision": "-",
-                         "mrays_s": res["mrays_s"], "measured_rays": res["n"],
-                         "total_rays": res["n"], "sampled": False,
-                         "hits_per_ray": res["hits"] / max(1, res["n"]),
-                         "agree_with_embree": res["agree_with_embree"]})
-            log(f"{w} {res['rays']} open3d: {res['mrays_s']:.3f} Mrays/s, hits {res['hits']} "
-                f"(Embree {res['ref_hits']}), agree {res['agree_with_embree']:.4f}")
+            rows.append(
+                {
+                    "kind": "trace",
+                    "workload": w,
+                    "rays": res["rays"],
+                    "peer": "open3d",
+                    "variant": "cast_rays",
+                    "mode": "closest",
+                    "precision": "-",
+                    "mrays_s": res["mrays_s"],
+                    "measured_rays": res["n"],
+                    "total_rays": res["n"],
+                    "sampled": False,
+                    "hits_per_ray": res["hits"] / max(1, res["n"]),
+                    "agree_with_embree": res["agree_with_embree"],
+                }
+            )
+            log(
+                f"{w} {res['rays']} open3d: {res['mrays_s']:.3f} Mrays/s, hits {res['hits']} "
+                f"(Embree {res['ref_hits']}), agree {res['agree_with_embree']:.4f}"
+            )
         check["version"] = doc["open3d"]
     # The trap the shim works around, shown on a sample: without it Open3D finds no hits.
     if "A" in workloads:
-        proc = subprocess.run(["/usr/bin/python3", peer, "--data-dir", data_dir, "--workload",
-                               "A", "--rays", "coherent", "--limit", "10000", "--reps", "1"],
-                              capture_output=True, text=True)
+        proc = subprocess.run(
+            [
+                "/usr/bin/python3",
+                peer,
+                "--data-dir",
+                data_dir,
+                "--workload",
+                "A",
+                "--rays",
+                "coherent",
+                "--limit",
+                "10000",
+                "--reps",
+                "1",
+            ],
+            capture_output=True,
+            text=True,
+        )
         if proc.returncode == 0:
             res = json.loads(proc.stdout)["results"][0]
-            check["without_shim"] = {"rays": res["n"], "hits": res["hits"],
-                                     "ref_hits": res["ref_hits"]}
-            log(f"open3d without shim: {res['hits']} hits of {res['n']} "
-                f"(Embree: {res['ref_hits']})")
+            check["without_shim"] = {
+                "rays": res["n"],
+                "hits": res["hits"],
+                "ref_hits": res["ref_hits"],
+            }
+            log(
+                f"open3d without shim: {res['hits']} hits of {res['n']} "
+                f"(Embree: {res['ref_hits']})"
+            )
     return rows, check
 
 
 # --- 4. the accuracy bench (issue 6) -----------------------------------------------------------
 
+
 def run_accuracy_bench(build: str, data_dir: str) -> str | None:
     """Hook for issue 6, "run time against error" per precision mode: runs
     <build>/bench/bench_accuracy when it exists (it is to write a Markdown table and a PNG plot
-    into data_dir/accuracy.md and accuracy.png) and returns the table; None until it is built."""
+    into data_dir/accuracy.md and accuracy.png) and returns the table; None until it is built.
+    """
     binary = os.path.join(build, "bench", "bench_accuracy")
     if not os.path.exists(binary):
         return None
@@ -261,25 +401,39 @@ def run_accuracy_bench(build: str, data_dir: str) -> str | None:
 
 # --- the report --------------------------------------------------------------------------------
 
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="small sizes, for a check in a minute")
+    ap.add_argument(
+        "--quick", action="store_true", help="small sizes, for a check in a minute"
+    )
     ap.add_argument("--build-dir", default=os.path.join(REPO, "build", "release"))
-    ap.add_argument("--out", help="Markdown output (default: docs/benchmarks.md for the full "
-                                  "run, <build>/bench/benchmarks-quick.md with --quick)")
+    ap.add_argument(
+        "--out",
+        help="Markdown output (default: docs/benchmarks.md for the full "
+        "run, <build>/bench/benchmarks-quick.md with --quick)",
+    )
     ap.add_argument("--skip-http", action="store_true")
     ap.add_argument("--skip-open3d", action="store_true")
-    ap.add_argument("--wait-quiet", type=float, default=0.0, metavar="MINUTES",
-                    help="first wait up to MINUTES for the 1-minute load average to fall below "
-                         "1 (the machine is shared with compiles); the run notes the load anyway")
+    ap.add_argument(
+        "--wait-quiet",
+        type=float,
+        default=0.0,
+        metavar="MINUTES",
+        help="first wait up to MINUTES for the 1-minute load average to fall below "
+        "1 (the machine is shared with compiles); the run notes the load anyway",
+    )
     args = ap.parse_args()
 
     preset = "quick" if args.quick else "full"
     build = os.path.abspath(args.build_dir)
     data_dir = os.path.join(build, "bench", f"data-{preset}")
     os.makedirs(data_dir, exist_ok=True)
-    out = args.out or (os.path.join(build, "bench", "benchmarks-quick.md") if args.quick
-                       else os.path.join(REPO, "docs", "benchmarks.md"))
+    out = args.out or (
+        os.path.join(build, "bench", "benchmarks-quick.md")
+        if args.quick
+        else os.path.join(REPO, "docs", "benchmarks.md")
+    )
     wait_for_quiet(args.wait_quiet)
     started = time.time()
     machine = machine_info()
@@ -303,16 +457,24 @@ def main() -> int:
 
     machine["loadavg_end"] = os.getloadavg()
     machine["run_seconds"] = time.time() - started
-    results = {"meta": inproc["meta"], "machine": machine, "rows": rows,
-               "small_requests": load, "open3d": open3d, "preset": preset}
+    results = {
+        "meta": inproc["meta"],
+        "machine": machine,
+        "rows": rows,
+        "small_requests": load,
+        "open3d": open3d,
+        "preset": preset,
+    }
     with open(os.path.join(data_dir, "results.json"), "w") as f:
         json.dump(results, f, indent=1)
     text = report_md.render(results, accuracy)
     with open(out, "w") as f:
         f.write(text)
     print(text)
-    log(f"wrote {out} and {os.path.join(data_dir, 'results.json')} "
-        f"in {machine['run_seconds']:.0f} s")
+    log(
+        f"wrote {out} and {os.path.join(data_dir, 'results.json')} "
+        f"in {machine['run_seconds']:.0f} s"
+    )
     return 0
 
 

@@ -26,8 +26,16 @@ import numpy as np
 
 MISS = np.uint32(0xFFFFFFFF)
 RECORD_DTYPE = np.dtype(
-    [("t", "<f4"), ("object", "<u4"), ("primitive", "<u4"), ("u", "<f4"), ("v", "<f4"),
-     ("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
+    [
+        ("t", "<f4"),
+        ("object", "<u4"),
+        ("primitive", "<u4"),
+        ("u", "<f4"),
+        ("v", "<f4"),
+        ("nx", "<f4"),
+        ("ny", "<f4"),
+        ("nz", "<f4"),
+    ]
 )
 
 
@@ -44,7 +52,7 @@ class RaycastdServer:
         if not line.startswith(prefix):
             self.stop()
             raise RuntimeError(f"raycastd did not start: first line {line!r}")
-        self.host, port = line[len(prefix):].strip().rsplit(":", 1)
+        self.host, port = line[len(prefix) :].strip().rsplit(":", 1)
         self.port = int(port)
 
     def connect(self) -> http.client.HTTPConnection:
@@ -64,8 +72,9 @@ class RaycastdServer:
         self.log.close()
 
 
-def post(conn: http.client.HTTPConnection, path: str, body: bytes,
-         content_type: str) -> tuple[int, bytes, dict[str, str]]:
+def post(
+    conn: http.client.HTTPConnection, path: str, body: bytes, content_type: str
+) -> tuple[int, bytes, dict[str, str]]:
     conn.request("POST", path, body=body, headers={"Content-Type": content_type})
     resp = conn.getresponse()
     data = resp.read()
@@ -86,7 +95,9 @@ class Registered:
     build_ms: float | None  # as the server reports it
 
 
-def register(conn: http.client.HTTPConnection, body: bytes, content_type: str) -> Registered:
+def register(
+    conn: http.client.HTTPConnection, body: bytes, content_type: str
+) -> Registered:
     start = time.perf_counter()
     status, data, _ = post(conn, "/v1/scenes", body, content_type)
     seconds = time.perf_counter() - start
@@ -120,8 +131,14 @@ class NotAvailable(Exception):
     """The server does not offer this form (e.g. binary intersect answers 404)."""
 
 
-def agreement(t: np.ndarray, obj: np.ndarray, prim: np.ndarray, ref_t: np.ndarray,
-              ref_obj: np.ndarray, ref_prim: np.ndarray) -> float:
+def agreement(
+    t: np.ndarray,
+    obj: np.ndarray,
+    prim: np.ndarray,
+    ref_t: np.ndarray,
+    ref_obj: np.ndarray,
+    ref_prim: np.ndarray,
+) -> float:
     """Same hit/miss as raw Embree and the same object and primitive, or the same t."""
     hit = obj != MISS
     ref_hit = ref_obj != MISS
@@ -132,13 +149,19 @@ def agreement(t: np.ndarray, obj: np.ndarray, prim: np.ndarray, ref_t: np.ndarra
     return float(np.count_nonzero(ok)) / max(1, len(t))
 
 
-def budgeted(total: int, budget_s: float, run: Callable[[np.ndarray], tuple[float, object]]):
+def budgeted(
+    total: int, budget_s: float, run: Callable[[np.ndarray], tuple[float, object]]
+):
     """Like bench/timing.h: grow a strided sample from 4096 rays until the whole set is sent or
     one call takes a quarter of the budget; repeat a quick full-set call, keep the median.
     run(indices) returns (seconds, answer). Returns (seconds, indices, answer)."""
     n = min(total, 4096)
     while True:
-        idx = np.arange(total) if n == total else (np.arange(n, dtype=np.int64) * total) // n
+        idx = (
+            np.arange(total)
+            if n == total
+            else (np.arange(n, dtype=np.int64) * total) // n
+        )
         seconds, answer = run(idx)
         if n < 65536:  # cheap to repeat; one descheduling must not end the search early
             seconds = min(seconds, run(idx)[0])
@@ -151,11 +174,20 @@ def budgeted(total: int, budget_s: float, run: Callable[[np.ndarray], tuple[floa
     return seconds, idx, answer
 
 
-def bench_binary(conn, scene_id: str, rays: np.ndarray, ref: dict[str, np.ndarray],
-                 budget_s: float, mode: str = "closest", precision: str = "fast") -> Timing:
+def bench_binary(
+    conn,
+    scene_id: str,
+    rays: np.ndarray,
+    ref: dict[str, np.ndarray],
+    budget_s: float,
+    mode: str = "closest",
+    precision: str = "fast",
+) -> Timing:
     """One request per measurement carrying the whole (sampled) set: 1M rays = a 32 MB body."""
     path = f"/v1/scenes/{scene_id}/intersect?mode={mode}&precision={precision}&dtype=float32"
-    probe_status, probe, _ = post(conn, path, rays[:16].tobytes(), "application/octet-stream")
+    probe_status, probe, _ = post(
+        conn, path, rays[:16].tobytes(), "application/octet-stream"
+    )
     if probe_status != 200:
         raise NotAvailable(f"HTTP {probe_status} {error_code(probe)}")
     headers: dict[str, str] = {}
@@ -174,17 +206,31 @@ def bench_binary(conn, scene_id: str, rays: np.ndarray, ref: dict[str, np.ndarra
     if len(data) != 32 * len(idx):
         raise RuntimeError(f"binary intersect: {len(data)} bytes for {len(idx)} rays")
     rec = np.frombuffer(data, dtype=RECORD_DTYPE)
-    agree = agreement(rec["t"], rec["object"], rec["primitive"], ref["t"][idx],
-                      ref["object"][idx], ref["primitive"][idx])
-    return Timing(seconds, len(idx), len(rays), int(np.count_nonzero(rec["object"] != MISS)),
-                  agree, headers.get("x-precision"))
+    agree = agreement(
+        rec["t"],
+        rec["object"],
+        rec["primitive"],
+        ref["t"][idx],
+        ref["object"][idx],
+        ref["primitive"][idx],
+    )
+    return Timing(
+        seconds,
+        len(idx),
+        len(rays),
+        int(np.count_nonzero(rec["object"] != MISS)),
+        agree,
+        headers.get("x-precision"),
+    )
 
 
 def json_body(rays: np.ndarray, mode: str, precision: str) -> bytes:
     """An intersect request in JSON; tmin/tmax are left at their defaults (0, +inf), which is what
     the generated rays carry (their tmax is beyond the scene)."""
     doc = {
-        "rays": [{"origin": r[0:3].tolist(), "direction": r[3:6].tolist()} for r in rays],
+        "rays": [
+            {"origin": r[0:3].tolist(), "direction": r[3:6].tolist()} for r in rays
+        ],
         "mode": mode,
         "precision": precision,
         "fields": ["t", "object", "primitive"],
@@ -192,9 +238,17 @@ def json_body(rays: np.ndarray, mode: str, precision: str) -> bytes:
     return json.dumps(doc, separators=(",", ":")).encode()
 
 
-def bench_json(conn, scene_id: str, rays: np.ndarray, ref: dict[str, np.ndarray],
-               budget_s: float, batch: int = 10000, max_rays: int = 200_000,
-               mode: str = "closest", precision: str = "fast") -> Timing:
+def bench_json(
+    conn,
+    scene_id: str,
+    rays: np.ndarray,
+    ref: dict[str, np.ndarray],
+    budget_s: float,
+    batch: int = 10000,
+    max_rays: int = 200_000,
+    mode: str = "closest",
+    precision: str = "fast",
+) -> Timing:
     """Batches of `batch` rays, sent one after another on one connection, until max_rays or the
     budget is spent (bodies for all batches are encoded before timing)."""
     path = f"/v1/scenes/{scene_id}/intersect"
@@ -202,7 +256,9 @@ def bench_json(conn, scene_id: str, rays: np.ndarray, ref: dict[str, np.ndarray]
     n_batches = max(1, min(max_rays, total) // batch)
     # Strided batches: each batch is a sample spread over the whole set.
     stride = max(1, total // (n_batches * batch))
-    picks = [np.arange(b * batch, (b + 1) * batch) * stride % total for b in range(n_batches)]
+    picks = [
+        np.arange(b * batch, (b + 1) * batch) * stride % total for b in range(n_batches)
+    ]
     bodies = [json_body(rays[p], mode, precision) for p in picks]
     spent = 0.0
     sent = 0
@@ -230,6 +286,14 @@ def bench_json(conn, scene_id: str, rays: np.ndarray, ref: dict[str, np.ndarray]
             if h.get("hit", False):
                 t[k], obj[k], prim[k] = h["t"], h["object"], h["primitive"]
             k += 1
-    agree = agreement(t, obj, prim, ref["t"][idx], ref["object"][idx], ref["primitive"][idx])
-    return Timing(spent, sent, total, int(np.count_nonzero(obj != MISS)), agree,
-                  precision_answered)
+    agree = agreement(
+        t, obj, prim, ref["t"][idx], ref["object"][idx], ref["primitive"][idx]
+    )
+    return Timing(
+        spent,
+        sent,
+        total,
+        int(np.count_nonzero(obj != MISS)),
+        agree,
+        precision_answered,
+    )

@@ -34,18 +34,24 @@ def load(data_dir: str, name: str) -> np.ndarray:
     return np.load(os.path.join(data_dir, name))
 
 
-def agreement(t: np.ndarray, prim: np.ndarray, ref_t: np.ndarray, ref_prim: np.ndarray) -> float:
+def agreement(
+    t: np.ndarray, prim: np.ndarray, ref_t: np.ndarray, ref_prim: np.ndarray
+) -> float:
     """Fraction of rays on which Open3D and raw Embree agree: both miss, or both hit the same
     triangle, or (a neighbour across a shared edge) at the same t."""
     hit = np.isfinite(t)
     ref_hit = np.isfinite(ref_t)
-    with np.errstate(invalid="ignore"):  # inf − inf on rays both miss; those are settled above
+    with np.errstate(
+        invalid="ignore"
+    ):  # inf − inf on rays both miss; those are settled above
         same_t = np.abs(t - ref_t) <= 1e-4 * np.maximum(1.0, np.abs(ref_t))
     agree = (hit == ref_hit) & (~ref_hit | (prim == ref_prim) | same_t)
     return float(np.count_nonzero(agree)) / max(1, len(t))
 
 
-def bench_rays(scene, data_dir: str, workload: str, rays_name: str, reps: int, limit: int) -> dict:
+def bench_rays(
+    scene, data_dir: str, workload: str, rays_name: str, reps: int, limit: int
+) -> dict:
     stem = f"{workload}_{rays_name}"
     records = load(data_dir, f"{stem}_rays.npy")
     if limit:
@@ -77,7 +83,9 @@ def bench_rays(scene, data_dir: str, workload: str, rays_name: str, reps: int, l
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-dir", required=True)
-    ap.add_argument("--workload", required=True, help="A or B (Open3D takes triangles only)")
+    ap.add_argument(
+        "--workload", required=True, help="A or B (Open3D takes triangles only)"
+    )
     ap.add_argument("--rays", default="coherent,incoherent")
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--limit", type=int, default=0, help="use only the first N rays")
@@ -89,7 +97,9 @@ def main() -> int:
     scene.add_triangles(o3d.core.Tensor(vertices), o3d.core.Tensor(triangles))
     # Open3D commits the Embree scene (builds the BVH) on the first query; a one-ray query is
     # the closest we can get to timing the build alone.
-    one = o3d.core.Tensor(np.zeros((1, 6), dtype=np.float32) + np.float32([0, 0, 0, 0, 0, 1]))
+    one = o3d.core.Tensor(
+        np.zeros((1, 6), dtype=np.float32) + np.float32([0, 0, 0, 0, 0, 1])
+    )
     start = time.perf_counter()
     scene.cast_rays(one)
     build_ms = (time.perf_counter() - start) * 1e3
