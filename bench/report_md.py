@@ -343,9 +343,10 @@ def engine_status(rows: list[dict]) -> str:
         )
     else:
         text = (
-            "Engine paths that answered `fast` requests: "
+            "Measured with the Embree-backed engine (engine requests for `fast` were answered "
+            "by: "
             + ", ".join(f"`{a}`" for a in sorted(a for a in answered if a))
-            + "."
+            + ")."
         )
     if sampled:
         text += (
@@ -396,6 +397,10 @@ COLUMNS = """\
   sphere. Fixed seeds. `--quick` shrinks every workload and ray set (see the headings)."""
 
 
+def rows_of(results: dict, peer: str) -> list[dict]:
+    return [r for r in results["rows"] if r.get("peer") == peer]
+
+
 def notes(results: dict) -> list[str]:
     m = results["machine"]
     out = [
@@ -422,6 +427,20 @@ def notes(results: dict) -> list[str]:
         "the whole `POST /v1/scenes` with a PLY body (upload, parse, hash, build); Open3D's is "
         "its first one-ray query, which commits its scene.",
     ]
+    floor = [
+        r
+        for r in rows_of(results, "overhead")
+        if r["kind"] == "trace" and r["total_rays"] >= 1 << 20
+    ]
+    if floor:
+        r = floor[0]
+        out.append(
+            f"- The *fresh `std::vector<Hit>(n)`* row times only allocating and zero-filling "
+            f"an answer of the shape `QueryEngine::intersect` returns ({r['bytes'] / 2**20:.0f} "
+            f"MB for {r['total_rays']:,} rays): fresh pages cost their first touch on this "
+            f"machine, which caps any path that returns a new `QueryResult` per call at about "
+            f"{r['mrays_s']:.1f} Mrays/s here, however fast it traces."
+        )
     if m.get("dirty"):
         out.append(
             f"- The working tree at commit {m['commit']} had uncommitted changes (other "
