@@ -207,6 +207,53 @@ Status apply_targets(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     return {};
 }
 
+/// The primitive's NORMAL values, morphed like its positions; empty when it has none or when
+/// their count differs from POSITION's (then with a warning).
+Result<std::vector<double>> primitive_normals(const tinygltf::Model& m,
+                                              const tinygltf::Primitive& prim,
+                                              const std::vector<double>& weights,
+                                              const std::string& where, std::size_t values,
+                                              std::vector<std::string>& warnings) {
+    auto it = prim.attributes.find("NORMAL");
+    if (it == prim.attributes.end())
+        return std::vector<double>{};
+    auto normals = read_floats(m, it->second, 3, where + "/attributes/NORMAL");
+    if (!normals)
+        return normals.status();
+    if (normals->size() != values) {
+        warnings.push_back(where + ": NORMAL count differs from POSITION count; normals ignored");
+        return std::vector<double>{};
+    }
+    if (Status st = apply_targets(m, prim, weights, "NORMAL", where, *normals); !st.ok())
+        return st;
+    return normals;
+}
+
+/// The primitive's vertex indices, each checked against the vertex count; 0..count−1 when the
+/// primitive is not indexed.
+Result<std::vector<std::uint32_t>> primitive_indices(const tinygltf::Model& m,
+                                                     const tinygltf::Primitive& prim,
+                                                     const std::string& where, std::size_t count) {
+    std::vector<std::uint32_t> indices;
+    if (prim.indices == -1) {
+        indices.resize(count);
+        for (std::size_t k = 0; k < count; ++k)
+            indices[k] = static_cast<std::uint32_t>(k);
+        return indices;
+    }
+    auto read = read_indices(m, prim.indices, where + "/indices");
+    if (!read)
+        return read.status();
+    for (std::size_t k = 0; k < read->size(); ++k) {
+        if ((*read)[k] >= count) {
+            return fail(where + "/indices: value " + std::to_string((*read)[k]) + " at " +
+                        std::to_string(k) + " is out of range for " + std::to_string(count) +
+                        " vertices");
+        }
+    }
+    return read;
+}
+
 Status add_primitive(const tinygltf::Model& m, std::size_t mesh, std::size_t p,
                      const std::vector<double>& weights, LocalMesh& out, bool& normals_complete,
                      std::vector<std::string>& warnings) {
@@ -239,67 +286,37 @@ Status add_primitive(const tinygltf::Model& m, std::size_t mesh, std::size_t p,
     if (Status st = apply_targets(m, prim, weights, "POSITION", where, *positions); !st.ok())
         return st;
     const std::size_t count = positions->size() / 3;
-
-    std::vector<double> normals;
-    if (auto n_it = prim.attributes.find("NORMAL"); n_it != prim.attributes.end()) {
-        auto read = read_floats(m, n_it->second, 3, where + "/attributes/NORMAL");
-        if (!read)
-            return read.status();
-        if (read->size() == positions->size()) {
-            normals = std::move(*read);
-            if (Status st = apply_targets(m, prim, weights, "NORMAL", where, normals); !st.ok())
-                return st;
-        } else {
-            warnings.push_back(where +
-                               ": NORMAL count differs from POSITION count; normals ignored");
-        }
-    }
-    if (normals.empty())
+    auto normals = primitive_normals(m, prim, weights, where, positions->size(), warnings);
+    if (!normals)
+        return normals.status();
+    if (normals->empty())
         normals_complete = false;
-
-    std::vector<std::uint32_t> indices;
-    if (prim.indices != -1) {
-        auto read = read_indices(m, prim.indices, where + "/indices");
-        if (!read)
-            return read.status();
-        indices = std::move(*read);
-        for (std::size_t k = 0; k < indices.size(); ++k) {
-            if (indices[k] >= count) {
-                return fail(where + "/indices: value " + std::to_string(indices[k]) + " at " +
-                            std::to_string(k) + " is out of range for " + std::to_string(count) +
-                            " vertices");
-            }
-        }
-    } else {
-        indices.resize(count);
-        for (std::size_t k = 0; k < count; ++k)
-            indices[k] = static_cast<std::uint32_t>(k);
-    }
-    if (prim.mode == TINYGLTF_MODE_TRIANGLES && indices.size() % 3 != 0) {
-        warnings.push_back(where + ": " + std::to_string(indices.size() % 3) +
+    auto indices = primitive_indices(m, prim, where, count);
+    if (!indices)
+        return indices.status();
+    if (prim.mode == TINYGLTF_MODE_TRIANGLES && indices->size() % 3 != 0) {
+        warnings.push_back(where + ": " + std::to_string(indices->size() % 3) +
                            " trailing indices ignored (not a multiple of 3)");
     }
-    std::uint32_t material = kNoMaterial;
-    if (prim.material != -1) {
-        if (!in_range(prim.material, m.materials.size())) {
-            return fail(where + "/material refers to material " + std::to_string(prim.material) +
-                        ", but the file has " + std::to_string(m.materials.size()));
-        }
-        material = static_cast<std::uint32_t>(prim.material);
-        out.any_material = true;
+    if (prim.material != -1 && !in_range(prim.material, m.materials.size())) {
+        return fail(where + "/material refers to material " + std::to_string(prim.material) +
+                    ", but the file has " + std::to_string(m.materials.size()));
     }
+    const std::uint32_t material =
+        prim.material == -1 ? kNoMaterial : static_cast<std::uint32_t>(prim.material);
+    out.any_material = out.any_material || prim.material != -1;
     if (out.positions.size() + count > std::numeric_limits<std::uint32_t>::max()) {
         return Status::error(Code::too_large, where + ": more than 2³² vertices in one mesh");
     }
     const auto base = static_cast<std::uint32_t>(out.positions.size());
+    const std::vector<double>& pos = *positions;
+    const std::vector<double>& nrm = *normals;
     for (std::size_t v = 0; v < count; ++v) {
-        out.positions.push_back(
-            {(*positions)[3 * v], (*positions)[3 * v + 1], (*positions)[3 * v + 2]});
-        out.normals.push_back(normals.empty()
-                                  ? Vec3d{}
-                                  : Vec3d{normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]});
+        out.positions.push_back({pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]});
+        out.normals.push_back(nrm.empty() ? Vec3d{}
+                                          : Vec3d{nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]});
     }
-    append_triangles(prim.mode, indices, base, material, out);
+    append_triangles(prim.mode, *indices, base, material, out);
     return {};
 }
 
@@ -432,7 +449,7 @@ Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& plac
                                      " triangles or " + std::to_string(limits.max_vertices) +
                                      " vertices after instancing");
         }
-        // A skinned mesh's node transform is ignored (glTF 2.0 §3.7.3.3); without applying the
+        // A skinned mesh's node transform is ignored (glTF 2.0 §3.7.3); without applying the
         // skin, the mesh stays in its bind pose.
         Transform world = p.world;
         if (node.skin != -1) {

@@ -53,12 +53,14 @@ struct Glb {
 
 // Binary glTF layout, glTF 2.0 §4.4: a 12-byte header (magic, version 2, total length), then
 // chunks of (uint32 length, uint32 type, data); chunk 0 is JSON, an optional BIN chunk comes
-// second; chunk lengths are multiples of 4; unknown chunk types are ignored.
-Result<Glb> check_glb(std::string_view b, std::string_view name,
-                      std::vector<std::string>& warnings) {
-    if (b.size() < 12)
+// second; chunk lengths are multiples of 4; unknown chunk types are ignored. Bytes after the
+// declared length are ignored with a warning, as the glTF-Validator rates them.
+Result<std::string_view> check_glb_header(std::string_view b, std::string_view name,
+                                          std::vector<std::string>& warnings) {
+    if (b.size() < 12) {
         return load_error(name, "truncated GLB: " + std::to_string(b.size()) +
                                     " bytes, the header alone needs 12");
+    }
     if (read_u32(b, 0) != kGlbMagic)
         return load_error(name, "not a GLB file (bad magic)");
     const std::uint32_t version = read_u32(b, 4);
@@ -77,30 +79,39 @@ Result<Glb> check_glb(std::string_view b, std::string_view name,
     if (length < b.size()) {
         warnings.push_back(std::to_string(b.size() - length) +
                            " bytes after the end of the GLB stream ignored");
-        b = b.substr(0, length);
     }
+    return b.substr(0, length);
+}
+
+Result<Glb> check_glb(std::string_view bytes, std::string_view name,
+                      std::vector<std::string>& warnings) {
+    auto header = check_glb_header(bytes, name, warnings);
+    if (!header)
+        return header.status();
+    const std::string_view b = *header;
     Glb glb;
     std::size_t at = 12, keep = 12;
-    for (int chunk = 0; at < length; ++chunk) {
-        if (length - at < 8)
-            return load_error(name, "truncated GLB chunk header at byte " + std::to_string(at));
+    for (int chunk = 0; at < b.size(); ++chunk) {
+        auto chunk_error = [&](const std::string& what) {
+            return load_error(name, "GLB chunk " + std::to_string(chunk) + ": " + what);
+        };
+        if (b.size() - at < 8)
+            return chunk_error("truncated chunk header");
         const std::size_t len = read_u32(b, at);
         const std::uint32_t type = read_u32(b, at + 4);
-        if (len > length - at - 8) {
-            return load_error(name, "GLB chunk " + std::to_string(chunk) + " (" +
-                                        std::to_string(len) +
-                                        " bytes) runs past the end of the file");
+        if (len > b.size() - at - 8) {
+            return chunk_error(std::to_string(len) + " bytes run past the end of the file");
         }
         if (len % 4 != 0)
-            return load_error(
-                name, "GLB chunk " + std::to_string(chunk) + " length is not a multiple of 4");
-        if (chunk == 0 && (type != kChunkJson || len == 0))
-            return load_error(name, "the first GLB chunk must be non-empty JSON");
+            return chunk_error("length is not a multiple of 4");
+        if (chunk == 0 && (type != kChunkJson || len == 0)) {
+            return chunk_error("the first chunk must be non-empty JSON");
+        }
         if (chunk > 0 && type == kChunkJson)
-            return load_error(name, "GLB has a second JSON chunk");
+            return chunk_error("a second JSON chunk");
         if (type == kChunkBin) {
             if (chunk != 1)
-                return load_error(name, "GLB BIN chunk must directly follow the JSON chunk");
+                return chunk_error("the BIN chunk must directly follow the JSON chunk");
             glb.has_bin = true;
             glb.bin_length = len;
         }
@@ -111,7 +122,7 @@ Result<Glb> check_glb(std::string_view b, std::string_view name,
     if (at == 12)
         return load_error(name, "GLB has no JSON chunk");
     glb.original = b;
-    if (keep != length || b.size() != read_u32(b, 8)) {
+    if (keep != b.size()) {
         // Hand tinygltf only the chunks it understands, with the header length to match.
         glb.patched.assign(b.data(), keep);
         for (std::size_t i = 0; i < 4; ++i) {

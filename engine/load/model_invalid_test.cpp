@@ -146,8 +146,8 @@ TEST(ModelInvalid, GltfValidatorOraclesSayWhatMustBeRejected) {
             if (geometry_unusable(code, pointer))
                 reason = code + " at '" + pointer + "'";
         }
-        // A UTF-8 byte-order mark is INVALID_JSON to the validator (glTF 2.0 §3.2 forbids it)
-        // but leaves the data intact; like nlohmann/json we read through it.
+        // A UTF-8 byte-order mark is INVALID_JSON to the validator (glTF JSON must not start with
+        // one) but leaves the data intact; like nlohmann/json we read through it.
         if (reason.empty() || p.stem() == "bom")
             continue;
         ++must_reject;

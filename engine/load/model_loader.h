@@ -2,10 +2,11 @@
 // Model loading: glTF 2.0 (.gltf, .glb), OBJ (+MTL), PLY, STL and OFF bytes → engine meshes,
 // materials, lights and a camera, all in world space and double precision.
 //
-// The loaders never touch the file system: everything a model refers to (external glTF
-// buffers, images, .mtl files) is fetched through the caller's ResourceReader, which the server
-// confines to its scene root. Parsing backends (tinygltf, OpenMesh) are hidden behind this
-// header; errors come back as Status values and nothing is thrown across it.
+// The loaders never touch the file system: what a model refers to (external glTF buffers, OBJ
+// material libraries) is fetched through the caller's ResourceReader, which the server confines
+// to its scene root. Images are never read: nothing is textured yet. The glTF backend (tinygltf) is
+// hidden behind this header; OBJ, PLY, STL and OFF have small readers of their own. Errors come
+// back as Status values and nothing is thrown across this API.
 
 #include <cstddef>
 #include <functional>
@@ -38,8 +39,8 @@ std::optional<ModelFormat> sniff_format(std::string_view bytes);
 /// The lower-case extension naming a format ("glb", ...).
 std::string_view format_name(ModelFormat format);
 
-/// Reads a file referenced by a model (external .bin buffers, .mtl, images) by its URI relative
-/// to the model, already percent-decoded; returns its bytes or a Status. The server supplies
+/// Reads a file referenced by a model (external .bin buffers, .mtl) by its URI relative to the
+/// model, already percent-decoded; returns its bytes or a Status. The server supplies
 /// one confined to its scene root. The loader itself refuses URIs with a scheme (http:, file:,
 /// ...) and absolute paths before calling it.
 using ResourceReader = std::function<Result<std::string>(const std::string& uri)>;
@@ -56,10 +57,13 @@ struct ModelPart {
     /// Positions in world space (node transforms applied). Triangles are numbered in file order:
     /// glTF primitives in order, strips and fans converted as glTF 2.0 §3.7.2.1 lists them;
     /// polygons of the other formats fan-triangulated as (v0, vi, vi+1). Vertices are kept as
-    /// the file lists them (unreferenced ones included). normals is per-vertex when every
-    /// primitive of the part has normals, else empty (never computed). triangle_material is
-    /// empty when no triangle of the part names a material, else one index per triangle into
-    /// LoadedModel::materials.
+    /// the file lists them (unreferenced ones included), except that STL, which stores every
+    /// corner separately, has exactly equal corners merged. glTF morph targets are applied at
+    /// their default weights; skins are not applied (the mesh stays in its bind pose, with a
+    /// warning). normals is per-vertex when every primitive of the part has normals, else
+    /// empty (never computed). triangle_material is empty when no triangle of the part names a
+    /// material; otherwise it has one index per triangle into LoadedModel::materials, and
+    /// triangles without a material of their own use an appended grey "default" material.
     TriangleMesh mesh;
 };
 
@@ -68,9 +72,11 @@ struct LoadedModel {
     std::vector<ModelPart> parts;
     std::vector<Material> materials;          ///< indexed by triangle_material
     std::vector<std::string> material_names;  ///< same length as materials
-    std::vector<Light> lights;                ///< point and directional only (no ambient)
-    std::optional<Camera> camera;             ///< the first perspective camera, if any
-    std::vector<std::string> warnings;        ///< what was skipped or approximated, and why
+    /// Point and directional lights only (no ambient); glTF intensities are colour × intensity,
+    /// rescaled together so the brightest component is at most 1 (see gltf_scene.cpp).
+    std::vector<Light> lights;
+    std::optional<Camera> camera;       ///< the first perspective camera, if any
+    std::vector<std::string> warnings;  ///< what was skipped or approximated, and why
 
     /// Sum of the parts' triangle counts.
     std::size_t triangle_count() const;

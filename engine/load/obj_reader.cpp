@@ -37,7 +37,8 @@ std::string rest_of_line(std::string_view line, std::string_view keyword) {
     return trim(s.substr(0, s.find('#')));
 }
 
-/// Reads 1 or 3 numbers after a colour keyword ("Kd 0.5" means grey); nullopt if malformed.
+/// Reads 1 or 3 numbers after a colour keyword ("Kd 0.5" means grey); nullopt if malformed or
+/// not finite (the material then keeps its default).
 std::optional<Vec3d> parse_color(const std::vector<std::string_view>& t) {
     if (t.size() < 2)
         return std::nullopt;
@@ -45,11 +46,12 @@ std::optional<Vec3d> parse_color(const std::vector<std::string_view>& t) {
     if (!r)
         return std::nullopt;
     if (t.size() < 4)
-        return Vec3d{*r, *r, *r};
+        return std::isfinite(*r) ? std::optional<Vec3d>(Vec3d{*r, *r, *r}) : std::nullopt;
     auto g = parse_double(t[2]), b = parse_double(t[3]);
     if (!g || !b)
         return std::nullopt;
-    return Vec3d{*r, *g, *b};
+    const Vec3d c{*r, *g, *b};
+    return is_finite(c) ? std::optional<Vec3d>(c) : std::nullopt;
 }
 
 /// MTL statements mapped to Phong: Kd → diffuse, Ka → ambient (0.1·Kd when absent, as for

@@ -87,6 +87,33 @@ struct Header {
     std::size_t skipped_lines = 0;
 };
 
+/// "format <encoding> 1.0".
+std::optional<Encoding> parse_format(const std::vector<std::string_view>& t) {
+    if (t.size() != 3 || t[2] != "1.0")
+        return std::nullopt;
+    if (t[1] == "ascii")
+        return Encoding::ascii;
+    if (t[1] == "binary_little_endian")
+        return Encoding::binary_le;
+    if (t[1] == "binary_big_endian")
+        return Encoding::binary_be;
+    return std::nullopt;
+}
+
+/// "property <type> <name>" or "property list <count type> <value type> <name>".
+std::optional<Property> parse_property(const std::vector<std::string_view>& t) {
+    if (t.size() == 5 && t[1] == "list") {
+        auto count_type = parse_type(t[2]), value_type = parse_type(t[3]);
+        if (!count_type || !value_type || !is_integer(*count_type))
+            return std::nullopt;
+        return Property{std::string(t[4]), *value_type, true, *count_type};
+    }
+    auto value_type = t.size() == 3 ? parse_type(t[1]) : std::nullopt;
+    if (!value_type)
+        return std::nullopt;
+    return Property{std::string(t[2]), *value_type, false, Type::u8};
+}
+
 Result<Header> parse_header(std::string_view bytes, std::string_view name) {
     LineReader lines(bytes);
     std::string_view line;
@@ -107,17 +134,10 @@ Result<Header> parse_header(std::string_view bytes, std::string_view name) {
         if (t[0] == "end_header")
             break;
         if (t[0] == "format") {
-            if (t.size() != 3 || t[2] != "1.0")
-                return error("expected 'format <encoding> 1.0'");
-            if (t[1] == "ascii") {
-                h.encoding = Encoding::ascii;
-            } else if (t[1] == "binary_little_endian") {
-                h.encoding = Encoding::binary_le;
-            } else if (t[1] == "binary_big_endian") {
-                h.encoding = Encoding::binary_be;
-            } else {
-                return error("unknown encoding '" + std::string(t[1]) + "'");
-            }
+            auto encoding = parse_format(t);
+            if (!encoding)
+                return error("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+            h.encoding = *encoding;
             has_format = true;
         } else if (t[0] == "element") {
             auto count = t.size() == 3 ? parse_int(t[2]) : std::nullopt;
@@ -127,21 +147,10 @@ Result<Header> parse_header(std::string_view bytes, std::string_view name) {
         } else if (t[0] == "property") {
             if (h.elements.empty())
                 return error("property before any element");
-            Property p;
-            if (t.size() == 5 && t[1] == "list") {
-                auto ct = parse_type(t[2]), vt = parse_type(t[3]);
-                if (!ct || !vt || !is_integer(*ct))
-                    return error("malformed list property");
-                p = {std::string(t[4]), *vt, true, *ct};
-            } else if (t.size() == 3) {
-                auto vt = parse_type(t[1]);
-                if (!vt)
-                    return error("unknown property type '" + std::string(t[1]) + "'");
-                p = {std::string(t[2]), *vt, false, Type::u8};
-            } else {
+            auto property = parse_property(t);
+            if (!property)
                 return error("malformed property");
-            }
-            h.elements.back().properties.push_back(p);
+            h.elements.back().properties.push_back(*property);
         } else {
             // Exporters write free text into headers (Blender 2.4: "Created by Blender3D
             // ..."); like most readers we pass over lines we do not understand.

@@ -183,114 +183,166 @@ Result<LoadedModel> load_stl(std::string_view bytes, std::string_view name,
 // face lines "k i1 … ik [colour]". '#' starts a comment. Vertex and face records are read one
 // per line because the optional colour fields make token counts ambiguous otherwise. 4OFF,
 // nOFF (other dimensions) and binary OFF are not supported.
-Result<LoadedModel> load_off(std::string_view bytes, std::string_view name,
-                             const LoadLimits& limits) {
-    LineReader lines(bytes);
-    std::string_view line;
-    auto next_tokens = [&](std::vector<std::string_view>& t) {
-        while (lines.next(line)) {
+namespace {
+
+class OffReader {
+  public:
+    OffReader(std::string_view bytes, std::string_view name, const LoadLimits& limits)
+        : bytes_(bytes), lines_(bytes), name_(name), limits_(limits) {
+        part_.name = std::string(name);
+    }
+
+    Result<LoadedModel> run() {
+        if (Status st = header(); !st.ok())
+            return st;
+        if (Status st = vertices(); !st.ok())
+            return st;
+        if (Status st = faces(); !st.ok())
+            return st;
+        model_.parts.push_back(std::move(part_));
+        if (Status st = finish_model(model_, name_, limits_); !st.ok())
+            return st;
+        return std::move(model_);
+    }
+
+  private:
+    /// The next line with tokens (comments and blank lines skipped); false at the end.
+    bool next(std::vector<std::string_view>& t) {
+        std::string_view line;
+        while (lines_.next(line)) {
             t = tokens(line);
             if (!t.empty())
                 return true;
         }
         return false;
-    };
-    auto error = [&](const std::string& what) {
-        return load_error(name, "line " + std::to_string(lines.number()) + ": " + what);
-    };
-
-    std::vector<std::string_view> t;
-    if (!next_tokens(t))
-        return load_error(name, "empty OFF file");
-    std::string_view head = t[0];
-    if (head.size() >= 3 && head.substr(0, 3) == "\xEF\xBB\xBF")
-        head.remove_prefix(3);
-    const std::size_t off_at = head.find("OFF");
-    if (off_at == std::string_view::npos)
-        return load_error(name, "not an OFF file (no OFF keyword)");
-    const std::string_view flags = head.substr(0, off_at);
-    if (flags.find_first_of("4n") != std::string_view::npos)
-        return Status::error(Code::unsupported_format,
-                             std::string(name) + ": only 3-dimensional OFF is supported");
-    if (flags.find_first_not_of("STCN") != std::string_view::npos)
-        return load_error(name, "unknown OFF header '" + std::string(head) + "'");
-    const bool has_normals = flags.find('N') != std::string_view::npos;
-    // The counts may follow on the header line, even glued to it ("OFF8 6 12").
-    std::vector<std::string_view> counts;
-    if (head.size() > off_at + 3)
-        counts.push_back(head.substr(off_at + 3));
-    counts.insert(counts.end(), t.begin() + 1, t.end());
-    if (!counts.empty() && counts[0] == "BINARY")
-        return Status::error(Code::unsupported_format,
-                             std::string(name) + ": binary OFF is not supported");
-    if (counts.empty() && !next_tokens(counts))
-        return load_error(name, "missing vertex and face counts");
-    auto nv = counts.size() >= 2 ? parse_int(counts[0]) : std::nullopt;
-    auto nf = counts.size() >= 2 ? parse_int(counts[1]) : std::nullopt;
-    if (!nv || !nf || *nv < 0 || *nf < 0)
-        return error("malformed vertex and face counts");
-    // Every record takes at least two bytes ("0\n"), so larger counts are lies; refusing them
-    // up front keeps a bogus header from reserving gigabytes.
-    if (static_cast<std::uint64_t>(*nv) + static_cast<std::uint64_t>(*nf) > bytes.size() / 2 + 1) {
-        return load_error(name, "the header announces " + std::to_string(*nv) + " vertices and " +
-                                    std::to_string(*nf) + " faces, more than the file can hold");
+    }
+    Status error(const std::string& what) {
+        return load_error(name_, "line " + std::to_string(lines_.number()) + ": " + what);
+    }
+    Status unsupported(const std::string& what) {
+        return Status::error(Code::unsupported_format, std::string(name_) + ": " + what);
     }
 
-    LoadedModel model;
-    ModelPart part;
-    part.name = std::string(name);
-    TriangleMesh& mesh = part.mesh;
-    mesh.positions.reserve(static_cast<std::size_t>(*nv));
-    std::vector<Vec3f> normals;
-    for (std::int64_t v = 0; v < *nv; ++v) {
-        if (!next_tokens(t))
-            return load_error(name, "file ends after " + std::to_string(v) + " of " +
-                                        std::to_string(*nv) + " vertices");
-        if (t.size() < (has_normals ? 6u : 3u))
-            return error("a vertex needs " + std::string(has_normals ? "6" : "3") + " numbers");
-        std::array<double, 6> x{};
-        for (std::size_t i = 0; i < (has_normals ? 6u : 3u); ++i) {
-            auto d = parse_double(t[i]);
-            if (!d)
-                return error("malformed number '" + std::string(t[i]) + "'");
-            x[i] = *d;
+    Status header() {
+        std::vector<std::string_view> t;
+        if (!next(t))
+            return load_error(name_, "empty OFF file");
+        std::string_view head = t[0];
+        if (head.substr(0, 3) == "\xEF\xBB\xBF")
+            head.remove_prefix(3);
+        const std::size_t off_at = head.find("OFF");
+        if (off_at == std::string_view::npos)
+            return error("not an OFF file (no OFF keyword)");
+        const std::string_view flags = head.substr(0, off_at);
+        if (flags.find_first_of("4n") != std::string_view::npos) {
+            return unsupported("only 3-dimensional OFF is supported");
         }
-        mesh.positions.push_back({x[0], x[1], x[2]});
-        if (has_normals)
-            normals.push_back(Vec3f(Vec3d{x[3], x[4], x[5]}));
-    }
-    std::vector<std::uint32_t> poly;
-    std::size_t short_faces = 0;
-    for (std::int64_t f = 0; f < *nf; ++f) {
-        if (!next_tokens(t))
-            return load_error(name, "file ends after " + std::to_string(f) + " of " +
-                                        std::to_string(*nf) + " faces");
-        auto k = parse_int(t[0]);
-        if (!k || *k < 0 || static_cast<std::size_t>(*k) > t.size() - 1)
-            return error("face vertex count does not match the indices on its line");
-        poly.clear();
-        for (std::int64_t i = 1; i <= *k; ++i) {
-            auto idx = parse_int(t[static_cast<std::size_t>(i)]);
-            if (!idx || *idx < 0 || *idx >= *nv)
-                return error("face index '" + std::string(t[static_cast<std::size_t>(i)]) +
-                             "' is not one of the " + std::to_string(*nv) + " vertices");
-            poly.push_back(static_cast<std::uint32_t>(*idx));
+        if (flags.find_first_not_of("STCN") != std::string_view::npos) {
+            return error("unknown OFF header '" + std::string(head) + "'");
         }
-        if (add_fan(mesh, poly) == 0)
-            ++short_faces;
-        if (mesh.triangles.size() > limits.max_triangles)
-            return Status::error(Code::too_large, std::string(name) + ": more than " +
-                                                      std::to_string(limits.max_triangles) +
-                                                      " triangles");
+        has_normals_ = flags.find('N') != std::string_view::npos;
+        // The counts may follow on the header line, even glued to it ("OFF8 6 12").
+        std::vector<std::string_view> counts;
+        if (head.size() > off_at + 3)
+            counts.push_back(head.substr(off_at + 3));
+        counts.insert(counts.end(), t.begin() + 1, t.end());
+        if (!counts.empty() && counts[0] == "BINARY")
+            return unsupported("binary OFF is not supported");
+        if (counts.empty() && !next(counts))
+            return error("missing vertex and face counts");
+        auto nv = counts.size() >= 2 ? parse_int(counts[0]) : std::nullopt;
+        auto nf = counts.size() >= 2 ? parse_int(counts[1]) : std::nullopt;
+        if (!nv || !nf || *nv < 0 || *nf < 0)
+            return error("malformed vertex and face counts");
+        // Every record takes at least two bytes ("0\n"), so larger counts are lies; refusing
+        // them up front keeps a bogus header from reserving gigabytes.
+        nv_ = static_cast<std::uint64_t>(*nv);
+        nf_ = static_cast<std::uint64_t>(*nf);
+        if (nv_ + nf_ > bytes_.size() / 2 + 1) {
+            return error("the header announces " + std::to_string(nv_) + " vertices and " +
+                         std::to_string(nf_) + " faces, more than the file can hold");
+        }
+        return {};
     }
-    if (short_faces > 0)
-        model.warnings.push_back(std::to_string(short_faces) +
-                                 " faces with fewer than 3 vertices skipped");
-    mesh.normals = std::move(normals);
-    model.parts.push_back(std::move(part));
-    if (Status st = finish_model(model, name, limits); !st.ok())
-        return st;
-    return model;
+
+    Status vertices() {
+        TriangleMesh& mesh = part_.mesh;
+        mesh.positions.reserve(nv_);
+        const std::size_t numbers = has_normals_ ? 6 : 3;
+        std::vector<std::string_view> t;
+        for (std::uint64_t v = 0; v < nv_; ++v) {
+            if (!next(t)) {
+                return load_error(name_, "file ends after " + std::to_string(v) + " of " +
+                                             std::to_string(nv_) + " vertices");
+            }
+            if (t.size() < numbers)
+                return error("a vertex needs " + std::to_string(numbers) + " numbers");
+            std::array<double, 6> x{};
+            for (std::size_t i = 0; i < numbers; ++i) {
+                auto d = parse_double(t[i]);
+                if (!d)
+                    return error("malformed number '" + std::string(t[i]) + "'");
+                x[i] = *d;
+            }
+            mesh.positions.push_back({x[0], x[1], x[2]});
+            if (has_normals_)
+                mesh.normals.push_back(Vec3f(Vec3d{x[3], x[4], x[5]}));
+        }
+        return {};
+    }
+
+    Status faces() {
+        std::vector<std::string_view> t;
+        std::vector<std::uint32_t> poly;
+        std::size_t short_faces = 0;
+        for (std::uint64_t f = 0; f < nf_; ++f) {
+            if (!next(t)) {
+                return load_error(name_, "file ends after " + std::to_string(f) + " of " +
+                                             std::to_string(nf_) + " faces");
+            }
+            auto k = parse_int(t[0]);
+            if (!k || *k < 0 || static_cast<std::uint64_t>(*k) > t.size() - 1) {
+                return error("face vertex count does not match the indices on its line");
+            }
+            poly.clear();
+            for (std::size_t i = 1; i <= static_cast<std::size_t>(*k); ++i) {
+                auto idx = parse_int(t[i]);
+                if (!idx || *idx < 0 || static_cast<std::uint64_t>(*idx) >= nv_) {
+                    return error("face index '" + std::string(t[i]) + "' is not one of the " +
+                                 std::to_string(nv_) + " vertices");
+                }
+                poly.push_back(static_cast<std::uint32_t>(*idx));
+            }
+            if (add_fan(part_.mesh, poly) == 0)
+                ++short_faces;
+            if (part_.mesh.triangles.size() > limits_.max_triangles) {
+                return Status::error(Code::too_large, std::string(name_) + ": more than " +
+                                                          std::to_string(limits_.max_triangles) +
+                                                          " triangles");
+            }
+        }
+        if (short_faces > 0) {
+            model_.warnings.push_back(std::to_string(short_faces) +
+                                      " faces with fewer than 3 vertices skipped");
+        }
+        return {};
+    }
+
+    std::string_view bytes_;
+    LineReader lines_;
+    std::string_view name_;
+    const LoadLimits& limits_;
+    LoadedModel model_;
+    ModelPart part_;
+    bool has_normals_ = false;
+    std::uint64_t nv_ = 0, nf_ = 0;
+};
+
+}  // namespace
+
+Result<LoadedModel> load_off(std::string_view bytes, std::string_view name,
+                             const LoadLimits& limits) {
+    return OffReader(bytes, name, limits).run();
 }
 
 }  // namespace raycastd::engine::detail
