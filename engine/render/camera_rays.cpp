@@ -1,0 +1,33 @@
+#include "engine/render/camera_rays.h"
+
+#include <cmath>
+
+namespace raycastd::engine {
+
+Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested) {
+    if (requested)
+        return *requested;
+    if (scene.camera)
+        return *scene.camera;
+    return default_camera(scene.bounds());
+}
+
+CameraRays::CameraRays(const Camera& camera, int width, int height)
+    : origin_(camera.position), width_(width), height_(height) {
+    forward_ = normalize(camera.look_at - camera.position);
+    right_ = normalize(cross(forward_, camera.up));
+    up_ = cross(right_, forward_);
+    const double tan_half = std::tan(0.5 * camera.fov_y_deg * M_PI / 180.0);
+    up_ = up_ * tan_half;
+    right_ = right_ * (tan_half * width_ / height_);
+}
+
+Ray CameraRays::ray(double x, double y) const {
+    Ray r;
+    r.origin = origin_;
+    r.direction =
+        normalize(forward_ + right_ * (2.0 * x / width_ - 1.0) + up_ * (1.0 - 2.0 * y / height_));
+    return r;
+}
+
+}  // namespace raycastd::engine

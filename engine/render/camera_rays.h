@@ -1,0 +1,34 @@
+#pragma once
+// Pinhole camera rays. The camera looks from `position` towards `look_at`; `up` fixes the roll;
+// `fov_y_deg` is the vertical field of view. The image plane sits at distance 1:
+//
+//   d(x, y) = f + (2x/W − 1)·tan(fov/2)·(W/H)·r + (1 − 2y/H)·tan(fov/2)·u
+//
+// with f the unit forward vector, r = normalize(f × up) the right vector and u = r × f the true
+// up vector; (x, y) are pixel coordinates with (0, 0) at the top-left corner of the image.
+// Which camera a render uses: the request's, else the scene's (its document's, else its glTF
+// file's), else one framing the scene bounds (engine/scene/scene.h default_camera).
+
+#include <optional>
+
+#include "engine/math/ray.h"
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine {
+
+/// The camera a render of `scene` uses given the one the request asked for (if any).
+Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested);
+
+/// Precomputed frame of a camera for a W × H image.
+class CameraRays {
+  public:
+    CameraRays(const Camera& camera, int width, int height);
+    /// The ray through image point (x, y) in pixels (x right, y down); unit direction.
+    Ray ray(double x, double y) const;
+
+  private:
+    Vec3d origin_, forward_, right_, up_;
+    double width_, height_;
+};
+
+}  // namespace raycastd::engine

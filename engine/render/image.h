@@ -1,0 +1,58 @@
+#pragma once
+// Image: a linear RGB float image, and its encodings.
+//
+//   png  8-bit sRGB (IEC 61966-2-1 transfer curve) through libstb's stb_image_write
+//   ppm  binary P6, 8-bit sRGB (Netpbm's PPM holds gamma-encoded samples)
+//   pfm  Portable Float Map, linear 32-bit floats, bottom row first (Netpbm/Debevec's PF)
+//   exr  OpenEXR 2.0 single-part scanline file, uncompressed, linear 32-bit float R, G, B
+//        (written from the OpenEXR file layout specification; no library needed)
+//
+// `linear_8bit = true` skips the sRGB curve for the 8-bit formats: the data shading modes
+// (normal, depth, object_id, barycentric) store values, not light.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/math/vec3.h"
+
+namespace raycastd::engine {
+
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<float> rgb;  ///< row-major from the top row, 3 floats per pixel
+
+    Image() = default;
+    Image(int w, int h)
+        : width(w), height(h), rgb(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3) {}
+    void set(int x, int y, const Vec3d& c) {
+        float* p = &rgb[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                             static_cast<std::size_t>(x))];
+        p[0] = static_cast<float>(c.x);
+        p[1] = static_cast<float>(c.y);
+        p[2] = static_cast<float>(c.z);
+    }
+    Vec3d at(int x, int y) const {
+        const float* p = &rgb[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                                   static_cast<std::size_t>(x))];
+        return {p[0], p[1], p[2]};
+    }
+};
+
+enum class ImageFormat { png, ppm, pfm, exr };
+
+/// "png", "ppm", "pfm", "exr" → the format; nullopt for anything else.
+std::optional<ImageFormat> image_format_from_name(std::string_view name);
+/// The MIME type of an encoded image ("image/png", "image/x-portable-pixmap", ...).
+const char* mime_type(ImageFormat format);
+
+/// The sRGB encoding of a linear value in [0, 1] (clamped), as an 8-bit code.
+unsigned char srgb_encode(float linear);
+
+/// The image encoded in `format`. Never fails for a well-formed Image (width·height·3 floats).
+std::string encode_image(const Image& image, ImageFormat format, bool linear_8bit = false);
+
+}  // namespace raycastd::engine

@@ -1,0 +1,189 @@
+#include "engine/render/render.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+
+#include <tbb/parallel_for.h>
+
+#include "engine/render/camera_rays.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a stateless hash giving each sample its own jitter,
+/// so that a render is the same whatever thread draws which tile.
+double hash01(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    x ^= x >> 31;
+    return static_cast<double>(x >> 11) * 0x1.0p-53;
+}
+
+/// A well-spread colour per object: hues a golden-ratio step apart (HSV with s = 0.65, v = 0.95).
+Vec3d object_color(std::uint32_t id) {
+    const double h = std::fmod(0.1 + 0.6180339887498949 * id, 1.0) * 6.0;
+    const double s = 0.65, v = 0.95;
+    const double f = h - std::floor(h);
+    const double p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
+    switch (static_cast<int>(h)) {
+        case 0:
+            return {v, t, p};
+        case 1:
+            return {q, v, p};
+        case 2:
+            return {p, v, t};
+        case 3:
+            return {p, q, v};
+        case 4:
+            return {t, p, v};
+        default:
+            return {v, p, q};
+    }
+}
+
+/// Everything a tile needs, built once per render.
+struct Frame {
+    const Whitted& whitted;
+    const RenderOptions& opt;
+    CameraRays camera;
+    int strata_x, strata_y;
+    double near, far;  ///< depth normalisation: the bounding sphere seen from the camera
+
+    Vec3d sample(const Ray& ray, RayCounts& counts) const {
+        if (opt.shading == ShadingMode::phong)
+            return whitted.radiance(ray, counts);
+        ++counts.primary;
+        const std::optional<Hit> hit = whitted.closest(ray);
+        if (!hit)
+            return {};
+        switch (opt.shading) {
+            case ShadingMode::normal:
+                return (whitted.shading_normal(*hit) + Vec3d{1, 1, 1}) * 0.5;
+            case ShadingMode::depth: {
+                const double d = 1.0 - (hit->t - near) / (far - near);
+                const double c = std::clamp(d, 0.0, 1.0);
+                return {c, c, c};
+            }
+            case ShadingMode::object_id:
+                return object_color(hit->object);
+            case ShadingMode::barycentric:
+                return {1.0 - hit->u - hit->v, hit->u, hit->v};
+            case ShadingMode::phong:
+                break;
+        }
+        return {};
+    }
+
+    Vec3d pixel(int x, int y, RayCounts& counts) const {
+        if (opt.spp == 1)
+            return sample(camera.ray(x + 0.5, y + 0.5), counts);
+        const std::uint64_t base =
+            (static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(opt.width) +
+             static_cast<std::uint64_t>(x)) *
+            static_cast<std::uint64_t>(opt.spp);
+        Vec3d sum;
+        for (int s = 0; s < opt.spp; ++s) {
+            // Stratified: sample s jittered inside cell (s mod nx, s div ny) of an nx × ny grid.
+            const int cx = s % strata_x, cy = s / strata_x;
+            const double jx = (cx + hash01(2 * (base + static_cast<std::uint64_t>(s)))) / strata_x;
+            const double jy =
+                (cy + hash01(2 * (base + static_cast<std::uint64_t>(s)) + 1)) / strata_y;
+            sum += sample(camera.ray(x + jx, y + jy), counts);
+        }
+        return sum / static_cast<double>(opt.spp);
+    }
+};
+
+}  // namespace
+
+std::optional<ShadingMode> shading_mode_from_name(std::string_view name) {
+    if (name == "phong")
+        return ShadingMode::phong;
+    if (name == "normal")
+        return ShadingMode::normal;
+    if (name == "depth")
+        return ShadingMode::depth;
+    if (name == "object_id")
+        return ShadingMode::object_id;
+    if (name == "barycentric")
+        return ShadingMode::barycentric;
+    return std::nullopt;
+}
+
+const char* to_string(ShadingMode mode) {
+    switch (mode) {
+        case ShadingMode::phong:
+            return "phong";
+        case ShadingMode::normal:
+            return "normal";
+        case ShadingMode::depth:
+            return "depth";
+        case ShadingMode::object_id:
+            return "object_id";
+        case ShadingMode::barycentric:
+            return "barycentric";
+    }
+    return "phong";
+}
+
+std::size_t tile_count(const RenderOptions& o) {
+    const auto tiles = [&](int n) {
+        return static_cast<std::size_t>((n + o.tile_size - 1) / o.tile_size);
+    };
+    return tiles(o.width) * tiles(o.height);
+}
+
+RenderResult render(const QueryEngine& engine, const RenderOptions& opt, RenderProgress* progress) {
+    const auto start = std::chrono::steady_clock::now();
+    const Whitted whitted(engine, opt.whitted);
+    const Scene& scene = engine.scene();
+    const Camera cam = resolve_camera(scene, opt.camera);
+    const Bounds3 b = scene.bounds();
+    const double radius = b.empty() ? 1.0 : 0.5 * length(b.diagonal());
+    const double dist = b.empty() ? 0.0 : length(b.center() - cam.position);
+    const int nx = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(opt.spp))));
+    const Frame frame{whitted,
+                      opt,
+                      CameraRays(cam, opt.width, opt.height),
+                      nx,
+                      (opt.spp + nx - 1) / nx,
+                      std::max(0.0, dist - radius),
+                      std::max(dist + radius, std::max(0.0, dist - radius) + 1e-300)};
+
+    RenderResult out;
+    out.image = Image(opt.width, opt.height);
+    const int tiles_x = (opt.width + opt.tile_size - 1) / opt.tile_size;
+    const std::size_t total = tile_count(opt);
+    if (progress)
+        progress->tiles_total = total;
+    std::mutex counts_mutex;
+    tbb::parallel_for(std::size_t{0}, total, [&](std::size_t tile) {
+        if (progress && progress->cancel.load(std::memory_order_relaxed))
+            return;
+        const int x0 = static_cast<int>(tile % static_cast<std::size_t>(tiles_x)) * opt.tile_size;
+        const int y0 = static_cast<int>(tile / static_cast<std::size_t>(tiles_x)) * opt.tile_size;
+        const int x1 = std::min(x0 + opt.tile_size, opt.width);
+        const int y1 = std::min(y0 + opt.tile_size, opt.height);
+        RayCounts counts;
+        for (int y = y0; y < y1; ++y) {
+            for (int x = x0; x < x1; ++x)
+                out.image.set(x, y, frame.pixel(x, y, counts));
+        }
+        {
+            std::lock_guard<std::mutex> lock(counts_mutex);
+            out.counts += counts;
+        }
+        if (progress)
+            progress->tiles_done.fetch_add(1, std::memory_order_relaxed);
+    });
+    out.cancelled = progress && progress->cancel.load();
+    out.render_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return out;
+}
+
+}  // namespace raycastd::engine

@@ -1,0 +1,62 @@
+#pragma once
+// Renders an image of a prepared scene: camera rays through stratified samples in each pixel,
+// shaded by the Whitted tracer (shading "phong") or showing data (normal, depth, object_id,
+// barycentric), in tiles spread over TBB's workers. Progress is the count of tiles done; a
+// render can be cancelled between tiles.
+
+#include <atomic>
+#include <cstddef>
+#include <optional>
+#include <string_view>
+
+#include "engine/query/intersect.h"
+#include "engine/render/image.h"
+#include "engine/scene/camera.h"
+#include "engine/shade/whitted.h"
+
+namespace raycastd::engine {
+
+enum class ShadingMode { phong, normal, depth, object_id, barycentric };
+
+/// "phong", "normal", "depth", "object_id", "barycentric" → the mode; nullopt otherwise.
+std::optional<ShadingMode> shading_mode_from_name(std::string_view name);
+const char* to_string(ShadingMode mode);
+/// True for the modes whose pixels are data rather than light (stored without the sRGB curve).
+inline bool is_data_mode(ShadingMode mode) {
+    return mode != ShadingMode::phong;
+}
+
+struct RenderOptions {
+    int width = 640;
+    int height = 480;
+    int spp = 1;  ///< samples per pixel, stratified over the pixel (1: its centre)
+    ShadingMode shading = ShadingMode::phong;
+    WhittedOptions whitted;        ///< max_depth, precision, background
+    std::optional<Camera> camera;  ///< the request's camera (else the scene's, else framing)
+    int tile_size = 16;            ///< pixels per tile side
+};
+
+/// How far a render has come, shared with whoever watches it, and the way to stop it.
+struct RenderProgress {
+    std::atomic<std::size_t> tiles_done{0};
+    std::atomic<std::size_t> tiles_total{0};
+    std::atomic<bool> cancel{false};  ///< set to stop at the next tile
+};
+
+struct RenderResult {
+    Image image;  ///< linear RGB (phong), or the data of the mode in [0, 1]
+    RayCounts counts;
+    double render_ms = 0.0;
+    bool cancelled = false;
+};
+
+/// The number of tiles a render of `options` is cut into.
+std::size_t tile_count(const RenderOptions& options);
+
+/// Renders `engine`'s scene. Options must be valid (width, height, spp ≥ 1; max_depth ≥ 1).
+/// Depth is 1 at the nearest point of the scene's bounding sphere and 0 at its farthest (and on
+/// a miss); object_id gives each object a distinct colour; barycentric shows (1−u−v, u, v).
+RenderResult render(const QueryEngine& engine, const RenderOptions& options,
+                    RenderProgress* progress = nullptr);
+
+}  // namespace raycastd::engine

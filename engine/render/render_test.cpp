@@ -1,0 +1,134 @@
+#include "engine/render/render.h"
+
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "engine/render/camera_rays.h"
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine {
+namespace {
+
+std::shared_ptr<const QueryEngine> prepare(Scene s) {
+    auto built = QueryEngine::build(std::make_shared<const Scene>(std::move(s)));
+    EXPECT_TRUE(built.ok());
+    return *built;
+}
+
+Scene lit_spheres(double reflectivity) {
+    Scene s = testing::tutorial_spheres();
+    s.materials[0].reflectivity = reflectivity;
+    Light l;
+    l.type = LightType::point;
+    l.position = {5, 5, 0};
+    s.lights = {l};
+    return s;
+}
+
+RenderOptions small(ShadingMode mode = ShadingMode::phong) {
+    RenderOptions o;
+    o.width = 40;
+    o.height = 30;
+    o.shading = mode;
+    o.camera = Camera{};  // the eye of the tutorial, looking along +z
+    return o;
+}
+
+TEST(Camera, RaysThroughTheCentreAndCorners) {
+    Camera c;
+    c.fov_y_deg = 90;
+    const CameraRays cam(c, 200, 100);
+    const Ray centre = cam.ray(100, 50);
+    EXPECT_NEAR(centre.direction.z, 1.0, 1e-15);
+    // Top edge: 45° up; the right edge: tan = 2 (aspect 2), towards −x (right-handed, y up).
+    EXPECT_NEAR(cam.ray(100, 0).direction.y, std::sqrt(0.5), 1e-15);
+    const Ray right = cam.ray(200, 50);
+    EXPECT_NEAR(right.direction.x / right.direction.z, -2.0, 1e-12);
+}
+
+TEST(Camera, RequestThenSceneThenFraming) {
+    Scene s = testing::tutorial_spheres();
+    Camera asked;
+    asked.position = {1, 2, 3};
+    EXPECT_EQ(resolve_camera(s, asked).position, asked.position);
+    EXPECT_EQ(resolve_camera(s, std::nullopt).look_at, s.bounds().center());
+    Camera doc;
+    doc.position = {0, 0, -1};
+    s.camera = doc;
+    EXPECT_EQ(resolve_camera(s, std::nullopt).position, doc.position);
+}
+
+TEST(Render, NoLightsTracesNoShadowRays) {
+    auto engine = prepare(testing::tutorial_spheres());
+    const RenderResult r = render(*engine, small());
+    EXPECT_EQ(r.counts.primary, 40u * 30u);
+    EXPECT_EQ(r.counts.shadow, 0u);
+    EXPECT_EQ(r.counts.reflected + r.counts.refracted, 0u);
+    // Ambient 1.0 only: a hit shows ka = 0.1 exactly.
+    EXPECT_NEAR(r.image.at(20, 15).x, 0.1, 1e-7);
+}
+
+TEST(Render, MatteSceneTracesNoSecondaryRays) {
+    auto engine = prepare(lit_spheres(0.0));
+    const RenderResult r = render(*engine, small());
+    EXPECT_GT(r.counts.shadow, 0u);
+    EXPECT_EQ(r.counts.reflected, 0u);
+    EXPECT_EQ(r.counts.refracted, 0u);
+    auto mirror = prepare(lit_spheres(0.5));
+    EXPECT_GT(render(*mirror, small()).counts.reflected, 0u);
+}
+
+TEST(Render, SamplesPerPixelMultiplyPrimaryRaysAndAreDeterministic) {
+    auto engine = prepare(lit_spheres(0.3));
+    RenderOptions o = small();
+    o.spp = 5;
+    const RenderResult a = render(*engine, o);
+    const RenderResult b = render(*engine, o);
+    EXPECT_EQ(a.counts.primary, 40u * 30u * 5u);
+    EXPECT_EQ(a.image.rgb, b.image.rgb);
+}
+
+TEST(Render, DataModes) {
+    auto engine = prepare(lit_spheres(0.0));
+    const RenderResult ids = render(*engine, small(ShadingMode::object_id));
+    EXPECT_EQ(ids.image.at(0, 0), Vec3d{});  // a miss is black
+    EXPECT_NE(ids.image.at(20, 15), Vec3d{});
+    EXPECT_EQ(ids.counts.shadow, 0u);
+    const RenderResult normals = render(*engine, small(ShadingMode::normal));
+    // The centre pixel sees sphere 3 at (0,0,7.27): normal (0,−½,−√3/2) → ((1+0)/2, ¼, …).
+    EXPECT_NEAR(normals.image.at(20, 15).x, 0.5, 0.05);
+    EXPECT_NEAR(normals.image.at(20, 15).y, 0.25, 0.05);
+    const RenderResult depth = render(*engine, small(ShadingMode::depth));
+    EXPECT_GT(depth.image.at(20, 15).x, 0.0);
+    EXPECT_LE(depth.image.at(20, 15).x, 1.0);
+    const RenderResult bary = render(*engine, small(ShadingMode::barycentric));
+    EXPECT_EQ(bary.image.at(20, 15), Vec3d(1, 0, 0));  // spheres have u = v = 0
+}
+
+TEST(Render, ProgressCountsTilesAndCancelStops) {
+    auto engine = prepare(lit_spheres(0.0));
+    RenderOptions o = small();
+    o.tile_size = 8;
+    RenderProgress progress;
+    const RenderResult r = render(*engine, o, &progress);
+    EXPECT_EQ(progress.tiles_total.load(), tile_count(o));
+    EXPECT_EQ(tile_count(o), 5u * 4u);
+    EXPECT_EQ(progress.tiles_done.load(), progress.tiles_total.load());
+    EXPECT_FALSE(r.cancelled);
+    RenderProgress stopped;
+    stopped.cancel = true;
+    const RenderResult c = render(*engine, o, &stopped);
+    EXPECT_TRUE(c.cancelled);
+    EXPECT_EQ(stopped.tiles_done.load(), 0u);
+    EXPECT_EQ(c.counts.primary, 0u);
+}
+
+TEST(Render, ModeNames) {
+    EXPECT_EQ(shading_mode_from_name("object_id"), ShadingMode::object_id);
+    EXPECT_FALSE(shading_mode_from_name("toon"));
+    EXPECT_STREQ(to_string(ShadingMode::barycentric), "barycentric");
+}
+
+}  // namespace
+}  // namespace raycastd::engine

@@ -1,0 +1,33 @@
+#pragma once
+// The Phong illumination model (Phong 1975) as the tutorial writes it:
+//
+//   I = ka·Ia + Σ_p Ip·(kd·(N·L) + ks·(R·V)ⁿ),   R = 2(N·L)N − L,
+//
+// with N the unit normal facing the viewer, L the unit direction to light p, V the unit
+// direction to the viewer and n the shininess. A light behind the surface (N·L ≤ 0) adds
+// nothing; a highlight facing away (R·V ≤ 0) adds no specular term.
+
+#include "engine/math/vec3.h"
+#include "engine/scene/material.h"
+
+namespace raycastd::engine {
+
+/// The two terms one light adds at a point.
+struct PhongLightTerms {
+    Vec3d diffuse;   ///< Ip·kd·(N·L)
+    Vec3d specular;  ///< Ip·ks·(R·V)ⁿ (zero when `with_specular` is false)
+    Vec3d sum() const { return diffuse + specular; }
+};
+
+/// The ambient term ka·Ia.
+inline Vec3d phong_ambient(const Material& m, const Vec3d& ia) {
+    return m.ambient * ia;
+}
+
+/// The diffuse and specular terms of one light of intensity `ip` in unit direction `l` at a
+/// point with unit normal `n` seen from unit direction `v`. Zero when n·l ≤ 0.
+/// `with_specular = false` skips the power for materials whose ks is zero.
+PhongLightTerms phong_light(const Material& m, const Vec3d& n, const Vec3d& l, const Vec3d& v,
+                            const Vec3d& ip, bool with_specular);
+
+}  // namespace raycastd::engine

@@ -1,0 +1,57 @@
+#include "engine/shade/spawn.h"
+
+#include <cmath>
+
+#include "engine/math/float_bounds.h"
+
+namespace raycastd::engine {
+
+Vec3d hit_point_error(const Ray& ray, const Hit& hit, const SpawnContext& ctx) {
+    const Vec3d td = ray.direction * hit.t;
+    // The error carried by t, then the rounding of t·d and of o + t·d (two roundings).
+    Vec3d err = abs(ray.direction) * hit.t_err + (abs(ray.origin) + abs(td)) * gamma(2);
+    if (ctx.float_scale > 0.0) {
+        // A float tracer rounds the spawned origin (relative to its centre) and its own copy of
+        // the surface; its t carries γ_f(12) of the scene scale (engine/accel/embree_accel.cpp).
+        // γ_f(16) of (distance to the centre + scale) bounds both, with a margin.
+        const Vec3d p = ray.origin + td;
+        const double f = gamma_float(16) * (length(p - ctx.center) + ctx.float_scale);
+        err += Vec3d{f, f, f};
+    }
+    return err;
+}
+
+Vec3d offset_ray_origin(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
+    const double d = dot(abs(n), p_err);
+    Vec3d offset = n * d;
+    if (dot(w, n) < 0.0)
+        offset = -offset;
+    Vec3d po = p + offset;
+    // Round away from p so that the addition above cannot land back inside the error box.
+    for (std::size_t i = 0; i < 3; ++i) {
+        if (offset[i] > 0.0) {
+            po[i] = next_up(po[i]);
+        } else if (offset[i] < 0.0) {
+            po[i] = next_down(po[i]);
+        }
+    }
+    return po;
+}
+
+Ray spawn_ray(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
+    Ray r;
+    r.origin = offset_ray_origin(p, p_err, n, w);
+    r.direction = w;
+    return r;
+}
+
+Ray spawn_ray_to(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& target) {
+    Ray r;
+    r.origin = offset_ray_origin(p, p_err, n, target - p);
+    r.direction = target - r.origin;
+    // Stop short of the light: something exactly at the light's position does not shadow it.
+    r.tmax = 1.0 - gamma(4);
+    return r;
+}
+
+}  // namespace raycastd::engine

@@ -1,0 +1,215 @@
+#include "engine/shade/whitted.h"
+
+#include <cmath>
+
+#include "engine/shade/optics.h"
+#include "engine/shade/phong.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+/// One ray through QueryEngine's batch interface. The buffers are per thread and keep their
+/// capacity, so a render allocates nothing per ray.
+struct SingleRayQuery {
+    std::vector<Ray> rays = std::vector<Ray>(1);
+    QueryResult result;
+
+    const Hit& run(const QueryEngine& engine, const Ray& ray, Mode mode, Precision precision) {
+        rays[0] = ray;
+        QueryOptions opt;
+        opt.mode = mode;
+        opt.precision = precision;
+        opt.want_normal = mode == Mode::closest;
+        engine.intersect(rays, opt, result);
+        return result.hits[0];
+    }
+};
+
+SingleRayQuery& thread_query() {
+    thread_local SingleRayQuery q;
+    return q;
+}
+
+bool is_nonzero(const Vec3d& v) {
+    return v.x > 0.0 || v.y > 0.0 || v.z > 0.0;
+}
+
+}  // namespace
+
+ShadingPlan plan_shading(const QueryEngine& engine, Precision precision) {
+    const Scene& s = engine.scene();
+    ShadingPlan plan;
+    // API.md: "no lights = ambient 1.0 only".
+    plan.ambient = s.lights.empty() ? Vec3d{1.0, 1.0, 1.0} : Vec3d{};
+    for (std::uint32_t i = 0; i < s.lights.size(); ++i) {
+        if (s.lights[i].type == LightType::ambient) {
+            plan.ambient += s.lights[i].intensity;
+        } else if (is_nonzero(s.lights[i].intensity) && !s.objects.empty()) {
+            plan.shadow_lights.push_back(i);
+        }
+    }
+    for (const Material& m : s.materials) {
+        plan.reflection = plan.reflection || m.reflectivity > 0.0;
+        plan.refraction = plan.refraction || m.transparency > 0.0;
+        plan.specular.push_back(is_nonzero(m.specular));
+    }
+    // Embree's float traversal answers fast and refined queries on scenes big enough to have a
+    // BVH; it sees coordinates relative to the bounds' centre, scaled by twice the diagonal.
+    if (!engine.brute_force() && engine.effective_precision(precision) != Precision::exact) {
+        const Bounds3 b = s.bounds();
+        plan.spawn.center = b.center();
+        plan.spawn.float_scale = 2.0 * length(b.diagonal());
+    }
+    return plan;
+}
+
+Whitted::Whitted(const QueryEngine& engine, WhittedOptions options)
+    : engine_(engine), options_(options), plan_(plan_shading(engine, options.precision)) {}
+
+std::optional<Hit> Whitted::closest(const Ray& ray) const {
+    const Hit& h = thread_query().run(engine_, ray, Mode::closest, options_.precision);
+    if (!h.valid())
+        return std::nullopt;
+    return h;
+}
+
+bool Whitted::occluded(const Ray& ray) const {
+    return thread_query().run(engine_, ray, Mode::any, options_.precision).valid();
+}
+
+std::uint32_t Whitted::material_of(const Hit& hit) const {
+    const Object& o = scene().objects[hit.object];
+    if (o.mesh && !o.mesh->triangle_material.empty())
+        return o.mesh->triangle_material[hit.primitive];
+    return o.material;
+}
+
+Vec3d Whitted::shading_normal(const Hit& hit) const {
+    const Object& o = scene().objects[hit.object];
+    if (!o.mesh || o.mesh->normals.size() != o.mesh->positions.size())
+        return hit.normal;
+    const auto& t = o.mesh->triangles[hit.primitive];
+    const Vec3d n = Vec3d(o.mesh->normals[t[0]]) * (1.0 - hit.u - hit.v) +
+                    Vec3d(o.mesh->normals[t[1]]) * hit.u + Vec3d(o.mesh->normals[t[2]]) * hit.v;
+    const double len = length(n);
+    if (!(len > 0.0) || !std::isfinite(len))
+        return hit.normal;
+    return n / len;
+}
+
+Vec3d Whitted::radiance(const Ray& ray, RayCounts& counts) const {
+    ++counts.primary;
+    return trace(ray, 1, counts, nullptr, nullptr);
+}
+
+Vec3d Whitted::shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) const {
+    return shade(ray, hit, 1, counts, nullptr);
+}
+
+RayTree Whitted::tree(const Ray& ray) const {
+    RayTree t;
+    ++t.counts.primary;
+    int root = -1;
+    t.color = trace(ray, 1, t.counts, &t, &root);
+    return t;
+}
+
+Vec3d Whitted::trace(const Ray& ray, int depth, RayCounts& counts, RayTree* tree, int* slot) const {
+    const std::optional<Hit> hit = closest(ray);
+    if (!hit)
+        return options_.background;
+    if (tree)
+        *slot = static_cast<int>(tree->nodes.size());
+    return shade(ray, *hit, depth, counts, tree);
+}
+
+Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
+                     RayTree* tree) const {
+    const Scene& s = scene();
+    const Material& m = s.materials[material_of(hit)];
+    const Vec3d d = normalize(ray.direction);
+    const Vec3d p = ray.at(hit.t);
+    const Vec3d ng = face_towards_ray(hit.normal, d);
+    Vec3d n = shading_normal(hit);
+    if (dot(n, ng) < 0.0)
+        n = -n;
+    const Vec3d p_err = hit_point_error(ray, hit, plan_.spawn);
+
+    // Node k of the tree is written before its children so that labels run depth-first; the
+    // vector may grow during the recursion, so the node is addressed by index, never by reference.
+    const std::size_t k = tree ? tree->nodes.size() : 0;
+    if (tree) {
+        TreeNode node;
+        node.hit = hit;
+        node.point = p;
+        node.normal = n;
+        tree->nodes.push_back(std::move(node));
+    }
+
+    Vec3d color = m.emissive + phong_ambient(m, plan_.ambient);
+    bool lit = false;
+    for (std::uint32_t li : plan_.shadow_lights) {
+        const Light& light = s.lights[li];
+        const bool point = light.type == LightType::point;
+        const Vec3d l = normalize(point ? light.position - p : -light.direction);
+        ShadowRayRecord rec;
+        rec.light = li;
+        rec.facing = dot(n, l) > 0.0;
+        if (rec.facing) {
+            const Ray shadow =
+                point ? spawn_ray_to(p, p_err, ng, light.position) : spawn_ray(p, p_err, ng, l);
+            ++counts.shadow;
+            bool blocked;
+            if (tree) {
+                // The tree names the blocker, so it asks for the closest one.
+                const std::optional<Hit> b = closest(shadow);
+                blocked = b.has_value();
+                if (b)
+                    rec.blocked_by = b->object;
+            } else {
+                blocked = occluded(shadow);
+            }
+            if (!blocked) {
+                lit = true;
+                color += phong_light(m, n, l, -d, light.intensity, plan_.specular[material_of(hit)])
+                             .sum();
+            }
+        }
+        if (tree)
+            tree->nodes[k].shadow_rays.push_back(rec);
+    }
+
+    if (depth < options_.max_depth) {
+        // Leaving a transparent object: its internal reflection is not traced (the tutorial).
+        const bool leaving_glass = m.transparency > 0.0 && !hit.front_face;
+        if (plan_.reflection && m.reflectivity > 0.0 && !leaving_glass) {
+            ++counts.reflected;
+            const Ray r = spawn_ray(p, p_err, ng, reflect(d, n));
+            int child = -1;
+            color += trace(r, depth + 1, counts, tree, &child) * m.reflectivity;
+            if (tree)
+                tree->nodes[k].reflected = child;
+        }
+        if (plan_.refraction && m.transparency > 0.0) {
+            const double eta = hit.front_face ? 1.0 / m.ior : m.ior;
+            if (const std::optional<Vec3d> t = refract(d, n, eta)) {
+                ++counts.refracted;
+                const Ray r = spawn_ray(p, p_err, ng, *t);
+                int child = -1;
+                color += trace(r, depth + 1, counts, tree, &child) * m.transparency;
+                if (tree)
+                    tree->nodes[k].refracted = child;
+            } else if (tree) {
+                tree->nodes[k].total_internal_reflection = true;
+            }
+        }
+    }
+    if (tree) {
+        tree->nodes[k].full_phong = lit;
+        tree->nodes[k].color = color;
+    }
+    return color;
+}
+
+}  // namespace raycastd::engine

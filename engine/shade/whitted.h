@@ -1,0 +1,134 @@
+#pragma once
+// Whitted-style ray tracing (Whitted, "An Improved Illumination Model for Shaded Display",
+// CACM 23(6), 1980) with the Phong model at every surface point, as the tutorial teaches it:
+//
+//   I = ka·Ia + Σ_lights [shadow ray free] · Ip·(kd·(N·L) + ks·(R·V)ⁿ)
+//         + reflectivity · I(reflected ray) + transparency · I(refracted ray)
+//
+// * One shadow ray per point or directional light whose light is in front of the shading
+//   normal; any object between the point and the light blocks it (transparent ones too, as in
+//   the classic model).
+// * The shading normal is turned to face the incoming ray, so a glass exit point or a triangle
+//   seen from behind is lit from the side the ray is on.
+// * Reflection: the mirror direction, weighted by `reflectivity`. Refraction: Snell's law with
+//   η = 1/ior entering (front face) and ior leaving; on total internal reflection no light is
+//   transmitted. Following the tutorial, internal reflection inside a transparent object is not
+//   traced: at a point where the ray leaves a transparent object only the refracted ray goes on.
+// * Recursion stops at `max_depth` surface points along a path (the camera ray's hit is 1).
+// * Work the scene does not need is skipped, decided once per scene (ShadingPlan): no shadow rays
+//   without point/directional lights, no reflected/refracted rays where no material reflects or
+//   refracts, no specular power where ks = 0.
+//
+// All tracing goes through QueryEngine (closest for camera and secondary rays, any for shadow
+// rays) at the precision asked for; secondary rays start at robust origins (shade/spawn.h).
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "engine/query/intersect.h"
+#include "engine/shade/spawn.h"
+
+namespace raycastd::engine {
+
+struct WhittedOptions {
+    int max_depth = 5;  ///< surface points along one path (1: camera hits only)
+    Precision precision = Precision::refined;
+    Vec3d background{0.0, 0.0, 0.0};  ///< the colour of a ray that hits nothing
+};
+
+/// Rays traced, by kind.
+struct RayCounts {
+    std::uint64_t primary = 0;
+    std::uint64_t shadow = 0;
+    std::uint64_t reflected = 0;
+    std::uint64_t refracted = 0;
+
+    RayCounts& operator+=(const RayCounts& o) {
+        primary += o.primary;
+        shadow += o.shadow;
+        reflected += o.reflected;
+        refracted += o.refracted;
+        return *this;
+    }
+    std::uint64_t total() const { return primary + shadow + reflected + refracted; }
+};
+
+/// What shading a scene needs, decided once per scene (and precision).
+struct ShadingPlan {
+    Vec3d ambient;  ///< Ia: the sum of the ambient lights; 1 when the scene has no lights at all
+    std::vector<std::uint32_t> shadow_lights;  ///< indices of the point and directional lights
+    bool reflection = false;                   ///< some material reflects
+    bool refraction = false;                   ///< some material is transparent
+    std::vector<bool> specular;                ///< per material: ks ≠ 0
+    SpawnContext spawn;                        ///< what the tracer adds to spawned-origin errors
+};
+
+/// Decides the plan for `engine`'s scene traced at `precision`.
+ShadingPlan plan_shading(const QueryEngine& engine, Precision precision);
+
+/// One shadow ray of a tree node.
+struct ShadowRayRecord {
+    std::uint32_t light = 0;                ///< index into Scene::lights
+    std::uint32_t blocked_by = kInvalidId;  ///< the closest object in the way, or kInvalidId
+    bool facing = false;  ///< the light is in front of the shading normal (else no ray is traced)
+};
+
+/// A surface point where intensity is computed (a node of the ray tree).
+struct TreeNode {
+    Hit hit;       ///< as the query answered it (geometric normal as stored, front_face)
+    Vec3d point;   ///< ray.at(hit.t)
+    Vec3d normal;  ///< the shading normal, turned to face the incoming ray
+    std::vector<ShadowRayRecord> shadow_rays;
+    bool full_phong = false;  ///< some light contributes: ambient + diffuse + specular
+    Vec3d color;              ///< the intensity at this point, children included
+    int reflected = -1;       ///< index of the reflected child in RayTree::nodes, −1 for none
+    int refracted = -1;       ///< index of the refracted child, −1 for none
+    bool total_internal_reflection = false;  ///< refraction was asked for but none exists
+};
+
+/// The Whitted ray tree of one ray: nodes in depth-first order (reflected before refracted),
+/// so that node k is the tutorial's I(k+1). Empty when the ray hits nothing.
+struct RayTree {
+    std::vector<TreeNode> nodes;
+    Vec3d color;  ///< the ray's intensity (the root's colour, or the background)
+    RayCounts counts;
+};
+
+/// A Whitted tracer over one prepared scene; immutable, shared by the threads of a render.
+class Whitted {
+  public:
+    Whitted(const QueryEngine& engine, WhittedOptions options);
+
+    const ShadingPlan& plan() const { return plan_; }
+    const WhittedOptions& options() const { return options_; }
+    const Scene& scene() const { return engine_.scene(); }
+
+    /// The closest hit along `ray` (normal included), or nullopt.
+    std::optional<Hit> closest(const Ray& ray) const;
+    /// Whether anything lies along `ray` within [tmin, tmax].
+    bool occluded(const Ray& ray) const;
+
+    /// The intensity (linear RGB) along a camera ray; adds the rays traced to `counts`.
+    Vec3d radiance(const Ray& ray, RayCounts& counts) const;
+    /// The same, shading a camera hit already found (counts.primary is the caller's).
+    Vec3d shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) const;
+    /// The ray tree of one ray, with the blocking object of each shadow ray named.
+    RayTree tree(const Ray& ray) const;
+
+    /// The material index of a hit (per-triangle material when the mesh has them).
+    std::uint32_t material_of(const Hit& hit) const;
+    /// The unit shading normal of a hit as stored (interpolated vertex normals on meshes that
+    /// have them, else the geometric normal); not yet turned towards the ray.
+    Vec3d shading_normal(const Hit& hit) const;
+
+  private:
+    Vec3d trace(const Ray& ray, int depth, RayCounts& counts, RayTree* tree, int* slot) const;
+    Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts, RayTree* tree) const;
+
+    const QueryEngine& engine_;
+    WhittedOptions options_;
+    ShadingPlan plan_;
+};
+
+}  // namespace raycastd::engine

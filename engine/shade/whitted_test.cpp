@@ -1,0 +1,310 @@
+#include "engine/shade/whitted.h"
+
+#include <cmath>
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "engine/render/camera_rays.h"
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine {
+namespace {
+
+std::shared_ptr<const QueryEngine> prepare(Scene s) {
+    auto built = QueryEngine::build(std::make_shared<const Scene>(std::move(s)));
+    EXPECT_TRUE(built.ok()) << built.status().message;
+    return *built;
+}
+
+Object sphere(std::string name, Vec3d c, double r, std::uint32_t material) {
+    Object o;
+    o.kind = ObjectKind::sphere;
+    o.name = std::move(name);
+    o.sphere = {c, r};
+    o.material = material;
+    return o;
+}
+
+Light point_light(Vec3d p) {
+    Light l;
+    l.type = LightType::point;
+    l.position = p;
+    return l;
+}
+
+Light ambient_light(double i) {
+    Light l;
+    l.type = LightType::ambient;
+    l.intensity = {i, i, i};
+    return l;
+}
+
+// The shape of the tutorial's Question 2: five points where intensity is computed, full Phong
+// at I1–I3 and ambient only at I4–I5, whose shadow rays are blocked. The eye is at the origin
+// looking along +z; one point light L = (0, 3, 0) and an ambient light.
+//
+//   object 0 "glass"  sphere (0,0,10) r 2, reflectivity 0.2, transparency 0.7, ior 1.5
+//   object 1 "mirror" triangle (−3,−1,−6) (3,−1,−6) (0,2,−3): the plane −y + z = −5, normal
+//                     (b−a)×(c−a) = (0,−18,18) ∝ (0,−1,1); reflectivity 0.8
+//   object 2 "ball"   sphere (0,−6,−5) r 1, matte
+//   object 3 "back"   sphere (0,0,20) r 2, matte
+//
+// The ray tree of the ray (0,0,0) + t·(0,0,1), derived by hand:
+//   I1 = (0,0,8) on glass (t = 8, normal (0,0,−1)). L − I1 = (0,3,−8) is in front of the normal;
+//        the segment (0, 3s, 8 − 8s) stays outside glass (|(0,3s,−2−8s)|² > 4 for s > 0) and
+//        meets nothing else: lit, full Phong.
+//     reflected: normal incidence sends it back along −z; it meets the mirror's plane at z = −5,
+//        at (0,0,−5), inside the triangle (the point is a + (3,1,1)·1/… : at height 1 of 3 the
+//        triangle spans x ∈ [−2, 2]).
+//   I2 = (0,0,−5) on mirror. Normal facing the ray (0,−1,1)/√2; L − I2 = (0,3,5) gives N·L > 0;
+//        the segment (0, 3s, −5 + 5s) has z ≤ 0 (no glass, no back) and y ≥ 0 (no ball): lit.
+//     reflected: d − 2(d·n)n with d = (0,0,−1), n = (0,−1,1)/√2 gives (0,−1,0): along −y it meets
+//        ball's top at (0,−5,−5).
+//   I3 = (0,−5,−5) on ball, normal (0,1,0). L − I3 = (0,8,5), N·L > 0; the segment
+//        (0, −5 + 8s, −5 + 5s) meets the mirror's plane only at s = 5/3 > 1, and nothing else:
+//        lit. Matte: no children.
+//     refracted (from I1): normal incidence, no bending: along +z inside glass to its far side.
+//   I4 = (0,0,12) on glass, leaving it: the normal turned to the ray is (0,0,−1); L − I4 =
+//        (0,3,−12) is in front of it, but the segment (0, 3s, 12 − 12s) runs inside glass until
+//        s = 48/153: blocked by glass itself, ambient only. Internal reflection is not traced;
+//        refraction out, still at normal incidence, goes on along +z.
+//   I5 = (0,0,18) on back, normal (0,0,−1). L − I5 = (0,3,−18) is in front, but the segment
+//        (0, 3s, 18 − 18s) passes through glass for s ∈ (0.350, 0.515) (333s² − 288s + 60 < 0):
+//        blocked by glass (a transparent object blocks, as in the classic model): ambient only.
+// Depth-first, reflected before refracted: I1 glass, I2 mirror, I3 ball, I4 glass, I5 back.
+Scene tutorial_q2_scene() {
+    Scene s;
+    s.materials = {Material{}, Material{}, Material{}};
+    s.material_names = {"default", "glass", "mirror"};
+    s.materials[1].reflectivity = 0.2;
+    s.materials[1].transparency = 0.7;
+    s.materials[1].ior = 1.5;
+    s.materials[2].reflectivity = 0.8;
+    s.objects.push_back(sphere("glass", {0, 0, 10}, 2, 1));
+    Object mirror =
+        testing::mesh_object("mirror", {{-3, -1, -6}, {3, -1, -6}, {0, 2, -3}}, {{0, 1, 2}});
+    mirror.material = 2;
+    s.objects.push_back(mirror);
+    s.objects.push_back(sphere("ball", {0, -6, -5}, 1, 0));
+    s.objects.push_back(sphere("back", {0, 0, 20}, 2, 0));
+    s.lights = {ambient_light(0.2), point_light({0, 3, 0})};
+    return s;
+}
+
+TEST(Whitted, TutorialQuestion2Tree) {
+    auto engine = prepare(tutorial_q2_scene());
+    const Whitted w(*engine, {});
+    const RayTree t = w.tree(Ray{{0, 0, 0}, {0, 0, 1}});
+    ASSERT_EQ(t.nodes.size(), 5u);
+    const std::uint32_t objects[5] = {0, 1, 2, 0, 3};
+    const bool full[5] = {true, true, true, false, false};
+    for (int k = 0; k < 5; ++k) {
+        SCOPED_TRACE("I" + std::to_string(k + 1));
+        EXPECT_EQ(t.nodes[k].hit.object, objects[k]);
+        EXPECT_EQ(t.nodes[k].full_phong, full[k]);
+        ASSERT_EQ(t.nodes[k].shadow_rays.size(), 1u);
+        EXPECT_EQ(t.nodes[k].shadow_rays[0].light, 1u);
+        EXPECT_TRUE(t.nodes[k].shadow_rays[0].facing);
+        EXPECT_EQ(t.nodes[k].shadow_rays[0].blocked_by, full[k] ? kInvalidId : 0u);
+    }
+    // The structure: I1 → reflected I2 → reflected I3; I1 → refracted I4 → refracted I5.
+    EXPECT_EQ(t.nodes[0].reflected, 1);
+    EXPECT_EQ(t.nodes[0].refracted, 3);
+    EXPECT_EQ(t.nodes[1].reflected, 2);
+    EXPECT_EQ(t.nodes[1].refracted, -1);
+    EXPECT_EQ(t.nodes[3].reflected, -1);  // internal reflection is not traced
+    EXPECT_EQ(t.nodes[3].refracted, 4);
+    EXPECT_NEAR(t.nodes[0].point.z, 8.0, 1e-12);
+    EXPECT_NEAR(t.nodes[1].point.z, -5.0, 1e-9);
+    EXPECT_NEAR(t.nodes[2].point.y, -5.0, 1e-9);
+    EXPECT_NEAR(t.nodes[3].point.z, 12.0, 1e-9);
+    EXPECT_NEAR(t.nodes[4].point.z, 18.0, 1e-9);
+    // Normals face the incoming ray: the glass exit point I4 is shaded from inside.
+    EXPECT_NEAR(t.nodes[3].normal.z, -1.0, 1e-12);
+    // Ambient-only points: ka·Ia = 0.1 · 0.2.
+    EXPECT_NEAR(t.nodes[4].color.x, 0.02, 1e-12);
+    // I3: ka·Ia + kd·(N·L) + ks·(R·V)ⁿ with N = (0,1,0), L = (0,8,5)/√89, V = (0,1,0), R·V = N·L.
+    const double nl = 8 / std::sqrt(89.0);
+    EXPECT_NEAR(t.nodes[2].color.x, 0.02 + 0.7 * nl + 0.2 * std::pow(nl, 32), 1e-9);
+    // I1's colour is its own terms plus 0.2·I2 + 0.7·I4.
+    EXPECT_EQ(t.color, t.nodes[0].color);
+    EXPECT_EQ(t.counts.primary, 1u);
+    EXPECT_EQ(t.counts.shadow, 5u);
+    EXPECT_EQ(t.counts.reflected, 2u);
+    EXPECT_EQ(t.counts.refracted, 2u);
+}
+
+TEST(Whitted, MaxDepthCutsTheTree) {
+    auto engine = prepare(tutorial_q2_scene());
+    WhittedOptions o;
+    o.max_depth = 2;
+    EXPECT_EQ(Whitted(*engine, o).tree(Ray{{0, 0, 0}, {0, 0, 1}}).nodes.size(), 3u);  // I1 I2 I4
+    o.max_depth = 1;
+    EXPECT_EQ(Whitted(*engine, o).tree(Ray{{0, 0, 0}, {0, 0, 1}}).nodes.size(), 1u);
+}
+
+TEST(Whitted, MissGivesAnEmptyTreeAndTheBackground) {
+    auto engine = prepare(tutorial_q2_scene());
+    WhittedOptions o;
+    o.background = {0.25, 0.5, 1};
+    const RayTree t = Whitted(*engine, o).tree(Ray{{0, 0, 0}, {1, 0, 0}});
+    EXPECT_TRUE(t.nodes.empty());
+    EXPECT_EQ(t.color, o.background);
+}
+
+TEST(Whitted, LightBehindTheShadingNormalIsNotFacingAndTracesNoRay) {
+    Scene s = testing::tutorial_spheres();
+    s.lights = {point_light({0, 0, 30})};  // behind sphere 3 as seen from the eye
+    auto engine = prepare(std::move(s));
+    const RayTree t = Whitted(*engine, {}).tree(Ray{{0, 0, 0}, {0, 0, 1}});
+    ASSERT_EQ(t.nodes.size(), 1u);
+    EXPECT_FALSE(t.nodes[0].shadow_rays[0].facing);
+    EXPECT_EQ(t.nodes[0].shadow_rays[0].blocked_by, kInvalidId);
+    EXPECT_FALSE(t.nodes[0].full_phong);
+    EXPECT_EQ(t.counts.shadow, 0u);
+}
+
+TEST(Whitted, TotalInternalReflectionIsReportedAndTransmitsNothing) {
+    // A ray leaving a glass cube past the critical angle.
+    Scene s;
+    s.materials = {Material{}, Material{}};
+    s.materials[1].transparency = 1.0;
+    s.materials[1].ior = 1.5;
+    Object cube = testing::cube_object(-1, 1);
+    cube.material = 1;
+    s.objects.push_back(cube);
+    auto engine = prepare(std::move(s));
+    // Start inside the cube and meet the z = 1 face at (0.433, 0, 1), 53° from its normal
+    // (cos θ = 0.6): past the critical angle asin(1/1.5) = 41.8°.
+    const Ray r{{-0.9, 0, 0}, {0.8, 0, 0.6}};
+    const RayTree t = Whitted(*engine, {}).tree(r);
+    ASSERT_FALSE(t.nodes.empty());
+    EXPECT_TRUE(t.nodes[0].total_internal_reflection);
+    EXPECT_EQ(t.nodes[0].refracted, -1);
+    EXPECT_EQ(t.nodes[0].reflected, -1);
+}
+
+TEST(Whitted, PlanSkipsWhatTheSceneDoesNotNeed) {
+    Scene s = testing::tutorial_spheres();
+    s.materials[0].specular = {0, 0, 0};
+    {
+        auto engine = prepare(s);
+        const ShadingPlan p = plan_shading(*engine, Precision::refined);
+        EXPECT_TRUE(p.shadow_lights.empty());
+        EXPECT_FALSE(p.reflection);
+        EXPECT_FALSE(p.refraction);
+        EXPECT_FALSE(p.specular[0]);
+        EXPECT_EQ(p.ambient, Vec3d(1, 1, 1));  // no lights: ambient 1.0 only
+    }
+    s.lights = {ambient_light(0.3)};
+    auto engine = prepare(s);
+    EXPECT_EQ(plan_shading(*engine, Precision::refined).ambient, Vec3d(0.3, 0.3, 0.3));
+}
+
+// ---- Shadow acne: a lit plane and a sphere, near the origin and 1e6 units away ---------------
+
+struct AcneCase {
+    Scene scene;
+    Vec3d o;  ///< where the scene sits
+    Vec3d light_dir;
+};
+
+AcneCase acne_scene(Vec3d o, int grid) {
+    AcneCase c;
+    c.o = o;
+    c.light_dir = normalize(Vec3d{-0.3, -1.0, 0.2});
+    Scene& s = c.scene;
+    s.materials = {Material{}};
+    s.materials[0].specular = {0, 0, 0};  // the lit plane has one exact value
+    // The plane y = 0, 40 × 40, as grid × grid quads (shared edges everywhere).
+    std::vector<Vec3d> p;
+    std::vector<std::array<std::uint32_t, 3>> t;
+    for (int j = 0; j <= grid; ++j) {
+        for (int i = 0; i <= grid; ++i) {
+            p.push_back(o + Vec3d{-20.0 + 40.0 * i / grid, 0.0, -20.0 + 40.0 * j / grid});
+        }
+    }
+    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (grid + 1) + i); };
+    for (int j = 0; j < grid; ++j) {
+        for (int i = 0; i < grid; ++i) {
+            t.push_back({at(i, j), at(i, j + 1), at(i + 1, j)});  // counter-clockwise from +y
+            t.push_back({at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)});
+        }
+    }
+    s.objects.push_back(testing::mesh_object("plane", std::move(p), std::move(t)));
+    s.objects.push_back(sphere("ball", o + Vec3d{0, 2.5, 0}, 1.5, 0));
+    Light sun;
+    sun.type = LightType::directional;
+    sun.direction = c.light_dir;
+    s.lights = {ambient_light(0.1), sun};
+    Camera cam;
+    cam.position = o + Vec3d{0, 7, -16};
+    cam.look_at = o + Vec3d{0, 1, 0};
+    s.camera = cam;
+    return c;
+}
+
+/// Pixels that should be lit but are dark, over a 200 × 150 view.
+int wrongly_dark_pixels(const AcneCase& c, Precision precision, bool* used_bvh) {
+    auto engine = prepare(c.scene);
+    *used_bvh = !engine->brute_force();
+    WhittedOptions opt;
+    opt.precision = precision;
+    const Whitted w(*engine, opt);
+    const CameraRays cam(*c.scene.camera, 200, 150);
+    const Sphere& ball = c.scene.objects[1].sphere;
+    const Vec3d l = -c.light_dir;
+    const double ka_ia = 0.1 * 0.1, kd = 0.7;
+    int dark = 0, checked = 0;
+    for (int y = 0; y < 150; ++y) {
+        for (int x = 0; x < 200; ++x) {
+            const Ray ray = cam.ray(x + 0.5, y + 0.5);
+            const auto hit = w.closest(ray);
+            if (!hit)
+                continue;
+            const Vec3d p = ray.at(hit->t);
+            RayCounts counts;
+            const double got = w.shade_hit(ray, *hit, counts).x;
+            double lit_value;
+            if (hit->object == 0) {
+                // Lit unless the line to the light passes within the ball (a margin either side
+                // keeps the penumbra-free shadow edge out of the count).
+                const Vec3d f = ball.center - p;
+                const double along = dot(f, l);
+                const double miss = length(f - l * along);
+                if (along > 0 && miss < ball.radius * 1.01)
+                    continue;
+                lit_value = ka_ia + kd * l.y;
+            } else {
+                // A convex ball under a light from above: nothing can shadow its lit side.
+                const double nl = dot(normalize(p - ball.center), l);
+                if (nl < 0.05)
+                    continue;
+                lit_value = ka_ia + kd * nl;
+            }
+            ++checked;
+            if (got < 0.5 * lit_value)
+                ++dark;
+        }
+    }
+    EXPECT_GT(checked, 10000);
+    return dark;
+}
+
+TEST(Whitted, NoShadowAcneNearTheOriginOrFarFromIt) {
+    for (const Vec3d o : {Vec3d{0, 0, 0}, Vec3d{1e6, 1e6, -1e6}}) {
+        for (int grid : {1, 16}) {  // 2 triangles + a sphere: brute force; 512: Embree
+            const AcneCase c = acne_scene(o, grid);
+            for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+                bool bvh = false;
+                EXPECT_EQ(wrongly_dark_pixels(c, p, &bvh), 0)
+                    << "at " << o.x << ", grid " << grid << ", precision " << to_string(p);
+                EXPECT_EQ(bvh, grid > 1);
+            }
+        }
+    }
+}
+
+}  // namespace
+}  // namespace raycastd::engine
