@@ -38,6 +38,11 @@ public:
 
     /// Closest hit in [tmin, tmax] at `precision`, or nullopt.
     std::optional<Hit> closest(const Ray& ray, Precision precision, bool want_normal) const;
+    /// Closest hits of rays[0..n) into out[0..n) (a miss leaves an invalid Hit). Coherent groups
+    /// of 16 (camera-like rays) go through Embree's packet traversal, where it is faster; the
+    /// answers are the same as closest() ray by ray.
+    void closest_range(const Ray* rays, std::size_t n, Precision precision, bool want_normal,
+                       Hit* out) const;
     /// Whether anything is hit in [tmin, tmax].
     bool any(const Ray& ray, Precision precision) const;
     /// Every hit, sorted, shared edges merged (see linear_accel.h). fast: Embree's float hits,
@@ -51,6 +56,17 @@ public:
     struct Impl;
 
 private:
+    /// What Embree's native traversal reported for one ray (geom is RTC_INVALID_GEOMETRY_ID on
+    /// a miss).
+    struct NativeHit {
+        unsigned geom, prim;
+        float tfar, u, v;
+        Vec3d ng;
+    };
+    std::optional<Hit> finish_native(const Ray& ray, double shift, double len, const NativeHit& nh,
+                                     const std::optional<Hit>& sphere_hit, Precision precision,
+                                     bool want_normal) const;
+
     explicit EmbreeAccel(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };

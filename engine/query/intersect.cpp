@@ -33,6 +33,17 @@ void for_each_ray(std::size_t n, F&& f) {
                       });
 }
 
+/// Like for_each_ray, handing out contiguous blocks (whole packets of 16 where possible).
+template <class F>
+void for_each_block(std::size_t n, F&& f) {
+    if (n <= kSerialBatch) {
+        f(std::size_t(0), n);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kSerialBatch),
+                      [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
+}
+
 }  // namespace
 
 const char* to_string(Mode m) {
@@ -137,10 +148,15 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
     switch (opt.mode) {
         case Mode::closest:
             out.hits.assign(n, Hit{});
+            if (accel) {
+                for_each_block(n, [&](std::size_t b, std::size_t e) {
+                    accel->closest_range(rays.data() + b, e - b, p, opt.want_normal,
+                                         out.hits.data() + b);
+                });
+                break;
+            }
             for_each_ray(n, [&](std::size_t i) {
-                auto h = accel ? accel->closest(rays[i], p, opt.want_normal)
-                               : linear_closest(s, rays[i], opt.want_normal);
-                if (h) out.hits[i] = *h;
+                if (auto h = linear_closest(s, rays[i], opt.want_normal)) out.hits[i] = *h;
             });
             break;
         case Mode::any:

@@ -1,6 +1,7 @@
 #pragma once
 // Small scenes shared by the engine's tests.
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
