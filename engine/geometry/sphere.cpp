@@ -7,34 +7,116 @@
 
 namespace raycastd::engine {
 
+namespace {
+
+// Double-double arithmetic: a value is the unevaluated sum hi + lo of two doubles (Dekker 1971;
+// Knuth, TAOCP vol. 2, §4.2.2). The two error-free transformations below are exact; the sums
+// and products built on them carry a relative error of a few u² (u = 2⁻⁵³), which is all the
+// kernel needs: every quantity it forms this way is used once, then rounded to double.
+struct DD {
+    double hi = 0.0, lo = 0.0;
+};
+
+/// a + b = s + e exactly (Knuth's TwoSum: no condition on the magnitudes).
+inline DD two_sum(double a, double b) {
+    const double s = a + b;
+    const double bb = s - a;
+    return {s, (a - (s - bb)) + (b - bb)};
+}
+/// a + b = s + e exactly when |a| ≥ |b| (Dekker's FastTwoSum).
+inline DD fast_two_sum(double a, double b) {
+    const double s = a + b;
+    return {s, b - (s - a)};
+}
+/// a·b = p + e exactly (TwoProduct with a fused multiply-add; Ogita, Rump & Oishi 2005).
+inline DD two_prod(double a, double b) {
+    const double p = a * b;
+    return {p, std::fma(a, b, -p)};
+}
+inline DD add(DD a, DD b) {
+    const DD s = two_sum(a.hi, b.hi);
+    return fast_two_sum(s.hi, s.lo + (a.lo + b.lo));
+}
+inline DD neg(DD a) { return {-a.hi, -a.lo}; }
+inline DD mul(DD a, double b) {
+    const DD p = two_prod(a.hi, b);
+    return fast_two_sum(p.hi, std::fma(a.lo, b, p.lo));
+}
+inline DD mul(DD a, DD b) {
+    const DD p = two_prod(a.hi, b.hi);
+    return fast_two_sum(p.hi, p.lo + (a.hi * b.lo + a.lo * b.hi));
+}
+/// n / d rounded to double (one correction step: the residual n − t·d is formed exactly).
+inline double div(DD n, DD d) {
+    const double t = n.hi / d.hi;
+    const DD p = two_prod(t, d.hi);
+    const double r = ((n.hi - p.hi) - p.lo) + n.lo - t * d.lo;
+    return t + r / d.hi;
+}
+/// √x of a non-negative x, to a few u² (one Newton step on the double square root).
+inline DD sqrt_dd(DD x) {
+    const double s = std::sqrt(x.hi);
+    const DD p = two_prod(s, s);
+    return fast_two_sum(s, (((x.hi - p.hi) - p.lo) + x.lo) / (2.0 * s));
+}
+
+}  // namespace
+
 SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
     SphereRoots out;
-    const Vec3d f = ray.origin - s.center;
     const Vec3d& d = ray.direction;
-    const double a = dot(d, d);
-    const double beta = dot(f, d);
-    const double gamma_c = dot(f, f) - s.radius * s.radius;
+    // f = o − c, exactly: a ray starting far from a small sphere loses nothing here.
+    const DD fx = two_sum(ray.origin.x, -s.center.x);
+    const DD fy = two_sum(ray.origin.y, -s.center.y);
+    const DD fz = two_sum(ray.origin.z, -s.center.z);
+    const DD a = add(add(two_prod(d.x, d.x), two_prod(d.y, d.y)), two_prod(d.z, d.z));
+    const DD beta = add(add(mul(fx, d.x), mul(fy, d.y)), mul(fz, d.z));
 
-    // Δ/4 = a·(r − |l|)(r + |l|), l = f − (β/a)·d (RTG eq. 7.5).
-    const Vec3d l = f - d * (beta / a);
-    const double len_l = length(l);
-    const double disc = a * ((s.radius - len_l) * (s.radius + len_l));
-    if (!(disc >= 0.0)) return out;  // also rejects NaN
+    // Δ/4 = β² − a·γ = a·r² − |f × d|² (Lagrange's identity; the RTG 2019 form a·(r² − |l|²)
+    // with |l| = |f × d|/√a): no difference of two huge squares, and in double-double the
+    // cancellation near tangency costs nothing visible.
+    const DD cx = add(mul(fy, d.z), neg(mul(fz, d.y)));
+    const DD cy = add(mul(fz, d.x), neg(mul(fx, d.z)));
+    const DD cz = add(mul(fx, d.y), neg(mul(fy, d.x)));
+    const DD fxd2 = add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz));
+    const DD r2 = two_prod(s.radius, s.radius);
+    const DD disc = add(mul(a, r2), neg(fxd2));
+    if (!(disc.hi >= 0.0)) return out;  // also rejects NaN
 
-    // Error estimate: every quantity above is a short chain of roundings on numbers of size
-    // |f|·|d|, so each root is known to a few ulps of the larger of |t| and the distance scale.
-    const double scale = (length(f) + s.radius) / std::sqrt(a);
+    // Error bound: every step above is a few u² relative to |f|·|d| and the roots below are
+    // within 2 ulps of the truth; γ₁₂ times the distance scale (|f| + r)/|d| bounds that with a
+    // wide margin.
+    const double scale = (std::sqrt(fx.hi * fx.hi + fy.hi * fy.hi + fz.hi * fz.hi) + s.radius) /
+                         std::sqrt(a.hi);
     out.t_err = gamma(12) * scale;
 
-    if (disc == 0.0) {
+    // The roots t_c ∓ h around the closest approach t_c = −β/a, h = √(Δ/4)/a, each rounded
+    // once from double-double. This is the form a student writes (the tutorial's 9 ∓ √3, printed
+    // by the API as 7.267949192431123), and where the subtraction cannot cancel (h ≤ |t_c|/2)
+    // it is within 2 ulps: |t| ≥ |t_c|/2 and |t| ≥ h, so the three roundings cost at most
+    // ulp(t) + ½ulp(t) + ½ulp(t).
+    const double tc = div(neg(beta), a);
+    if (disc.hi == 0.0) {
         // Tangent: one root, at the closest approach. Reported once, deliberately.
         out.count = 1;
-        out.t[0] = out.t[1] = -beta / a;
+        out.t[0] = out.t[1] = tc;
         return out;
     }
-    const double q = -(beta + std::copysign(std::sqrt(disc), beta));
-    double t0 = q / a;
-    double t1 = gamma_c / q;  // q ≠ 0 here: |q| ≥ √disc > 0
+    const DD root = sqrt_dd(disc);
+    const double h = div(root, a);
+    double t0 = tc + std::copysign(h, tc);  // the root away from the origin: never cancels
+    double t1;
+    if (h <= 0.5 * std::abs(tc)) {
+        t1 = tc - std::copysign(h, tc);
+    } else {
+        // The origin is near the surface (or inside): the near root is γ/q with
+        // q = −(β + sign(β)·√Δ) (Press et al., Numerical Recipes §5.6), a sum of two numbers of
+        // one sign, and γ = f·f − r² in double-double, so a root of 1e-12 is still exact to an
+        // ulp.
+        const DD q = neg(add(beta, beta.hi < 0.0 ? neg(root) : root));
+        const DD gamma_c = add(add(add(mul(fx, fx), mul(fy, fy)), mul(fz, fz)), neg(r2));
+        t1 = div(gamma_c, q);  // q ≠ 0 here: |q| ≥ √disc > 0
+    }
     if (t0 > t1) std::swap(t0, t1);
     out.count = 2;
     out.t[0] = t0;

@@ -1,6 +1,7 @@
 #include "engine/geometry/triangle.h"
 
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "engine/math/float_bounds.h"
@@ -26,6 +27,85 @@ ShearFrame make_shear(const Vec3d& d) {
     s.sy = d[s.ky] / d[s.kz];
     s.sz = 1.0 / d[s.kz];
     return s;
+}
+
+}  // namespace
+
+namespace {
+
+// Double-double arithmetic for the hit's t: a value is the unevaluated sum hi + lo of two
+// doubles (Dekker 1971; Knuth, TAOCP vol. 2, §4.2.2). TwoSum and TwoProduct (with a fused
+// multiply-add; Ogita, Rump & Oishi 2005) are exact; the sums and products built on them carry
+// a relative error of a few u² (u = 2⁻⁵³) of their operands. The same few helpers appear in
+// sphere.cpp; they are kept private to each kernel.
+struct DD {
+    double hi = 0.0, lo = 0.0;
+};
+inline DD two_sum(double a, double b) {
+    const double s = a + b;
+    const double bb = s - a;
+    return {s, (a - (s - bb)) + (b - bb)};
+}
+inline DD fast_two_sum(double a, double b) {
+    const double s = a + b;
+    return {s, b - (s - a)};
+}
+inline DD two_prod(double a, double b) {
+    const double p = a * b;
+    return {p, std::fma(a, b, -p)};
+}
+inline DD add(DD a, DD b) {
+    const DD s = two_sum(a.hi, b.hi);
+    return fast_two_sum(s.hi, s.lo + (a.lo + b.lo));
+}
+inline DD sub(DD a, DD b) { return add(a, DD{-b.hi, -b.lo}); }
+inline DD mul(DD a, double b) {
+    const DD p = two_prod(a.hi, b);
+    return fast_two_sum(p.hi, std::fma(a.lo, b, p.lo));
+}
+inline DD mul(DD a, DD b) {
+    const DD p = two_prod(a.hi, b.hi);
+    return fast_two_sum(p.hi, p.lo + (a.hi * b.lo + a.lo * b.hi));
+}
+/// n / d rounded to double (one correction step: the residual n − t·d is formed exactly).
+inline double div(DD n, DD d) {
+    const double t = n.hi / d.hi;
+    const DD p = two_prod(t, d.hi);
+    const double r = ((n.hi - p.hi) - p.lo) + n.lo - t * d.lo;
+    return t + r / d.hi;
+}
+
+/// Where the ray's line crosses the triangle's plane: t = n·(v − o) / n·d with v a vertex,
+/// n = (b − a)×(c − a), every difference exact (TwoSum) and every product double-double, so t
+/// is rounded once: a grazing ray, a sliver or a far origin, whose Woop t loses digits in the
+/// shear, still gets t to about an ulp. NaN when n·d is zero to double-double precision (the ray
+/// runs in or parallel to the plane).
+double plane_t(const Triangle& tri, const Ray& ray) {
+    const DD e1[3] = {two_sum(tri.b.x, -tri.a.x), two_sum(tri.b.y, -tri.a.y),
+                      two_sum(tri.b.z, -tri.a.z)};
+    const DD e2[3] = {two_sum(tri.c.x, -tri.a.x), two_sum(tri.c.y, -tri.a.y),
+                      two_sum(tri.c.z, -tri.a.z)};
+    // The plane is anchored at the vertex nearest the origin: the numerator's rounding then
+    // scales with that distance, and an origin exactly on a vertex gets t = 0 exactly.
+    const Vec3d* anchor = &tri.a;
+    double best = kInfinity;
+    for (const Vec3d* v : {&tri.a, &tri.b, &tri.c}) {
+        const double d1 = max_component(abs(*v - ray.origin));
+        if (d1 < best) {
+            best = d1;
+            anchor = v;
+        }
+    }
+    const DD ao[3] = {two_sum(anchor->x, -ray.origin.x), two_sum(anchor->y, -ray.origin.y),
+                      two_sum(anchor->z, -ray.origin.z)};
+    const DD n[3] = {sub(mul(e1[1], e2[2]), mul(e1[2], e2[1])),
+                     sub(mul(e1[2], e2[0]), mul(e1[0], e2[2])),
+                     sub(mul(e1[0], e2[1]), mul(e1[1], e2[0]))};
+    const DD num = add(add(mul(n[0], ao[0]), mul(n[1], ao[1])), mul(n[2], ao[2]));
+    const DD den = add(add(mul(n[0], ray.direction.x), mul(n[1], ray.direction.y)),
+                       mul(n[2], ray.direction.z));
+    if (den.hi == 0.0) return std::numeric_limits<double>::quiet_NaN();
+    return div(num, den);
 }
 
 }  // namespace
@@ -73,12 +153,15 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
     // along the ray); both miss by contract.
     if (det == 0.0 || !std::isfinite(det)) return std::nullopt;
 
-    const double az = s.sz * A[s.kz], bz = s.sz * B[s.kz], cz = s.sz * C[s.kz];
-    const double t_scaled = u * az + v * bz + w * cz;
-    const double inv_det = 1.0 / det;
-    const double t = t_scaled * inv_det;
-    if (require_inside && !(t >= ray.tmin && t <= ray.tmax)) return std::nullopt;
     if (is_degenerate(tri)) return std::nullopt;
+    // The inside/outside decision above is Woop's (watertight); t is the plane crossing in
+    // double-double, which Woop's sheared t (rounded in the shear, and ill-conditioned for a
+    // grazing ray) agrees with to its t_err.
+    const double t = plane_t(tri, ray);
+    if (std::isnan(t)) return std::nullopt;  // in the plane to double-double precision
+    if (require_inside && !(t >= ray.tmin && t <= ray.tmax)) return std::nullopt;
+    const double az = s.sz * A[s.kz], bz = s.sz * B[s.kz], cz = s.sz * C[s.kz];
+    const double inv_det = 1.0 / det;
 
     Hit hit;
     hit.t = t;

@@ -7,7 +7,10 @@
 // negated edge functions, so a ray through a shared edge or vertex can never slip between them.
 // When an edge function is exactly zero it is recomputed in long double (as the paper does
 // with double for a float kernel). Edges and vertices belong to the triangle (closed test).
-// The t error bound follows pbrt-v4 §6.8.4.
+// Once a hit is decided, t is recomputed as the plane crossing t = n·(a − o) / n·d in
+// double-double (TwoSum/TwoProduct, Dekker 1971, Ogita, Rump & Oishi 2005): Woop's sheared t
+// loses digits in the shear (a few ulps) and for grazing rays (~u/cos θ); this one is rounded
+// once. The t error bound follows pbrt-v4 §6.8.4 (it bounds both).
 //
 // The tutorial's explained method (plane ⟨n,x⟩ = ⟨n,a⟩ with n = ac × ab, and the same-direction
 // cross-product test) lives in engine/explain, the only place that needs it.
