@@ -335,6 +335,22 @@ def targets_table(results: dict) -> list[str]:
 # --- the document --------------------------------------------------------------------------------
 
 
+def load_banner(m: dict) -> list[str]:
+    """A warning above the figures when other work competed for the cores."""
+    busiest = max(m["loadavg_start"][0], m["loadavg_end"][0])
+    if busiest <= m["cores"]:
+        return []
+    return [
+        f"**Measured on a busy machine**: the 1-minute load average was "
+        f"{m['loadavg_start'][0]:.1f} at the start and {m['loadavg_end'][0]:.1f} at the end "
+        f"on {m['cores']} cores (other engineers' compiles). Absolute figures are several times "
+        "below the ceilings in PERFORMANCE.md and move between runs; compare paths by their "
+        "ratios, and re-run on a quiet machine (`bench/run_all.py --wait-quiet 10`) before "
+        "reading much into any single figure.",
+        "",
+    ]
+
+
 def engine_status(rows: list[dict]) -> str:
     answered = {
         r.get("answered_precision")
@@ -482,6 +498,7 @@ def render(results: dict, accuracy: str | None) -> str:
         "",
         engine_status(rows),
         "",
+        *load_banner(m),
         "## How to run",
         "",
         HOW_TO_RUN,
@@ -567,4 +584,7 @@ def render(results: dict, accuracy: str | None) -> str:
 
 
 def json_statuses(statuses: dict) -> str:
-    return ", ".join(f"HTTP {k}: {v:,}" for k, v in statuses.items()) or "none"
+    def name(k: str) -> str:
+        return "transport error (closed or reset)" if k == "-1" else f"HTTP {k}"
+
+    return ", ".join(f"{name(k)}: {v:,}" for k, v in statuses.items()) or "none"

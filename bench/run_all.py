@@ -402,6 +402,26 @@ def run_accuracy_bench(build: str, data_dir: str) -> str | None:
 # --- the report --------------------------------------------------------------------------------
 
 
+def render_only(results_path: str, out: str | None) -> int:
+    with open(results_path) as f:
+        results = json.load(f)
+    accuracy_path = os.path.join(os.path.dirname(results_path), "accuracy.md")
+    accuracy = None
+    if os.path.exists(accuracy_path):
+        with open(accuracy_path) as f:
+            accuracy = f.read()
+    default = "benchmarks-quick.md" if results["preset"] == "quick" else None
+    out = out or (
+        os.path.join(os.path.dirname(results_path), "..", default)
+        if default
+        else os.path.join(REPO, "docs", "benchmarks.md")
+    )
+    with open(out, "w") as f:
+        f.write(report_md.render(results, accuracy))
+    log(f"wrote {out} from {results_path}")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
@@ -423,7 +443,14 @@ def main() -> int:
         help="first wait up to MINUTES for the 1-minute load average to fall below "
         "1 (the machine is shared with compiles); the run notes the load anyway",
     )
+    ap.add_argument(
+        "--render-only",
+        metavar="RESULTS_JSON",
+        help="measure nothing: re-render the Markdown from a results.json of an earlier run",
+    )
     args = ap.parse_args()
+    if args.render_only:
+        return render_only(args.render_only, args.out)
 
     preset = "quick" if args.quick else "full"
     build = os.path.abspath(args.build_dir)
