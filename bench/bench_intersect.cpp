@@ -9,7 +9,9 @@
 //   bench_intersect --smoke         tiny sizes, < 1 s; exits 1 if the engine disagrees with
 //                                   Embree (this is the CTest `bench_smoke`)
 //   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
+//            --raw-only (the ceiling alone: raw Embree's builds and traces, no engine)
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -65,6 +67,7 @@ struct Args {
     std::string workloads = "ABC";
     std::string data_dir;
     std::string json_path;
+    bool raw_only = false;  ///< the ceiling alone: raw Embree, no engine
 };
 
 bool parse_args(int argc, char** argv, Args& a) {
@@ -83,6 +86,8 @@ bool parse_args(int argc, char** argv, Args& a) {
             a.workloads = value();
         } else if (arg == "--data-dir") {
             a.data_dir = value();
+        } else if (arg == "--raw-only") {
+            a.raw_only = true;
         } else if (arg == "--json") {
             a.json_path = value();
         } else {
@@ -352,18 +357,21 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
     report.build(w.name, "raw_embree", "rtcCommitScene medium", embree->build_ms());
     report.build(w.name, "raw_embree", "rtcCommitScene medium ROBUST", robust->build_ms());
 
-    auto scene = std::make_shared<const re::Scene>(rb::to_engine_scene(w));
-    re::Result<std::shared_ptr<const re::QueryEngine>> built =
-        re::Status::error(re::Code::internal, "not built");
-    const double build_s =
-        rb::median_seconds(s.reps > 1 ? 3 : 1, [&] { built = re::QueryEngine::build(scene); });
-    if (!built.ok()) {
-        std::fprintf(stderr, "bench_intersect: QueryEngine::build: %s\n",
-                     built.status().message.c_str());
-        return false;
+    std::shared_ptr<const re::QueryEngine> engine;
+    if (!args.raw_only) {
+        auto scene = std::make_shared<const re::Scene>(rb::to_engine_scene(w));
+        re::Result<std::shared_ptr<const re::QueryEngine>> built =
+            re::Status::error(re::Code::internal, "not built");
+        const double build_s =
+            rb::median_seconds(s.reps > 1 ? 3 : 1, [&] { built = re::QueryEngine::build(scene); });
+        if (!built.ok()) {
+            std::fprintf(stderr, "bench_intersect: QueryEngine::build: %s\n",
+                         built.status().message.c_str());
+            return false;
+        }
+        report.build(w.name, "engine", "QueryEngine::build", 1e3 * build_s);
+        engine = *built;
     }
-    report.build(w.name, "engine", "QueryEngine::build", 1e3 * build_s);
-    const re::QueryEngine& engine = **built;
 
     for (const std::string rays_name : {"coherent", "incoherent"}) {
         const auto rays = rays_name == "coherent" ? rb::camera_rays(w, s.image, s.image)
@@ -378,9 +386,11 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
                 return false;
             }
         }
-        bench_result_allocation(report, w, rays_name, rays.size(), s.reps);
-        worst = std::min(
-            worst, bench_engine(report, w, rays_name, rays, engine, *embree, refs, args.budget_s));
+        if (engine) {
+            bench_result_allocation(report, w, rays_name, rays.size(), s.reps);
+            worst = std::min(worst, bench_engine(report, w, rays_name, rays, *engine, *embree, refs,
+                                                 args.budget_s));
+        }
     }
     return true;
 }
@@ -402,6 +412,8 @@ int main(int argc, char** argv) {
     // threads.
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 static_cast<std::size_t>(args.threads));
+    const auto wall_start = std::chrono::steady_clock::now();
+    const std::clock_t cpu_start = std::clock();
     Report report;
     report.meta() = {{"preset", args.sizes.name},          {"threads", args.threads},
                      {"embree", rb::RawEmbree::version()}, {"date", utc_now()},
@@ -416,6 +428,14 @@ int main(int argc, char** argv) {
         ok = bench_workload(report, w, args, worst) && ok;
     }
     report.meta()["worst_agreement"] = worst;
+    // CPU time of all our threads over wall time: how much of the machine this run really had
+    // (2.0 on an idle 2-core machine; far less while others compile).
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const double cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    report.meta()["cores_used"] = wall_s > 0.0 ? cpu_s / wall_s : 0.0;
+    std::printf("cores used on average (CPU time / wall time): %.2f of %d\n",
+                wall_s > 0.0 ? cpu_s / wall_s : 0.0, args.threads);
     if (!args.json_path.empty() && !report.write(args.json_path)) {
         std::fprintf(stderr, "bench_intersect: cannot write %s\n", args.json_path.c_str());
         ok = false;

@@ -335,15 +335,22 @@ def targets_table(results: dict) -> list[str]:
 # --- the document --------------------------------------------------------------------------------
 
 
-def load_banner(m: dict) -> list[str]:
+def load_banner(m: dict, meta: dict) -> list[str]:
     """A warning above the figures when other work competed for the cores."""
     busiest = max(m["loadavg_start"][0], m["loadavg_end"][0])
     if busiest <= m["cores"]:
         return []
+    used = meta.get("cores_used")
+    share = (
+        f" `bench_intersect` had {used:.2f} of its {meta['threads']} threads' worth of CPU "
+        "on average (CPU time / wall time)."
+        if used is not None
+        else ""
+    )
     return [
         f"**Measured on a busy machine**: the 1-minute load average was "
         f"{m['loadavg_start'][0]:.1f} at the start and {m['loadavg_end'][0]:.1f} at the end "
-        f"on {m['cores']} cores (other engineers' compiles). Absolute figures are several times "
+        f"on {m['cores']} cores (other engineers' compiles).{share} Absolute figures are several times "
         "below the ceilings in PERFORMANCE.md and move between runs; compare paths by their "
         "ratios, and re-run on a quiet machine (`bench/run_all.py --wait-quiet 10`) before "
         "reading much into any single figure.",
@@ -498,7 +505,7 @@ def render(results: dict, accuracy: str | None) -> str:
         "",
         engine_status(rows),
         "",
-        *load_banner(m),
+        *load_banner(m, meta),
         "## How to run",
         "",
         HOW_TO_RUN,
