@@ -1,10 +1,163 @@
-// POST /v1/scenes/{id}/render and /v1/jobs/...: arriving with issue 5 (no routes yet, so they
-// answer 404 not_found).
+// POST /v1/scenes/{id}/render, GET/DELETE /v1/jobs/{job}, GET /v1/jobs/{job}/image.
 
+#include <memory>
+
+#include "engine/render/render.h"
 #include "server/app.h"
+#include "server/job_queue.h"
+#include "server/schema/json_writer.h"
+#include "server/schema/render_doc.h"
 
 namespace raycastd::server {
 
-void install_render_routes(App&) {}
+namespace {
+
+/// Finished jobs whose images are kept for GET /v1/jobs/{job}/image.
+constexpr std::size_t kJobsKept = 32;
+
+/// Renders and encodes; the response headers say how long it took and which rays it traced.
+JobOutput render_output(const engine::QueryEngine& engine, const RenderRequest& req,
+                        engine::RenderProgress* progress) {
+    const engine::RenderResult r = engine::render(engine, req.options, progress);
+    JobOutput out;
+    if (r.cancelled)
+        return out;
+    out.body = engine::encode_image(r.image, req.format, engine::is_data_mode(req.options.shading));
+    out.content_type = engine::mime_type(req.format);
+    char ms[32];
+    std::snprintf(ms, sizeof ms, "%.3f", r.render_ms);
+    out.headers = {{"X-Render-Ms", ms},
+                   {"X-Rays", rays_header(r.counts)},
+                   {"X-Precision",
+                    engine::to_string(engine.effective_precision(req.options.whitted.precision))}};
+    return out;
+}
+
+void send_output(httplib::Response& res, const JobOutput& out) {
+    for (const auto& [k, v] : out.headers)
+        res.set_header(k, v);
+    res.status = 200;
+    res.set_content(out.body, out.content_type);
+}
+
+std::string job_body(const JobInfo& j) {
+    std::string out;
+    JsonWriter w(out);
+    w.raw("{\"job\":").string(j.id);
+    w.raw(",\"state\":").string(to_string(j.state));
+    w.raw(",\"progress\":").number(j.progress);
+    w.raw(",\"eta_s\":");
+    if (j.eta_s) {
+        w.number(*j.eta_s);
+    } else {
+        w.raw("null");
+    }
+    w.raw(",\"elapsed_s\":").number(j.elapsed_s);
+    w.raw(",\"tiles_done\":").integer(j.tiles_done);
+    w.raw(",\"tiles_total\":").integer(j.tiles_total);
+    if (j.state == JobState::done) {
+        w.raw(",\"image\":").string("/v1/jobs/" + j.id + "/image");
+        for (const auto& [k, v] : j.output->headers) {
+            if (k == "X-Render-Ms")
+                w.raw(",\"render_ms\":").raw(v);
+            if (k == "X-Rays")
+                w.raw(",\"rays\":").string(v);
+        }
+    }
+    if (j.error) {
+        w.raw(",\"error\":{\"code\":").string(j.error->code);
+        w.raw(",\"message\":").string(j.error->what()).ch('}');
+    }
+    w.ch('}');
+    return out;
+}
+
+ApiError job_not_found(const std::string& id) {
+    return api_error("not_found", "no job with id " + id);
+}
+
+}  // namespace
+
+void install_render_routes(App& app) {
+    // The queue lives as long as the routes that use it (the App's server); its destructor
+    // cancels what is still running and joins its worker.
+    auto jobs = std::make_shared<JobQueue>(app.max_concurrent(), kJobsKept);
+    auto& http = app.http();
+
+    http.Post(R"(/v1/scenes/([A-Za-z0-9_]+)/render)", [&app, jobs](const httplib::Request& req,
+                                                                   httplib::Response& res) {
+        app.handle(req, res, true, [&] {
+            auto engine = app.scene_or_404(req.matches[1]);
+            const Json body = req.body.empty() ? Json() : App::parse_json_body(req);
+            const RenderRequest r = parse_render_request(body, app.config().limits.max_pixels);
+            if (!r.async) {
+                send_output(res, render_output(*engine, r, nullptr));
+                return;
+            }
+            auto id = jobs->submit([engine, r](engine::RenderProgress& progress) {
+                return render_output(*engine, r, &progress);
+            });
+            if (!id) {
+                throw api_error("busy",
+                                "too many render jobs queued or running; "
+                                "retry shortly");
+            }
+            res.set_header("Location", "/v1/jobs/" + *id);
+            send_json(res, "{\"job\":\"" + *id + "\",\"state\":\"queued\"}", 202);
+        });
+    });
+
+    http.Get(R"(/v1/jobs/([A-Za-z0-9_]+))",
+             [&app, jobs](const httplib::Request& req, httplib::Response& res) {
+                 app.handle(req, res, false, [&] {
+                     auto info = jobs->info(req.matches[1]);
+                     if (!info)
+                         throw job_not_found(req.matches[1]);
+                     send_json(res, job_body(*info));
+                 });
+             });
+
+    http.Get(R"(/v1/jobs/([A-Za-z0-9_]+)/image)",
+             [&app, jobs](const httplib::Request& req, httplib::Response& res) {
+                 app.handle(req, res, false, [&] {
+                     const std::string id = req.matches[1];
+                     auto info = jobs->info(id);
+                     if (!info)
+                         throw job_not_found(id);
+                     switch (info->state) {
+                         case JobState::done:
+                             send_output(res, *info->output);
+                             return;
+                         case JobState::failed:
+                             throw *info->error;
+                         case JobState::cancelled:
+                             throw api_error("not_found", "job " + id + " was cancelled");
+                         case JobState::queued:
+                         case JobState::running:
+                             // Not yet: the job's status, as 202, with a hint when to ask again.
+                             res.set_header("Retry-After", "1");
+                             send_json(res, job_body(*info), 202);
+                             return;
+                     }
+                 });
+             });
+
+    http.Delete(R"(/v1/jobs/([A-Za-z0-9_]+))", [&app, jobs](const httplib::Request& req,
+                                                            httplib::Response& res) {
+        app.handle(req, res, false, [&] {
+            const std::string id = req.matches[1];
+            auto before = jobs->info(id);
+            auto after = jobs->cancel_or_remove(id);
+            if (!before || !after)
+                throw job_not_found(id);
+            const bool cancelled =
+                before->state == JobState::queued || before->state == JobState::running;
+            send_json(res, "{\"job\":\"" + id + "\",\"state\":\"" +
+                               to_string(cancelled ? JobState::cancelled : before->state) +
+                               "\",\"cancelled\":" + (cancelled ? "true" : "false") +
+                               ",\"deleted\":" + (cancelled ? "false" : "true") + "}");
+        });
+    });
+}
 
 }  // namespace raycastd::server

@@ -1,0 +1,89 @@
+#pragma once
+// JobQueue: long renders run in the background ("async": true). One worker thread takes jobs in
+// order (each render already spreads over every core through TBB, so running two at once only
+// splits the machine); at most `max_pending` jobs may wait or run (more is 503 busy). Finished
+// jobs keep their output until deleted or until more than `max_kept` have finished (the oldest
+// finished goes first). Progress is the render's own count of tiles done.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "engine/render/render.h"
+#include "server/api_error.h"
+
+namespace raycastd::server {
+
+enum class JobState { queued, running, done, failed, cancelled };
+const char* to_string(JobState s);
+
+/// What a finished job produced: an encoded image and the headers that go with it.
+struct JobOutput {
+    std::string body;
+    std::string content_type;
+    std::vector<std::pair<std::string, std::string>> headers;
+};
+
+/// A snapshot of one job.
+struct JobInfo {
+    std::string id;
+    JobState state = JobState::queued;
+    double progress = 0.0;        ///< tiles done / tiles (1 when done)
+    std::optional<double> eta_s;  ///< seconds left, from the rate so far; none before a tile
+    double elapsed_s = 0.0;       ///< since the job started running (0 while queued)
+    std::size_t tiles_done = 0, tiles_total = 0;
+    bool finished = false;          ///< the worker is done with it (a cancelled render has stopped)
+    std::optional<ApiError> error;  ///< when failed
+    std::shared_ptr<const JobOutput> output;  ///< when done
+};
+
+class JobQueue {
+  public:
+    /// The work of a job: renders with `progress` (watching progress.cancel) and returns its
+    /// output; throws ApiError (or anything else: internal) to fail.
+    using Work = std::function<JobOutput(engine::RenderProgress& progress)>;
+
+    JobQueue(std::size_t max_pending, std::size_t max_kept);
+    /// Cancels what is queued or running and waits for the worker.
+    ~JobQueue();
+    JobQueue(const JobQueue&) = delete;
+    JobQueue& operator=(const JobQueue&) = delete;
+
+    /// The new job's id ("jb_" + 16 hex digits), or nullopt when max_pending jobs are already
+    /// queued or running.
+    std::optional<std::string> submit(Work work);
+    /// A snapshot, or nullopt for an unknown id.
+    std::optional<JobInfo> info(const std::string& id) const;
+    /// Queued or running: cancels it (state cancelled; a running render stops at its next
+    /// tile). Already finished: forgets it. Returns the state after the call, nullopt when the
+    /// id is unknown.
+    std::optional<JobState> cancel_or_remove(const std::string& id);
+
+  private:
+    struct Job;
+    void run();
+    void trim_finished();  // with mu_ held
+
+    const std::size_t max_pending_;
+    const std::size_t max_kept_;
+    mutable std::mutex mu_;
+    std::condition_variable cv_;
+    std::map<std::string, std::shared_ptr<Job>> jobs_;
+    std::deque<std::shared_ptr<Job>> queue_;
+    std::deque<std::string> finished_;  ///< ids in the order they finished
+    std::size_t pending_ = 0;           ///< queued + running
+    bool stopping_ = false;
+    std::thread worker_;
+};
+
+}  // namespace raycastd::server

@@ -1,0 +1,235 @@
+#include "server/schema/render_doc.h"
+
+#include <cmath>
+
+#include "server/schema/json_writer.h"
+#include "server/schema/query_doc.h"
+
+namespace raycastd::server {
+
+namespace {
+
+constexpr const char* kInvalid = "invalid_request";
+constexpr int kMaxSide = 16384;
+constexpr int kMaxSpp = 4096;
+constexpr int kMaxDepth = 32;
+
+int read_int(const Json& body, const char* key, int fallback, int lo, int hi) {
+    const Json* v = member(body, key);
+    if (!v)
+        return fallback;
+    const std::string path = std::string("/") + key;
+    const double x = read_number(*v, path, kInvalid);
+    if (x != std::floor(x) || x < lo || x > hi) {
+        throw api_error(kInvalid,
+                        path + " must be an integer in [" + std::to_string(lo) + ", " +
+                            std::to_string(hi) + "]",
+                        path);
+    }
+    return static_cast<int>(x);
+}
+
+engine::Camera parse_camera(const Json& j, const std::string& path) {
+    require_object(j, path, kInvalid);
+    engine::Camera c;
+    if (const Json* v = member(j, "position"))
+        c.position = read_vec3(*v, path + "/position", kInvalid);
+    if (const Json* v = member(j, "look_at"))
+        c.look_at = read_vec3(*v, path + "/look_at", kInvalid);
+    if (const Json* v = member(j, "up"))
+        c.up = read_vec3(*v, path + "/up", kInvalid);
+    if (const Json* v = member(j, "fov_y_deg")) {
+        c.fov_y_deg = read_number(*v, path + "/fov_y_deg", kInvalid);
+        if (!(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0)) {
+            throw api_error(kInvalid, path + "/fov_y_deg must be in (0, 180)", path + "/fov_y_deg");
+        }
+    }
+    if (c.look_at == c.position) {
+        throw api_error(kInvalid, path + "/look_at must differ from position", path + "/look_at");
+    }
+    if (length(cross(c.look_at - c.position, c.up)) == 0.0) {
+        throw api_error(kInvalid, path + "/up must not be parallel to the view direction",
+                        path + "/up");
+    }
+    return c;
+}
+
+engine::Precision read_precision(const Json& body) {
+    const Json* p = member(body, "precision");
+    if (!p)
+        return engine::Precision::refined;
+    return parse_precision(read_string(*p, "/precision", kInvalid), "/precision");
+}
+
+void write_node(JsonWriter& w, const engine::Scene& scene, const engine::RayTree& tree, int k) {
+    if (k < 0) {
+        w.raw("null");
+        return;
+    }
+    const engine::TreeNode& n = tree.nodes[static_cast<std::size_t>(k)];
+    const engine::Object& o = scene.objects[n.hit.object];
+    w.raw("{\"label\":").string("I" + std::to_string(k + 1));
+    w.raw(",\"object\":").integer(n.hit.object);
+    w.raw(",\"name\":").string(o.name);
+    w.raw(",\"t\":").number(n.hit.t);
+    w.raw(",\"point\":").vec(n.point);
+    w.raw(",\"normal\":").vec(n.normal);
+    w.raw(",\"front_face\":").boolean(n.hit.front_face);
+    w.raw(",\"shadow_rays\":[");
+    for (std::size_t i = 0; i < n.shadow_rays.size(); ++i) {
+        const engine::ShadowRayRecord& s = n.shadow_rays[i];
+        if (i)
+            w.ch(',');
+        w.raw("{\"light\":").integer(s.light).raw(",\"blocked_by\":");
+        if (s.blocked_by == engine::kInvalidId) {
+            w.raw("null");
+        } else {
+            w.string(scene.objects[s.blocked_by].name);
+        }
+        w.raw(",\"facing\":").boolean(s.facing).ch('}');
+    }
+    w.raw("],\"terms\":");
+    w.raw(n.full_phong ? R"(["ambient","diffuse","specular"])" : R"(["ambient"])");
+    w.raw(",\"color\":").vec(n.color);
+    if (n.total_internal_reflection)
+        w.raw(",\"total_internal_reflection\":true");
+    w.raw(",\"reflected\":");
+    write_node(w, scene, tree, n.reflected);
+    w.raw(",\"refracted\":");
+    write_node(w, scene, tree, n.refracted);
+    w.ch('}');
+}
+
+void write_labels(JsonWriter& w, const engine::RayTree& tree, bool full) {
+    w.ch('[');
+    bool first = true;
+    for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
+        if (tree.nodes[k].full_phong != full)
+            continue;
+        if (!first)
+            w.ch(',');
+        first = false;
+        w.string("I" + std::to_string(k + 1));
+    }
+    w.ch(']');
+}
+
+}  // namespace
+
+RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
+    RenderRequest r;
+    if (body.is_null())
+        return r;
+    require_object(body, "", kInvalid);
+    engine::RenderOptions& o = r.options;
+    o.width = read_int(body, "width", o.width, 1, kMaxSide);
+    o.height = read_int(body, "height", o.height, 1, kMaxSide);
+    o.spp = read_int(body, "spp", o.spp, 1, kMaxSpp);
+    o.whitted.max_depth = read_int(body, "max_depth", o.whitted.max_depth, 1, kMaxDepth);
+    o.whitted.precision = read_precision(body);
+    if (const Json* v = member(body, "background")) {
+        o.whitted.background = read_vec3(*v, "/background", kInvalid);
+    }
+    if (const Json* v = member(body, "camera"))
+        o.camera = parse_camera(*v, "/camera");
+    if (const Json* v = member(body, "shading")) {
+        const std::string s = read_string(*v, "/shading", kInvalid);
+        const auto mode = engine::shading_mode_from_name(s);
+        if (!mode) {
+            throw api_error(kInvalid,
+                            "unknown shading \"" + s +
+                                "\" (expected phong, normal, depth, object_id, barycentric)",
+                            "/shading");
+        }
+        o.shading = *mode;
+    }
+    if (const Json* v = member(body, "format")) {
+        const std::string s = read_string(*v, "/format", kInvalid);
+        const auto f = engine::image_format_from_name(s);
+        if (!f) {
+            throw api_error("unsupported_format",
+                            "unknown image format \"" + s + "\" (expected png, ppm, pfm, exr)",
+                            "/format");
+        }
+        r.format = *f;
+    }
+    if (const Json* v = member(body, "async")) {
+        if (!v->is_boolean())
+            throw api_error(kInvalid, "/async must be a boolean", "/async");
+        r.async = v->get<bool>();
+    }
+    const std::size_t samples = static_cast<std::size_t>(o.width) *
+                                static_cast<std::size_t>(o.height) *
+                                static_cast<std::size_t>(o.spp);
+    if (samples > max_pixels) {
+        throw api_error("too_large", "width × height × spp = " + std::to_string(samples) +
+                                         " is over the limit of " + std::to_string(max_pixels));
+    }
+    return r;
+}
+
+engine::Ray parse_single_ray(const Json& body, const std::string& path) {
+    const Json* r = member(body, "ray");
+    if (!r)
+        throw api_error(kInvalid, path + " is required", path);
+    if (!r->is_object())
+        throw api_error("invalid_ray", path + " must be an object", path);
+    engine::Ray ray;
+    const Json* o = member(*r, "origin");
+    const Json* d = member(*r, "direction");
+    if (!o)
+        throw api_error("invalid_ray", path + "/origin is required", path + "/origin");
+    if (!d)
+        throw api_error("invalid_ray", path + "/direction is required", path + "/direction");
+    ray.origin = read_vec3(*o, path + "/origin", "invalid_ray");
+    ray.direction = read_vec3(*d, path + "/direction", "invalid_ray");
+    if (const Json* v = member(*r, "tmin"))
+        ray.tmin = read_number(*v, path + "/tmin", "invalid_ray");
+    if (const Json* v = member(*r, "tmax"))
+        ray.tmax = read_number(*v, path + "/tmax", "invalid_ray");
+    engine::Status st = engine::validate_ray(ray, 0);
+    if (!st.ok()) {
+        const auto slash = st.path.find('/', std::string("/rays/0").size());
+        throw api_error("invalid_ray",
+                        "the ray is invalid: " + st.message.substr(st.message.find(": ") + 2),
+                        path + (slash == std::string::npos ? "" : st.path.substr(slash)));
+    }
+    return ray;
+}
+
+TraceRequest parse_trace_request(const Json& body) {
+    require_object(body, "", kInvalid);
+    TraceRequest t;
+    t.ray = parse_single_ray(body, "/ray");
+    t.options.max_depth = read_int(body, "max_depth", t.options.max_depth, 1, kMaxDepth);
+    t.options.precision = read_precision(body);
+    return t;
+}
+
+std::string write_trace_json(const engine::Scene& scene, const engine::RayTree& tree,
+                             engine::Precision precision) {
+    std::string out;
+    JsonWriter w(out);
+    w.raw("{\"tree\":");
+    write_node(w, scene, tree, tree.nodes.empty() ? -1 : 0);
+    w.raw(",\"summary\":{\"points\":").integer(tree.nodes.size());
+    w.raw(",\"full_phong\":");
+    write_labels(w, tree, true);
+    w.raw(",\"ambient_only\":");
+    write_labels(w, tree, false);
+    w.raw("},\"color\":").vec(tree.color);
+    w.raw(",\"rays\":{\"primary\":").integer(tree.counts.primary);
+    w.raw(",\"shadow\":").integer(tree.counts.shadow);
+    w.raw(",\"reflected\":").integer(tree.counts.reflected);
+    w.raw(",\"refracted\":").integer(tree.counts.refracted);
+    w.raw("},\"precision\":").string(engine::to_string(precision)).ch('}');
+    return out;
+}
+
+std::string rays_header(const engine::RayCounts& c) {
+    return "primary=" + std::to_string(c.primary) + ", shadow=" + std::to_string(c.shadow) +
+           ", reflected=" + std::to_string(c.reflected) +
+           ", refracted=" + std::to_string(c.refracted);
+}
+
+}  // namespace raycastd::server

@@ -1,0 +1,130 @@
+// Reference images with a tolerance (as Embree's tutorials are tested): scene documents from
+// scenes/ rendered by the real binary and compared with images/*.png. The goldens were made by
+// this renderer and looked at before they were committed; RAYCASTD_UPDATE_GOLDEN=1 rewrites
+// them. A pixel differs when a channel is off by more than 8/255; a render passes when at most
+// 0.5% of its pixels differ (sampling and float rounding move edge pixels, nothing else).
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <stb_image.h>
+
+#include "tests/support/server_process.h"
+
+namespace raycastd {
+namespace {
+
+using Json = nlohmann::json;
+const std::string kGoldenDir = RAYCASTD_SOURCE_DIR "/tests/golden";
+const std::string kModels = RAYCASTD_SHARED_DIR "/data/models";
+
+std::string read_file(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+struct Pixels {
+    int w = 0, h = 0;
+    std::vector<unsigned char> rgb;
+};
+
+Pixels decode(const std::string& png) {
+    Pixels p;
+    int n = 0;
+    unsigned char* data = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(png.data()),
+                                                static_cast<int>(png.size()), &p.w, &p.h, &n, 3);
+    if (!data)
+        return p;
+    p.rgb.assign(data, data + static_cast<std::size_t>(p.w) * static_cast<std::size_t>(p.h) * 3);
+    stbi_image_free(data);
+    return p;
+}
+
+class Golden : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite() {
+        server_ = new testing::ServerProcess({"--scene-root", RAYCASTD_SHARED_DIR "/data"});
+    }
+    static void TearDownTestSuite() {
+        delete server_;
+        server_ = nullptr;
+    }
+
+    /// Registers scenes/<scene>.json, renders it with `options`, compares with images/<name>.png.
+    void check(const std::string& scene, const std::string& name, const Json& options) {
+        auto c = server_->client();
+        auto reg = c->Post("/v1/scenes", read_file(kGoldenDir + "/scenes/" + scene + ".json"),
+                           "application/json");
+        ASSERT_TRUE(reg);
+        ASSERT_LT(reg->status, 300) << reg->body;
+        const std::string id = Json::parse(reg->body).at("id");
+        auto res = c->Post("/v1/scenes/" + id + "/render", options.dump(), "application/json");
+        ASSERT_TRUE(res);
+        ASSERT_EQ(res->status, 200) << res->body;
+        const std::string golden_path = kGoldenDir + "/images/" + name + ".png";
+        if (std::getenv("RAYCASTD_UPDATE_GOLDEN")) {
+            std::ofstream(golden_path, std::ios::binary) << res->body;
+            GTEST_SKIP() << "wrote " << golden_path;
+        }
+        const Pixels got = decode(res->body);
+        const Pixels want = decode(read_file(golden_path));
+        ASSERT_FALSE(want.rgb.empty()) << "no golden image at " << golden_path;
+        ASSERT_EQ(got.w, want.w);
+        ASSERT_EQ(got.h, want.h);
+        std::size_t differ = 0;
+        for (std::size_t i = 0; i < got.rgb.size(); i += 3) {
+            for (std::size_t k = 0; k < 3; ++k) {
+                if (std::abs(int(got.rgb[i + k]) - int(want.rgb[i + k])) > 8) {
+                    ++differ;
+                    break;
+                }
+            }
+        }
+        const std::size_t pixels = got.rgb.size() / 3;
+        EXPECT_LE(differ, pixels / 200) << differ << " of " << pixels << " pixels differ";
+    }
+
+    static testing::ServerProcess* server_;
+};
+testing::ServerProcess* Golden::server_ = nullptr;
+
+TEST_F(Golden, ThreeLitSpheres) {
+    check("spheres", "spheres", Json{{"width", 160}, {"height", 120}, {"spp", 4}});
+}
+
+TEST_F(Golden, GlassSphere) {
+    check("glass_sphere", "glass_sphere", Json{{"width", 160}, {"height", 120}, {"spp", 4}});
+}
+
+TEST_F(Golden, GlassAndMirrorSpheres) {
+    check("tutorial_like", "tutorial_like",
+          Json{{"width", 160}, {"height", 120}, {"spp", 4}, {"max_depth", 5}});
+}
+
+TEST_F(Golden, TutorialQuestion2SceneFromTheEye) {
+    check("tutorial_q2", "tutorial_q2", Json{{"width", 120}, {"height", 90}, {"spp", 1}});
+}
+
+TEST_F(Golden, GltfDuck) {
+    if (!std::filesystem::exists(kModels + "/Duck/glTF-Binary/Duck.glb")) {
+        GTEST_SKIP() << "models not found at " << kModels;
+    }
+    check("duck", "duck", Json{{"width", 160}, {"height", 120}, {"spp", 4}});
+}
+
+TEST_F(Golden, GltfDuckNormals) {
+    if (!std::filesystem::exists(kModels + "/Duck/glTF-Binary/Duck.glb")) {
+        GTEST_SKIP() << "models not found at " << kModels;
+    }
+    check("duck", "duck_normals",
+          Json{{"width", 120}, {"height", 90}, {"spp", 1}, {"shading", "normal"}});
+}
+
+}  // namespace
+}  // namespace raycastd

@@ -1,0 +1,300 @@
+// POST /v1/scenes/{id}/render, the async jobs and POST /v1/scenes/{id}/trace against the real
+// raycastd binary.
+
+#include <chrono>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <stb_image.h>
+
+#include "tests/support/server_process.h"
+
+namespace raycastd {
+namespace {
+
+using Json = nlohmann::json;
+using namespace std::chrono_literals;
+
+std::string read_file(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+std::string scene_file(const std::string& name) {
+    return read_file(RAYCASTD_SOURCE_DIR "/tests/golden/scenes/" + name + ".json");
+}
+
+/// Parses "primary=N, shadow=N, reflected=N, refracted=N".
+std::map<std::string, long long> parse_rays(const std::string& header) {
+    std::map<std::string, long long> out;
+    const std::regex re(R"((\w+)=(\d+))");
+    for (std::sregex_iterator it(header.begin(), header.end(), re), end; it != end; ++it) {
+        out[(*it)[1]] = std::stoll((*it)[2]);
+    }
+    return out;
+}
+
+class RenderApi : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite() {
+        server_ = new testing::ServerProcess({"--max-pixels", "4000000"});
+    }
+    static void TearDownTestSuite() {
+        delete server_;
+        server_ = nullptr;
+    }
+    static std::string add_scene(const std::string& body) {
+        auto res = server_->client()->Post("/v1/scenes", body, "application/json");
+        if (!res || res->status >= 300)
+            return "";
+        return Json::parse(res->body).at("id");
+    }
+    static httplib::Result render(const std::string& id, const Json& body) {
+        return server_->client()->Post("/v1/scenes/" + id + "/render", body.dump(),
+                                       "application/json");
+    }
+    static testing::ServerProcess* server_;
+};
+testing::ServerProcess* RenderApi::server_ = nullptr;
+
+TEST_F(RenderApi, PngWithTimingAndRayCounts) {
+    const std::string id = add_scene(scene_file("tutorial_like"));
+    ASSERT_FALSE(id.empty());
+    auto res = render(id, {{"width", 64}, {"height", 48}, {"spp", 2}});
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    EXPECT_EQ(res->get_header_value("Content-Type"), "image/png");
+    EXPECT_GE(std::stod(res->get_header_value("X-Render-Ms")), 0.0);
+    const std::string rays = res->get_header_value("X-Rays");
+    EXPECT_TRUE(std::regex_match(
+        rays, std::regex(R"(primary=\d+, shadow=\d+, reflected=\d+, refracted=\d+)")))
+        << rays;
+    const auto n = parse_rays(rays);
+    EXPECT_EQ(n.at("primary"), 64 * 48 * 2);
+    EXPECT_GT(n.at("shadow"), 0);
+    EXPECT_GT(n.at("reflected"), 0);
+    EXPECT_GT(n.at("refracted"), 0);
+    int w = 0, h = 0, c = 0;
+    unsigned char* px =
+        stbi_load_from_memory(reinterpret_cast<const unsigned char*>(res->body.data()),
+                              static_cast<int>(res->body.size()), &w, &h, &c, 3);
+    ASSERT_NE(px, nullptr);
+    stbi_image_free(px);
+    EXPECT_EQ(w, 64);
+    EXPECT_EQ(h, 48);
+}
+
+TEST_F(RenderApi, EmptyBodyRendersTheDefaults) {
+    const std::string id = add_scene(scene_file("spheres"));
+    auto res = server_->client()->Post("/v1/scenes/" + id + "/render", "", "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    EXPECT_EQ(parse_rays(res->get_header_value("X-Rays")).at("primary"), 640 * 480);
+}
+
+TEST_F(RenderApi, SkippingIsVisibleInXRays) {
+    // No lights: ambient 1.0 only, no shadow rays; matte materials: no secondary rays.
+    const std::string dark =
+        add_scene(R"({"objects": [{"type": "sphere", "center": [0,0,10], "radius": 2}]})");
+    auto res = render(dark, {{"width", 32}, {"height", 32}});
+    ASSERT_EQ(res->status, 200);
+    auto n = parse_rays(res->get_header_value("X-Rays"));
+    EXPECT_EQ(n.at("shadow"), 0);
+    EXPECT_EQ(n.at("reflected") + n.at("refracted"), 0);
+    const std::string matte = add_scene(scene_file("spheres"));
+    res = render(matte, {{"width", 32}, {"height", 32}});
+    n = parse_rays(res->get_header_value("X-Rays"));
+    EXPECT_GT(n.at("shadow"), 0);
+    EXPECT_EQ(n.at("reflected"), 0);
+    EXPECT_EQ(n.at("refracted"), 0);
+}
+
+TEST_F(RenderApi, OtherFormatsAndModes) {
+    const std::string id = add_scene(scene_file("spheres"));
+    auto ppm = render(id, {{"width", 8}, {"height", 4}, {"format", "ppm"}});
+    ASSERT_EQ(ppm->status, 200);
+    EXPECT_EQ(ppm->body.rfind("P6\n8 4\n255\n", 0), 0u);
+    auto pfm = render(id, {{"width", 8}, {"height", 4}, {"format", "pfm"}});
+    EXPECT_EQ(pfm->body.rfind("PF\n8 4\n", 0), 0u);
+    auto exr = render(id, {{"width", 8}, {"height", 4}, {"format", "exr"}});
+    ASSERT_EQ(exr->status, 200);
+    EXPECT_EQ(exr->get_header_value("Content-Type"), "image/x-exr");
+    EXPECT_EQ(exr->body.substr(0, 4), std::string("\x76\x2f\x31\x01", 4));
+    for (const char* mode : {"normal", "depth", "object_id", "barycentric"}) {
+        auto res = render(id, {{"width", 16}, {"height", 12}, {"shading", mode}});
+        ASSERT_EQ(res->status, 200) << mode << ": " << res->body;
+        EXPECT_EQ(parse_rays(res->get_header_value("X-Rays")).at("shadow"), 0) << mode;
+    }
+}
+
+TEST_F(RenderApi, Errors) {
+    const std::string id = add_scene(scene_file("spheres"));
+    auto missing = render("sc_nope", Json::object());
+    EXPECT_EQ(missing->status, 404);
+    EXPECT_EQ(Json::parse(missing->body).at("error").at("code"), "scene_not_found");
+    auto big = render(id, {{"width", 2000}, {"height", 1000}, {"spp", 4}});
+    EXPECT_EQ(big->status, 413);
+    EXPECT_EQ(Json::parse(big->body).at("error").at("code"), "too_large");
+    auto fmt = render(id, {{"format", "jpeg"}});
+    EXPECT_EQ(fmt->status, 400);
+    EXPECT_EQ(Json::parse(fmt->body).at("error").at("code"), "unsupported_format");
+    auto mode = render(id, {{"shading", "toon"}});
+    EXPECT_EQ(Json::parse(mode->body).at("error").at("path"), "/shading");
+    auto bad = server_->client()->Post("/v1/scenes/" + id + "/render", "{", "application/json");
+    EXPECT_EQ(Json::parse(bad->body).at("error").at("code"), "bad_json");
+    auto job = server_->client()->Get("/v1/jobs/jb_0000000000000000");
+    EXPECT_EQ(job->status, 404);
+    EXPECT_EQ(Json::parse(job->body).at("error").at("code"), "not_found");
+}
+
+TEST_F(RenderApi, AsyncJobGivesTheSameImage) {
+    const std::string id = add_scene(scene_file("glass_sphere"));
+    const Json opts = {{"width", 96}, {"height", 64}, {"spp", 2}};
+    auto sync = render(id, opts);
+    ASSERT_EQ(sync->status, 200);
+    Json async_opts = opts;
+    async_opts["async"] = true;
+    auto sub = render(id, async_opts);
+    ASSERT_EQ(sub->status, 202) << sub->body;
+    const std::string job = Json::parse(sub->body).at("job");
+    EXPECT_EQ(job.rfind("jb_", 0), 0u);
+    EXPECT_EQ(sub->get_header_value("Location"), "/v1/jobs/" + job);
+    auto c = server_->client();
+    Json status;
+    double last = 0;
+    for (int i = 0; i < 500; ++i) {
+        auto r = c->Get("/v1/jobs/" + job);
+        ASSERT_EQ(r->status, 200);
+        status = Json::parse(r->body);
+        EXPECT_GE(status.at("progress").get<double>(), last);
+        last = status.at("progress");
+        if (status.at("state") == "done")
+            break;
+        std::this_thread::sleep_for(10ms);
+    }
+    ASSERT_EQ(status.at("state"), "done") << status;
+    EXPECT_EQ(status.at("progress"), 1.0);
+    EXPECT_EQ(status.at("eta_s"), 0.0);
+    EXPECT_EQ(status.at("tiles_done"), status.at("tiles_total"));
+    auto img = c->Get("/v1/jobs/" + job + "/image");
+    ASSERT_EQ(img->status, 200);
+    EXPECT_EQ(img->body, sync->body);  // the renderer is deterministic
+    EXPECT_EQ(img->get_header_value("X-Rays"), sync->get_header_value("X-Rays"));
+    // DELETE of a finished job forgets it.
+    auto del = c->Delete("/v1/jobs/" + job);
+    EXPECT_EQ(Json::parse(del->body).at("deleted"), true);
+    EXPECT_EQ(c->Get("/v1/jobs/" + job)->status, 404);
+}
+
+TEST_F(RenderApi, DeleteCancelsARunningJob) {
+    const std::string id = add_scene(scene_file("tutorial_like"));
+    auto sub = render(id, {{"width", 1000}, {"height", 1000}, {"spp", 4}, {"async", true}});
+    ASSERT_EQ(sub->status, 202) << sub->body;
+    const std::string job = Json::parse(sub->body).at("job");
+    auto c = server_->client();
+    // The image is not there yet: 202 with the job's status.
+    auto early = c->Get("/v1/jobs/" + job + "/image");
+    EXPECT_EQ(early->status, 202);
+    EXPECT_NE(Json::parse(early->body).at("state"), "done");
+    auto del = c->Delete("/v1/jobs/" + job);
+    ASSERT_EQ(del->status, 200);
+    EXPECT_EQ(Json::parse(del->body).at("state"), "cancelled");
+    Json status;
+    for (int i = 0; i < 300; ++i) {
+        status = Json::parse(c->Get("/v1/jobs/" + job)->body);
+        if (status.at("state") == "cancelled")
+            break;
+        std::this_thread::sleep_for(10ms);
+    }
+    EXPECT_EQ(status.at("state"), "cancelled");
+    EXPECT_LT(status.at("progress").get<double>(), 1.0);
+    auto img = c->Get("/v1/jobs/" + job + "/image");
+    EXPECT_EQ(img->status, 404);
+}
+
+TEST(RenderApiBusy, JobQueueOverTheLimitIs503) {
+    testing::ServerProcess server({"--max-concurrent", "1"});
+    auto c = server.client();
+    auto reg = c->Post("/v1/scenes", scene_file("tutorial_like"), "application/json");
+    const std::string id = Json::parse(reg->body).at("id");
+    const Json slow = {{"width", 1000}, {"height", 1000}, {"spp", 4}, {"async", true}};
+    auto first = c->Post("/v1/scenes/" + id + "/render", slow.dump(), "application/json");
+    ASSERT_EQ(first->status, 202);
+    auto second = c->Post("/v1/scenes/" + id + "/render", slow.dump(), "application/json");
+    EXPECT_EQ(second->status, 503);
+    EXPECT_EQ(Json::parse(second->body).at("error").at("code"), "busy");
+    c->Delete("/v1/jobs/" + Json::parse(first->body).at("job").get<std::string>());
+}
+
+// The tutorial's Question 2 over HTTP, with the scene of tests/golden/scenes/tutorial_q2.json.
+// Its tree, derived by hand (engine/shade/whitted_test.cpp has the same scene, step by step):
+// eye (0,0,0), ray +z, point light L = (0,3,0) (lights[1]).
+//   I1 (0,0,8)   glass entry.  Shadow ray to L clear:            full Phong.
+//   I2 (0,0,−5)  mirror, reached by I1's reflection (back along −z). Clear: full Phong.
+//   I3 (0,−5,−5) ball, reached by I2's reflection (along −y). Clear:   full Phong.
+//   I4 (0,0,12)  glass exit, reached by I1's refraction (straight through at normal incidence).
+//                The shadow ray runs inside glass: blocked by glass.  Ambient only.
+//   I5 (0,0,18)  back, reached by I4's refraction. Its shadow ray passes through glass for
+//                s ∈ (0.350, 0.515): blocked by glass.               Ambient only.
+TEST_F(RenderApi, TraceTutorialQuestion2) {
+    const std::string id = add_scene(scene_file("tutorial_q2"));
+    ASSERT_FALSE(id.empty());
+    auto res = server_->client()->Post(
+        "/v1/scenes/" + id + "/trace",
+        R"({"ray": {"origin": [0,0,0], "direction": [0,0,1]}, "max_depth": 5})",
+        "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    const Json j = Json::parse(res->body);
+    EXPECT_EQ(j.at("summary"), Json::parse(R"({"points": 5, "full_phong": ["I1","I2","I3"],
+                                               "ambient_only": ["I4","I5"]})"));
+    const Json& i1 = j.at("tree");
+    EXPECT_EQ(i1.at("label"), "I1");
+    EXPECT_EQ(i1.at("name"), "glass");
+    EXPECT_EQ(i1.at("t"), 8.0);
+    EXPECT_EQ(i1.at("shadow_rays"),
+              Json::parse(R"([{"light": 1, "blocked_by": null, "facing": true}])"));
+    const Json& i2 = i1.at("reflected");
+    EXPECT_EQ(i2.at("label"), "I2");
+    EXPECT_EQ(i2.at("name"), "mirror");
+    EXPECT_EQ(i2.at("reflected").at("label"), "I3");
+    EXPECT_EQ(i2.at("reflected").at("name"), "ball");
+    const Json& i4 = i1.at("refracted");
+    EXPECT_EQ(i4.at("label"), "I4");
+    EXPECT_EQ(i4.at("terms"), Json::parse(R"(["ambient"])"));
+    EXPECT_EQ(i4.at("shadow_rays").at(0).at("blocked_by"), "glass");
+    EXPECT_TRUE(i4.at("reflected").is_null());  // internal reflection is not traced
+    const Json& i5 = i4.at("refracted");
+    EXPECT_EQ(i5.at("label"), "I5");
+    EXPECT_EQ(i5.at("name"), "back");
+    EXPECT_EQ(i5.at("shadow_rays").at(0).at("blocked_by"), "glass");
+    EXPECT_EQ(i5.at("terms"), Json::parse(R"(["ambient"])"));
+}
+
+TEST_F(RenderApi, TraceErrorsAndMiss) {
+    const std::string id = add_scene(scene_file("tutorial_q2"));
+    auto c = server_->client();
+    auto miss =
+        c->Post("/v1/scenes/" + id + "/trace",
+                R"({"ray": {"origin": [0,0,0], "direction": [1,0,0]}})", "application/json");
+    ASSERT_EQ(miss->status, 200);
+    EXPECT_TRUE(Json::parse(miss->body).at("tree").is_null());
+    auto zero =
+        c->Post("/v1/scenes/" + id + "/trace",
+                R"({"ray": {"origin": [0,0,0], "direction": [0,0,0]}})", "application/json");
+    EXPECT_EQ(zero->status, 400);
+    EXPECT_EQ(Json::parse(zero->body).at("error").at("code"), "invalid_ray");
+    auto none =
+        c->Post("/v1/scenes/sc_nope/trace", R"({"ray": {"origin": [0,0,0], "direction": [0,0,1]}})",
+                "application/json");
+    EXPECT_EQ(none->status, 404);
+}
+
+}  // namespace
+}  // namespace raycastd
