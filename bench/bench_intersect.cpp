@@ -9,7 +9,8 @@
 //   bench_intersect --smoke         tiny sizes, < 1 s; exits 1 if the engine disagrees with
 //                                   Embree (this is the CTest `bench_smoke`)
 //   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
-//            --raw-only (the ceiling alone: raw Embree's builds and traces, no engine)
+//            --raw-only (raw Embree's builds and traces alone, no engine)
+//            --ceiling-only (raw rtcIntersect1 alone: run_all.py times it around each peer)
 
 #include <chrono>
 #include <cmath>
@@ -67,7 +68,8 @@ struct Args {
     std::string workloads = "ABC";
     std::string data_dir;
     std::string json_path;
-    bool raw_only = false;  ///< the ceiling alone: raw Embree, no engine
+    bool raw_only = false;      ///< raw Embree alone, no engine
+    bool ceiling_only = false;  ///< raw rtcIntersect1 alone, no files
 };
 
 bool parse_args(int argc, char** argv, Args& a) {
@@ -86,6 +88,8 @@ bool parse_args(int argc, char** argv, Args& a) {
             a.workloads = value();
         } else if (arg == "--data-dir") {
             a.data_dir = value();
+        } else if (arg == "--ceiling-only") {
+            a.ceiling_only = true;
         } else if (arg == "--raw-only") {
             a.raw_only = true;
         } else if (arg == "--json") {
@@ -326,6 +330,33 @@ bool write_workload_files(const std::string& dir, const rb::Workload& w) {
 }
 
 /// Everything for one workload. Returns false on an error that makes its figures meaningless.
+std::vector<rb::RayRecord> make_rays(const rb::Workload& w, const std::string& rays_name,
+                                     const Sizes& s) {
+    return rays_name == "coherent" ? rb::camera_rays(w, s.image, s.image)
+                                   : rb::random_rays(w, s.random_rays, kRaySeed);
+}
+
+/// --ceiling-only: raw rtcIntersect1 on both ray sets and nothing else, so that run_all.py can
+/// time the ceiling right before and right after an out-of-process peer (HTTP, Open3D).
+bool bench_ceiling_only(Report& report, const rb::Workload& w, const Args& args) {
+    std::string error;
+    auto embree = rb::RawEmbree::build(w, rb::BuildQuality::medium, /*robust=*/false, error);
+    if (!embree) {
+        std::fprintf(stderr, "bench_intersect: %s\n", error.c_str());
+        return false;
+    }
+    report.meta()["workloads"][w.name] = {{"description", w.description}};
+    for (const std::string rays_name : {"coherent", "incoherent"}) {
+        const auto rays = make_rays(w, rays_name, args.sizes);
+        rb::RawHits hits;
+        hits.prepare(rays.size());
+        const double s = rb::median_seconds(3, [&] { embree->intersect1(rays, hits); });
+        report.trace(w.name, rays_name, "raw_embree", "rtcIntersect1", "closest", "fast",
+                     rb::BudgetedTiming{s, rays.size(), rays.size()}, json::object());
+    }
+    return true;
+}
+
 bool bench_workload(Report& report, const rb::Workload& w, const Args& args, double& worst) {
     const Sizes& s = args.sizes;
     json& meta = report.meta()["workloads"][w.name];
@@ -374,8 +405,7 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
     }
 
     for (const std::string rays_name : {"coherent", "incoherent"}) {
-        const auto rays = rays_name == "coherent" ? rb::camera_rays(w, s.image, s.image)
-                                                  : rb::random_rays(w, s.random_rays, kRaySeed);
+        const auto rays = make_rays(w, rays_name, s);
         meta["rays"][rays_name] = rays.size();
         const RaySetRefs refs = bench_raw(report, w, rays_name, rays, *embree, *robust, s.reps);
         if (!args.data_dir.empty()) {
@@ -425,7 +455,9 @@ int main(int argc, char** argv) {
     for (char name : args.workloads) {
         const rb::Workload w = make_workload(name, args.sizes);
         std::printf("-- %s: %s\n", w.name.c_str(), w.description.c_str());
-        ok = bench_workload(report, w, args, worst) && ok;
+        ok = (args.ceiling_only ? bench_ceiling_only(report, w, args)
+                                : bench_workload(report, w, args, worst)) &&
+             ok;
     }
     report.meta()["worst_agreement"] = worst;
     // CPU time of all our threads over wall time: how much of the machine this run really had

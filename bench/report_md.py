@@ -251,8 +251,16 @@ def ratio(
     base = trace_lookup(rows, workload, rays, *against)
     if not row or not base or row["kind"] != "trace" or base["kind"] != "trace":
         return None
-    denominator = ceiling_for(row, base) if against == CEILING else base["mrays_s"]
-    return row["mrays_s"] / denominator if denominator else None
+    if against == CEILING:
+        denominator = ceiling_for(row, base)
+        return row["mrays_s"] / denominator if denominator else None
+    if row.get("paired_ceiling_mrays_s") and base.get("paired_ceiling_mrays_s"):
+        # Two peers timed at different moments: compare their shares of the ceiling timed
+        # around each, which cancels a change of load between them.
+        return (row["mrays_s"] / row["paired_ceiling_mrays_s"]) / (
+            base["mrays_s"] / base["paired_ceiling_mrays_s"]
+        )
+    return row["mrays_s"] / base["mrays_s"] if base["mrays_s"] else None
 
 
 def targets_table(results: dict) -> list[str]:
@@ -412,9 +420,13 @@ COLUMNS = """\
   response on loopback; bodies are encoded before and responses decoded after the clock.
 - **× ceiling**: that figure divided by raw Embree `rtcIntersect1` on the same workload and the
   same rays in the same run (2 threads, TBB `parallel_for`, default scene flags, `MEDIUM` build).
-  Engine rows are divided by `rtcIntersect1` re-timed right before and right after that very
-  measurement (the mean of the two), so that both figures are taken under the same load; the
-  other rows by the ceiling row of the table.
+  The machine is shared, so every ratio is paired: engine rows are divided by `rtcIntersect1`
+  re-timed right before and right after that very measurement (the mean of the two), HTTP and
+  Open3D rows by `rtcIntersect1` re-timed (`bench_intersect --ceiling-only`) right before and
+  after that peer ran on that workload; so both figures of a ratio are taken under the same
+  load, and a ratio may differ from dividing the two Mrays/s figures shown. Raw Embree rows are
+  divided by the ceiling row of the table. "binary HTTP ≥ 2× Open3D" compares the two peers'
+  paired ratios.
 - **agrees with Embree**: share of the measured rays whose closest hit has the same hit/miss
   decision as raw Embree's `rtcIntersect1` and the same object and primitive, or the same `t`
   within 1e-4 relative (a neighbour across a shared edge); coherent / incoherent.

@@ -220,37 +220,9 @@ def run_http(
                     "ms": reg.build_ms,
                 }
             )
-            for r in report_md.RAYS:
-                records, ref = load_rays(data_dir, w, r)
-                for variant, fn, kwargs in (
-                    ("binary float32", http_peer.bench_binary, {}),
-                    (
-                        "JSON",
-                        http_peer.bench_json,
-                        {"batch": JSON_BATCH, "max_rays": cfg["json_rays"]},
-                    ),
-                ):
-                    try:
-                        t = fn(
-                            conn,
-                            reg.scene_id,
-                            records,
-                            ref,
-                            cfg["http_budget_s"],
-                            **kwargs,
-                        )
-                    except http_peer.NotAvailable as e:
-                        rows.append(unavailable(w, r, "http", variant, str(e)))
-                        continue
-                    except Exception as e:
-                        rows.append(unavailable(w, r, "http", variant, f"error: {e}"))
-                        conn = server.connect()
-                        continue
-                    rows.append(trace_row(w, r, variant, t))
-                    log(
-                        f"{w} {r} http {variant}: {t.mrays_s:.3f} Mrays/s "
-                        f"({t.rays} rays, agree {t.agree:.4f})"
-                    )
+            before = measure_ceiling(build, preset, w)
+            traced, conn = trace_over_http(server, conn, w, reg.scene_id, data_dir, cfg)
+            rows += paired(traced, before, measure_ceiling(build, preset, w))
         if "A" in scene_ids:
             load = run_small_requests(
                 build, server.port, scene_ids["A"], data_dir, cfg["load_s"]
@@ -261,6 +233,72 @@ def run_http(
             conn.close()
         server.stop()
     return rows, load
+
+
+def trace_over_http(
+    server: http_peer.RaycastdServer,
+    conn,
+    w: str,
+    scene_id: str,
+    data_dir: str,
+    cfg: dict,
+) -> tuple[list[dict], object]:
+    """Binary and JSON closest-hit requests for both ray sets of workload w. Returns the rows
+    and the connection to go on with (a new one after an error broke the old)."""
+    rows = []
+    for r in report_md.RAYS:
+        records, ref = load_rays(data_dir, w, r)
+        for variant, fn, kwargs in (
+            ("binary float32", http_peer.bench_binary, {}),
+            (
+                "JSON",
+                http_peer.bench_json,
+                {"batch": JSON_BATCH, "max_rays": cfg["json_rays"]},
+            ),
+        ):
+            try:
+                t = fn(conn, scene_id, records, ref, cfg["http_budget_s"], **kwargs)
+            except http_peer.NotAvailable as e:
+                rows.append(unavailable(w, r, "http", variant, str(e)))
+                continue
+            except Exception as e:
+                rows.append(unavailable(w, r, "http", variant, f"error: {e}"))
+                conn = server.connect()
+                continue
+            rows.append(trace_row(w, r, variant, t))
+            log(
+                f"{w} {r} http {variant}: {t.mrays_s:.3f} Mrays/s "
+                f"({t.rays} rays, agree {t.agree:.4f})"
+            )
+    return rows, conn
+
+
+def measure_ceiling(build: str, preset: str, workload: str) -> dict[str, float]:
+    """Raw rtcIntersect1 Mrays/s per ray set of `workload`, timed now (bench_intersect
+    --ceiling-only; a few seconds). Empty if it fails."""
+    cmd = [
+        os.path.join(build, "bench", "bench_intersect"),
+        *PRESETS[preset]["flag"],
+        "--ceiling-only",
+        "--workloads",
+        workload,
+        "--json",
+        os.path.join(build, "bench", f"data-{preset}", "ceiling.json"),
+    ]
+    if subprocess.run(cmd, capture_output=True).returncode != 0:
+        return {}
+    with open(cmd[-1]) as f:
+        doc = json.load(f)
+    return {r["rays"]: r["mrays_s"] for r in doc["rows"] if r["kind"] == "trace"}
+
+
+def paired(rows: list[dict], before: dict, after: dict) -> list[dict]:
+    """Gives each trace row the ceiling timed right before and after it (their mean), so that
+    its ratio compares figures taken under the same load on this shared machine."""
+    for r in rows:
+        if r["kind"] == "trace" and r["rays"] in before and r["rays"] in after:
+            r["paired_ceiling_mrays_s"] = 0.5 * (before[r["rays"]] + after[r["rays"]])
+    return rows
 
 
 def run_small_requests(
@@ -297,7 +335,9 @@ def run_small_requests(
 # --- 3. Open3D ---------------------------------------------------------------------------------
 
 
-def run_open3d(build: str, data_dir: str, workloads: list[str]) -> tuple[list, dict]:
+def run_open3d(
+    build: str, preset: str, data_dir: str, workloads: list[str]
+) -> tuple[list, dict]:
     peer = os.path.join(BENCH_DIR, "peers", "open3d_peer.py")
     shim = need(os.path.join(build, "bench", "libembree_mask_shim.so"))
     rows: list[dict] = []
@@ -306,6 +346,7 @@ def run_open3d(build: str, data_dir: str, workloads: list[str]) -> tuple[list, d
         if w not in MESH_WORKLOADS:
             continue
         env = dict(os.environ, LD_PRELOAD=shim)
+        before = measure_ceiling(build, preset, w)
         proc = subprocess.run(
             ["/usr/bin/python3", peer, "--data-dir", data_dir, "--workload", w],
             env=env,
@@ -317,6 +358,7 @@ def run_open3d(build: str, data_dir: str, workloads: list[str]) -> tuple[list, d
             rows.append(unavailable(w, "-", "open3d", "cast_rays", reason))
             continue
         doc = json.loads(proc.stdout)
+        after = measure_ceiling(build, preset, w)
         rows.append(
             {
                 "kind": "build",
@@ -327,22 +369,26 @@ def run_open3d(build: str, data_dir: str, workloads: list[str]) -> tuple[list, d
             }
         )
         for res in doc["results"]:
-            rows.append(
-                {
-                    "kind": "trace",
-                    "workload": w,
-                    "rays": res["rays"],
-                    "peer": "open3d",
-                    "variant": "cast_rays",
-                    "mode": "closest",
-                    "precision": "-",
-                    "mrays_s": res["mrays_s"],
-                    "measured_rays": res["n"],
-                    "total_rays": res["n"],
-                    "sampled": False,
-                    "hits_per_ray": res["hits"] / max(1, res["n"]),
-                    "agree_with_embree": res["agree_with_embree"],
-                }
+            rows += paired(
+                [
+                    {
+                        "kind": "trace",
+                        "workload": w,
+                        "rays": res["rays"],
+                        "peer": "open3d",
+                        "variant": "cast_rays",
+                        "mode": "closest",
+                        "precision": "-",
+                        "mrays_s": res["mrays_s"],
+                        "measured_rays": res["n"],
+                        "total_rays": res["n"],
+                        "sampled": False,
+                        "hits_per_ray": res["hits"] / max(1, res["n"]),
+                        "agree_with_embree": res["agree_with_embree"],
+                    }
+                ],
+                before,
+                after,
             )
             log(
                 f"{w} {res['rays']} open3d: {res['mrays_s']:.3f} Mrays/s, hits {res['hits']} "
@@ -478,7 +524,7 @@ def main() -> int:
             traceback.print_exc()
             rows.append(unavailable("-", "-", "http", "raycastd", f"error: {e}"))
     if not args.skip_open3d:
-        o3d_rows, open3d = run_open3d(build, data_dir, workloads)
+        o3d_rows, open3d = run_open3d(build, preset, data_dir, workloads)
         rows += o3d_rows
     accuracy = run_accuracy_bench(build, data_dir)
 
