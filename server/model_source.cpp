@@ -88,6 +88,8 @@ std::uint32_t adopt_materials(const engine::LoadedModel& model, const std::strin
 engine::LoadLimits load_limits(const Limits& limits) {
     engine::LoadLimits l;
     l.max_triangles = limits.max_triangles;
+    // A mesh has at most about three vertices per triangle unless it is padding itself out.
+    l.max_vertices = 3 * limits.max_triangles;
     return l;
 }
 
