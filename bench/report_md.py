@@ -501,7 +501,7 @@ def notes(results: dict) -> list[str]:
     return out
 
 
-def render(results: dict, accuracy: str | None) -> str:
+def render(results: dict, accuracy: str) -> str:
     rows = results["rows"]
     meta = results["meta"]
     m = results["machine"]
@@ -578,14 +578,7 @@ def render(results: dict, accuracy: str | None) -> str:
     else:
         lines.append("Open3D was not run.")
     lines += ["", "## Run time against error (issue 6)", ""]
-    lines.append(
-        accuracy.strip()
-        if accuracy
-        else "Not measured yet: the accuracy bench of issue 6 (Mrays/s and error against a "
-        "high-precision reference for each precision mode, on a stress ray set) is to be "
-        "`bench/bench_accuracy`; `run_all.py` runs it through `run_accuracy_bench()` "
-        "as soon as it is built."
-    )
+    lines.append(accuracy.strip())
     unavail = unavailable_notes(rows)
     lines += [
         "",
