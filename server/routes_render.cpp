@@ -28,8 +28,7 @@ JobOutput render_output(const engine::QueryEngine& engine, const RenderRequest& 
     std::snprintf(ms, sizeof ms, "%.3f", r.render_ms);
     out.headers = {{"X-Render-Ms", ms},
                    {"X-Rays", rays_header(r.counts)},
-                   {"X-Precision",
-                    engine::to_string(engine.effective_precision(req.options.whitted.precision))}};
+                   {"X-Precision", engine::to_string(r.precision)}};
     return out;
 }
 

@@ -48,6 +48,7 @@ struct RenderResult {
     RayCounts counts;
     double render_ms = 0.0;
     bool cancelled = false;
+    Precision precision = Precision::exact;  ///< the path that answered
 };
 
 /// The number of tiles a render of `options` is cut into.

@@ -124,6 +124,27 @@ TEST(Render, ProgressCountsTilesAndCancelStops) {
     EXPECT_EQ(c.counts.primary, 0u);
 }
 
+TEST(Render, SmallSceneBvhAgreesWithExactBruteForce) {
+    // Three spheres: QueryEngine answers them by brute force (exact); a render traces them
+    // through its own BVH at the precision asked for. The pictures must agree.
+    auto engine = prepare(lit_spheres(0.3));
+    ASSERT_TRUE(engine->brute_force());
+    RenderOptions o = small();
+    o.whitted.precision = Precision::refined;
+    const RenderResult bvh = render(*engine, o);
+    o.whitted.precision = Precision::exact;
+    const RenderResult exact = render(*engine, o);
+    EXPECT_EQ(bvh.precision, Precision::refined);
+    EXPECT_EQ(exact.precision, Precision::exact);
+    int differ = 0;
+    for (std::size_t i = 0; i < bvh.image.rgb.size(); ++i) {
+        if (std::abs(bvh.image.rgb[i] - exact.image.rgb[i]) > 1e-3f)
+            ++differ;
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(bvh.counts.shadow, exact.counts.shadow);
+}
+
 TEST(Render, ModeNames) {
     EXPECT_EQ(shading_mode_from_name("object_id"), ShadingMode::object_id);
     EXPECT_FALSE(shading_mode_from_name("toon"));

@@ -37,7 +37,7 @@ bool is_nonzero(const Vec3d& v) {
 
 }  // namespace
 
-ShadingPlan plan_shading(const QueryEngine& engine, Precision precision) {
+ShadingPlan plan_shading(const QueryEngine& engine, bool float_tracer) {
     const Scene& s = engine.scene();
     ShadingPlan plan;
     // API.md: "no lights = ambient 1.0 only".
@@ -54,9 +54,9 @@ ShadingPlan plan_shading(const QueryEngine& engine, Precision precision) {
         plan.refraction = plan.refraction || m.transparency > 0.0;
         plan.specular.push_back(is_nonzero(m.specular));
     }
-    // Embree's float traversal answers fast and refined queries on scenes big enough to have a
-    // BVH; it sees coordinates relative to the bounds' centre, scaled by twice the diagonal.
-    if (!engine.brute_force() && engine.effective_precision(precision) != Precision::exact) {
+    // Embree's float traversal sees coordinates relative to the bounds' centre, scaled by twice
+    // the diagonal (engine/accel/embree_accel.cpp).
+    if (float_tracer) {
         const Bounds3 b = s.bounds();
         plan.spawn.center = b.center();
         plan.spawn.float_scale = 2.0 * length(b.diagonal());
@@ -64,17 +64,56 @@ ShadingPlan plan_shading(const QueryEngine& engine, Precision precision) {
     return plan;
 }
 
+namespace {
+
+std::unique_ptr<EmbreeAccel> small_scene_bvh(const QueryEngine& engine, const WhittedOptions& o) {
+    if (!o.bvh_for_small_scenes || !engine.brute_force() || o.precision == Precision::exact ||
+        engine.scene().objects.empty()) {
+        return nullptr;
+    }
+    auto built = EmbreeAccel::build(engine.scene());
+    // Without it the brute-force path still gives the right (exact) answers, only slower.
+    return built.ok() ? std::move(*built) : nullptr;
+}
+
+}  // namespace
+
 Whitted::Whitted(const QueryEngine& engine, WhittedOptions options)
-    : engine_(engine), options_(options), plan_(plan_shading(engine, options.precision)) {}
+    : engine_(engine),
+      options_(options),
+      small_bvh_(small_scene_bvh(engine, options)),
+      plan_(plan_shading(engine, effective_precision() != Precision::exact)) {}
+
+Precision Whitted::effective_precision() const {
+    return small_bvh_ ? options_.precision : engine_.effective_precision(options_.precision);
+}
 
 std::optional<Hit> Whitted::closest(const Ray& ray) const {
+    if (small_bvh_)
+        return small_bvh_->closest(ray, options_.precision, /*want_normal=*/true);
     const Hit& h = thread_query().run(engine_, ray, Mode::closest, options_.precision);
     if (!h.valid())
         return std::nullopt;
     return h;
 }
 
+void Whitted::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
+    if (small_bvh_) {
+        out.assign(rays.size(), Hit{});
+        small_bvh_->closest_range(rays.data(), rays.size(), options_.precision,
+                                  /*want_normal=*/true, out.data());
+        return;
+    }
+    QueryOptions q;
+    q.precision = options_.precision;
+    QueryResult result;
+    engine_.intersect(rays, q, result);
+    out.swap(result.hits);
+}
+
 bool Whitted::occluded(const Ray& ray) const {
+    if (small_bvh_)
+        return small_bvh_->any(ray, options_.precision);
     return thread_query().run(engine_, ray, Mode::any, options_.precision).valid();
 }
 

@@ -21,11 +21,19 @@
 //
 // All tracing goes through QueryEngine (closest for camera and secondary rays, any for shadow
 // rays) at the precision asked for; secondary rays start at robust origins (shade/spawn.h).
+// One exception, for speed: QueryEngine answers scenes of at most 16 primitives by brute force
+// in exact precision, which is the cheapest for a few rays but not for the millions of a render
+// (every ray pays the double-double sphere test on every primitive: 0.6× POV-Ray's speed on the
+// bench's six-primitive scene). When asked to (bvh_for_small_scenes, as renders do) and unless
+// exact is asked for, the tracer then builds its own EmbreeAccel over the scene (microseconds
+// for 16 primitives) and traces at the precision asked.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
+#include "engine/accel/embree_accel.h"
 #include "engine/query/intersect.h"
 #include "engine/shade/spawn.h"
 
@@ -35,6 +43,9 @@ struct WhittedOptions {
     int max_depth = 5;  ///< surface points along one path (1: camera hits only)
     Precision precision = Precision::refined;
     Vec3d background{0.0, 0.0, 0.0};  ///< the colour of a ray that hits nothing
+    /// Trace a scene that QueryEngine answers by brute force through a BVH of its own (renders:
+    /// millions of rays). Off for a single ray tree, where exact brute force is the cheapest.
+    bool bvh_for_small_scenes = false;
 };
 
 /// Rays traced, by kind.
@@ -64,8 +75,9 @@ struct ShadingPlan {
     SpawnContext spawn;                        ///< what the tracer adds to spawned-origin errors
 };
 
-/// Decides the plan for `engine`'s scene traced at `precision`.
-ShadingPlan plan_shading(const QueryEngine& engine, Precision precision);
+/// Decides the plan for `engine`'s scene traced at `precision`; `float_tracer` says whether an
+/// Embree float traversal answers (its rounding is added to spawned-origin errors).
+ShadingPlan plan_shading(const QueryEngine& engine, bool float_tracer);
 
 /// One shadow ray of a tree node.
 struct ShadowRayRecord {
@@ -106,6 +118,9 @@ class Whitted {
 
     /// The closest hit along `ray` (normal included), or nullopt.
     std::optional<Hit> closest(const Ray& ray) const;
+    /// Closest hits of a batch (a tile's camera rays, coherent in runs of 16) into out[0..n);
+    /// a miss leaves an invalid Hit.
+    void closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
     /// Whether anything lies along `ray` within [tmin, tmax].
     bool occluded(const Ray& ray) const;
 
@@ -115,6 +130,9 @@ class Whitted {
     Vec3d shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) const;
     /// The ray tree of one ray, with the blocking object of each shadow ray named.
     RayTree tree(const Ray& ray) const;
+
+    /// The path that answers this tracer's queries (see QueryEngine::effective_precision).
+    Precision effective_precision() const;
 
     /// The material index of a hit (per-triangle material when the mesh has them).
     std::uint32_t material_of(const Hit& hit) const;
@@ -128,6 +146,7 @@ class Whitted {
 
     const QueryEngine& engine_;
     WhittedOptions options_;
+    std::unique_ptr<EmbreeAccel> small_bvh_;  ///< for scenes QueryEngine answers by brute force
     ShadingPlan plan_;
 };
 

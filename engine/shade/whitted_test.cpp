@@ -190,7 +190,7 @@ TEST(Whitted, PlanSkipsWhatTheSceneDoesNotNeed) {
     s.materials[0].specular = {0, 0, 0};
     {
         auto engine = prepare(s);
-        const ShadingPlan p = plan_shading(*engine, Precision::refined);
+        const ShadingPlan p = plan_shading(*engine, /*float_tracer=*/false);
         EXPECT_TRUE(p.shadow_lights.empty());
         EXPECT_FALSE(p.reflection);
         EXPECT_FALSE(p.refraction);
@@ -199,7 +199,7 @@ TEST(Whitted, PlanSkipsWhatTheSceneDoesNotNeed) {
     }
     s.lights = {ambient_light(0.3)};
     auto engine = prepare(s);
-    EXPECT_EQ(plan_shading(*engine, Precision::refined).ambient, Vec3d(0.3, 0.3, 0.3));
+    EXPECT_EQ(plan_shading(*engine, /*float_tracer=*/false).ambient, Vec3d(0.3, 0.3, 0.3));
 }
 
 // ---- Shadow acne: a lit plane and a sphere, near the origin and 1e6 units away ---------------
@@ -246,11 +246,12 @@ AcneCase acne_scene(Vec3d o, int grid) {
 }
 
 /// Pixels that should be lit but are dark, over a 200 × 150 view.
-int wrongly_dark_pixels(const AcneCase& c, Precision precision, bool* used_bvh) {
+int wrongly_dark_pixels(const AcneCase& c, Precision precision, bool small_bvh, bool* used_bvh) {
     auto engine = prepare(c.scene);
     *used_bvh = !engine->brute_force();
     WhittedOptions opt;
     opt.precision = precision;
+    opt.bvh_for_small_scenes = small_bvh;
     const Whitted w(*engine, opt);
     const CameraRays cam(*c.scene.camera, 200, 150);
     const Sphere& ball = c.scene.objects[1].sphere;
@@ -297,10 +298,13 @@ TEST(Whitted, NoShadowAcneNearTheOriginOrFarFromIt) {
         for (int grid : {1, 16}) {  // 2 triangles + a sphere: brute force; 512: Embree
             const AcneCase c = acne_scene(o, grid);
             for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
-                bool bvh = false;
-                EXPECT_EQ(wrongly_dark_pixels(c, p, &bvh), 0)
-                    << "at " << o.x << ", grid " << grid << ", precision " << to_string(p);
-                EXPECT_EQ(bvh, grid > 1);
+                for (bool small_bvh : {false, true}) {
+                    bool bvh = false;
+                    EXPECT_EQ(wrongly_dark_pixels(c, p, small_bvh, &bvh), 0)
+                        << "at " << o.x << ", grid " << grid << ", precision " << to_string(p)
+                        << (small_bvh ? ", own BVH" : "");
+                    EXPECT_EQ(bvh, grid > 1);
+                }
             }
         }
     }

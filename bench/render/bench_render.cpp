@@ -1,0 +1,233 @@
+// Render benchmark (issue 5): raycastd's Whitted renderer against POV-Ray on the same scenes,
+// in the same run, at 1024×768, spp 1 and 4, max_depth 5:
+//   (a) tests/golden/scenes/tutorial_like.json: spheres with a glass and a mirror one, a floor,
+//       two point lights;
+//   (b) tests/golden/scenes/duck.json: the glTF sample Duck on a reflective floor.
+// POV-Ray renders a .pov written from the same scene document (pov_writer.h) with 2 threads;
+// spp 4 maps to POV-Ray's non-adaptive antialiasing (+AM1 +A0.0 +R2: 2×2 extra samples in every
+// pixel whose neighbours differ at all). Also reported: the renderer's rays per second against
+// raw Embree tracing the Duck scene's primary rays (bench/raw_embree.h), the ceiling for rays.
+//
+//   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/raw_embree.h"
+#include "bench/render/pov_writer.h"
+#include "engine/render/camera_rays.h"
+#include "engine/render/render.h"
+#include "server/model_source.h"
+
+namespace {
+
+using namespace raycastd;
+using Clock = std::chrono::steady_clock;
+
+struct Args {
+    int runs = 1;
+    std::string povray = "povray";
+    std::string out;
+    bool smoke = false;
+};
+
+std::string read_file(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+std::shared_ptr<const engine::QueryEngine> load_scene(const std::string& name) {
+    const std::string data = RAYCASTD_SHARED_DIR "/data";
+    const server::FileSource files = [&](const std::string& path) -> engine::Result<std::string> {
+        std::ifstream f(data + "/" + path, std::ios::binary);
+        if (!f)
+            return engine::Status::error(engine::Code::not_found, "cannot read " + path);
+        return read_file(data + "/" + path);
+    };
+    const auto doc = server::Json::parse(
+        read_file(std::string(RAYCASTD_SOURCE_DIR "/tests/golden/scenes/") + name + ".json"));
+    auto scene = server::scene_from_document(doc, "", files, server::Limits{});
+    auto built = engine::QueryEngine::build(std::make_shared<engine::Scene>(std::move(scene)));
+    if (!built.ok())
+        throw std::runtime_error(built.status().message);
+    return *built;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+/// Milliseconds of POV-Ray rendering `pov` (wall clock, parse and bounding included), or −1.
+double run_povray(const Args& a, const std::string& pov, int w, int h, int spp) {
+    const std::string dir = "/tmp/raycastd_bench_render";
+    std::system(("mkdir -p " + dir).c_str());
+    std::ofstream(dir + "/scene.pov") << pov;
+    const std::string aa = spp > 1 ? " +A0.0 +AM1 +R2" : " -A";
+    const std::string cmd = a.povray + " +I" + dir + "/scene.pov +O" + dir + "/scene.png +W" +
+                            std::to_string(w) + " +H" + std::to_string(h) + aa + " -D +WT2 +FN > " +
+                            dir + "/povray.log 2>&1";
+    const auto t0 = Clock::now();
+    const int rc = std::system(cmd.c_str());
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return rc == 0 ? ms : -1.0;
+}
+
+/// Raw Embree (rtcIntersect1 and rtcIntersect16) on the primary rays of a triangle-only scene.
+std::pair<double, double> raw_embree_mrays(const engine::Scene& s, const engine::Camera& cam, int w,
+                                           int h) {
+    bench::Workload wl;
+    wl.name = "render";
+    for (const auto& o : s.objects) {
+        if (o.kind == engine::ObjectKind::sphere)
+            return {-1, -1};
+        const auto base = static_cast<std::uint32_t>(wl.positions.size());
+        for (const auto& p : o.mesh->positions) {
+            wl.positions.push_back(
+                {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
+        }
+        for (const auto& t : o.mesh->triangles)
+            wl.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    const engine::CameraRays cr(cam, w, h);
+    std::vector<bench::RayRecord> rays;
+    for (int ty = 0; ty < h; ty += 4) {
+        for (int tx = 0; tx < w; tx += 4) {
+            for (int y = ty; y < ty + 4; ++y) {
+                for (int x = tx; x < tx + 4; ++x) {
+                    const engine::Ray r = cr.ray(x + 0.5, y + 0.5);
+                    rays.push_back({float(r.origin.x), float(r.origin.y), float(r.origin.z),
+                                    float(r.direction.x), float(r.direction.y),
+                                    float(r.direction.z), 0.0f, bench::kRayTmax});
+                }
+            }
+        }
+    }
+    std::string error;
+    auto raw = bench::RawEmbree::build(wl, bench::BuildQuality::medium, /*robust=*/true, error);
+    if (!raw)
+        return {-1, -1};
+    bench::RawHits hits;
+    hits.prepare(rays.size());
+    std::vector<double> t1, t16;
+    for (int i = 0; i < 3; ++i) {
+        auto t0 = Clock::now();
+        raw->intersect1(rays, hits);
+        t1.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        t0 = Clock::now();
+        raw->intersect16(rays, /*coherent=*/true, hits);
+        t16.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+    }
+    return {rays.size() / median(t1) / 1e6, rays.size() / median(t16) / 1e6};
+}
+
+struct Row {
+    std::string scene, precision;
+    int spp;
+    double ms, mrays, pov_ms;
+    engine::RayCounts counts;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Args a;
+    for (int i = 1; i < argc; ++i) {
+        const std::string s = argv[i];
+        if (s == "--runs" && i + 1 < argc) {
+            a.runs = std::max(1, std::atoi(argv[++i]));
+        } else if (s == "--povray" && i + 1 < argc) {
+            a.povray = argv[++i];
+        } else if (s == "--out" && i + 1 < argc) {
+            a.out = argv[++i];
+        } else if (s == "--smoke") {
+            a.smoke = true;
+        } else {
+            std::cerr
+                << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n";
+            return 2;
+        }
+    }
+    const int w = a.smoke ? 128 : 1024, h = a.smoke ? 96 : 768;
+    const std::vector<std::string> scenes = a.smoke
+                                                ? std::vector<std::string>{"tutorial_like"}
+                                                : std::vector<std::string>{"tutorial_like", "duck"};
+    std::vector<Row> rows;
+    std::ostringstream extra;
+    for (const std::string& name : scenes) {
+        std::shared_ptr<const engine::QueryEngine> engine;
+        try {
+            engine = load_scene(name);
+        } catch (const std::exception& e) {
+            std::cerr << "skipping " << name << ": " << e.what() << "\n";
+            continue;
+        }
+        const engine::Camera cam = engine::resolve_camera(engine->scene(), std::nullopt);
+        for (int spp : a.smoke ? std::vector<int>{1} : std::vector<int>{1, 4}) {
+            for (auto p : {engine::Precision::refined, engine::Precision::fast}) {
+                engine::RenderOptions o;
+                o.width = w;
+                o.height = h;
+                o.spp = spp;
+                o.whitted.max_depth = 5;
+                o.whitted.precision = p;
+                std::vector<double> ms;
+                engine::RenderResult r;
+                for (int k = 0; k < a.runs; ++k) {
+                    r = engine::render(*engine, o);
+                    ms.push_back(r.render_ms);
+                }
+                const double m = median(ms);
+                double pov = -1;
+                if (p == engine::Precision::refined && a.povray != "none" && !a.smoke) {
+                    pov = run_povray(a, bench::to_pov(engine->scene(), cam, w, h, 5), w, h, spp);
+                }
+                rows.push_back({name, engine::to_string(r.precision), spp, m,
+                                r.counts.total() / m / 1e3, pov, r.counts});
+                if (a.smoke)
+                    break;
+            }
+        }
+        if (!a.smoke && name == "duck") {
+            const auto [m1, m16] = raw_embree_mrays(engine->scene(), cam, w, h);
+            extra << "Raw Embree on the Duck scene's " << w << "×" << h
+                  << " primary rays (2 threads, robust): rtcIntersect1 " << m1
+                  << " Mrays/s, rtcIntersect16 " << m16 << " Mrays/s.\n";
+        }
+    }
+    std::ostringstream md;
+    md << "| scene | spp | precision | raycastd ms | rays (primary / shadow / reflected / "
+          "refracted) | Mrays/s | POV-Ray ms | POV-Ray ÷ raycastd |\n"
+       << "|---|---|---|---|---|---|---|---|\n";
+    char buf[512];
+    for (const Row& r : rows) {
+        std::snprintf(buf, sizeof buf,
+                      "| %s | %d | %s | %.0f | %llu / %llu / %llu / %llu | %.2f | ",
+                      r.scene.c_str(), r.spp, r.precision.c_str(), r.ms,
+                      static_cast<unsigned long long>(r.counts.primary),
+                      static_cast<unsigned long long>(r.counts.shadow),
+                      static_cast<unsigned long long>(r.counts.reflected),
+                      static_cast<unsigned long long>(r.counts.refracted), r.mrays);
+        md << buf;
+        if (r.pov_ms > 0) {
+            std::snprintf(buf, sizeof buf, "%.0f | %.2f× |\n", r.pov_ms, r.pov_ms / r.ms);
+        } else {
+            std::snprintf(buf, sizeof buf, "– | – |\n");
+        }
+        md << buf;
+    }
+    md << "\n" << extra.str();
+    std::cout << md.str();
+    if (!a.out.empty())
+        std::ofstream(a.out) << md.str();
+    return rows.empty() ? 1 : 0;
+}
