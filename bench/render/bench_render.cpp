@@ -8,7 +8,8 @@
 // pixel whose neighbours differ at all). Also reported: the renderer's rays per second against
 // raw Embree tracing the Duck scene's primary rays (bench/raw_embree.h), the ceiling for rays.
 //
-//   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]
+//   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
+// --write-pov writes each scene's .pov (1024×768) into DIR and renders nothing.
 
 #include <algorithm>
 #include <chrono>
@@ -36,6 +37,7 @@ struct Args {
     std::string povray = "povray";
     std::string out;
     bool smoke = false;
+    std::string write_pov;
 };
 
 std::string read_file(const std::string& path) {
@@ -149,6 +151,8 @@ int main(int argc, char** argv) {
             a.povray = argv[++i];
         } else if (s == "--out" && i + 1 < argc) {
             a.out = argv[++i];
+        } else if (s == "--write-pov" && i + 1 < argc) {
+            a.write_pov = argv[++i];
         } else if (s == "--smoke") {
             a.smoke = true;
         } else {
@@ -172,6 +176,11 @@ int main(int argc, char** argv) {
             continue;
         }
         const engine::Camera cam = engine::resolve_camera(engine->scene(), std::nullopt);
+        if (!a.write_pov.empty()) {
+            std::ofstream(a.write_pov + "/" + name + ".pov")
+                << bench::to_pov(engine->scene(), cam, w, h, 5);
+            continue;
+        }
         for (int spp : a.smoke ? std::vector<int>{1} : std::vector<int>{1, 4}) {
             for (auto p : {engine::Precision::refined, engine::Precision::fast}) {
                 engine::RenderOptions o;
@@ -229,5 +238,5 @@ int main(int argc, char** argv) {
     std::cout << md.str();
     if (!a.out.empty())
         std::ofstream(a.out) << md.str();
-    return rows.empty() ? 1 : 0;
+    return rows.empty() && a.write_pov.empty() ? 1 : 0;
 }
