@@ -402,6 +402,8 @@ scripts/setup.sh --bench                              # once, as root: Open3D, N
 cmake --preset release && cmake --build build/release -j2
 bench/run_all.py                                      # the full run; rewrites this file
 bench/run_all.py --quick                              # small sizes, ~1 min; writes build/release/bench/benchmarks-quick.md
+bench/run_all.py --wait-quiet 10                      # first wait (up to 10 min) for the load average to fall below 1
+bench/run_all.py --render-only build/release/bench/data-full/results.json   # re-render, measure nothing
 ctest --test-dir build/release -R bench_smoke         # < 1 s: the intersect bench on tiny sizes
 ```
 `run_all.py` builds nothing and must run under Debian's `/usr/bin/python3` (its shebang). Pieces
