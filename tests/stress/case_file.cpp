@@ -32,7 +32,8 @@ bool parse(std::istringstream& in, engine::Vec3d& v) {
 
 std::string write_case(const StressCase& c, const std::string& comment) {
     std::ostringstream out;
-    out << "# " << comment << "\n";
+    std::istringstream lines(comment);
+    for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
     for (std::size_t i = 0; i < c.scene->objects.size(); ++i) {
         const engine::Object& o = c.scene->objects[i];
         if (o.kind == engine::ObjectKind::sphere) {

@@ -1,1 +1,239 @@
+// Differential fuzzing (issue 6): random scenes and rays, the engine against the quad-precision
+// reference, for a bounded time. Any disagreement beyond the documented bounds is saved as a case
+// file under tests/stress/regressions/ (case_file.h), which the replay test runs on every build.
+//
+//   RAYCASTD_FUZZ_SECONDS  time budget (default 20; CI keeps the default, run longer by hand)
+//   RAYCASTD_FUZZ_SEED     first seed (default 6); iteration i uses seed + i, so a run is
+//                          reproducible up to where its time ran out
+//   RAYCASTD_FUZZ_SAVE_DIR where to save disagreements (default: the regressions folder)
+//   RAYCASTD_FUZZ_MAX_RATIO largest offset/size of a scene (default 1e8; see random_case)
+//
+// Asserted: everything for exact; wrong decisions and t_err for refined. Recorded, not asserted:
+// refined leaks through a vertex or edge of a closed mesh where Embree's float test skips the
+// entry and reports the exit (engine/accel/embree_accel.cpp confirms float misses on the exact
+// BVH, not float hits on a back face); reproducer in tests/stress/known_issues/.
+
 #include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "engine/testing/scenes.h"
+#include "tests/stress/case_file.h"
+#include "tests/stress/generators.h"
+
+namespace raycastd::stress {
+namespace {
+
+using engine::Object;
+using engine::ObjectKind;
+using engine::Ray;
+using engine::Scene;
+using engine::Vec3d;
+
+constexpr double kExactMaxUlps = 4.0;
+
+double env_or(const char* name, double fallback) {
+    const char* v = std::getenv(name);
+    return v && *v ? std::atof(v) : fallback;
+}
+
+/// A random scene at a random scale and offset, and rays aimed at its features (vertices, edge
+/// points, sphere silhouettes, interiors) with random direction lengths.
+StressCase random_case(std::uint64_t seed, double max_offset_over_size) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+    auto vec = [&] { return Vec3d{u(rng), u(rng), u(rng)}; };
+    auto pow10 = [&](double lo, double hi) { return std::pow(10.0, lo + (hi - lo) * u01(rng)); };
+    const double scale = pow10(-6, 6);
+    // Offsets up to 1e7.5, but a scene no smaller than 1e-8 of its distance from the world
+    // origin: beyond that ratio the Embree paths lose the scene's own precision (reproducers in
+    // tests/stress/known_issues/).
+    const Vec3d offset =
+        rng() % 3 == 0 ? Vec3d{} : vec() * std::min(pow10(0, 7.5), scale * max_offset_over_size);
+    StressCase c;
+    c.suite = "fuzz " + std::to_string(seed);
+    c.scene = std::make_shared<Scene>(empty_scene());
+    const int spheres = static_cast<int>(rng() % 5), tris = static_cast<int>(rng() % 6);
+    for (int k = 0; k < spheres; ++k) {
+        c.scene->objects.push_back(
+            sphere(offset + vec() * (3 * scale), scale * pow10(-3, 0.3)));
+    }
+    for (int k = 0; k < tris; ++k) {
+        const Vec3d a = offset + vec() * (3 * scale);
+        c.scene->objects.push_back(triangle(a, a + vec() * scale, a + vec() * scale));
+    }
+    if (rng() % 2 == 0 || c.scene->objects.empty()) {
+        c.scene->objects.push_back(engine::testing::icosphere_object(
+            static_cast<int>(rng() % 3), offset + vec() * scale, scale * pow10(-1, 0.3)));
+    }
+    c.closed.assign(c.scene->objects.size(), false);
+    for (std::size_t i = 0; i < c.scene->objects.size(); ++i) {
+        const Object& o = c.scene->objects[i];
+        c.closed[i] = o.kind == ObjectKind::mesh && is_closed_mesh(*o.mesh);
+    }
+    for (int i = 0; i < 48; ++i) {
+        const Object& o = c.scene->objects[rng() % c.scene->objects.size()];
+        Vec3d target;
+        if (o.kind == ObjectKind::sphere) {
+            const double rho = rng() % 4 == 0 ? 1.0 + u(rng) * 1e-9 : std::sqrt(u01(rng));
+            target = o.sphere.center + engine::normalize(vec()) * (o.sphere.radius * rho);
+        } else {
+            const engine::TriangleMesh& m = *o.mesh;
+            const auto& t = m.triangles[rng() % m.size()];
+            const double s = u01(rng), w = u01(rng) * (1 - s);
+            switch (rng() % 3) {
+                case 0: target = m.positions[t[0]]; break;
+                case 1: target = m.positions[t[0]] + (m.positions[t[1]] - m.positions[t[0]]) * s; break;
+                default:
+                    target = m.positions[t[0]] + (m.positions[t[1]] - m.positions[t[0]]) * s +
+                             (m.positions[t[2]] - m.positions[t[0]]) * w;
+            }
+        }
+        const Vec3d origin =
+            rng() % 4 == 0 ? vec() * pow10(0, 7) : target + vec() * (scale * pow10(0, 3));
+        Ray r{origin, (target - origin) * pow10(-6, 6)};
+        if (!(engine::length(r.direction) > 0) ||
+            !std::isfinite(engine::dot(r.direction, r.direction))) {
+            continue;
+        }
+        if (rng() % 8 == 0) r.tmin = u01(rng) * 0.5;
+        c.rays.push_back(r);
+    }
+    return c;
+}
+
+/// The engine's answers on `c` judged ray by ray: what breaks the asserted bounds goes to
+/// `wrong` (and its rays to `bad_rays`), refined's leaks to `known`.
+struct Verdict {
+    std::string wrong, known;
+    std::vector<std::size_t> bad_rays;
+};
+Verdict judge_case(const StressCase& c) {
+    Verdict v;
+    const ReferenceAnswers refs = reference_answers(c);
+    auto built = engine::QueryEngine::build(c.scene);
+    if (!built.ok()) return v;  // a scene the engine rejects is not a disagreement
+    for (engine::Precision p : {engine::Precision::refined, engine::Precision::exact}) {
+        engine::QueryOptions opt;
+        opt.precision = p;
+        const auto res = (*built)->intersect(c.rays, opt);
+        const bool exact = res.precision == engine::Precision::exact;
+        for (std::size_t i = 0; i < c.rays.size(); ++i) {
+            StressCase one{c.suite, c.scene, {c.rays[i]}, c.closed};
+            const ModeStats m = judge(one, {exact ? refs.exact[i] : refs.coarse[i]},
+                                      {res.hits[i]}, exact ? "exact" : "refined", "");
+            const std::string line = std::string(engine::to_string(res.precision)) + " ray " +
+                                     std::to_string(i) + ": " + m.summary() + "\n";
+            if (m.wrong() || m.t_err_violations || (exact && (m.leaks || m.max_ulps() > kExactMaxUlps))) {
+                v.bad_rays.push_back(i);
+                v.wrong += line;
+            } else if (m.leaks) {
+                v.known += line;
+            }
+        }
+        if ((*built)->brute_force()) break;
+    }
+    return v;
+}
+
+TEST(Fuzz, DifferentialAgainstReference) {
+    const double budget = env_or("RAYCASTD_FUZZ_SECONDS", 20);
+    const auto seed0 = static_cast<std::uint64_t>(env_or("RAYCASTD_FUZZ_SEED", 6));
+    const double max_ratio = env_or("RAYCASTD_FUZZ_MAX_RATIO", 1e8);
+    const char* save = std::getenv("RAYCASTD_FUZZ_SAVE_DIR");
+    const std::filesystem::path dir =
+        save && *save ? save : std::filesystem::path(RAYCASTD_STRESS_DIR) / "regressions";
+    const auto start = std::chrono::steady_clock::now();
+    std::size_t iterations = 0, rays = 0, failures = 0, known = 0;
+    for (std::uint64_t seed = seed0;; ++seed) {
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (elapsed > budget) break;
+        // Each scene twice: as generated (brute force when small), and padded for Embree.
+        StressCase base = random_case(seed, max_ratio);
+        StressCase padded = base;
+        padded.scene = std::make_shared<Scene>(*base.scene);
+        pad_for_embree(*padded.scene, padded.closed);
+        for (const StressCase* c : {&base, &padded}) {
+            ++iterations;
+            rays += c->rays.size();
+            const Verdict v = judge_case(*c);
+            if (!v.known.empty()) {
+                ++known;
+                std::printf("[ fuzz     ] seed %llu (known issue, not asserted): %s",
+                            static_cast<unsigned long long>(seed), v.known.c_str());
+            }
+            if (v.wrong.empty()) continue;
+            ++failures;
+            StressCase keep = *c;
+            keep.rays.clear();
+            for (std::size_t i : v.bad_rays) keep.rays.push_back(c->rays[i]);
+            std::filesystem::create_directories(dir);
+            const auto file = dir / ("fuzz-" + std::to_string(seed) +
+                                     (c == &padded ? "-embree" : "") + ".txt");
+            std::ofstream(file) << write_case(keep, "differential fuzz, seed " +
+                                                        std::to_string(seed) + "\n" + v.wrong);
+            ADD_FAILURE() << "disagreement saved to " << file << "\n" << v.wrong;
+        }
+    }
+    std::printf("[ fuzz     ] %zu scenes, %zu rays in %.0f s, %zu disagreements, %zu scenes with "
+                "refined leaks (known issue)\n",
+                iterations, rays, budget, failures, known);
+    RecordProperty("scenes", static_cast<int>(iterations));
+    RecordProperty("rays", static_cast<int>(rays));
+    RecordProperty("refined_leak_scenes", static_cast<int>(known));
+    EXPECT_GT(iterations, 0u);
+}
+
+/// Replays every case file of `folder` on both paths; returns what breaks the asserted bounds
+/// (and, with `include_known`, refined's leaks too).
+std::string replay(const std::string& folder, bool include_known, std::size_t& files) {
+    std::string out;
+    const std::filesystem::path dir = std::filesystem::path(RAYCASTD_STRESS_DIR) / folder;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+        if (entry.path().extension() != ".txt") continue;
+        ++files;
+        std::ifstream in(entry.path());
+        std::stringstream text;
+        text << in.rdbuf();
+        StressCase c;
+        std::string error;
+        if (!read_case(text.str(), c, error)) {
+            out += entry.path().string() + ": " + error + "\n";
+            continue;
+        }
+        c.suite = entry.path().filename().string();
+        StressCase padded = c;
+        padded.scene = std::make_shared<Scene>(*c.scene);
+        pad_for_embree(*padded.scene, padded.closed);
+        for (const StressCase* k : {&c, &padded}) {
+            const Verdict v = judge_case(*k);
+            const std::string bad = v.wrong + (include_known ? v.known : "");
+            if (!bad.empty()) out += c.suite + (k == &padded ? " (padded)" : "") + ":\n" + bad;
+        }
+    }
+    return out;
+}
+
+// Every saved case, replayed: once a disagreement is fixed it must stay fixed.
+TEST(Fuzz, RegressionCases) {
+    std::size_t files = 0;
+    EXPECT_EQ(replay("regressions", /*include_known=*/false, files), "");
+    EXPECT_GT(files, 0u) << "no cases in tests/stress/regressions";
+}
+
+// Cases the engine still gets wrong, each the accelerator's (engine/accel/embree_accel.cpp) and
+// described in its file's header; enable when they are fixed.
+TEST(Fuzz, DISABLED_KnownIssues) {
+    std::size_t files = 0;
+    EXPECT_EQ(replay("known_issues", /*include_known=*/true, files), "");
+    EXPECT_GT(files, 0u);
+}
+
+}  // namespace
+}  // namespace raycastd::stress

@@ -304,10 +304,12 @@ std::vector<StressCase> huge_coordinates(const GenOptions& g) {
     Rng rng(g.seed * 1000 + 7);
     const Vec3d offset{1e7, -1e7, 1e7};
     std::vector<StressCase> out;
-    for (int variant = 0; variant < 2; ++variant) {
+    // 0: spheres and triangles (both paths); 1: plus a closed icosphere; 2: triangles only (the
+    // case Open3D can take too).
+    for (int variant = 0; variant < 3; ++variant) {
         Scene s = empty_scene();
         std::vector<bool> closed;
-        for (int k = 0; k < 4; ++k) {
+        for (int k = 0; k < (variant == 2 ? 0 : 4); ++k) {
             s.objects.push_back(sphere(offset + unit(rng) * uniform(rng, 2, 6), uniform(rng, 0.3, 1)));
             closed.push_back(false);
         }
@@ -316,7 +318,7 @@ std::vector<StressCase> huge_coordinates(const GenOptions& g) {
             s.objects.push_back(triangle(a, a + unit(rng), a + unit(rng)));
             closed.push_back(false);
         }
-        if (variant == 1) {
+        if (variant >= 1) {
             s.objects.push_back(engine::testing::icosphere_object(3, offset, 1.5));
             closed.push_back(true);
         }
@@ -339,8 +341,9 @@ std::vector<StressCase> huge_coordinates(const GenOptions& g) {
         }
         auto cases = variant == 0 ? both_paths("huge coordinates", std::move(s), std::move(rays),
                                                std::move(closed))
-                                  : embree_only("huge coordinates (mesh)", std::move(s),
-                                                std::move(rays), std::move(closed));
+                                  : embree_only(variant == 1 ? "huge coordinates (mesh)"
+                                                             : "huge coordinates (triangles)",
+                                                std::move(s), std::move(rays), std::move(closed));
         for (auto& cs : cases) out.push_back(std::move(cs));
     }
     return out;

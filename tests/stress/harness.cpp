@@ -33,7 +33,7 @@ Quad qabs(Quad v) { return v < 0 ? -v : v; }
 const RefCrossing* match(const RefAnswer& ref, const Hit& h) {
     const RefCrossing* best = nullptr;
     for (const RefCrossing& c : ref.crossings) {
-        if (c.object != h.object || c.primitive != h.primitive) continue;
+        if (c.parallel || c.object != h.object || c.primitive != h.primitive) continue;
         if (!best || qabs(c.t - Quad(h.t)) < qabs(best->t - Quad(h.t))) best = &c;
     }
     return best;
@@ -133,7 +133,7 @@ ModeStats judge(const StressCase& c, const std::vector<RefAnswer>& refs,
         }
         const RefCrossing* first = nullptr;
         for (const RefCrossing& y : ref.crossings) {
-            if (y.t == ref.t_first_robust) first = &y;
+            if (!y.parallel && y.t == ref.t_first_robust) first = &y;
         }
         const double tb = first ? tie_band(bands, first->t, first->t_scale) : 0.0;
         if (x->t > ref.t_first_robust + tb) {

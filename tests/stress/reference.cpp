@@ -31,7 +31,6 @@ QVec cross(const QVec& a, const QVec& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 Quad norm(const QVec& a) { return sqrtq(dot(a, a)); }
-Quad qabs(Quad v) { return v < 0 ? -v : v; }
 
 /// The sphere: Δ/4 = a·r² − |f × d|² (Lagrange's identity) with f = o − c exact in quad.
 void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& ray,
@@ -54,7 +53,7 @@ void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& 
     if (c.margin < -bands.decision) return;
     if (disc <= 0) {
         // Tangent, or a near miss within the band: the candidate point is the closest approach.
-        c.t = -beta / a;
+        c.t = c.t_hi = -beta / a;
         c.front_face = true;
         out.push_back(c);
         return;
@@ -64,10 +63,10 @@ void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& 
     const Quad gamma_c = dot(f, f) - r * r;
     Quad t0 = qq / a, t1 = gamma_c / qq;
     if (t0 > t1) std::swap(t0, t1);
-    c.t = t0;
+    c.t = c.t_hi = t0;
     c.front_face = true;  // below the closest approach the ray moves towards the centre
     out.push_back(c);
-    c.t = t1;
+    c.t = c.t_hi = t1;
     c.front_face = false;
     out.push_back(c);
 }
@@ -110,7 +109,6 @@ void triangle_crossings(const engine::Triangle& tri, std::uint32_t object, std::
     const QVec n = cross(b - a, c - a);
     if (n.x == 0 && n.y == 0 && n.z == 0) return;  // degenerate: never hit
     const Quad nd = dot(n, d);
-    if (nd == 0) return;  // the line lies in (or parallel to) the plane: no crossing
     const QVec A = a - o, B = b - o, C = c - o;
     const Quad len_d = norm(d);
     RefCrossing x;
@@ -118,8 +116,20 @@ void triangle_crossings(const engine::Triangle& tri, std::uint32_t object, std::
     x.primitive = prim;
     x.margin = to_double(triangle_margin(A, B, C, d, len_d, [](const QVec& v) { return norm(v); }));
     if (x.margin < -bands.decision) return;
-    x.t = dot(n, A) / nd;
     x.t_scale = to_double(std::max(norm(A), std::max(norm(B), norm(C))) / len_d);
+    if (nd == 0) {
+        // The line lies in (or parallel to) the plane: no crossing, but where it runs alongside
+        // the triangle (the projections of the vertices on the line) matters to its neighbours.
+        const Quad dd = dot(d, d);
+        const Quad ta = dot(A, d) / dd, tb = dot(B, d) / dd, tc = dot(C, d) / dd;
+        x.parallel = true;
+        x.t = std::min(ta, std::min(tb, tc));
+        x.t_hi = std::max(ta, std::max(tb, tc));
+        out.push_back(x);
+        return;
+    }
+    x.t = dot(n, A) / nd;
+    x.t_hi = x.t;
     x.front_face = nd < 0;
     out.push_back(x);
 }
@@ -192,7 +202,7 @@ std::vector<RefCrossing> reference_crossings(const Scene& scene, const Ray& ray,
     std::vector<RefCrossing> kept;
     for (const RefCrossing& c : all) {
         const double band_t = bands.range * c.t_scale;
-        if (c.t >= Quad(ray.tmin) - band_t && c.t <= Quad(ray.tmax) + band_t) kept.push_back(c);
+        if (c.t_hi >= Quad(ray.tmin) - band_t && c.t <= Quad(ray.tmax) + band_t) kept.push_back(c);
     }
     return kept;
 }
@@ -207,7 +217,7 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
     RefAnswer ans;
     for (const RefCrossing& c : crossings) {
         const double band_t = bands.range * c.t_scale;
-        if (c.margin >= -bands.decision && c.t >= Quad(ray.tmin) - band_t &&
+        if (c.margin >= -bands.decision && c.t_hi >= Quad(ray.tmin) - band_t &&
             c.t <= Quad(ray.tmax) + band_t) {
             ans.crossings.push_back(c);
         }
@@ -225,7 +235,7 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
     // The exact answer: margins ≥ 0 in range, ordered by (t, object, primitive) as the API does.
     const RefCrossing* best = nullptr;
     for (const RefCrossing& c : cs) {
-        if (c.margin < 0 || !in_range_exact(c)) continue;
+        if (c.parallel || c.margin < 0 || !in_range_exact(c)) continue;
         if (!best || c.t < best->t || (c.t == best->t && std::make_pair(c.object, c.primitive) <
                                                               std::make_pair(best->object,
                                                                              best->primitive))) {
@@ -243,13 +253,16 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
     // crossing of that mesh within the tie band faces the same way (the line passes through the
     // surface at a shared edge or vertex, whichever triangle takes it).
     auto robust = [&](const RefCrossing& c) {
-        if (!in_range_robust(c)) return false;
+        if (c.parallel || !in_range_robust(c)) return false;
         if (c.margin > bands.decision) return true;
         if (c.margin < 0 || !is_closed(c.object)) return false;
-        const double tb = tie_band(bands, c.t, c.t_scale);
+        // The neighbourhood of the crossing: 1e-9 of the distance scale, far wider than any
+        // double kernel's uncertainty, so that an exit right after the entry (a corner clipped
+        // at a vertex, a silhouette) makes it a near-tie.
+        const double tb = std::max(tie_band(bands, c.t, c.t_scale), 1e-9 * c.t_scale);
         for (const RefCrossing& o : cs) {
-            if (o.object != c.object) continue;
-            if (qabs(o.t - c.t) <= tb && o.front_face != c.front_face) return false;
+            if (o.object != c.object || o.t > c.t + tb || o.t_hi < c.t - tb) continue;
+            if (o.parallel || o.front_face != c.front_face) return false;  // grazes, not enters
         }
         return true;
     };
@@ -268,7 +281,8 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
     const double tb = tie_band(bands, first_robust->t, first_robust->t_scale);
     ans.object_robust = true;
     for (const RefCrossing& c : cs) {
-        if (c.t <= first_robust->t + tb && c.object != first_robust->object) {
+        if (c.t <= first_robust->t + tb && c.object != first_robust->object &&
+            !(c.parallel && c.t_hi < first_robust->t - tb)) {
             ans.object_robust = false;
         }
     }

@@ -39,6 +39,11 @@ struct RefCrossing {
     double margin = 0;     ///< signed relative decision margin (see header comment)
     double t_scale = 0;    ///< distance scale of the computation / |d|: the unit of range bands
     bool front_face = true;  ///< the ray arrives against the stored normal
+    /// The line is parallel to (or lies in) the triangle's plane: never a hit (the API's
+    /// in-plane rule), but a line touching a closed mesh along a face makes nearby crossings
+    /// of that mesh near-ties. t .. t_hi is where the line runs alongside the triangle.
+    bool parallel = false;
+    Quad t_hi = 0;
 };
 
 /// Near-tie bands: below these the reference does not judge a decision.
