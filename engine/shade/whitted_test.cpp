@@ -135,6 +135,17 @@ TEST(Whitted, TutorialQuestion2Tree) {
     EXPECT_EQ(t.counts.refracted, 2u);
 }
 
+TEST(Whitted, RadianceIsTheTreesColourWithTheSameRays) {
+    auto engine = prepare(tutorial_q2_scene());
+    const Whitted w(*engine, {});
+    const Ray ray{{0, 0, 0}, {0, 0, 1}};
+    RayCounts counts;
+    const Vec3d c = w.radiance(ray, counts);
+    const RayTree t = w.tree(ray);
+    EXPECT_EQ(c, t.color);
+    EXPECT_EQ(counts.total(), t.counts.total());
+}
+
 TEST(Whitted, MaxDepthCutsTheTree) {
     auto engine = prepare(tutorial_q2_scene());
     WhittedOptions o;
