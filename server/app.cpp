@@ -125,9 +125,7 @@ int App::bind() {
 
 bool App::listen_after_bind() { return http_.listen_after_bind(); }
 
-void App::stop() {
-    if (http_.is_running()) http_.stop();
-}
+void App::stop() { http_.stop(); }
 
 void App::handle(const httplib::Request& req, httplib::Response& res, bool heavy,
                  const std::function<void()>& work) {

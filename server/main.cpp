@@ -1,20 +1,15 @@
-// raycastd: parse flags, build the App, listen.
+// raycastd: parse flags, build the App, listen; SIGINT/SIGTERM stop it cleanly.
 
-#include <csignal>
+#include <pthread.h>
+#include <signal.h>
+
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <thread>
 
 #include "server/app.h"
-
-namespace {
-
-raycastd::server::App* g_app = nullptr;
-
-void on_signal(int) {
-    if (g_app) g_app->stop();
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
     std::string message;
@@ -24,6 +19,17 @@ int main(int argc, char** argv) {
         (error ? std::cerr : std::cout) << message;
         return error ? 2 : 0;
     }
+    // A client that hangs up mid-response, or a closed stdout, must not end the server.
+    std::signal(SIGPIPE, SIG_IGN);
+    // SIGINT/SIGTERM are taken by one thread with sigwait (blocked everywhere else, so every
+    // thread started from here inherits the mask). A signal that arrives before the server is
+    // listening is not lost: the watcher keeps asking it to stop until it has.
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGINT);
+    sigaddset(&stop_signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
     raycastd::server::App app(*config);
     std::string startup_error;
     if (!app.start(startup_error)) {
@@ -35,12 +41,21 @@ int main(int argc, char** argv) {
         std::cerr << "raycastd: cannot listen on " << config->host << ":" << config->port << "\n";
         return 1;
     }
-    g_app = &app;
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
-    // A client that hangs up mid-response, or a closed stdout, must not end the server.
-    std::signal(SIGPIPE, SIG_IGN);
+    std::atomic<bool> done{false};
+    std::thread watcher([&] {
+        int sig = 0;
+        sigwait(&stop_signals, &sig);
+        while (!done) {
+            app.stop();
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+    });
     std::printf("raycastd listening on http://%s:%d\n", config->host.c_str(), port);
     std::fflush(stdout);
-    return app.listen_after_bind() ? 0 : 1;
+    const bool ok = app.listen_after_bind();
+    done = true;
+    // Wake the watcher if no signal came (listening failed): it ends once `done` is seen.
+    pthread_kill(watcher.native_handle(), SIGTERM);
+    watcher.join();
+    return ok ? 0 : 1;
 }

@@ -313,6 +313,43 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
     return true;
 }
 
+/// The fast path's float ray: the double ray as it is, relative to the scene centre, with no
+/// clipping to the bounds and no renormalisation (t comes back in the client's units). Used
+/// when that loses nothing the float kernel had anyway: tmin ≥ 0, an origin within a few
+/// scene sizes of the scene, and a direction of moderate length. Otherwise prepare_ray.
+bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c, RTCRay& r) {
+    const Vec3d org = ray.origin - a.center;
+    const double d2 = dot(ray.direction, ray.direction);
+    const double scale = a.float_scale;
+    if (!(ray.tmin >= 0.0) || dot(org, org) > 16.0 * scale * scale || d2 < 1e-12 || d2 > 1e12) {
+        return false;
+    }
+    c.ray = &ray;
+    c.shift = 0.0;
+    c.len = 1.0;
+    c.margin = 0.0;
+    r.org_x = static_cast<float>(org.x);
+    r.org_y = static_cast<float>(org.y);
+    r.org_z = static_cast<float>(org.z);
+    r.dir_x = static_cast<float>(ray.direction.x);
+    r.dir_y = static_cast<float>(ray.direction.y);
+    r.dir_z = static_cast<float>(ray.direction.z);
+    r.tnear = static_cast<float>(ray.tmin);
+    r.tfar = static_cast<float>(ray.tmax);  // +inf stays +inf
+    r.time = 0.0f;
+    r.mask = 0xFFFFFFFFu;
+    r.id = 0;
+    r.flags = 0;
+    return true;
+}
+
+/// prepare_ray_fast where it applies, else prepare_ray.
+bool prepare_native_ray(const EmbreeAccel::Impl& a, const Ray& ray, Precision p, RayContext& c,
+                        RTCRay& r) {
+    if (p == Precision::fast && a.spheres == 0 && prepare_ray_fast(a, ray, c, r)) return true;
+    return prepare_ray(a, ray, /*back_off=*/false, c, r);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -412,7 +449,7 @@ std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
         return h;
     }
 
-    if (!prepare_ray(a, ray, /*back_off=*/false, c, rh.ray)) return std::nullopt;
+    if (!prepare_native_ray(a, ray, precision, c, rh.ray)) return std::nullopt;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a.native, &c.rtc, &rh);
     NativeHit nh{rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v,
@@ -446,7 +483,9 @@ std::optional<Hit> EmbreeAccel::finish_native(const Ray& ray, double shift, doub
     h.u = nh.u;
     h.v = nh.v;
     // A float kernel: relative error of a few float ulps of the scene's coordinates.
-    h.t_err = gamma_float(12) * (a.float_scale / len + std::abs(h.t));
+    h.t_err = gamma_float(12) * ((a.float_scale + length(ray.origin - a.center)) /
+                                     length(ray.direction) +
+                                 std::abs(h.t));
     // Embree's Ng = cross(v2−v0, v0−v1) = (b−a)×(c−a) up to rounding: its sign gives the side.
     h.front_face = dot(ray.direction, nh.ng) < 0.0;
     if (want_normal) h.normal = triangle_normal(tri);
@@ -477,10 +516,16 @@ namespace {
 /// origins close together relative to the scene (camera rays, not random rays). Packets win
 /// 2.6× on camera rays and lose on random ones (PERFORMANCE.md).
 bool coherent(const Ray* rays, std::size_t n, double scene_scale) {
-    const Vec3d d0 = normalize(rays[0].direction);
+    // cos²(angle) ≥ 0.97 without square roots: (d·d0)² ≥ 0.97·|d|²·|d0|², d·d0 > 0.
+    const Vec3d& d0 = rays[0].direction;
+    const double d0d0 = dot(d0, d0);
+    const double max_spread2 = 0.0025 * scene_scale * scene_scale;
     for (std::size_t i = 1; i < n; ++i) {
-        if (dot(normalize(rays[i].direction), d0) < 0.985) return false;
-        if (length(rays[i].origin - rays[0].origin) > 0.05 * scene_scale) return false;
+        const Vec3d& d = rays[i].direction;
+        const double c = dot(d, d0);
+        if (c <= 0.0 || c * c < 0.97 * dot(d, d) * d0d0) return false;
+        const Vec3d o = rays[i].origin - rays[0].origin;
+        if (dot(o, o) > max_spread2) return false;
     }
     return true;
 }
@@ -512,7 +557,7 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             RTCRay r{};
             valid[k] = 0;
             lanes[k].accel = &a;
-            if (k < m && prepare_ray(a, rays[i + k], /*back_off=*/false, lanes[k], r)) valid[k] = -1;
+            if (k < m && prepare_native_ray(a, rays[i + k], precision, lanes[k], r)) valid[k] = -1;
             rh.ray.org_x[k] = r.org_x;
             rh.ray.org_y[k] = r.org_y;
             rh.ray.org_z[k] = r.org_z;
@@ -559,7 +604,10 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
         if (!s) return linear_any(*a.scene, ray);
     }
     RTCRay r;
-    if (!prepare_ray(a, ray, precision == Precision::exact, c, r)) return false;
+    const bool prepared = precision == Precision::exact
+                              ? prepare_ray(a, ray, /*back_off=*/true, c, r)
+                              : prepare_native_ray(a, ray, precision, c, r);
+    if (!prepared) return false;
     rtcOccluded1(s, &c.rtc, &r);
     const bool hit = r.tfar == -std::numeric_limits<float>::infinity();
     // As in closest: a float miss is confirmed by the exact traversal before refined says so.

@@ -33,14 +33,16 @@ void for_each_ray(std::size_t n, F&& f) {
                       });
 }
 
-/// Like for_each_ray, handing out contiguous blocks (whole packets of 16 where possible).
+/// Like for_each_ray, handing out contiguous blocks of at least 256 rays (whole packets of 16
+/// where possible, and few enough tasks that scheduling costs nothing per ray).
 template <class F>
 void for_each_block(std::size_t n, F&& f) {
-    if (n <= kSerialBatch) {
+    constexpr std::size_t kBlock = 256;
+    if (n <= kBlock) {
         f(std::size_t(0), n);
         return;
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kSerialBatch),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kBlock),
                       [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
 }
 
