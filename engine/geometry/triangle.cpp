@@ -75,35 +75,66 @@ inline double div(DD n, DD d) {
     return t + r / d.hi;
 }
 
-/// Where the ray's line crosses the triangle's plane: t = n·(v − o) / n·d with v a vertex,
-/// n = (b − a)×(c − a), every difference exact (TwoSum) and every product double-double, so t
-/// is rounded once: a grazing ray, a sliver or a far origin, whose Woop t loses digits in the
-/// shear, still gets t to about an ulp. NaN when n·d is zero to double-double precision (the ray
-/// runs in or parallel to the plane).
-double plane_t(const Triangle& tri, const Ray& ray) {
+/// The vertex nearest the origin (max norm). Anchoring the plane there makes the numerator's
+/// rounding scale with that distance, and an origin exactly on a vertex gets t = 0 exactly.
+const Vec3d& anchor_vertex(const Triangle& tri, const Vec3d& origin) {
+    const Vec3d* anchor = &tri.a;
+    double best = max_component(abs(tri.a - origin));
+    for (const Vec3d* v : {&tri.b, &tri.c}) {
+        const double dist = max_component(abs(*v - origin));
+        if (dist < best) {
+            best = dist;
+            anchor = v;
+        }
+    }
+    return *anchor;
+}
+
+/// Where the ray's line crosses the triangle's plane: t = n·(v − o) / n·d with v the anchor
+/// vertex and n = (b − a)×(c − a), v − o exact (TwoSum) and both dot products double-double, so
+/// that t is rounded once. A grazing ray, a sliver or a far origin, whose Woop t loses digits in
+/// the shear, still gets t to about an ulp. NaN when n·d is zero to double-double precision (the
+/// ray runs in or parallel to the plane).
+///
+/// n itself is first taken in plain double: a normal off by δn moves the crossing by
+/// δn·(v − p) / n·d (p the crossing), which for the usual triangle, ray and distance is far
+/// below an ulp of t. Where that bound is not (slivers, grazing rays, a triangle large next to
+/// its distance), n is formed in double-double from exact edges.
+///
+/// Compiled twice, with and without hardware FMA, and chosen when the program loads (GCC's
+/// function multiversioning): without it std::fma is a library call and this costs twice as much.
+__attribute__((target_clones("fma", "default"))) double plane_t(const Triangle& tri,
+                                                               const Ray& ray) {
+    const Vec3d& d = ray.direction;
+    const Vec3d& v = anchor_vertex(tri, ray.origin);
+    const DD vo[3] = {two_sum(v.x, -ray.origin.x), two_sum(v.y, -ray.origin.y),
+                      two_sum(v.z, -ray.origin.z)};
+    {
+        const Vec3d e1 = tri.b - tri.a, e2 = tri.c - tri.a;
+        const Vec3d n = cross(e1, e2);
+        const DD num = add(add(mul(vo[0], n.x), mul(vo[1], n.y)), mul(vo[2], n.z));
+        const DD den = add(add(two_prod(n.x, d.x), two_prod(n.y, d.y)), two_prod(n.z, d.z));
+        if (den.hi != 0.0) {
+            const double t = div(num, den);
+            // |δn|₁ ≤ γ₃·Σ|products| plus the rounding of e1 and e2: 16u·|e1|₁·|e2|₁ covers it.
+            // |v − p|₁ from the double hit point; accept when the shift is below u·|t|
+            // (4u·|v − o|₁ more for the rounding of v − p itself).
+            auto l1 = [](const Vec3d& w) { return std::abs(w.x) + std::abs(w.y) + std::abs(w.z); };
+            const double dn = 16.0 * kDoubleUnitRoundoff * l1(e1) * l1(e2);
+            const Vec3d vo_hi{vo[0].hi, vo[1].hi, vo[2].hi};
+            const double vp = l1(vo_hi - d * t) + 4.0 * kDoubleUnitRoundoff * l1(vo_hi);
+            if (dn * vp <= kDoubleUnitRoundoff * std::abs(t) * std::abs(den.hi)) return t;
+        }
+    }
     const DD e1[3] = {two_sum(tri.b.x, -tri.a.x), two_sum(tri.b.y, -tri.a.y),
                       two_sum(tri.b.z, -tri.a.z)};
     const DD e2[3] = {two_sum(tri.c.x, -tri.a.x), two_sum(tri.c.y, -tri.a.y),
                       two_sum(tri.c.z, -tri.a.z)};
-    // The plane is anchored at the vertex nearest the origin: the numerator's rounding then
-    // scales with that distance, and an origin exactly on a vertex gets t = 0 exactly.
-    const Vec3d* anchor = &tri.a;
-    double best = kInfinity;
-    for (const Vec3d* v : {&tri.a, &tri.b, &tri.c}) {
-        const double d1 = max_component(abs(*v - ray.origin));
-        if (d1 < best) {
-            best = d1;
-            anchor = v;
-        }
-    }
-    const DD ao[3] = {two_sum(anchor->x, -ray.origin.x), two_sum(anchor->y, -ray.origin.y),
-                      two_sum(anchor->z, -ray.origin.z)};
     const DD n[3] = {sub(mul(e1[1], e2[2]), mul(e1[2], e2[1])),
                      sub(mul(e1[2], e2[0]), mul(e1[0], e2[2])),
                      sub(mul(e1[0], e2[1]), mul(e1[1], e2[0]))};
-    const DD num = add(add(mul(n[0], ao[0]), mul(n[1], ao[1])), mul(n[2], ao[2]));
-    const DD den = add(add(mul(n[0], ray.direction.x), mul(n[1], ray.direction.y)),
-                       mul(n[2], ray.direction.z));
+    const DD num = add(add(mul(n[0], vo[0]), mul(n[1], vo[1])), mul(n[2], vo[2]));
+    const DD den = add(add(mul(n[0], d.x), mul(n[1], d.y)), mul(n[2], d.z));
     if (den.hi == 0.0) return std::numeric_limits<double>::quiet_NaN();
     return div(num, den);
 }

@@ -17,6 +17,7 @@
 //   <stem>_crossings.f64  rows of 8: ray, object, primitive, t, margin, t_scale, tie band,
 //                         parallel (1: the line runs alongside the triangle; never a hit)
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -49,18 +50,28 @@ std::string json_string(const std::string& s) {
     return out + "\"";
 }
 
+/// A number for JSON; an infinite error (a nonzero t against a reference of exactly 0) is
+/// written as Infinity, which Python's json module reads.
+std::string num(double v) {
+    if (std::isinf(v)) return v > 0 ? "Infinity" : "-Infinity";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
 std::string stats_json(const std::string& suite, const ModeStats& m) {
     char buf[1024];
     std::snprintf(buf, sizeof buf,
                   "{\"suite\": %s, \"path\": %s, \"mode\": %s, \"rays\": %zu, \"judged\": %zu, "
                   "\"near_ties\": %zu, \"near_tie_disagree\": %zu, \"wrong_hit\": %zu, "
                   "\"wrong_object\": %zu, \"leaks\": %zu, \"t_err_violations\": %zu, "
-                  "\"max_rel\": %.6g, \"median_rel\": %.6g, \"max_ulps\": %.6g, "
-                  "\"median_ulps\": %.6g, \"seconds\": %.9g}",
+                  "\"max_rel\": %s, \"median_rel\": %s, \"max_ulps\": %s, "
+                  "\"median_ulps\": %s, \"seconds\": %.9g}",
                   json_string(suite).c_str(), json_string(m.path).c_str(),
                   json_string(m.mode).c_str(), m.rays, m.judged, m.near_ties, m.near_tie_disagree,
-                  m.wrong_hit, m.wrong_object, m.leaks, m.t_err_violations, m.max_rel(),
-                  m.median_rel(), m.max_ulps(), m.median_ulps(), m.seconds);
+                  m.wrong_hit, m.wrong_object, m.leaks, m.t_err_violations,
+                  num(m.max_rel()).c_str(), num(m.median_rel()).c_str(),
+                  num(m.max_ulps()).c_str(), num(m.median_ulps()).c_str(), m.seconds);
     return buf;
 }
 
