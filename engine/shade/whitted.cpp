@@ -163,17 +163,33 @@ Vec3d Whitted::trace(const Ray& ray, int depth, RayCounts& counts, RayTree* tree
     return shade(ray, *hit, depth, counts, tree);
 }
 
+struct Whitted::Surface {
+    const Hit& hit;
+    const Material& m;
+    std::uint32_t material;
+    Vec3d d;      ///< unit direction of the incoming ray
+    Vec3d p;      ///< the hit point
+    Vec3d ng;     ///< geometric normal, turned to face the ray (spawned origins move along it)
+    Vec3d n;      ///< shading normal, on the same side
+    Vec3d p_err;  ///< error bound of p (shade/spawn.h)
+};
+
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
                      RayTree* tree) const {
-    const Scene& s = scene();
-    const Material& m = s.materials[material_of(hit)];
+    const std::uint32_t mi = material_of(hit);
     const Vec3d d = normalize(ray.direction);
-    const Vec3d p = ray.at(hit.t);
     const Vec3d ng = face_towards_ray(hit.normal, d);
     Vec3d n = shading_normal(hit);
     if (dot(n, ng) < 0.0)
         n = -n;
-    const Vec3d p_err = hit_point_error(ray, hit, plan_.spawn);
+    const Surface sp{hit,
+                     scene().materials[mi],
+                     mi,
+                     d,
+                     ray.at(hit.t),
+                     ng,
+                     n,
+                     hit_point_error(ray, hit, plan_.spawn)};
 
     // Node k of the tree is written before its children so that labels run depth-first; the
     // vector may grow during the recursion, so the node is addressed by index, never by reference.
@@ -181,26 +197,38 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
     if (tree) {
         TreeNode node;
         node.hit = hit;
-        node.point = p;
+        node.point = sp.p;
         node.normal = n;
         tree->nodes.push_back(std::move(node));
     }
-
-    Vec3d color = m.emissive + phong_ambient(m, plan_.ambient);
     bool lit = false;
+    // direct() does not recurse, so the node's address is stable while it runs.
+    Vec3d color = direct(sp, counts, tree ? &tree->nodes[k] : nullptr, lit);
+    if (depth < options_.max_depth)
+        color += indirect(sp, depth, counts, tree, k);
+    if (tree) {
+        tree->nodes[k].full_phong = lit;
+        tree->nodes[k].color = color;
+    }
+    return color;
+}
+
+Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit) const {
+    const Scene& s = scene();
+    Vec3d color = sp.m.emissive + phong_ambient(sp.m, plan_.ambient);
     for (std::uint32_t li : plan_.shadow_lights) {
         const Light& light = s.lights[li];
         const bool point = light.type == LightType::point;
-        const Vec3d l = normalize(point ? light.position - p : -light.direction);
+        const Vec3d l = normalize(point ? light.position - sp.p : -light.direction);
         ShadowRayRecord rec;
         rec.light = li;
-        rec.facing = dot(n, l) > 0.0;
+        rec.facing = dot(sp.n, l) > 0.0;
         if (rec.facing) {
-            const Ray shadow =
-                point ? spawn_ray_to(p, p_err, ng, light.position) : spawn_ray(p, p_err, ng, l);
+            const Ray shadow = point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
+                                     : spawn_ray(sp.p, sp.p_err, sp.ng, l);
             ++counts.shadow;
             bool blocked;
-            if (tree) {
+            if (node) {
                 // The tree names the blocker, so it asks for the closest one.
                 const std::optional<Hit> b = closest(shadow);
                 blocked = b.has_value();
@@ -211,42 +239,42 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
             }
             if (!blocked) {
                 lit = true;
-                color += phong_light(m, n, l, -d, light.intensity, plan_.specular[material_of(hit)])
-                             .sum();
+                color +=
+                    phong_light(sp.m, sp.n, l, -sp.d, light.intensity, plan_.specular[sp.material])
+                        .sum();
             }
         }
-        if (tree)
-            tree->nodes[k].shadow_rays.push_back(rec);
+        if (node)
+            node->shadow_rays.push_back(rec);
     }
+    return color;
+}
 
-    if (depth < options_.max_depth) {
-        // Leaving a transparent object: its internal reflection is not traced (the tutorial).
-        const bool leaving_glass = m.transparency > 0.0 && !hit.front_face;
-        if (plan_.reflection && m.reflectivity > 0.0 && !leaving_glass) {
-            ++counts.reflected;
-            const Ray r = spawn_ray(p, p_err, ng, reflect(d, n));
-            int child = -1;
-            color += trace(r, depth + 1, counts, tree, &child) * m.reflectivity;
-            if (tree)
-                tree->nodes[k].reflected = child;
-        }
-        if (plan_.refraction && m.transparency > 0.0) {
-            const double eta = hit.front_face ? 1.0 / m.ior : m.ior;
-            if (const std::optional<Vec3d> t = refract(d, n, eta)) {
-                ++counts.refracted;
-                const Ray r = spawn_ray(p, p_err, ng, *t);
-                int child = -1;
-                color += trace(r, depth + 1, counts, tree, &child) * m.transparency;
-                if (tree)
-                    tree->nodes[k].refracted = child;
-            } else if (tree) {
-                tree->nodes[k].total_internal_reflection = true;
-            }
-        }
+Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, RayTree* tree,
+                        std::size_t k) const {
+    Vec3d color;
+    // Leaving a transparent object: its internal reflection is not traced (the tutorial).
+    const bool leaving_glass = sp.m.transparency > 0.0 && !sp.hit.front_face;
+    if (plan_.reflection && sp.m.reflectivity > 0.0 && !leaving_glass) {
+        ++counts.reflected;
+        const Ray r = spawn_ray(sp.p, sp.p_err, sp.ng, reflect(sp.d, sp.n));
+        int child = -1;
+        color += trace(r, depth + 1, counts, tree, &child) * sp.m.reflectivity;
+        if (tree)
+            tree->nodes[k].reflected = child;
     }
-    if (tree) {
-        tree->nodes[k].full_phong = lit;
-        tree->nodes[k].color = color;
+    if (plan_.refraction && sp.m.transparency > 0.0) {
+        const double eta = sp.hit.front_face ? 1.0 / sp.m.ior : sp.m.ior;
+        if (const std::optional<Vec3d> t = refract(sp.d, sp.n, eta)) {
+            ++counts.refracted;
+            const Ray r = spawn_ray(sp.p, sp.p_err, sp.ng, *t);
+            int child = -1;
+            color += trace(r, depth + 1, counts, tree, &child) * sp.m.transparency;
+            if (tree)
+                tree->nodes[k].refracted = child;
+        } else if (tree) {
+            tree->nodes[k].total_internal_reflection = true;
+        }
     }
     return color;
 }

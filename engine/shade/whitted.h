@@ -141,8 +141,16 @@ class Whitted {
     Vec3d shading_normal(const Hit& hit) const;
 
   private:
+    struct Surface;  // a hit made ready for shading (whitted.cpp)
+
     Vec3d trace(const Ray& ray, int depth, RayCounts& counts, RayTree* tree, int* slot) const;
     Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts, RayTree* tree) const;
+    /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
+    /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
+    Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit) const;
+    /// The weighted reflected and refracted rays (below max_depth); children go into node k.
+    Vec3d indirect(const Surface& sp, int depth, RayCounts& counts, RayTree* tree,
+                   std::size_t k) const;
 
     const QueryEngine& engine_;
     WhittedOptions options_;
