@@ -4,6 +4,7 @@
 
 #include "server/schema/json_writer.h"
 #include "server/schema/query_doc.h"
+#include "server/schema/scene_doc.h"
 
 namespace raycastd::server {
 
@@ -27,31 +28,6 @@ int read_int(const Json& body, const char* key, int fallback, int lo, int hi) {
                         path);
     }
     return static_cast<int>(x);
-}
-
-engine::Camera parse_camera(const Json& j, const std::string& path) {
-    require_object(j, path, kInvalid);
-    engine::Camera c;
-    if (const Json* v = member(j, "position"))
-        c.position = read_vec3(*v, path + "/position", kInvalid);
-    if (const Json* v = member(j, "look_at"))
-        c.look_at = read_vec3(*v, path + "/look_at", kInvalid);
-    if (const Json* v = member(j, "up"))
-        c.up = read_vec3(*v, path + "/up", kInvalid);
-    if (const Json* v = member(j, "fov_y_deg")) {
-        c.fov_y_deg = read_number(*v, path + "/fov_y_deg", kInvalid);
-        if (!(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0)) {
-            throw api_error(kInvalid, path + "/fov_y_deg must be in (0, 180)", path + "/fov_y_deg");
-        }
-    }
-    if (c.look_at == c.position) {
-        throw api_error(kInvalid, path + "/look_at must differ from position", path + "/look_at");
-    }
-    if (length(cross(c.look_at - c.position, c.up)) == 0.0) {
-        throw api_error(kInvalid, path + "/up must not be parallel to the view direction",
-                        path + "/up");
-    }
-    return c;
 }
 
 engine::Precision read_precision(const Json& body) {
@@ -131,7 +107,7 @@ RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
         o.whitted.background = read_vec3(*v, "/background", kInvalid);
     }
     if (const Json* v = member(body, "camera"))
-        o.camera = parse_camera(*v, "/camera");
+        o.camera = parse_camera(*v, "/camera", kInvalid);
     if (const Json* v = member(body, "shading")) {
         const std::string s = read_string(*v, "/shading", kInvalid);
         const auto mode = engine::shading_mode_from_name(s);

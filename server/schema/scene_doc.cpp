@@ -109,24 +109,6 @@ engine::Light parse_light(const Json& j, const std::string& path, Scene& scene) 
     return l;
 }
 
-engine::Camera parse_camera(const Json& j, const std::string& path, Scene& scene) {
-    require_object(j, path, kInvalid);
-    warn_unknown_keys(j, path, {"position", "look_at", "up", "fov_y_deg"}, scene);
-    engine::Camera c;
-    if (const Json* v = member(j, "position")) c.position = read_vec3(*v, path + "/position", kInvalid);
-    if (const Json* v = member(j, "look_at")) c.look_at = read_vec3(*v, path + "/look_at", kInvalid);
-    if (const Json* v = member(j, "up")) c.up = read_vec3(*v, path + "/up", kInvalid);
-    c.fov_y_deg = read_in_range(j, "fov_y_deg", path, c.fov_y_deg, 1e-3, 179.999, "in (0, 180)");
-    if (c.look_at == c.position) {
-        throw api_error(kInvalid, path + "/look_at must differ from position", path + "/look_at");
-    }
-    if (length(cross(c.look_at - c.position, c.up)) == 0.0) {
-        throw api_error(kInvalid, path + "/up must not be parallel to the view direction",
-                        path + "/up");
-    }
-    return c;
-}
-
 engine::Object parse_object(const Json& j, const std::string& path, std::size_t index,
                             Scene& scene, const std::map<std::string, std::uint32_t>& materials,
                             const MeshObjectLoader& load_mesh) {
@@ -194,6 +176,28 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
 
 }  // namespace
 
+engine::Camera parse_camera(const Json& j, const std::string& path, const char* code) {
+    require_object(j, path, code);
+    engine::Camera c;
+    if (const Json* v = member(j, "position")) c.position = read_vec3(*v, path + "/position", code);
+    if (const Json* v = member(j, "look_at")) c.look_at = read_vec3(*v, path + "/look_at", code);
+    if (const Json* v = member(j, "up")) c.up = read_vec3(*v, path + "/up", code);
+    if (const Json* v = member(j, "fov_y_deg")) {
+        c.fov_y_deg = read_number(*v, path + "/fov_y_deg", code);
+        if (!(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0)) {
+            throw api_error(code, path + "/fov_y_deg must be in (0, 180)", path + "/fov_y_deg");
+        }
+    }
+    if (c.look_at == c.position) {
+        throw api_error(code, path + "/look_at must differ from position", path + "/look_at");
+    }
+    if (length(cross(c.look_at - c.position, c.up)) == 0.0) {
+        throw api_error(code, path + "/up must not be parallel to the view direction",
+                        path + "/up");
+    }
+    return c;
+}
+
 engine::Scene parse_scene_doc(const Json& doc, const std::string& prefix,
                               const MeshObjectLoader& load_mesh) {
     require_object(doc, prefix, kInvalid);
@@ -218,7 +222,11 @@ engine::Scene parse_scene_doc(const Json& doc, const std::string& prefix,
         }
     }
     if (const Json* cam = member(doc, "camera")) {
-        scene.camera = parse_camera(*cam, prefix + "/camera", scene);
+        const std::string cpath = prefix + "/camera";
+        if (cam->is_object()) {
+            warn_unknown_keys(*cam, cpath, {"position", "look_at", "up", "fov_y_deg"}, scene);
+        }
+        scene.camera = parse_camera(*cam, cpath, kInvalid);
     }
     engine::Status st = engine::validate(scene);
     if (!st.ok()) throw from_status(st, prefix);

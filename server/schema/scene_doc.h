@@ -18,6 +18,10 @@ namespace raycastd::server {
 using MeshObjectLoader = std::function<std::shared_ptr<const engine::TriangleMesh>(
     const Json& object, const std::string& path, engine::Scene& scene)>;
 
+/// A camera object {position, look_at, up, fov_y_deg} (defaults for what is missing); errors
+/// are `code` (invalid_scene in documents, invalid_request in render requests) with pointers.
+engine::Camera parse_camera(const Json& j, const std::string& path, const char* code);
+
 /// Parses and validates a scene document. `load_mesh` may be empty, in which case `mesh`
 /// objects are rejected with invalid_scene.
 engine::Scene parse_scene_doc(const Json& doc, const std::string& path_prefix,
