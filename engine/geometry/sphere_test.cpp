@@ -115,6 +115,46 @@ TEST(Sphere, DirectionScaleInvariance) {
     }
 }
 
+// An origin exactly on the sphere: the near root is exactly 0 (γ = f·f − r² is formed in
+// double-double, so it is exactly zero), the far one exactly the chord.
+TEST(Sphere, OriginOnSurfaceGivesExactZero) {
+    const Sphere s{{0.5, 0.25, 8}, 2};
+    SphereRoots r = sphere_roots(s, Ray{{0.5, 0.25, 6}, {0, 0, 1}});
+    ASSERT_EQ(r.count, 2);
+    EXPECT_EQ(r.t[0], 0.0);
+    EXPECT_EQ(r.t[1], 4.0);
+    r = sphere_roots(s, Ray{{2.5, 0.25, 8}, {-0.5, 0, 0}});  // leaving inwards, |d| = 0.5
+    ASSERT_EQ(r.count, 2);
+    EXPECT_EQ(r.t[0], 0.0);
+    EXPECT_EQ(r.t[1], 8.0);
+}
+
+// A ray passing at distance r·(1 − 2⁻⁴⁰) from the centre, along a direction that is not an axis
+// (so no component makes the arithmetic exact): the half-chord √(r² − dist²) ≈ 1.3e-6·r must come
+// out to a few ulps of t, which a double discriminant cannot give (it loses ~12 of 16 digits).
+TEST(Sphere, NearTangentRootsToAnUlp) {
+    // The line through p = c + w·dist with direction u ⟂ w; w, u built from a Pythagorean triple
+    // so that both are exact and exactly perpendicular: w = (3, 4, 0)/5, u = (−4, 3, 0)/5 · k.
+    const double dist = 1.0 - std::ldexp(1.0, -40);
+    const Sphere s{{0, 0, 0}, 1};
+    const Vec3d p{0.6 * dist, 0.8 * dist, 0};  // rounded: the true distance is |p| = dist(1 ± u)
+    const Ray ray{p - Vec3d{-0.8, 0.6, 0} * 10.0, Vec3d{-0.8, 0.6, 0}};
+    const SphereRoots r = sphere_roots(s, ray);
+    ASSERT_EQ(r.count, 2);
+    // The roots from the rounded inputs: t = t_c ∓ √(a·r² − |f × d|²)/a. The discriminant is
+    // formed in GCC's __float128 (every product of two doubles is exact there), whose value
+    // long double's √ then takes to 64 bits: far more than the 2 ulps asked.
+    using Q = __float128;
+    const Q ox = ray.origin.x, oy = ray.origin.y, dx = ray.direction.x, dy = ray.direction.y;
+    const Q a = dx * dx + dy * dy, beta = ox * dx + oy * dy;
+    const Q cr = ox * dy - oy * dx;  // |f × d| (z components are zero)
+    const long double h = std::sqrt(static_cast<long double>(a - cr * cr)) /
+                          static_cast<long double>(a);
+    const long double tc = static_cast<long double>(-beta / a);
+    EXPECT_NEAR(r.t[0], static_cast<double>(tc - h), 2 * ulp(10.0));
+    EXPECT_NEAR(r.t[1], static_cast<double>(tc + h), 2 * ulp(10.0));
+}
+
 TEST(Sphere, ErrorBoundCoversFarSphere) {
     SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
     EXPECT_GT(r.t_err, 0.0);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -91,6 +92,57 @@ TEST(Triangle, TErrorBoundHoldsForExactCase) {
     ASSERT_TRUE(hit);
     EXPECT_LE(std::abs(hit->t - 5.0), hit->t_err);
     EXPECT_GT(hit->t_err, 0.0);
+}
+
+// An origin exactly on a vertex gets t = 0 exactly (the plane is anchored at that vertex), and
+// on an axis-aligned face too.
+TEST(Triangle, OriginOnSurfaceGivesExactZero) {
+    const Triangle tilted{{-1.3, 0.7, 12.1}, {3.1, 2.9, 11.7}, {0.3, -2.2, 13.3}};
+    for (const Vec3d& v : {tilted.a, tilted.b, tilted.c}) {
+        auto hit = intersect_triangle(tilted, Ray{v, {0.3, -0.2, 1}});
+        ASSERT_TRUE(hit);
+        EXPECT_EQ(hit->t, 0.0);
+    }
+    auto hit = intersect_triangle(kTri, Ray{{0.25, 0.5, 5}, {0.1, 0.2, -1}});
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 0.0);
+}
+
+// A ray at 2⁻³ rad·2⁻³⁰ (~1e-10) to the plane z = 0.5: t = 2⁻³⁰ / 2⁻³³ = 8 exactly. Woop's
+// sheared t is off by ~u/cos θ here; the plane crossing in double-double is exact.
+TEST(Triangle, NearlyParallelRayExactT) {
+    const Triangle big{{-10, -10, 0.5}, {10, -10, 0.5}, {-10, 10, 0.5}};
+    const Ray ray{{-9, 0.1, 0.5 - std::ldexp(1.0, -30)}, {1, 0.001, std::ldexp(1.0, -33)}};
+    auto hit = intersect_triangle(big, ray);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->t, 8.0);
+    EXPECT_LE(std::abs(hit->t - 8.0), hit->t_err);
+}
+
+// A sliver (angle ~1e-8 rad at a): the plane crossing of a ray through its interior, checked
+// against the same formula in GCC's __float128, where the differences and the products of the
+// normal are exact or nearly (long double would lose ~8 digits of the sliver's normal).
+TEST(Triangle, SliverTToAnUlp) {
+    const Triangle sliver{{0.3, -0.2, 4}, {2.3, 0.1, 4.2}, {1.3, -0.05 + 1e-8, 4.1}};
+    const Vec3d target = sliver.a * 0.2 + sliver.b * 0.4 + sliver.c * 0.4;
+    const Ray ray{{-1, 3, -2}, target - Vec3d{-1, 3, -2}};
+    auto hit = triangle_plane_hit(sliver, ray);
+    ASSERT_TRUE(hit);
+    using Q = __float128;
+    auto q = [](const Vec3d& v) { return std::array<Q, 3>{v.x, v.y, v.z}; };
+    const auto a = q(sliver.a), b = q(sliver.b), c = q(sliver.c), o = q(ray.origin),
+               d = q(ray.direction);
+    const Q e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const Q e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const Q n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0]};
+    Q num = 0, den = 0;
+    for (int k = 0; k < 3; ++k) {
+        num += n[k] * (a[k] - o[k]);
+        den += n[k] * d[k];
+    }
+    const double t = static_cast<double>(num / den);
+    EXPECT_LE(std::abs(hit->t - t), 2 * (std::nextafter(t, 2 * t) - t));
 }
 
 // Watertightness (Woop et al. 2013): a quad split along its diagonal; rays aimed exactly at
