@@ -296,7 +296,10 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
     // The exact path backs the origin off by the padding so that a hit at exactly tmin lies
     // strictly inside the float segment; its double test still enforces tmin.
     c.shift = back_off ? t0 - c.margin / c.len : t0;
-    const Vec3d org = ray.at(c.shift) - a.center;
+    // (o − centre) + s·d rather than (o + s·d) − centre: the first difference is exact or nearly
+    // so when the origin is near the scene (Sterbenz), so the float origin is accurate to the
+    // scene's size even when the scene sits far from the world origin.
+    const Vec3d org = (ray.origin - a.center) + ray.direction * c.shift;
     const Vec3d dir = ray.direction / c.len;
     r.org_x = static_cast<float>(org.x);
     r.org_y = static_cast<float>(org.y);
@@ -341,6 +344,15 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
     r.id = 0;
     r.flags = 0;
     return true;
+}
+
+/// Whether the float ray of the exact path is within the exact BVH's box padding of the double
+/// ray: the shifted origin carries a double rounding of about u·(|o − centre| + |s·d|), which for
+/// an origin very far from a small scene exceeds the padding. Such rays take the linear scan.
+bool exact_ray_within_padding(const EmbreeAccel::Impl& a, const Ray& ray, const RayContext& c) {
+    const double err = 8.0 * kDoubleUnitRoundoff *
+                       (length(ray.origin - a.center) + std::abs(c.shift) * c.len);
+    return err <= 0.25 * a.pad;
 }
 
 /// prepare_ray_fast where it applies, else prepare_ray.
@@ -434,6 +446,7 @@ std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
         if (!s) return linear_closest(*a.scene, ray, want_normal);  // could not build: still exact
         c.exact = true;
         if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray)) return std::nullopt;
+        if (!exact_ray_within_padding(a, ray, c)) return linear_closest(*a.scene, ray, want_normal);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(s, &c.rtc, &rh);
         if (!c.best) return std::nullopt;
@@ -490,17 +503,14 @@ std::optional<Hit> EmbreeAccel::finish_native(const Ray& ray, double shift, doub
     h.front_face = dot(ray.direction, nh.ng) < 0.0;
     if (want_normal) h.normal = triangle_normal(tri);
     if (precision == Precision::refined) {
-        // Embree chose the primitive; the hit on it is recomputed in double. Near an edge the
-        // double test may put the point a hair outside: keep Embree's verdict, and take the
-        // plane crossing for t.
+        // Embree chose the primitive; the hit on it is recomputed in double.
+        // The exact path decides instead whenever the float choice is in doubt: the double
+        // test misses the primitive (the ray passes at an edge, or float picked wrongly), or
+        // the hit leaves a surface (a ray entering a closed mesh that slips through a vertex in
+        // float meets the exit face first; rays that really start inside pay the exact path).
         auto d = intersect_triangle(tri, ray, want_normal);
-        if (!d) d = triangle_plane_hit(tri, ray, want_normal);
-        if (d) h = *d;
-        // The float origin can round across tmin (or the float t across tmax): a primitive
-        // whose double t lies outside the range was the wrong choice. Decide exactly.
-        if (!(h.t >= ray.tmin && h.t <= ray.tmax)) {
-            return closest(ray, Precision::exact, want_normal);
-        }
+        if (!d || !d->front_face) return closest(ray, Precision::exact, want_normal);
+        h = *d;
     } else {
         // fast reports float t; keep it inside the range the client asked for.
         h.t = std::min(std::max(h.t, ray.tmin), ray.tmax);
@@ -608,6 +618,9 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
                               ? prepare_ray(a, ray, /*back_off=*/true, c, r)
                               : prepare_native_ray(a, ray, precision, c, r);
     if (!prepared) return false;
+    if (precision == Precision::exact && !exact_ray_within_padding(a, ray, c)) {
+        return linear_any(*a.scene, ray);
+    }
     rtcOccluded1(s, &c.rtc, &r);
     const bool hit = r.tfar == -std::numeric_limits<float>::infinity();
     // As in closest: a float miss is confirmed by the exact traversal before refined says so.
@@ -631,6 +644,7 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
         if (!s) return linear_all(*a.scene, ray, want_normal, out);
         c.exact = true;
         if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray)) return;
+        if (!exact_ray_within_padding(a, ray, c)) return linear_all(*a.scene, ray, want_normal, out);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(s, &c.rtc, &rh);
         for (Hit& h : out) {
