@@ -4,9 +4,13 @@
 #include <limits>
 #include <utility>
 
+#include "engine/math/double_double.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
+
+// Double-double helpers (engine/math/double_double.h) for the few steps that need them.
+using namespace dd;
 
 namespace {
 
@@ -27,52 +31,6 @@ ShearFrame make_shear(const Vec3d& d) {
     s.sy = d[s.ky] / d[s.kz];
     s.sz = 1.0 / d[s.kz];
     return s;
-}
-
-}  // namespace
-
-namespace {
-
-// Double-double arithmetic for the hit's t: a value is the unevaluated sum hi + lo of two
-// doubles (Dekker 1971; Knuth, TAOCP vol. 2, §4.2.2). TwoSum and TwoProduct (with a fused
-// multiply-add; Ogita, Rump & Oishi 2005) are exact; the sums and products built on them carry
-// a relative error of a few u² (u = 2⁻⁵³) of their operands. The same few helpers appear in
-// sphere.cpp; they are kept private to each kernel.
-struct DD {
-    double hi = 0.0, lo = 0.0;
-};
-inline DD two_sum(double a, double b) {
-    const double s = a + b;
-    const double bb = s - a;
-    return {s, (a - (s - bb)) + (b - bb)};
-}
-inline DD fast_two_sum(double a, double b) {
-    const double s = a + b;
-    return {s, b - (s - a)};
-}
-inline DD two_prod(double a, double b) {
-    const double p = a * b;
-    return {p, std::fma(a, b, -p)};
-}
-inline DD add(DD a, DD b) {
-    const DD s = two_sum(a.hi, b.hi);
-    return fast_two_sum(s.hi, s.lo + (a.lo + b.lo));
-}
-inline DD sub(DD a, DD b) { return add(a, DD{-b.hi, -b.lo}); }
-inline DD mul(DD a, double b) {
-    const DD p = two_prod(a.hi, b);
-    return fast_two_sum(p.hi, std::fma(a.lo, b, p.lo));
-}
-inline DD mul(DD a, DD b) {
-    const DD p = two_prod(a.hi, b.hi);
-    return fast_two_sum(p.hi, p.lo + (a.hi * b.lo + a.lo * b.hi));
-}
-/// n / d rounded to double (one correction step: the residual n − t·d is formed exactly).
-inline double div(DD n, DD d) {
-    const double t = n.hi / d.hi;
-    const DD p = two_prod(t, d.hi);
-    const double r = ((n.hi - p.hi) - p.lo) + n.lo - t * d.lo;
-    return t + r / d.hi;
 }
 
 /// The vertex nearest the origin (max norm). Anchoring the plane there makes the numerator's
