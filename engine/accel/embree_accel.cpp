@@ -132,16 +132,11 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     const Object& o = c.accel->scene->objects[object];
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
-        const SphereRoots r = sphere_roots(o.sphere, ray);
-        for (int k = 0; k < r.count; ++k) {
-            if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax)) continue;
-            Hit h;
-            h.t = r.t[k];
-            h.t_err = r.t_err;
-            h.object = object;
-            h.primitive = 0;
-            if (c.collect) sphere_normal(o.sphere, ray, h.t, h);  // front_face merges `all`
-            if (!emit(h)) return;
+        Hit hits[2];
+        const int n = sphere_hits(o.sphere, ray, hits);
+        for (int k = 0; k < n; ++k) {
+            hits[k].object = object;
+            if (!emit(hits[k])) return;
         }
         return;
     }

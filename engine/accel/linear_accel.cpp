@@ -80,16 +80,11 @@ void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vecto
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         if (o.kind == ObjectKind::sphere) {
-            const SphereRoots r = sphere_roots(o.sphere, ray);
-            for (int k = 0; k < r.count; ++k) {
-                if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax)) continue;
-                Hit h;
-                h.t = r.t[k];
-                h.t_err = r.t_err;
-                h.object = i;
-                h.primitive = 0;
-                sphere_normal(o.sphere, ray, h.t, h);  // front_face is needed for merging
-                out.push_back(h);
+            Hit hits[2];
+            const int n = sphere_hits(o.sphere, ray, hits);  // front_face is needed for merging
+            for (int k = 0; k < n; ++k) {
+                hits[k].object = i;
+                out.push_back(hits[k]);
             }
             continue;
         }

@@ -118,4 +118,19 @@ std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_n
     return std::nullopt;
 }
 
+int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]) {
+    const SphereRoots r = sphere_roots(s, ray);
+    int n = 0;
+    for (int k = 0; k < r.count; ++k) {
+        if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax)) continue;
+        Hit& h = out[n++];
+        h = Hit{};
+        h.t = r.t[k];
+        h.t_err = r.t_err;
+        h.primitive = 0;
+        sphere_normal(s, ray, h.t, h);
+    }
+    return n;
+}
+
 }  // namespace raycastd::engine

@@ -46,6 +46,10 @@ SphereRoots sphere_roots(const Sphere& s, const Ray& ray);
 /// root. `want_normal = false` skips the normal and front-face computation.
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal = true);
 
+/// Every root in [ray.tmin, ray.tmax] as a Hit (t, t_err, primitive 0, outward normal and
+/// front_face; object left for the caller), ascending; returns how many (0, 1 or 2).
+int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]);
+
 /// The outward unit normal at the point of the ray at parameter t, and whether the ray arrives
 /// against it.
 void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit);
