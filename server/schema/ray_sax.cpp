@@ -177,13 +177,16 @@ private:
     bool number(double v) {
         if (skip_ > 0) return true;
         if (!std::isfinite(v)) return false;
-        engine::Ray& r = out_.rays.back();
+        // Only inside a ray object is there a current ray (a bare number in the rays array, or
+        // anywhere else, is not the expected shape).
         if (at_ == At::vec) {
             if (vec_n_ >= 3) return false;
+            engine::Ray& r = out_.rays.back();
             (key_ == "origin" ? r.origin : r.direction)[vec_n_++] = v;
             return true;
         }
         if (at_ == At::ray_value) {
+            engine::Ray& r = out_.rays.back();
             if (key_ == "tmin") {
                 r.tmin = v;
             } else if (key_ == "tmax") {
