@@ -2,6 +2,7 @@
 // Internal to engine/load: one entry point per format, called by load_model() inside its
 // catch-all boundary, and the helpers they share.
 
+#include <cctype>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -26,6 +27,13 @@ Result<LoadedModel> load_stl(std::string_view bytes, std::string_view name,
 /// Object File Format (ASCII OFF, COFF, NOFF, STOFF and their combinations).
 Result<LoadedModel> load_off(std::string_view bytes, std::string_view name,
                              const LoadLimits& limits);
+
+/// ASCII lower case (file extensions, format keywords).
+inline std::string lower(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+}
 
 /// model_load_failed with "<name>: <message>".
 Status load_error(std::string_view name, const std::string& message);

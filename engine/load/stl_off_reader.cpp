@@ -18,12 +18,6 @@ namespace raycastd::engine::detail {
 
 namespace {
 
-std::string lower(std::string_view s) {
-    std::string out(s);
-    for (char& c : out)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return out;
-}
 
 /// Merges exactly equal positions into one vertex. STL stores every triangle's corners
 /// separately; sharing them gives the mesh the connectivity the file implies, as OpenMesh's
