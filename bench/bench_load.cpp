@@ -82,8 +82,9 @@ void row(const std::string& name, const std::string& bytes, engine::ModelFormat 
     }
     const double per_tri = tris ? double((*engine)->memory_bytes()) / double(tris) : 0.0;
     std::printf("| %s | %.1f | %zu | %.2f | %.2f | %.2f | %.2f | %.0f | %.1f |\n", name.c_str(),
-                bytes.size() / 1e3, tris, parse_ms, build_ms, hash_ms, parse_ms + build_ms + hash_ms,
-                per_tri, tris ? double(rss1 > rss0 ? rss1 - rss0 : 0) / double(tris) : 0.0);
+                bytes.size() / 1e3, tris, parse_ms, build_ms, hash_ms,
+                parse_ms + build_ms + hash_ms, per_tri,
+                tris ? double(rss1 > rss0 ? rss1 - rss0 : 0) / double(tris) : 0.0);
 }
 
 }  // namespace
@@ -93,25 +94,36 @@ int main(int argc, char** argv) {
     bool quick = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--shared" && i + 1 < argc) shared = argv[++i];
-        if (a == "--quick") quick = true;
+        if (a == "--shared" && i + 1 < argc)
+            shared = argv[++i];
+        if (a == "--quick")
+            quick = true;
     }
-    std::printf("| model | file kB | triangles | parse ms | build ms | sha256 ms | total ms | "
-                "memory B/tri | RSS growth B/tri |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    std::printf(
+        "| model | file kB | triangles | parse ms | build ms | sha256 ms | total ms | "
+        "memory B/tri | RSS growth B/tri |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     const fs::path models = shared / "data" / "models";
     const char* files[] = {
-        "Duck/glTF-Binary/Duck.glb", "CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb",
-        "2CylinderEngine/glTF-Binary/2CylinderEngine.glb", "BoxTextured/glTF/BoxTextured.gltf",
-        "stanford-bunny/stanford-bunny.obj", "bunny_ply/bunny.ply", "Wuson/Wuson.stl",
-        "fandisk/fandisk.obj", "ballA_off/ballA.off", "teapot_stl/teapot.stl",
+        "Duck/glTF-Binary/Duck.glb",
+        "CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb",
+        "2CylinderEngine/glTF-Binary/2CylinderEngine.glb",
+        "BoxTextured/glTF/BoxTextured.gltf",
+        "stanford-bunny/stanford-bunny.obj",
+        "bunny_ply/bunny.ply",
+        "Wuson/Wuson.stl",
+        "fandisk/fandisk.obj",
+        "ballA_off/ballA.off",
+        "teapot_stl/teapot.stl",
     };
     if (fs::exists(models)) {
         for (const char* f : files) {
             const fs::path p = models / f;
-            if (!fs::exists(p)) continue;
+            if (!fs::exists(p))
+                continue;
             const auto format = engine::format_from_name(p.filename().string());
             const fs::path dir = p.parent_path();
-            engine::ResourceReader reader = [&dir](const std::string& uri) -> engine::Result<std::string> {
+            engine::ResourceReader reader =
+                [&dir](const std::string& uri) -> engine::Result<std::string> {
                 return read_bytes(dir / uri);
             };
             row(f, read_bytes(p), *format, reader);
@@ -120,8 +132,8 @@ int main(int argc, char** argv) {
         std::printf("(models not found at %s: sample models skipped)\n", models.c_str());
     }
     // A generated model of ≥1M triangles, written as binary PLY and loaded back.
-    const bench::Workload big = quick ? bench::make_icosphere_field(20, 4, 7)
-                                      : bench::make_icosphere_field(200, 4, 7);
+    const bench::Workload big =
+        quick ? bench::make_icosphere_field(20, 4, 7) : bench::make_icosphere_field(200, 4, 7);
     const fs::path ply = fs::temp_directory_path() / "raycastd_bench_load.ply";
     if (bench::write_ply(ply.string(), big)) {
         row(std::string("generated: ") + big.description + " (binary PLY)", read_bytes(ply),

@@ -1,13 +1,13 @@
 #include "engine/accel/embree_accel.h"
 
-#include <embree3/rtcore.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
 #include <mutex>
 #include <string>
+
+#include <embree3/rtcore.h>
 
 #include "engine/accel/linear_accel.h"
 #include "engine/math/float_bounds.h"
@@ -31,7 +31,8 @@ void on_embree_error(void*, RTCError code, const char* message) {
 RTCDevice shared_device() {
     static RTCDevice device = [] {
         RTCDevice d = rtcNewDevice("verbose=0");
-        if (d) rtcSetDeviceErrorFunction(d, on_embree_error, nullptr);
+        if (d)
+            rtcSetDeviceErrorFunction(d, on_embree_error, nullptr);
         return d;
     }();
     return device;
@@ -42,7 +43,8 @@ Status take_embree_error(const char* what) {
     const std::string msg = t_last_message;
     t_last_error = RTC_ERROR_NONE;
     t_last_message.clear();
-    if (e == RTC_ERROR_NONE) return {};
+    if (e == RTC_ERROR_NONE)
+        return {};
     const Code code = e == RTC_ERROR_OUT_OF_MEMORY ? Code::too_large : Code::internal;
     return Status::error(code, std::string(what) + ": Embree error " +
                                    std::to_string(static_cast<int>(e)) +
@@ -77,7 +79,7 @@ struct GeomData {
 
 struct EmbreeAccel::Impl {
     const Scene* scene = nullptr;
-    RTCScene native = nullptr;  ///< float triangles + sphere user geometry (fast, refined)
+    RTCScene native = nullptr;         ///< float triangles + sphere user geometry (fast, refined)
     mutable RTCScene exact = nullptr;  ///< every primitive as user geometry, double tests
     mutable std::atomic<bool> exact_ready{false};
     mutable std::once_flag exact_once;
@@ -87,13 +89,15 @@ struct EmbreeAccel::Impl {
     /// Embree sees every coordinate relative to this point (the centre of the scene bounds):
     /// float precision then follows the scene's size, not its distance from the origin.
     Vec3d center;
-    double pad = 0;         ///< absolute padding of every box, in scene units (see build)
-    double float_scale = 0; ///< magnitude of scene coordinates, for the fast path's t_err
+    double pad = 0;          ///< absolute padding of every box, in scene units (see build)
+    double float_scale = 0;  ///< magnitude of scene coordinates, for the fast path's t_err
     std::size_t triangles = 0, spheres = 0;
 
     ~Impl() {
-        if (native) rtcReleaseScene(native);
-        if (exact) rtcReleaseScene(exact);
+        if (native)
+            rtcReleaseScene(native);
+        if (exact)
+            rtcReleaseScene(exact);
     }
     void build_exact() const;
     RTCScene exact_scene() const {
@@ -118,7 +122,9 @@ struct RayContext {
     bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
 };
 
-RayContext& ctx_of(RTCIntersectContext* c) { return *reinterpret_cast<RayContext*>(c); }
+RayContext& ctx_of(RTCIntersectContext* c) {
+    return *reinterpret_cast<RayContext*>(c);
+}
 
 /// tfar for a candidate at double t: never below it, whatever the float rounding.
 float tfar_for(const RayContext& c, double t) {
@@ -136,7 +142,8 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
         const int n = sphere_hits(o.sphere, ray, hits);
         for (int k = 0; k < n; ++k) {
             hits[k].object = object;
-            if (!emit(hits[k])) return;
+            if (!emit(hits[k]))
+                return;
         }
         return;
     }
@@ -174,7 +181,8 @@ void user_bounds(const RTCBoundsFunctionArguments* args) {
 }
 
 void user_intersect(const RTCIntersectFunctionNArguments* args) {
-    if (!args->valid[0]) return;
+    if (!args->valid[0])
+        return;
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     RayContext& c = ctx_of(args->context);
     auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
@@ -194,7 +202,8 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
         }
         // The native BVH: a sphere competes with Embree's float triangle hits by float t'.
         const auto tf = static_cast<float>((h.t - c.shift) * c.len);
-        if (!(tf <= rh->ray.tfar)) return true;
+        if (!(tf <= rh->ray.tfar))
+            return true;
         rh->ray.tfar = tf;
         rh->hit.geomID = h.object;
         rh->hit.primID = h.primitive;
@@ -205,7 +214,8 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
 }
 
 void user_occluded(const RTCOccludedFunctionNArguments* args) {
-    if (!args->valid[0]) return;
+    if (!args->valid[0])
+        return;
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     RayContext& c = ctx_of(args->context);
     auto* ray = reinterpret_cast<RTCRay*>(args->ray);
@@ -219,10 +229,12 @@ void user_occluded(const RTCOccludedFunctionNArguments* args) {
 /// traversal goes on to the next one.
 void collect_filter(const RTCFilterFunctionNArguments* args) {
     RayContext& c = ctx_of(args->context);
-    if (args->N != 1 || !args->valid[0] || !c.collect) return;
+    if (args->N != 1 || !args->valid[0] || !c.collect)
+        return;
     const auto* hit = reinterpret_cast<const RTCHit*>(args->hit);
     const auto* ray = reinterpret_cast<const RTCRay*>(args->ray);
-    if (c.accel->scene->objects[hit->geomID].kind == ObjectKind::sphere) return;  // user geom
+    if (c.accel->scene->objects[hit->geomID].kind == ObjectKind::sphere)
+        return;  // user geom
     Hit h;
     h.object = hit->geomID;
     h.primitive = hit->primID;
@@ -243,13 +255,16 @@ RTCGeometry make_user_geometry(RTCDevice device, GeomData* data, unsigned prims)
     return g;
 }
 
-RTCGeometry make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Vec3d& center) {
+RTCGeometry make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
+                                   const Vec3d& center) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
         g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
-    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
-    if (!v || !idx) return g;  // the error callback has recorded why; commit reports it
+    auto* idx = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                mesh.triangles.size()));
+    if (!v || !idx)
+        return g;  // the error callback has recorded why; commit reports it
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         const Vec3d q = mesh.positions[i] - center;
         v[3 * i + 0] = static_cast<float>(q.x);
@@ -275,16 +290,19 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
         const double o = ray.origin[k], d = ray.direction[k];
         const double lo = a.padded_bounds.lo[k], hi = a.padded_bounds.hi[k];
         if (d == 0.0) {
-            if (o < lo || o > hi) return false;
+            if (o < lo || o > hi)
+                return false;
             continue;
         }
         double ta = (lo - o) / d, tb = (hi - o) / d;
-        if (ta > tb) std::swap(ta, tb);
+        if (ta > tb)
+            std::swap(ta, tb);
         // Widen by a few ulps: the divisions round, and a hit at the slab's edge must survive.
         t0 = std::max(t0, ta - gamma(3) * std::abs(ta));
         t1 = std::min(t1, tb + gamma(3) * std::abs(tb));
     }
-    if (!(t0 <= t1)) return false;
+    if (!(t0 <= t1))
+        return false;
     c.ray = &ray;
     c.len = length(ray.direction);
     c.margin = 4.0 * a.pad;
@@ -345,15 +363,16 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
 /// ray: the shifted origin carries a double rounding of about u·(|o − centre| + |s·d|), which for
 /// an origin very far from a small scene exceeds the padding. Such rays take the linear scan.
 bool exact_ray_within_padding(const EmbreeAccel::Impl& a, const Ray& ray, const RayContext& c) {
-    const double err = 8.0 * kDoubleUnitRoundoff *
-                       (length(ray.origin - a.center) + std::abs(c.shift) * c.len);
+    const double err =
+        8.0 * kDoubleUnitRoundoff * (length(ray.origin - a.center) + std::abs(c.shift) * c.len);
     return err <= 0.25 * a.pad;
 }
 
 /// prepare_ray_fast where it applies, else prepare_ray.
 bool prepare_native_ray(const EmbreeAccel::Impl& a, const Ray& ray, Precision p, RayContext& c,
                         RTCRay& r) {
-    if (p == Precision::fast && a.spheres == 0 && prepare_ray_fast(a, ray, c, r)) return true;
+    if (p == Precision::fast && a.spheres == 0 && prepare_ray_fast(a, ray, c, r))
+        return true;
     return prepare_ray(a, ray, /*back_off=*/false, c, r);
 }
 
@@ -366,7 +385,8 @@ EmbreeAccel::~EmbreeAccel() = default;
 
 Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
     RTCDevice device = shared_device();
-    if (!device) return Status::error(Code::internal, "cannot create the Embree device");
+    if (!device)
+        return Status::error(Code::internal, "cannot create the Embree device");
     auto impl = std::make_unique<Impl>();
     impl->scene = &scene;
     impl->geoms.reserve(scene.objects.size());
@@ -387,8 +407,9 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
 
     take_embree_error("");  // start clean on this thread
     impl->native = rtcNewScene(device);
-    rtcSetSceneFlags(impl->native, static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST |
-                                                             RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    rtcSetSceneFlags(
+        impl->native,
+        static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         impl->geoms.push_back(GeomData{impl.get(), i});
@@ -406,7 +427,8 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
     }
     rtcCommitScene(impl->native);
     Status st = take_embree_error("building the BVH");
-    if (!st.ok()) return st;
+    if (!st.ok())
+        return st;
     return std::unique_ptr<EmbreeAccel>(new EmbreeAccel(std::move(impl)));
 }
 
@@ -438,13 +460,17 @@ std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
     RTCRayHit rh;
     if (precision == Precision::exact) {
         RTCScene s = a.exact_scene();
-        if (!s) return linear_closest(*a.scene, ray, want_normal);  // could not build: still exact
+        if (!s)
+            return linear_closest(*a.scene, ray, want_normal);  // could not build: still exact
         c.exact = true;
-        if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray)) return std::nullopt;
-        if (!exact_ray_within_padding(a, ray, c)) return linear_closest(*a.scene, ray, want_normal);
+        if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray))
+            return std::nullopt;
+        if (!exact_ray_within_padding(a, ray, c))
+            return linear_closest(*a.scene, ray, want_normal);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(s, &c.rtc, &rh);
-        if (!c.best) return std::nullopt;
+        if (!c.best)
+            return std::nullopt;
         Hit h = *c.best;
         if (want_normal) {
             const Object& o = a.scene->objects[h.object];
@@ -457,11 +483,12 @@ std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
         return h;
     }
 
-    if (!prepare_native_ray(a, ray, precision, c, rh.ray)) return std::nullopt;
+    if (!prepare_native_ray(a, ray, precision, c, rh.ray))
+        return std::nullopt;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a.native, &c.rtc, &rh);
-    NativeHit nh{rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v,
-                 Vec3d{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}};
+    NativeHit nh{rh.hit.geomID, rh.hit.primID, rh.ray.tfar,
+                 rh.hit.u,      rh.hit.v,      Vec3d{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}};
     return finish_native(ray, c.shift, c.len, nh, c.best, precision, want_normal);
 }
 
@@ -482,7 +509,8 @@ std::optional<Hit> EmbreeAccel::finish_native(const Ray& ray, double shift, doub
     if (o.kind == ObjectKind::sphere) {
         // The sphere callback already decided in double and kept its hit.
         Hit h = *sphere_hit;
-        if (want_normal) sphere_normal(o.sphere, ray, h.t, h);
+        if (want_normal)
+            sphere_normal(o.sphere, ray, h.t, h);
         return h;
     }
     const Triangle tri = o.mesh->triangle(nh.prim);
@@ -491,12 +519,13 @@ std::optional<Hit> EmbreeAccel::finish_native(const Ray& ray, double shift, doub
     h.u = nh.u;
     h.v = nh.v;
     // A float kernel: relative error of a few float ulps of the scene's coordinates.
-    h.t_err = gamma_float(12) * ((a.float_scale + length(ray.origin - a.center)) /
-                                     length(ray.direction) +
-                                 std::abs(h.t));
+    h.t_err =
+        gamma_float(12) *
+        ((a.float_scale + length(ray.origin - a.center)) / length(ray.direction) + std::abs(h.t));
     // Embree's Ng = cross(v2−v0, v0−v1) = (b−a)×(c−a) up to rounding: its sign gives the side.
     h.front_face = dot(ray.direction, nh.ng) < 0.0;
-    if (want_normal) h.normal = triangle_normal(tri);
+    if (want_normal)
+        h.normal = triangle_normal(tri);
     if (precision == Precision::refined) {
         // Embree chose the primitive; the hit on it is recomputed in double.
         // The exact path decides instead whenever the float choice is in doubt: the double
@@ -504,7 +533,8 @@ std::optional<Hit> EmbreeAccel::finish_native(const Ray& ray, double shift, doub
         // the hit leaves a surface (a ray entering a closed mesh that slips through a vertex in
         // float meets the exit face first; rays that really start inside pay the exact path).
         auto d = intersect_triangle(tri, ray, want_normal);
-        if (!d || !d->front_face) return closest(ray, Precision::exact, want_normal);
+        if (!d || !d->front_face)
+            return closest(ray, Precision::exact, want_normal);
         h = *d;
     } else {
         // fast reports float t; keep it inside the range the client asked for.
@@ -528,9 +558,11 @@ bool coherent(const Ray* rays, std::size_t n, double scene_scale) {
     for (std::size_t i = 1; i < n; ++i) {
         const Vec3d& d = rays[i].direction;
         const double c = dot(d, d0);
-        if (c <= 0.0 || c * c < 0.97 * dot(d, d) * d0d0) return false;
+        if (c <= 0.0 || c * c < 0.97 * dot(d, d) * d0d0)
+            return false;
         const Vec3d o = rays[i].origin - rays[0].origin;
-        if (dot(o, o) > max_spread2) return false;
+        if (dot(o, o) > max_spread2)
+            return false;
     }
     return true;
 }
@@ -562,7 +594,8 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             RTCRay r{};
             valid[k] = 0;
             lanes[k].accel = &a;
-            if (k < m && prepare_native_ray(a, rays[i + k], precision, lanes[k], r)) valid[k] = -1;
+            if (k < m && prepare_native_ray(a, rays[i + k], precision, lanes[k], r))
+                valid[k] = -1;
             rh.ray.org_x[k] = r.org_x;
             rh.ray.org_y[k] = r.org_y;
             rh.ray.org_z[k] = r.org_z;
@@ -588,10 +621,11 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
                 out[i + k] = Hit{};
                 continue;
             }
-            NativeHit nh{rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k],
-                         rh.hit.v[k], Vec3d{rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}};
-            auto h = finish_native(ray, lanes[k].shift, lanes[k].len, nh, std::nullopt,
-                                   precision, want_normal);
+            NativeHit nh{rh.hit.geomID[k], rh.hit.primID[k],
+                         rh.ray.tfar[k],   rh.hit.u[k],
+                         rh.hit.v[k],      Vec3d{rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}};
+            auto h = finish_native(ray, lanes[k].shift, lanes[k].len, nh, std::nullopt, precision,
+                                   want_normal);
             out[i + k] = h ? *h : Hit{};
         }
         i += m;
@@ -606,20 +640,23 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
     RTCScene s = a.native;
     if (precision == Precision::exact) {
         s = a.exact_scene();
-        if (!s) return linear_any(*a.scene, ray);
+        if (!s)
+            return linear_any(*a.scene, ray);
     }
     RTCRay r;
     const bool prepared = precision == Precision::exact
                               ? prepare_ray(a, ray, /*back_off=*/true, c, r)
                               : prepare_native_ray(a, ray, precision, c, r);
-    if (!prepared) return false;
+    if (!prepared)
+        return false;
     if (precision == Precision::exact && !exact_ray_within_padding(a, ray, c)) {
         return linear_any(*a.scene, ray);
     }
     rtcOccluded1(s, &c.rtc, &r);
     const bool hit = r.tfar == -std::numeric_limits<float>::infinity();
     // As in closest: a float miss is confirmed by the exact traversal before refined says so.
-    if (!hit && precision == Precision::refined) return any(ray, Precision::exact);
+    if (!hit && precision == Precision::refined)
+        return any(ray, Precision::exact);
     return hit;
 }
 
@@ -636,10 +673,13 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
     // occasionally does: refined counts on the exact path. fast shows what float gives.
     if (precision != Precision::fast) {
         RTCScene s = a.exact_scene();
-        if (!s) return linear_all(*a.scene, ray, want_normal, out);
+        if (!s)
+            return linear_all(*a.scene, ray, want_normal, out);
         c.exact = true;
-        if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray)) return;
-        if (!exact_ray_within_padding(a, ray, c)) return linear_all(*a.scene, ray, want_normal, out);
+        if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray))
+            return;
+        if (!exact_ray_within_padding(a, ray, c))
+            return linear_all(*a.scene, ray, want_normal, out);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(s, &c.rtc, &rh);
         for (Hit& h : out) {
@@ -651,7 +691,8 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
         sort_and_merge_edge_duplicates(out);
         return;
     }
-    if (!prepare_ray(a, ray, /*back_off=*/false, c, rh.ray)) return;
+    if (!prepare_ray(a, ray, /*back_off=*/false, c, rh.ray))
+        return;
     c.rtc.filter = collect_filter;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a.native, &c.rtc, &rh);
@@ -661,7 +702,8 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
     constexpr double kEdgeTolerance = 1e-5;
     for (Hit& h : out) {
         const Object& o = a.scene->objects[h.object];
-        if (o.kind == ObjectKind::sphere) continue;
+        if (o.kind == ObjectKind::sphere)
+            continue;
         const Triangle tri = o.mesh->triangle(h.primitive);
         const double fu = h.u, fv = h.v;
         auto d = triangle_plane_hit(tri, ray, want_normal);
@@ -679,9 +721,10 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
 
 std::size_t EmbreeAccel::memory_bytes() const {
     const Impl& a = *impl_;
-    std::size_t bytes = a.triangles * (kBytesPerTriangle + 12 * sizeof(float)) +
-                        a.spheres * kBytesPerUserPrimitive;
-    if (a.exact_ready) bytes += (a.triangles + a.spheres) * kBytesPerUserPrimitive;
+    std::size_t bytes =
+        a.triangles * (kBytesPerTriangle + 12 * sizeof(float)) + a.spheres * kBytesPerUserPrimitive;
+    if (a.exact_ready)
+        bytes += (a.triangles + a.spheres) * kBytesPerUserPrimitive;
     return bytes;
 }
 

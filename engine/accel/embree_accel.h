@@ -28,7 +28,7 @@
 namespace raycastd::engine {
 
 class EmbreeAccel {
-public:
+  public:
     /// Builds the fast/refined BVH over `scene`, which must outlive the accelerator.
     /// Embree errors (out of memory → too_large) come back as a Status.
     static Result<std::unique_ptr<EmbreeAccel>> build(const Scene& scene);
@@ -55,7 +55,7 @@ public:
 
     struct Impl;
 
-private:
+  private:
     /// What Embree's native traversal reported for one ray (geom is RTC_INVALID_GEOMETRY_ID on
     /// a miss).
     struct NativeHit {

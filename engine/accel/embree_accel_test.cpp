@@ -3,9 +3,9 @@
 
 #include "engine/accel/embree_accel.h"
 
-#include <gtest/gtest.h>
-
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "engine/accel/linear_accel.h"
 #include "engine/query/intersect.h"
@@ -64,7 +64,8 @@ Built build(Scene s) {
     b.scene = std::make_shared<Scene>(std::move(s));
     auto a = EmbreeAccel::build(*b.scene);
     EXPECT_TRUE(a.ok()) << (a.ok() ? "" : a.status().message);
-    if (a.ok()) b.accel = std::move(*a);
+    if (a.ok())
+        b.accel = std::move(*a);
     return b;
 }
 
@@ -77,7 +78,8 @@ void expect_agreement(double offset, std::uint64_t seed) {
         const auto exact = b.accel->closest(ray, Precision::exact, true);
         ASSERT_EQ(ref.has_value(), exact.has_value());
         EXPECT_EQ(linear_any(*b.scene, ray), b.accel->any(ray, Precision::exact));
-        if (!ref) continue;
+        if (!ref)
+            continue;
         ++hits;
         // exact: the same decision and bit-identical numbers as the linear scan.
         EXPECT_EQ(exact->object, ref->object);
@@ -88,7 +90,8 @@ void expect_agreement(double offset, std::uint64_t seed) {
         // refined: double numbers on the primitive Embree chose; almost always the same one.
         const auto refined = b.accel->closest(ray, Precision::refined, true);
         const auto fast = b.accel->closest(ray, Precision::fast, true);
-        if (!refined || !fast) continue;
+        if (!refined || !fast)
+            continue;
         ++compared;
         if (refined->object == ref->object && refined->primitive == ref->primitive) {
             ++refined_same;
@@ -104,8 +107,12 @@ void expect_agreement(double offset, std::uint64_t seed) {
     EXPECT_GE(refined_same, compared * 99 / 100);
 }
 
-TEST(EmbreeAccel, AgreesWithLinearScan) { expect_agreement(0.0, 11); }
-TEST(EmbreeAccel, AgreesWithLinearScanFarFromOrigin) { expect_agreement(1e6, 12); }
+TEST(EmbreeAccel, AgreesWithLinearScan) {
+    expect_agreement(0.0, 11);
+}
+TEST(EmbreeAccel, AgreesWithLinearScanFarFromOrigin) {
+    expect_agreement(1e6, 12);
+}
 
 TEST(EmbreeAccel, AllAndCountAgreeWithLinearScan) {
     Built b = build(random_scene(21));
@@ -146,7 +153,8 @@ TEST(EmbreeAccel, WatertightOnSharedEdgesAndVertices) {
             ++rays;
             EXPECT_TRUE(b.accel->closest(ray, Precision::exact, false)) << t;
             EXPECT_TRUE(b.accel->closest(ray, Precision::refined, false)) << t;
-            if (!b.accel->closest(ray, Precision::fast, false)) ++fast_leaks;
+            if (!b.accel->closest(ray, Precision::fast, false))
+                ++fast_leaks;
             Ray line = ray;
             line.tmin = -kInfinity;
             b.accel->all(line, Precision::exact, false, hits);
@@ -155,7 +163,8 @@ TEST(EmbreeAccel, WatertightOnSharedEdgesAndVertices) {
             b.accel->all(line, Precision::refined, false, hits);
             EXPECT_EQ(hits.size() % 2, 0u) << "refined " << t;
             b.accel->all(line, Precision::fast, false, hits);
-            if (hits.size() % 2) ++fast_odd;
+            if (hits.size() % 2)
+                ++fast_odd;
         }
     }
     // fast is Embree's own (robust) float test: recorded, not hidden.
@@ -186,7 +195,8 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
         for (std::size_t i = 0; i < rays.size(); ++i) {
             auto one = b.accel->closest(rays[i], p, true);
             ASSERT_EQ(one.has_value(), packed[i].valid()) << i;
-            if (!one) continue;
+            if (!one)
+                continue;
             ++hits;
             EXPECT_EQ(one->object, packed[i].object);
             if (one->primitive != packed[i].primitive) {

@@ -24,7 +24,8 @@ std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t ob
             }
         }
     }
-    if (best) best->object = object;
+    if (best)
+        best->object = object;
     return best;
 }
 
@@ -44,11 +45,13 @@ std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray_in, bool wa
 bool linear_any(const Scene& scene, const Ray& ray) {
     for (const Object& o : scene.objects) {
         if (o.kind == ObjectKind::sphere) {
-            if (intersect_sphere(o.sphere, ray, false)) return true;
+            if (intersect_sphere(o.sphere, ray, false))
+                return true;
             continue;
         }
         for (std::size_t p = 0; p < o.mesh->size(); ++p) {
-            if (intersect_triangle(o.mesh->triangle(p), ray, false)) return true;
+            if (intersect_triangle(o.mesh->triangle(p), ray, false))
+                return true;
         }
     }
     return false;
@@ -63,14 +66,16 @@ void sort_and_merge_edge_duplicates(std::vector<Hit>& hits) {
         if (h.on_edge) {
             // Hits sorted by t: only the tail of `kept` can be within the error band.
             for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
-                if (h.t - it->t > h.t_err + it->t_err) break;
+                if (h.t - it->t > h.t_err + it->t_err)
+                    break;
                 if (it->object == h.object && it->on_edge && it->front_face == h.front_face) {
                     duplicate = true;
                     break;
                 }
             }
         }
-        if (!duplicate) kept.push_back(h);
+        if (!duplicate)
+            kept.push_back(h);
     }
     hits.swap(kept);
 }

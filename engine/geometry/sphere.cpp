@@ -11,12 +11,11 @@ namespace raycastd::engine {
 // Double-double helpers (engine/math/double_double.h) for the few steps that need them.
 using namespace dd;
 
-
 // Compiled twice, with and without hardware FMA, and chosen when the program loads (GCC's
 // function multiversioning): without it std::fma is a library call, and the double-double steps
 // cost twice as much.
 __attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const Sphere& s,
-                                                                         const Ray& ray) {
+                                                                          const Ray& ray) {
     SphereRoots out;
     const Vec3d& d = ray.direction;
     {
@@ -29,7 +28,8 @@ __attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const 
         const Vec3d c = cross(f, d);
         const double ar2 = a * (s.radius * s.radius);
         const double bound = 64.0 * kDoubleUnitRoundoff * (dot(f, f) * a + ar2);
-        if (ar2 - dot(c, c) < -bound) return out;
+        if (ar2 - dot(c, c) < -bound)
+            return out;
     }
     // f = o − c, exactly: a ray starting far from a small sphere loses nothing here.
     const DD fx = two_sum(ray.origin.x, -s.center.x);
@@ -47,13 +47,14 @@ __attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const 
     const DD fxd2 = add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz));
     const DD r2 = two_prod(s.radius, s.radius);
     const DD disc = add(mul(a, r2), neg(fxd2));
-    if (!(disc.hi >= 0.0)) return out;  // also rejects NaN
+    if (!(disc.hi >= 0.0))
+        return out;  // also rejects NaN
 
     // Error bound: every step above is a few u² relative to |f|·|d| and the roots below are
     // within 2 ulps of the truth; γ₁₂ times the distance scale (|f| + r)/|d| bounds that with a
     // wide margin.
-    const double scale = (std::sqrt(fx.hi * fx.hi + fy.hi * fy.hi + fz.hi * fz.hi) + s.radius) /
-                         std::sqrt(a.hi);
+    const double scale =
+        (std::sqrt(fx.hi * fx.hi + fy.hi * fy.hi + fz.hi * fz.hi) + s.radius) / std::sqrt(a.hi);
     out.t_err = gamma(12) * scale;
 
     // The roots t_c ∓ h around the closest approach t_c = −β/a, h = √(Δ/4)/a, each rounded
@@ -83,7 +84,8 @@ __attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const 
         const DD gamma_c = add(add(add(mul(fx, fx), mul(fy, fy)), mul(fz, fz)), neg(r2));
         t1 = div(gamma_c, q);  // q ≠ 0 here: |q| ≥ √disc > 0
     }
-    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t1)
+        std::swap(t0, t1);
     out.count = 2;
     out.t[0] = t0;
     out.t[1] = t1;
@@ -97,7 +99,8 @@ void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
     const Vec3d pc = ray.origin - s.center + ray.direction * t;
     Vec3d n = pc / s.radius;
     const double len2 = dot(n, n);
-    if (std::abs(len2 - 1.0) > 8.0 * kDoubleUnitRoundoff) n = normalize(pc);
+    if (std::abs(len2 - 1.0) > 8.0 * kDoubleUnitRoundoff)
+        n = normalize(pc);
     hit.normal = n;
     hit.front_face = dot(ray.direction, hit.normal) < 0.0;
 }
@@ -111,7 +114,8 @@ std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_n
             hit.t = t;
             hit.t_err = r.t_err;
             hit.primitive = 0;
-            if (want_normal) sphere_normal(s, ray, t, hit);
+            if (want_normal)
+                sphere_normal(s, ray, t, hit);
             return hit;
         }
     }
@@ -122,7 +126,8 @@ int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]) {
     const SphereRoots r = sphere_roots(s, ray);
     int n = 0;
     for (int k = 0; k < r.count; ++k) {
-        if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax)) continue;
+        if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax))
+            continue;
         Hit& h = out[n++];
         h = Hit{};
         h.t = r.t[k];

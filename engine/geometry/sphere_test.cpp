@@ -1,16 +1,20 @@
 #include "engine/geometry/sphere.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <limits>
+
+#include <gtest/gtest.h>
 
 namespace raycastd::engine {
 namespace {
 
-Ray ray_z() { return Ray{{0, 0, 0}, {0, 0, 1}}; }
+Ray ray_z() {
+    return Ray{{0, 0, 0}, {0, 0, 1}};
+}
 
-double ulp(double x) { return std::nextafter(std::abs(x), kInfinity) - std::abs(x); }
+double ulp(double x) {
+    return std::nextafter(std::abs(x), kInfinity) - std::abs(x);
+}
 
 // Tutorial Question 1, sphere 1: (t − 10)² = 2² gives t = 8 and t = 12.
 TEST(Sphere, TutorialSphere1) {
@@ -148,8 +152,8 @@ TEST(Sphere, NearTangentRootsToAnUlp) {
     const Q ox = ray.origin.x, oy = ray.origin.y, dx = ray.direction.x, dy = ray.direction.y;
     const Q a = dx * dx + dy * dy, beta = ox * dx + oy * dy;
     const Q cr = ox * dy - oy * dx;  // |f × d| (z components are zero)
-    const long double h = std::sqrt(static_cast<long double>(a - cr * cr)) /
-                          static_cast<long double>(a);
+    const long double h =
+        std::sqrt(static_cast<long double>(a - cr * cr)) / static_cast<long double>(a);
     const long double tc = static_cast<long double>(-beta / a);
     EXPECT_NEAR(r.t[0], static_cast<double>(tc - h), 2 * ulp(10.0));
     EXPECT_NEAR(r.t[1], static_cast<double>(tc + h), 2 * ulp(10.0));

@@ -26,7 +26,8 @@ ShearFrame make_shear(const Vec3d& d) {
     s.kz = max_abs_dimension(d);
     s.kx = (s.kz + 1) % 3;
     s.ky = (s.kx + 1) % 3;
-    if (d[s.kz] < 0.0) std::swap(s.kx, s.ky);
+    if (d[s.kz] < 0.0)
+        std::swap(s.kx, s.ky);
     s.sx = d[s.kx] / d[s.kz];
     s.sy = d[s.ky] / d[s.kz];
     s.sz = 1.0 / d[s.kz];
@@ -62,7 +63,7 @@ const Vec3d& anchor_vertex(const Triangle& tri, const Vec3d& origin) {
 /// Compiled twice, with and without hardware FMA, and chosen when the program loads (GCC's
 /// function multiversioning): without it std::fma is a library call and this costs twice as much.
 __attribute__((target_clones("fma", "default"))) double plane_t(const Triangle& tri,
-                                                               const Ray& ray) {
+                                                                const Ray& ray) {
     const Vec3d& d = ray.direction;
     const Vec3d& v = anchor_vertex(tri, ray.origin);
     const DD vo[3] = {two_sum(v.x, -ray.origin.x), two_sum(v.y, -ray.origin.y),
@@ -81,7 +82,8 @@ __attribute__((target_clones("fma", "default"))) double plane_t(const Triangle& 
             const double dn = 16.0 * kDoubleUnitRoundoff * l1(e1) * l1(e2);
             const Vec3d vo_hi{vo[0].hi, vo[1].hi, vo[2].hi};
             const double vp = l1(vo_hi - d * t) + 4.0 * kDoubleUnitRoundoff * l1(vo_hi);
-            if (dn * vp <= kDoubleUnitRoundoff * std::abs(t) * std::abs(den.hi)) return t;
+            if (dn * vp <= kDoubleUnitRoundoff * std::abs(t) * std::abs(den.hi))
+                return t;
         }
     }
     const DD e1[3] = {two_sum(tri.b.x, -tri.a.x), two_sum(tri.b.y, -tri.a.y),
@@ -93,13 +95,16 @@ __attribute__((target_clones("fma", "default"))) double plane_t(const Triangle& 
                      sub(mul(e1[0], e2[1]), mul(e1[1], e2[0]))};
     const DD num = add(add(mul(n[0], vo[0]), mul(n[1], vo[1])), mul(n[2], vo[2]));
     const DD den = add(add(mul(n[0], d.x), mul(n[1], d.y)), mul(n[2], d.z));
-    if (den.hi == 0.0) return std::numeric_limits<double>::quiet_NaN();
+    if (den.hi == 0.0)
+        return std::numeric_limits<double>::quiet_NaN();
     return div(num, den);
 }
 
 }  // namespace
 
-Vec3d triangle_normal(const Triangle& tri) { return normalize(cross(tri.b - tri.a, tri.c - tri.a)); }
+Vec3d triangle_normal(const Triangle& tri) {
+    return normalize(cross(tri.b - tri.a, tri.c - tri.a));
+}
 
 bool is_degenerate(const Triangle& tri) {
     return cross(tri.b - tri.a, tri.c - tri.a) == Vec3d{0.0, 0.0, 0.0};
@@ -140,15 +145,19 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
     const double det = u + v + w;
     // det == 0: the ray lies in the triangle's plane or the triangle is degenerate (as seen
     // along the ray); both miss by contract.
-    if (det == 0.0 || !std::isfinite(det)) return std::nullopt;
+    if (det == 0.0 || !std::isfinite(det))
+        return std::nullopt;
 
-    if (is_degenerate(tri)) return std::nullopt;
+    if (is_degenerate(tri))
+        return std::nullopt;
     // The inside/outside decision above is Woop's (watertight); t is the plane crossing in
     // double-double, which Woop's sheared t (rounded in the shear, and ill-conditioned for a
     // grazing ray) agrees with to its t_err.
     const double t = plane_t(tri, ray);
-    if (std::isnan(t)) return std::nullopt;  // in the plane to double-double precision
-    if (require_inside && !(t >= ray.tmin && t <= ray.tmax)) return std::nullopt;
+    if (std::isnan(t))
+        return std::nullopt;  // in the plane to double-double precision
+    if (require_inside && !(t >= ray.tmin && t <= ray.tmax))
+        return std::nullopt;
     const double az = s.sz * A[s.kz], bz = s.sz * B[s.kz], cz = s.sz * C[s.kz];
     const double inv_det = 1.0 / det;
 
@@ -172,8 +181,8 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
     const double delta_y = gamma(5) * (max_y + max_z);
     const double delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     const double max_e = max_component(abs(Vec3d{u, v, w}));
-    hit.t_err = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) *
-                std::abs(inv_det);
+    hit.t_err =
+        3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * std::abs(inv_det);
 
     if (want_normal) {
         hit.normal = triangle_normal(tri);

@@ -1,10 +1,10 @@
 #include "engine/geometry/triangle.h"
 
-#include <gtest/gtest.h>
-
 #include <array>
 #include <cmath>
 #include <random>
+
+#include <gtest/gtest.h>
 
 namespace raycastd::engine {
 namespace {
@@ -12,7 +12,9 @@ namespace {
 // The triangle a = (0,0,5), b = (2,0,5), c = (0,2,5), facing −z ((b−a)×(c−a) = (0,0,4)).
 const Triangle kTri{{0, 0, 5}, {2, 0, 5}, {0, 2, 5}};
 
-Ray toward(double x, double y) { return Ray{{x, y, 0}, {0, 0, 1}}; }
+Ray toward(double x, double y) {
+    return Ray{{x, y, 0}, {0, 0, 1}};
+}
 
 TEST(Triangle, Inside) {
     auto hit = intersect_triangle(kTri, toward(0.5, 0.5));
@@ -158,7 +160,8 @@ TEST(Triangle, SharedEdgeNeverLeaks) {
         const Vec3d target = p0 + (p2 - p0) * s;
         const Vec3d origin{jitter(rng), jitter(rng), -10.0 + jitter(rng)};
         const Ray ray{origin, target - origin};
-        if (!intersect_triangle(t0, ray) && !intersect_triangle(t1, ray)) ++leaks;
+        if (!intersect_triangle(t0, ray) && !intersect_triangle(t1, ray))
+            ++leaks;
     }
     EXPECT_EQ(leaks, 0);
 }

@@ -31,7 +31,8 @@ Result<LoadedModel> load_off(std::string_view bytes, std::string_view name,
 /// ASCII lower case (file extensions, format keywords).
 inline std::string lower(std::string_view s) {
     std::string out(s);
-    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    for (char& c : out)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     return out;
 }
 
