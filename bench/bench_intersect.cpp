@@ -11,6 +11,7 @@
 //   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
 //            --raw-only (raw Embree's builds and traces alone, no engine)
 //            --ceiling-only (raw rtcIntersect1 alone: run_all.py times it around each peer)
+//            --modes closest,any,...  --precisions fast,refined,...  (engine rows measured)
 
 #include <chrono>
 #include <cmath>
@@ -70,6 +71,8 @@ struct Args {
     std::string json_path;
     bool raw_only = false;      ///< raw Embree alone, no engine
     bool ceiling_only = false;  ///< raw rtcIntersect1 alone, no files
+    std::string modes = "closest,any,all,count";   ///< engine modes measured
+    std::string precisions = "fast,refined,exact";  ///< engine precisions measured
 };
 
 bool parse_args(int argc, char** argv, Args& a) {
@@ -94,6 +97,10 @@ bool parse_args(int argc, char** argv, Args& a) {
             a.raw_only = true;
         } else if (arg == "--json") {
             a.json_path = value();
+        } else if (arg == "--modes") {
+            a.modes = value();
+        } else if (arg == "--precisions") {
+            a.precisions = value();
         } else {
             std::fprintf(stderr, "bench_intersect: unknown argument %s\n", arg.c_str());
             return false;
@@ -255,11 +262,17 @@ void bench_result_allocation(Report& report, const rb::Workload& w, const std::s
                  rb::BudgetedTiming{s, n, n}, {{"bytes", n * sizeof(re::Hit)}});
 }
 
+/// Whether `name` is one of the comma-separated `list`.
+bool listed(const std::string& list, const std::string& name) {
+    return ("," + list + ",").find("," + name + ",") != std::string::npos;
+}
+
 /// The engine in-process on one ray set: every mode at every precision, time-budgeted.
 /// Returns the lowest agreement with Embree seen (closest and any).
 double bench_engine(Report& report, const rb::Workload& w, const std::string& rays_name,
                     const std::vector<rb::RayRecord>& rays, const re::QueryEngine& engine,
-                    const rb::RawEmbree& embree, const RaySetRefs& refs, double budget_s) {
+                    const rb::RawEmbree& embree, const RaySetRefs& refs, double budget_s,
+                    const std::string& modes, const std::string& precisions) {
     const std::vector<re::Ray> all = rb::to_engine_rays(rays);
     // The ceiling again, right before and right after each engine measurement: on a shared
     // machine the load drifts within seconds, and a ratio of figures taken under the same load
@@ -274,6 +287,8 @@ double bench_engine(Report& report, const rb::Workload& w, const std::string& ra
     for (re::Mode mode : {re::Mode::closest, re::Mode::any, re::Mode::all, re::Mode::count}) {
         for (re::Precision p :
              {re::Precision::fast, re::Precision::refined, re::Precision::exact}) {
+            if (!listed(modes, re::to_string(mode)) || !listed(precisions, re::to_string(p)))
+                continue;
             const re::QueryOptions opt{mode, p, /*want_normal=*/true};
             std::vector<re::Ray> sample;
             std::vector<std::size_t> idx;
@@ -402,6 +417,14 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
         }
         report.build(w.name, "engine", "QueryEngine::build", 1e3 * build_s);
         engine = *built;
+        // The exact BVH is built on the first query that needs it (exact, and refined's
+        // confirmation of a float miss). Built here, untimed by the traces, and reported apart.
+        const auto bs = w.bounding_sphere();
+        const re::Ray probe{{bs[0], bs[1], bs[2]}, {0.0, 0.0, 1.0}};
+        const double lazy_s = rb::seconds([&] {
+            engine->intersect({probe}, re::QueryOptions{re::Mode::closest, re::Precision::exact});
+        });
+        report.build(w.name, "engine", "exact BVH (built by the first exact query)", 1e3 * lazy_s);
     }
 
     for (const std::string rays_name : {"coherent", "incoherent"}) {
@@ -419,7 +442,7 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
         if (engine) {
             bench_result_allocation(report, w, rays_name, rays.size(), s.reps);
             worst = std::min(worst, bench_engine(report, w, rays_name, rays, *engine, *embree, refs,
-                                                 args.budget_s));
+                                                 args.budget_s, args.modes, args.precisions));
         }
     }
     return true;

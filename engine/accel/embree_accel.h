@@ -2,12 +2,14 @@
 // EmbreeAccel: Embree 3 BVHs over a scene, answering single rays at the three precisions of
 // the API. No Embree type appears here (Mitsuba's pattern: the backend stays in the .cpp).
 //
-//   fast     Embree's float traversal and intersection (RTC_SCENE_FLAG_ROBUST: Embree's
-//            watertight triangle test); spheres are user geometry running the engine's double
-//            sphere test; t from Embree's float t.
+//   fast     Embree's float traversal and intersection (Embree's default build, not ROBUST:
+//            what raw Embree and Open3D run); spheres are user geometry running the engine's
+//            double sphere test; t and the normal from Embree's float hit. Batches of 16 go
+//            through Embree's packets.
 //   refined  the same traversal; the primitive Embree found is re-intersected in double. A float
 //            miss is confirmed on the exact BVH (Embree's float test can leak at a shared
-//            vertex), and all/count run on the exact BVH, so refined never leaks.
+//            vertex), and all/count run on the exact BVH, so refined never leaks. In a batch,
+//            rays that would need that confirmation anyway go to the exact path directly.
 //   exact    a second BVH whose triangles are user geometry: Embree's float boxes (padded to
 //            cover the float rounding of the ray and of the boxes) only cull; every candidate is
 //            decided by the double watertight test and the closest is chosen by the API's tie
@@ -63,9 +65,17 @@ class EmbreeAccel {
         float tfar, u, v;
         Vec3d ng;
     };
+    /// `escalated` (if given) is set when refined had to ask the exact path.
     std::optional<Hit> finish_native(const Ray& ray, double shift, double len, const NativeHit& nh,
                                      const std::optional<Hit>& sphere_hit, Precision precision,
-                                     bool want_normal) const;
+                                     bool want_normal, bool* escalated = nullptr) const;
+    std::optional<Hit> closest_impl(const Ray& ray, Precision precision, bool want_normal,
+                                    bool* escalated) const;
+    /// Whether the ray's segment meets the padded scene bounds.
+    bool enters_bounds(const Ray& ray) const;
+
+    /// closest_range's fast path for 16 rays on a triangle-only scene.
+    void fast_packet(const Ray* rays, bool want_normal, Hit* out) const;
 
     explicit EmbreeAccel(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;

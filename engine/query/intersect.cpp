@@ -149,14 +149,16 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
     const EmbreeAccel* accel = accel_.get();
     switch (opt.mode) {
         case Mode::closest:
-            out.hits.assign(n, Hit{});
             if (accel) {
+                // closest_range writes every answer: no need to clear a reused buffer first.
+                out.hits.resize(n);
                 for_each_block(n, [&](std::size_t b, std::size_t e) {
                     accel->closest_range(rays.data() + b, e - b, p, opt.want_normal,
                                          out.hits.data() + b);
                 });
                 break;
             }
+            out.hits.assign(n, Hit{});
             for_each_ray(n, [&](std::size_t i) {
                 if (auto h = linear_closest(s, rays[i], opt.want_normal)) out.hits[i] = *h;
             });
