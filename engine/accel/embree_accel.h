@@ -47,6 +47,9 @@ class EmbreeAccel {
                        Hit* out) const;
     /// Whether anything is hit in [tmin, tmax].
     bool any(const Ray& ray, Precision precision) const;
+    /// any() for rays[0..n): out[i].valid() says whether ray i hits anything (nothing else is
+    /// filled in). Groups of 16 go through Embree's occlusion packets where they can.
+    void any_range(const Ray* rays, std::size_t n, Precision precision, Hit* out) const;
     /// Every hit, sorted, shared edges merged (see linear_accel.h). fast: Embree's float hits,
     /// recomputed in double and merged with a float-sized edge tolerance; refined and exact:
     /// every candidate decided in double.

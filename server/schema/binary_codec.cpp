@@ -1,5 +1,9 @@
 #include "server/schema/binary_codec.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -13,11 +17,25 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
 
 namespace {
 
+/// Runs f(begin, end) over [0, n) in blocks on every core when n is large: decoding, checking
+/// and encoding 1M records is ~15 ms a core, worth sharing (tbb's grain keeps small batches
+/// on the calling thread).
 template <class F>
-void decode_as(std::string_view body, std::vector<engine::Ray>& rays) {
-    const std::size_t n = rays.size();
-    const char* p = body.data();
-    for (std::size_t i = 0; i < n; ++i, p += 8 * sizeof(F)) {
+void for_blocks(std::size_t n, F&& f) {
+    constexpr std::size_t kGrain = 16384;
+    if (n <= kGrain) {
+        f(std::size_t(0), n);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain),
+                      [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
+}
+
+template <class F>
+void decode_as(std::string_view body, std::vector<engine::Ray>& rays, std::size_t begin,
+               std::size_t end) {
+    const char* p = body.data() + begin * 8 * sizeof(F);
+    for (std::size_t i = begin; i < end; ++i, p += 8 * sizeof(F)) {
         F v[8];
         std::memcpy(v, p, sizeof v);
         engine::Ray& r = rays[i];
@@ -59,8 +77,10 @@ void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, s
     switch (mode) {
         case engine::Mode::closest: {
             out.resize(n * rec);
-            char* p = out.data();
-            for (std::size_t i = 0; i < n; ++i) p = put_hit<F>(p, r.hits[i]);
+            for_blocks(n, [&](std::size_t b, std::size_t e) {
+                char* p = out.data() + b * rec;
+                for (std::size_t i = b; i < e; ++i) p = put_hit<F>(p, r.hits[i]);
+            });
             break;
         }
         case engine::Mode::any:
@@ -110,14 +130,27 @@ void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
                                          std::to_string(max_rays) + " per request");
     }
     rays.resize(n);
-    if (dtype == Dtype::float32) {
-        decode_as<float>(body, rays);
-    } else {
-        decode_as<double>(body, rays);
-    }
-    for (std::size_t i = 0; i < n; ++i) {
+    // Decoded and checked in parallel blocks; the error names the lowest bad index, as a
+    // serial scan would.
+    std::atomic<std::size_t> first_bad{n};
+    for_blocks(n, [&](std::size_t b, std::size_t e) {
+        if (dtype == Dtype::float32) {
+            decode_as<float>(body, rays, b, e);
+        } else {
+            decode_as<double>(body, rays, b, e);
+        }
+        for (std::size_t i = b; i < e; ++i) {
+            if (!engine::validate_ray(rays[i], i).ok()) {
+                std::size_t cur = first_bad.load();
+                while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
+                }
+                break;
+            }
+        }
+    });
+    if (const std::size_t i = first_bad.load(); i < n) {
         engine::Status st = engine::validate_ray(rays[i], i);
-        if (!st.ok()) throw api_error("invalid_ray", st.message, "/rays/" + std::to_string(i));
+        throw api_error("invalid_ray", st.message, "/rays/" + std::to_string(i));
     }
 }
 
