@@ -10,6 +10,7 @@
 #include <embree3/rtcore.h>
 
 #include "engine/accel/linear_accel.h"
+#include "engine/math/double_double.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
@@ -117,6 +118,7 @@ struct RayContext {
     double shift = 0;          ///< the float ray starts at ray.at(shift)
     double len = 1;            ///< |direction|: float t' (unit direction) ↔ t = shift + t'/len
     double margin = 0;         ///< slack added to tfar, in unit-direction length
+    double origin_err = 0;     ///< bound on the double rounding of the float ray's start point
     std::optional<Hit> best;   ///< closest so far (exact path)
     std::vector<Hit>* collect = nullptr;  ///< all/count: every hit goes here
     bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
@@ -319,8 +321,26 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
     c.shift = back_off ? t0 - c.margin / c.len : t0;
     // (o − centre) + s·d rather than (o + s·d) − centre: the first difference is exact or nearly
     // so when the origin is near the scene (Sterbenz), so the float origin is accurate to the
-    // scene's size even when the scene sits far from the world origin.
-    const Vec3d org = (ray.origin - a.center) + ray.direction * c.shift;
+    // scene's size even when the scene sits far from the world origin. Its rounding is about
+    // u·(|o − centre| + |s·d|): for an origin far from a small scene that exceeds the exact
+    // BVH's box padding, and the start point is then formed in double-double instead (TwoSum
+    // and TwoProduct are exact, their sum is off by a few u² of the terms: Ogita, Rump & Oishi
+    // 2005), which keeps it within the padding out to ~1e15 scene sizes.
+    const double far = length(ray.origin - a.center) + std::abs(c.shift) * c.len;
+    Vec3d org;
+    if (8.0 * kDoubleUnitRoundoff * far <= 0.25 * a.pad) {
+        org = (ray.origin - a.center) + ray.direction * c.shift;
+        c.origin_err = 8.0 * kDoubleUnitRoundoff * far;
+    } else {
+        for (std::size_t k = 0; k < 3; ++k) {
+            const dd::DD p = dd::add(dd::two_sum(ray.origin[k], -a.center[k]),
+                                     dd::two_prod(ray.direction[k], c.shift));
+            org[k] = p.hi + p.lo;
+        }
+        // The double-double residual, then the rounding of the (near-scene) point to double.
+        c.origin_err = 8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * far +
+                       2.0 * kDoubleUnitRoundoff * length(org);
+    }
     const Vec3d dir = ray.direction / c.len;
     r.org_x = static_cast<float>(org.x);
     r.org_y = static_cast<float>(org.y);
@@ -370,10 +390,8 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
 /// Whether the float ray of the exact path is within the exact BVH's box padding of the double
 /// ray: the shifted origin carries a double rounding of about u·(|o − centre| + |s·d|), which for
 /// an origin very far from a small scene exceeds the padding. Such rays take the linear scan.
-bool exact_ray_within_padding(const EmbreeAccel::Impl& a, const Ray& ray, const RayContext& c) {
-    const double err =
-        8.0 * kDoubleUnitRoundoff * (length(ray.origin - a.center) + std::abs(c.shift) * c.len);
-    return err <= 0.25 * a.pad;
+bool exact_ray_within_padding(const EmbreeAccel::Impl& a, const Ray&, const RayContext& c) {
+    return c.origin_err <= 0.25 * a.pad;
 }
 
 /// fast's answer from Embree's float hit: t in the client's units (clamped to the range asked
