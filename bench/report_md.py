@@ -298,6 +298,13 @@ def targets_table(results: dict) -> list[str]:
             "×",
         ),
         (
+            "(for reference) engine `fast` ÷ raw `rtcIntersect1` on a ROBUST scene, the same "
+            "watertight test the engine runs, incoherent",
+            ratios("incoherent", engine, against=("raw_embree", "rtcIntersect1 ROBUST")),
+            1.0,
+            "×",
+        ),
+        (
             "binary HTTP ≥ 0.5× `rtcIntersect1`, incoherent",
             ratios("incoherent", binary),
             0.5,
@@ -533,6 +540,18 @@ def render(results: dict, accuracy: str) -> str:
         "## Targets of issue 4",
         "",
         *targets_table(results),
+        "",
+        "Two of the HTTP targets sit at or beyond what this machine's loopback carries: "
+        "PERFORMANCE.md measures ≈ 11 Mrays/s for moving 1M 32-byte rays up and 1M 32-byte "
+        "records down with no work at all, on the same two cores that must also trace the rays "
+        "and run the client. \"≥ 2× Open3D on coherent rays\" asks for 2 × 10–15 Mrays/s, "
+        "above that transport ceiling before any tracing; \"≥ 0.5× `rtcIntersect1`\" asks for "
+        "≈ 7 Mrays/s of transport plus tracing, where transport alone and tracing alone "
+        "(engine `fast`, ≈ 10–14 Mrays/s) add up to ≈ 6 Mrays/s when done one after the other "
+        "on 2 cores. The engine `fast` rows are measured against raw `rtcIntersect1` on a "
+        "default (non-robust) scene, as the issue asks; the engine runs Embree's ROBUST "
+        "(watertight) mode, which costs 7–15% (see docs/numerics.md for why it is kept), so the "
+        "reference row divides by raw Embree on a ROBUST scene.",
         "",
         "## Closest hit on each whole ray set (1M rays in the full run)",
         "",
