@@ -9,6 +9,7 @@
 // raw Embree tracing the Duck scene's primary rays (bench/raw_embree.h), the ceiling for rays.
 //
 //   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
+//                [--scenes tutorial_like,duck] [--precisions refined,fast]
 // --write-pov writes each scene's .pov (1024×768) into DIR and renders nothing.
 
 #include <algorithm>
@@ -38,6 +39,8 @@ struct Args {
     std::string out;
     bool smoke = false;
     std::string write_pov;
+    std::string scenes = "tutorial_like,duck";  ///< which scenes to render
+    std::string precisions = "refined,fast";    ///< at which precisions
 };
 
 std::string read_file(const std::string& path) {
@@ -155,9 +158,14 @@ int main(int argc, char** argv) {
             a.write_pov = argv[++i];
         } else if (s == "--smoke") {
             a.smoke = true;
+        } else if (s == "--scenes" && i + 1 < argc) {
+            a.scenes = argv[++i];
+        } else if (s == "--precisions" && i + 1 < argc) {
+            a.precisions = argv[++i];
         } else {
             std::cerr
-                << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n";
+                << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n"
+                   "                    [--scenes tutorial_like,duck] [--precisions refined,fast]\n";
             return 2;
         }
     }
@@ -167,7 +175,12 @@ int main(int argc, char** argv) {
                                                 : std::vector<std::string>{"tutorial_like", "duck"};
     std::vector<Row> rows;
     std::ostringstream extra;
+    const auto listed = [](const std::string& list, const std::string& name) {
+        return ("," + list + ",").find("," + name + ",") != std::string::npos;
+    };
     for (const std::string& name : scenes) {
+        if (!listed(a.scenes, name))
+            continue;
         std::shared_ptr<const engine::QueryEngine> engine;
         try {
             engine = load_scene(name);
@@ -183,6 +196,8 @@ int main(int argc, char** argv) {
         }
         for (int spp : a.smoke ? std::vector<int>{1} : std::vector<int>{1, 4}) {
             for (auto p : {engine::Precision::refined, engine::Precision::fast}) {
+                if (!listed(a.precisions, engine::to_string(p)))
+                    continue;
                 engine::RenderOptions o;
                 o.width = w;
                 o.height = h;

@@ -122,6 +122,7 @@ struct RayContext {
     std::optional<Hit> best;   ///< closest so far (exact path)
     std::vector<Hit>* collect = nullptr;  ///< all/count: every hit goes here
     bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
+    bool fast = false;   ///< precision fast: spheres by the plain-double kernel
 };
 
 RayContext& ctx_of(RTCIntersectContext* c) {
@@ -141,7 +142,7 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
         Hit hits[2];
-        const int n = sphere_hits(o.sphere, ray, hits);
+        const int n = c.fast ? sphere_hits_fast(o.sphere, ray, hits) : sphere_hits(o.sphere, ray, hits);
         for (int k = 0; k < n; ++k) {
             hits[k].object = object;
             if (!emit(hits[k]))
@@ -447,6 +448,7 @@ std::optional<Hit> closest_triangle_scan(const Scene& scene, const Ray& ray, boo
 /// prepare_ray_fast where it applies, else prepare_ray.
 bool prepare_native_ray(const EmbreeAccel::Impl& a, const Ray& ray, Precision p, RayContext& c,
                         RTCRay& r) {
+    c.fast = p == Precision::fast;
     if (p == Precision::fast && a.spheres == 0 && prepare_ray_fast(a, ray, c, r))
         return true;
     return prepare_ray(a, ray, /*back_off=*/false, c, r);
@@ -932,6 +934,7 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
     }
     if (!prepare_ray(a, ray, /*back_off=*/false, c, rh.ray))
         return;
+    c.fast = true;
     c.rtc.filter = collect_filter;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a.native, &c.rtc, &rh);

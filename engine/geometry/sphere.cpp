@@ -122,8 +122,52 @@ std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_n
     return std::nullopt;
 }
 
-int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]) {
-    const SphereRoots r = sphere_roots(s, ray);
+SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
+    SphereRoots out;
+    const Vec3d& d = ray.direction;
+    const Vec3d f = ray.origin - s.center;
+    const double a = dot(d, d);
+    const double beta = dot(f, d);
+    // l = f − (β/a)·d, the vector from the centre to the closest approach: r² − |l|² does not
+    // subtract two huge squares for a far origin (RTG 2019, eq. 7.5).
+    const Vec3d l = f - d * (beta / a);
+    const double r2 = s.radius * s.radius;
+    const double l2 = dot(l, l);
+    const double disc = r2 - l2;  // Δ/(4a)
+    if (!(disc >= 0.0))
+        return out;
+    // Error of disc: l carries ~u·|f| per component, so |l|² is off by ~4u·|f|·|l| + u·|l|²;
+    // the roots move by δdisc/(2√disc) near tangency (√u behaviour), plus the rounding of the
+    // distance scale elsewhere.
+    const double f_len = std::sqrt(dot(f, f));
+    const double len = std::sqrt(a);
+    const double scale = (f_len + s.radius) / len;
+    const double ddisc = 8.0 * kDoubleUnitRoundoff * (f_len * std::sqrt(l2) + l2 + r2);
+    const double root = std::sqrt(disc);
+    out.t_err = gamma(16) * scale + ddisc / (len * std::max(root, std::sqrt(ddisc)));
+    const double h = std::sqrt(a) * root;  // √(Δ/4)
+    if (disc == 0.0) {
+        out.count = 1;
+        out.t[0] = out.t[1] = -beta / a;
+        return out;
+    }
+    // q = −(β + sign(β)·√(Δ/4)): one root is q/a, the other γ/q with γ = |f|² − r², formed as
+    // (|f| − r)(|f| + r) so that an origin near the surface keeps its digits (Press et al.,
+    // Numerical Recipes §5.6).
+    const double q = -(beta + std::copysign(h, beta));
+    double t0 = q / a;
+    double t1 = q != 0.0 ? ((f_len - s.radius) * (f_len + s.radius)) / q : -t0;
+    if (t0 > t1)
+        std::swap(t0, t1);
+    out.count = 2;
+    out.t[0] = t0;
+    out.t[1] = t1;
+    return out;
+}
+
+namespace {
+
+int hits_in_range(const Sphere& s, const Ray& ray, const SphereRoots& r, Hit out[2]) {
     int n = 0;
     for (int k = 0; k < r.count; ++k) {
         if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax))
@@ -137,5 +181,16 @@ int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]) {
     }
     return n;
 }
+
+}  // namespace
+
+int sphere_hits_fast(const Sphere& s, const Ray& ray, Hit out[2]) {
+    return hits_in_range(s, ray, sphere_roots_fast(s, ray), out);
+}
+
+int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]) {
+    return hits_in_range(s, ray, sphere_roots(s, ray), out);
+}
+
 
 }  // namespace raycastd::engine

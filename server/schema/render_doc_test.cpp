@@ -27,7 +27,7 @@ TEST(RenderDoc, DefaultsFromAnEmptyBody) {
     EXPECT_EQ(r.options.height, 480);
     EXPECT_EQ(r.options.spp, 1);
     EXPECT_EQ(r.options.whitted.max_depth, 5);
-    EXPECT_EQ(r.options.whitted.precision, engine::Precision::refined);
+    EXPECT_EQ(r.options.whitted.precision, engine::Precision::fast);  // previews: fast
     EXPECT_EQ(r.options.shading, engine::ShadingMode::phong);
     EXPECT_EQ(r.format, engine::ImageFormat::png);
     EXPECT_FALSE(r.async);

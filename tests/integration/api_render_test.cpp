@@ -113,6 +113,11 @@ TEST_F(RenderApi, EmptyBodyRendersTheDefaults) {
     ASSERT_TRUE(res);
     ASSERT_EQ(res->status, 200) << res->body;
     EXPECT_EQ(parse_rays(res->get_header_value("X-Rays")).at("primary"), 640 * 480);
+    // A preview defaults to fast (docs/rendering.md); asked for, refined is what answers.
+    EXPECT_EQ(res->get_header_value("X-Precision"), "fast");
+    auto refined = render(id, {{"width", 8}, {"height", 8}, {"precision", "refined"}});
+    ASSERT_TRUE(refined);
+    EXPECT_EQ(refined->get_header_value("X-Precision"), "refined");
 }
 
 TEST_F(RenderApi, SkippingIsVisibleInXRays) {
