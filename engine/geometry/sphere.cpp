@@ -14,6 +14,18 @@ using namespace dd;
 // Compiled twice, with and without hardware FMA, and chosen when the program loads (GCC's
 // function multiversioning): without it std::fma is a library call, and the double-double steps
 // cost twice as much.
+namespace {
+
+/// `out` with the two roots t0, t1 in ascending order.
+SphereRoots with_roots(SphereRoots out, double t0, double t1) {
+    out.count = 2;
+    out.t[0] = std::min(t0, t1);
+    out.t[1] = std::max(t0, t1);
+    return out;
+}
+
+}  // namespace
+
 __attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const Sphere& s,
                                                                           const Ray& ray) {
     SphereRoots out;
@@ -84,12 +96,7 @@ __attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const 
         const DD gamma_c = add(add(add(mul(fx, fx), mul(fy, fy)), mul(fz, fz)), neg(r2));
         t1 = div(gamma_c, q);  // q ≠ 0 here: |q| ≥ √disc > 0
     }
-    if (t0 > t1)
-        std::swap(t0, t1);
-    out.count = 2;
-    out.t[0] = t0;
-    out.t[1] = t1;
-    return out;
+    return with_roots(out, t0, t1);
 }
 
 void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
@@ -157,12 +164,7 @@ SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
     const double q = -(beta + std::copysign(h, beta));
     double t0 = q / a;
     double t1 = q != 0.0 ? ((f_len - s.radius) * (f_len + s.radius)) / q : -t0;
-    if (t0 > t1)
-        std::swap(t0, t1);
-    out.count = 2;
-    out.t[0] = t0;
-    out.t[1] = t1;
-    return out;
+    return with_roots(out, t0, t1);
 }
 
 namespace {
