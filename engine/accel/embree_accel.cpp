@@ -449,7 +449,10 @@ std::optional<Hit> closest_triangle_scan(const Scene& scene, const Ray& ray, boo
 bool prepare_native_ray(const EmbreeAccel::Impl& a, const Ray& ray, Precision p, RayContext& c,
                         RTCRay& r) {
     c.fast = p == Precision::fast;
-    if (p == Precision::fast && a.spheres == 0 && prepare_ray_fast(a, ray, c, r))
+    // Spheres too: their callback works in the client's t units with shift 0 and len 1, and a
+    // sphere culled by its box within the float rounding of the unclipped ray is within what
+    // fast promises. Measured: clipping and normalising cost 17% of a fast render of spheres.
+    if (p == Precision::fast && prepare_ray_fast(a, ray, c, r))
         return true;
     return prepare_ray(a, ray, /*back_off=*/false, c, r);
 }
