@@ -14,8 +14,18 @@ namespace {
 
 int pick_worker_threads(const Config& c) {
     if (c.threads > 0) return c.threads;
-    // At least 4 so that slow clients on keep-alive connections cannot starve the others.
-    return std::max(4, static_cast<int>(std::thread::hardware_concurrency()));
+    // cpp-httplib serves a keep-alive connection on one worker thread until the client goes
+    // quiet for the keep-alive timeout, so the worker count is the number of clients served at
+    // once: with 4 workers a fifth keep-alive client waited 30 s (measured). Idle workers
+    // cost a stack each; the work itself is bounded by --max-concurrent and runs on TBB.
+    return std::max(64, 8 * static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+/// Work requests in flight before 503 busy: the cores' worth of parallel work twice over
+/// (each request runs on every core through TBB), at least 4.
+std::size_t pick_max_concurrent(const Config& c) {
+    if (c.limits.max_concurrent) return c.limits.max_concurrent;
+    return std::max<std::size_t>(4, 2 * std::max(1u, std::thread::hardware_concurrency()));
 }
 
 /// Holds one concurrent-work slot for the life of a request.
@@ -52,8 +62,7 @@ App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_
         config_.data_dir, config_.limits.memory_budget_bytes,
         [this](const SceneSource& src, const FileSource& files) { return build_scene(src, files); });
     const int threads = threads_ = pick_worker_threads(config_);
-    max_concurrent_ = config_.limits.max_concurrent ? config_.limits.max_concurrent
-                                                    : static_cast<std::size_t>(2 * threads);
+    max_concurrent_ = pick_max_concurrent(config_);
     http_.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
     // Without TCP_NODELAY every small response waits for the delayed ACK (~40 ms): 530 instead
     // of 36,000 requests/s on this machine (PERFORMANCE.md).

@@ -14,6 +14,7 @@
 #include "server/config.h"
 #include "server/scene_cache.h"
 #include "server/scene_registry.h"
+#include "server/scratch.h"
 #include "server/schema/json_read.h"
 #include "server/schema/query_doc.h"
 #include "server/uri_resolver.h"
@@ -97,14 +98,16 @@ void install_render_routes(App& app);
 /// registered-scene routes).
 void answer_intersect(const engine::QueryEngine& engine, const Json& body,
                       const std::string& prefix, std::size_t max_rays, httplib::Response& res);
-/// Answers an already parsed intersect request in JSON.
+/// Answers an already parsed intersect request in JSON, the engine answering into `result`.
 void answer_parsed_intersect(const engine::QueryEngine& engine, const IntersectRequest& req,
-                             httplib::Response& res);
+                             engine::QueryResult& result, httplib::Response& res);
 /// True when the request carries binary ray records (Content-Type: application/octet-stream).
 bool is_binary(const httplib::Request& req);
-/// Answers the binary form (see schema/binary_codec.h) from the query string and `body`.
+/// Answers the binary form (see schema/binary_codec.h) from the query string and
+/// `scratch->body`; the response streams from `scratch`, which it keeps until written.
 void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,
-                             std::string_view body, std::size_t max_rays, httplib::Response& res);
+                             std::shared_ptr<Scratch> scratch, std::size_t max_rays,
+                             httplib::Response& res);
 
 /// Sends `body` as application/json with the given status.
 void send_json(httplib::Response& res, std::string body, int status = 200);

@@ -12,7 +12,8 @@ usage: raycastd [options]
 
   --host ADDR             address to listen on (default 127.0.0.1)
   --port N                port (default 8080; 0 picks a free port and prints it)
-  --threads N             HTTP worker threads (default: hardware threads, at least 4)
+  --threads N             HTTP worker threads = keep-alive clients served at once
+                          (default: 8 per hardware thread, at least 64)
   --scene-root DIR        mesh "uri"s resolve inside DIR only (default .)
   --data-dir DIR          persist registered scenes in DIR (default: memory only)
   --demo FILE             register the scene document FILE at start-up (repeatable)
@@ -20,7 +21,8 @@ usage: raycastd [options]
   --max-rays N            most rays per intersect request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
-  --max-concurrent N      work requests in flight before 503 busy (default 2*threads)
+  --max-concurrent N      work requests in flight before 503 busy
+                          (default: 2 per hardware thread, at least 4)
   --memory-budget-mb N    resident scene memory before least-recently-used eviction (default 4096)
   --access-log            log every request to stderr
   --help                  this text

@@ -9,15 +9,16 @@
 namespace raycastd::server {
 
 void answer_parsed_intersect(const engine::QueryEngine& engine, const IntersectRequest& req,
-                             httplib::Response& res) {
-    thread_local engine::QueryResult result;
+                             engine::QueryResult& result, httplib::Response& res) {
     engine.intersect(req.rays, req.options, result);
     send_json(res, write_intersect_response(engine.scene(), req, result));
 }
 
 void answer_intersect(const engine::QueryEngine& engine, const Json& body,
                       const std::string& prefix, std::size_t max_rays, httplib::Response& res) {
-    answer_parsed_intersect(engine, parse_intersect_request(body, prefix, max_rays), res);
+    const auto scratch = acquire_scratch();
+    answer_parsed_intersect(engine, parse_intersect_request(body, prefix, max_rays),
+                            scratch->result, res);
 }
 
 bool is_binary(const httplib::Request& req) {
@@ -26,7 +27,8 @@ bool is_binary(const httplib::Request& req) {
 }
 
 void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,
-                             std::string_view body, std::size_t max_rays, httplib::Response& res) {
+                             std::shared_ptr<Scratch> scratch, std::size_t max_rays,
+                             httplib::Response& res) {
     engine::QueryOptions opt;
     const auto param = [&](const char* k) {
         return req.has_param(k) ? req.get_param_value(k) : std::string();
@@ -40,22 +42,21 @@ void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::R
         const std::string f = param("fields");
         opt.want_normal = f.find("normal") != std::string::npos;
     }
-    thread_local std::vector<engine::Ray> rays;
-    thread_local engine::QueryResult result;
-    thread_local std::string out;
-    decode_rays(body, dtype, max_rays, rays);
-    engine.intersect(rays, opt, result);
-    encode_results(result, opt.mode, dtype, rays.size(), out);
+    Scratch& s = *scratch;
+    decode_rays(s.body, dtype, max_rays, s.rays);
+    engine.intersect(s.rays, opt, s.result);
+    encode_results(s.result, opt.mode, dtype, s.rays.size(), s.out);
     res.status = 200;
-    res.set_header("X-Precision", engine::to_string(result.precision));
+    res.set_header("X-Precision", engine::to_string(s.result.precision));
     res.set_header("X-Mode", engine::to_string(opt.mode));
-    // `out` belongs to this worker thread, which also writes the response before it takes
-    // the next request, so it outlives the provider's use.
-    const std::string* data = &out;
-    res.set_content_provider(out.size(), "application/octet-stream",
-                             [data](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
-                                 return sink.write(data->data() + offset, length);
-                             });
+    // The provider keeps the scratch (and so `out`) until the response has been written.
+    const std::size_t size = s.out.size();
+    res.set_content_provider(
+        size, "application/octet-stream",
+        [scratch = std::move(scratch)](std::size_t offset, std::size_t length,
+                                       httplib::DataSink& sink) {
+            return sink.write(scratch->out.data() + offset, length);
+        });
 }
 
 void install_query_routes(App& app) {

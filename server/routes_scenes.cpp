@@ -77,14 +77,15 @@ void install_scene_routes(App& app) {
                         send_json(res, "{\"id\":\"" + id + "\",\"deleted\":true}");
                     });
                 });
-    // The body is streamed into a buffer this worker thread reuses, and binary answers are
-    // written from another: a 1M-ray batch moves 32-64 MB each way, and fresh buffers of that
+    // The body is streamed into a pooled buffer and binary answers are written from another
+    // (server/scratch.h): a 1M-ray batch moves 32-64 MB each way, and fresh buffers of that
     // size cost more in page faults than tracing the rays (PERFORMANCE.md).
     http.Post(R"(/v1/scenes/([A-Za-z0-9_]+)/intersect)",
               [&app](const httplib::Request& req, httplib::Response& res,
                      const httplib::ContentReader& read) {
                   app.handle(req, res, true, [&] {
-                      thread_local std::string body;
+                      auto scratch = acquire_scratch();
+                      std::string& body = scratch->body;
                       body.clear();
                       const std::size_t limit = app.config().limits.max_body_bytes;
                       bool over = false;
@@ -99,17 +100,18 @@ void install_scene_routes(App& app) {
                       if (over) throw api_error("too_large", "request body is over the configured limit");
                       auto engine = app.scene_or_404(req.matches[1]);
                       if (is_binary(req)) {
-                          answer_binary_intersect(*engine, req, body, app.config().limits.max_rays, res);
+                          answer_binary_intersect(*engine, req, std::move(scratch),
+                                                  app.config().limits.max_rays, res);
                           return;
                       }
                       if (body.empty()) throw api_error("bad_json", "empty body: a JSON document is required");
                       const std::size_t max_rays = app.config().limits.max_rays;
-                      thread_local IntersectRequest fast;
+                      IntersectRequest& fast = scratch->parsed;
                       fast.rays.clear();  // keeps its capacity for the next request
                       fast.options = {};
                       fast.fields = {};
                       if (parse_intersect_request_fast(body, max_rays, fast)) {
-                          answer_parsed_intersect(*engine, fast, res);
+                          answer_parsed_intersect(*engine, fast, scratch->result, res);
                           return;
                       }
                       Json doc;

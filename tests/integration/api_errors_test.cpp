@@ -124,5 +124,27 @@ TEST_F(ApiErrors, InfoAndOpenApi) {
     EXPECT_TRUE(api.at("paths").contains("/v1/intersect"));
 }
 
+// cpp-httplib serves a keep-alive connection on one worker until the client goes quiet (30 s):
+// with the old default of 4 workers a fifth keep-alive client waited that long. With the
+// default worker count (--threads 0 = default), a dozen keep-alive clients, all holding their
+// connections open, are each answered at once.
+TEST(ServerThreads, DozenKeepAliveClientsAreAllServed) {
+    testing::ServerProcess server({"--threads", "0"});
+    std::vector<std::unique_ptr<httplib::Client>> clients;
+    for (int i = 0; i < 12; ++i) {
+        clients.push_back(server.client());
+        clients.back()->set_keep_alive(true);
+        clients.back()->set_read_timeout(3, 0);
+        auto res = clients.back()->Get("/v1/health");
+        ASSERT_TRUE(res) << "client " << i << " was not served";
+        EXPECT_EQ(res->status, 200);
+    }
+    for (auto& c : clients) {  // and again, every connection still open
+        auto res = c->Get("/v1/health");
+        ASSERT_TRUE(res);
+        EXPECT_EQ(res->status, 200);
+    }
+}
+
 }  // namespace
 }  // namespace raycastd

@@ -1,0 +1,31 @@
+#pragma once
+// Reusable buffers for intersect requests. A 1M-ray batch moves 32-64 MB each way and answers
+// into ~72 MB of hits; fresh buffers of that size cost more in page faults than tracing the
+// rays (PERFORMANCE.md: ~2.5 ms per MB). They used to be thread_local, which with one worker
+// thread per keep-alive client (app.cpp) would let every worker pin its own few hundred MB.
+// A small pool keeps at most kRetained sets, whichever requests used them last; more sets
+// exist only while more requests are in flight (bounded by --max-concurrent).
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "engine/query/query_types.h"
+#include "server/schema/query_doc.h"
+
+namespace raycastd::server {
+
+struct Scratch {
+    std::string body;                ///< the request body, streamed in
+    std::vector<engine::Ray> rays;   ///< decoded binary rays
+    IntersectRequest parsed;         ///< the JSON fast path's parse
+    engine::QueryResult result;      ///< the engine's answers
+    std::string out;                 ///< an encoded binary answer
+};
+
+/// A Scratch from the pool (or a new one); it returns to the pool when the last copy of the
+/// pointer goes, e.g. after a streamed response that captured it has been written.
+std::shared_ptr<Scratch> acquire_scratch();
+
+}  // namespace raycastd::server
