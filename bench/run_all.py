@@ -250,6 +250,7 @@ def trace_over_http(
     for r in report_md.RAYS:
         records, ref = load_rays(data_dir, w, r)
         for variant, fn, kwargs in (
+            ("binary float32 curl", http_peer.bench_binary_curl, {}),
             ("binary float32", http_peer.bench_binary, {}),
             (
                 "JSON",
