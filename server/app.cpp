@@ -21,11 +21,12 @@ int pick_worker_threads(const Config& c) {
     return std::max(64, 8 * static_cast<int>(std::thread::hardware_concurrency()));
 }
 
-/// Work requests in flight before 503 busy: the cores' worth of parallel work twice over
-/// (each request runs on every core through TBB), at least 4.
-std::size_t pick_max_concurrent(const Config& c) {
+/// Work requests in flight before 503 busy: by default one per worker, so that no client is
+/// turned away while a worker is free to serve it (each request runs on every core through
+/// TBB, so more of them share the cores rather than queue). Operators bound memory with it.
+std::size_t pick_max_concurrent(const Config& c, int threads) {
     if (c.limits.max_concurrent) return c.limits.max_concurrent;
-    return std::max<std::size_t>(4, 2 * std::max(1u, std::thread::hardware_concurrency()));
+    return static_cast<std::size_t>(threads);
 }
 
 /// Holds one concurrent-work slot for the life of a request.
@@ -62,7 +63,7 @@ App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_
         config_.data_dir, config_.limits.memory_budget_bytes,
         [this](const SceneSource& src, const FileSource& files) { return build_scene(src, files); });
     const int threads = threads_ = pick_worker_threads(config_);
-    max_concurrent_ = pick_max_concurrent(config_);
+    max_concurrent_ = pick_max_concurrent(config_, threads);
     http_.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
     // Without TCP_NODELAY every small response waits for the delayed ACK (~40 ms): 530 instead
     // of 36,000 requests/s on this machine (PERFORMANCE.md).

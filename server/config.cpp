@@ -21,8 +21,7 @@ usage: raycastd [options]
   --max-rays N            most rays per intersect request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
-  --max-concurrent N      work requests in flight before 503 busy
-                          (default: 2 per hardware thread, at least 4)
+  --max-concurrent N      work requests in flight before 503 busy (default: --threads)
   --memory-budget-mb N    resident scene memory before least-recently-used eviction (default 4096)
   --access-log            log every request to stderr
   --help                  this text

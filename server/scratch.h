@@ -4,7 +4,8 @@
 // rays (PERFORMANCE.md: ~2.5 ms per MB). They used to be thread_local, which with one worker
 // thread per keep-alive client (app.cpp) would let every worker pin its own few hundred MB.
 // A small pool keeps at most kRetained sets, whichever requests used them last; more sets
-// exist only while more requests are in flight (bounded by --max-concurrent).
+// exist only while more requests are in flight or their answers are still being written to
+// slow readers (a binary answer streams from its set).
 
 #include <memory>
 #include <mutex>

@@ -52,6 +52,17 @@ Status take_embree_error(const char* what) {
                                    (msg.empty() ? "" : " (" + msg + ")"));
 }
 
+/// v as a float, ±infinity beyond float's range (a plain conversion of a finite double above
+/// FLT_MAX is undefined behaviour).
+float to_float(double v) {
+    constexpr double kMax = std::numeric_limits<float>::max();
+    if (v > kMax)
+        return std::numeric_limits<float>::infinity();
+    if (v < -kMax)
+        return -std::numeric_limits<float>::infinity();
+    return static_cast<float>(v);
+}
+
 float float_down(double v) {
     const float f = static_cast<float>(v);
     return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity())
@@ -204,7 +215,7 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
             return true;
         }
         // The native BVH: a sphere competes with Embree's float triangle hits by float t'.
-        const auto tf = static_cast<float>((h.t - c.shift) * c.len);
+        const float tf = to_float((h.t - c.shift) * c.len);
         if (!(tf <= rh->ray.tfar))
             return true;
         rh->ray.tfar = tf;
@@ -379,8 +390,8 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
     r.dir_x = static_cast<float>(ray.direction.x);
     r.dir_y = static_cast<float>(ray.direction.y);
     r.dir_z = static_cast<float>(ray.direction.z);
-    r.tnear = static_cast<float>(ray.tmin);
-    r.tfar = static_cast<float>(ray.tmax);  // +inf stays +inf
+    r.tnear = to_float(ray.tmin);
+    r.tfar = to_float(ray.tmax);  // +inf stays +inf
     r.time = 0.0f;
     r.mask = 0xFFFFFFFFu;
     r.id = 0;
@@ -787,8 +798,8 @@ void EmbreeAccel::fast_packet(const Ray* rays, bool want_normal, Hit* out) const
         rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
         rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
         rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);
-        rh.ray.tnear[k] = ok ? static_cast<float>(ray.tmin) : 0.0f;
-        rh.ray.tfar[k] = ok ? static_cast<float>(ray.tmax) : -1.0f;
+        rh.ray.tnear[k] = ok ? to_float(ray.tmin) : 0.0f;
+        rh.ray.tfar[k] = ok ? to_float(ray.tmax) : -1.0f;
         rh.ray.time[k] = 0.0f;
         rh.ray.mask[k] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks
         rh.ray.id[k] = static_cast<unsigned>(k);

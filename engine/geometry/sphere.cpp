@@ -147,6 +147,10 @@ SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
     // the roots move by δdisc/(2√disc) near tangency (√u behaviour), plus the rounding of the
     // distance scale elsewhere.
     const double f_len = std::sqrt(dot(f, f));
+    // Past ~1e154 from the centre |f|² overflows, and below radius ~1e-162 r² underflows: the
+    // plain-double form is meaningless there, and the double-double kernel handles both.
+    if (!std::isfinite(f_len) || !(r2 > 0.0))
+        return sphere_roots(s, ray);
     const double len = std::sqrt(a);
     const double scale = (f_len + s.radius) / len;
     const double ddisc = 8.0 * kDoubleUnitRoundoff * (f_len * std::sqrt(l2) + l2 + r2);

@@ -1,6 +1,7 @@
 #include "engine/geometry/sphere.h"
 
 #include <cmath>
+#include <random>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -163,6 +164,48 @@ TEST(Sphere, ErrorBoundCoversFarSphere) {
     SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
     EXPECT_GT(r.t_err, 0.0);
     EXPECT_LT(r.t_err, 1e-6);
+}
+
+// fast's plain-double kernel against the double-double one: the same roots to within the
+// t_err it reports, on ordinary rays, near tangency, from inside; and for the cases plain
+// double cannot form (|o − c|² overflowing, r² underflowing) it hands over to the other.
+TEST(Sphere, FastRootsWithinTheirBound) {
+    std::mt19937_64 rng(77);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int compared = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Sphere s{{u(rng) * 10, u(rng) * 10, u(rng) * 10}, 0.1 + std::abs(u(rng)) * 3};
+        Ray ray;
+        ray.origin = {u(rng) * 20, u(rng) * 20, u(rng) * 20};
+        // aim near the sphere's rim so that tangency is common
+        const Vec3d target = s.center + normalize(Vec3d{u(rng), u(rng), u(rng)}) * s.radius *
+                                            (1.0 + 1e-9 * u(rng));
+        ray.direction = (target - ray.origin) * std::pow(10.0, 3 * u(rng));
+        const SphereRoots ref = sphere_roots(s, ray);
+        const SphereRoots fast = sphere_roots_fast(s, ray);
+        if (ref.count == 0 || fast.count == 0)
+            continue;  // near tangency the two may disagree on a graze, within the bound
+        ++compared;
+        for (int k = 0; k < 2; ++k) {
+            EXPECT_LE(std::abs(fast.t[k] - ref.t[std::min(k, ref.count - 1)]),
+                      fast.t_err + ref.t_err)
+                << "ray " << i;
+        }
+        EXPECT_TRUE(std::isfinite(fast.t_err));
+    }
+    EXPECT_GT(compared, 15000);
+
+    const Sphere unit{{0, 0, 0}, 1.0};
+    const Ray far{{-1e200, 0, 0}, {1, 0, 0}};  // |f|² overflows in plain double
+    const SphereRoots a = sphere_roots_fast(unit, far), b = sphere_roots(unit, far);
+    ASSERT_EQ(a.count, b.count);
+    EXPECT_EQ(a.t[0], b.t[0]);
+    EXPECT_EQ(a.t[1], b.t[1]);
+    const Sphere tiny{{0, 0, 0}, 1e-170};  // r² underflows
+    const Ray through{{-1, 0, 0}, {1, 0, 0}};
+    const SphereRoots c = sphere_roots_fast(tiny, through), d = sphere_roots(tiny, through);
+    EXPECT_EQ(c.count, d.count);
+    EXPECT_FALSE(std::isnan(c.t_err));
 }
 
 }  // namespace
