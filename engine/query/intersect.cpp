@@ -33,11 +33,15 @@ void for_each_ray(std::size_t n, F&& f) {
                       });
 }
 
+/// The fixed blocks of for_each_block.
+constexpr std::size_t kBlock = 1024;
+std::size_t block_count(std::size_t n) { return n <= kBlock ? 1 : (n + kBlock - 1) / kBlock; }
+std::size_t block_index(std::size_t begin) { return begin / kBlock; }
+
 /// Like for_each_ray, handing out fixed blocks of 1024 rays (whole packets of 16
 /// where possible, and few enough tasks that scheduling costs nothing per ray).
 template <class F>
 void for_each_block(std::size_t n, F&& f) {
-    constexpr std::size_t kBlock = 1024;
     if (n <= kBlock) {
         f(std::size_t(0), n);
         return;
@@ -195,28 +199,33 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
             break;
         case Mode::all:
         case Mode::count: {
+            // One scratch vector per block instead of one vector per ray (a million small
+            // allocations for a 1M-ray batch): each block's hits are appended to its own list,
+            // and `all` concatenates the lists in block order.
             const bool normals = opt.want_normal && opt.mode == Mode::all;
-            std::vector<std::vector<Hit>> per_ray(n);
-            for_each_ray(n, [&](std::size_t i) {
-                if (accel) {
-                    accel->all(rays[i], p, normals, per_ray[i]);
-                } else {
-                    linear_all(s, rays[i], normals, per_ray[i]);
+            const bool keep = opt.mode == Mode::all;
+            out.counts.resize(n);
+            std::vector<std::vector<Hit>> block_hits(keep ? block_count(n) : 0);
+            for_each_block(n, [&](std::size_t b, std::size_t e) {
+                std::vector<Hit> one;
+                std::vector<Hit>* mine = keep ? &block_hits[block_index(b)] : nullptr;
+                for (std::size_t i = b; i < e; ++i) {
+                    if (accel) {
+                        accel->all(rays[i], p, normals, one);
+                    } else {
+                        linear_all(s, rays[i], normals, one);
+                    }
+                    out.counts[i] = static_cast<std::uint32_t>(one.size());
+                    if (mine) mine->insert(mine->end(), one.begin(), one.end());
                 }
             });
-            if (opt.mode == Mode::count) {
-                out.counts.resize(n);
-                for (std::size_t i = 0; i < n; ++i) {
-                    out.counts[i] = static_cast<std::uint32_t>(per_ray[i].size());
-                }
-                break;
-            }
-            out.offsets.resize(n + 1, 0);
-            for (std::size_t i = 0; i < n; ++i) {
-                out.offsets[i + 1] = out.offsets[i] + static_cast<std::uint32_t>(per_ray[i].size());
-            }
+            if (!keep) break;
+            out.offsets.resize(n + 1);
+            out.offsets[0] = 0;
+            for (std::size_t i = 0; i < n; ++i) out.offsets[i + 1] = out.offsets[i] + out.counts[i];
+            out.counts.clear();  // all answers with offsets (query_types.h)
             out.hits.reserve(out.offsets[n]);
-            for (auto& v : per_ray) out.hits.insert(out.hits.end(), v.begin(), v.end());
+            for (auto& v : block_hits) out.hits.insert(out.hits.end(), v.begin(), v.end());
             break;
         }
     }
