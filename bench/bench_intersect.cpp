@@ -69,9 +69,9 @@ struct Args {
     std::string workloads = "ABC";
     std::string data_dir;
     std::string json_path;
-    bool raw_only = false;      ///< raw Embree alone, no engine
-    bool ceiling_only = false;  ///< raw rtcIntersect1 alone, no files
-    std::string modes = "closest,any,all,count";   ///< engine modes measured
+    bool raw_only = false;                          ///< raw Embree alone, no engine
+    bool ceiling_only = false;                      ///< raw rtcIntersect1 alone, no files
+    std::string modes = "closest,any,all,count";    ///< engine modes measured
     std::string precisions = "fast,refined,exact";  ///< engine precisions measured
 };
 

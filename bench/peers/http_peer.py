@@ -177,6 +177,34 @@ def budgeted(
     return seconds, idx, answer
 
 
+def binary_path(scene_id: str, mode: str, precision: str) -> str:
+    return f"/v1/scenes/{scene_id}/intersect?mode={mode}&precision={precision}&dtype=float32"
+
+
+def binary_timing(
+    data: bytes,
+    seconds: float,
+    idx: np.ndarray,
+    total: int,
+    ref: dict[str, np.ndarray],
+    precision: str | None,
+) -> Timing:
+    """The Timing of a binary answer `data` to the rays rays[idx], judged against `ref`."""
+    if len(data) != 32 * len(idx):
+        raise RuntimeError(f"binary intersect: {len(data)} bytes for {len(idx)} rays")
+    rec = np.frombuffer(data, dtype=RECORD_DTYPE)
+    agree = agreement(
+        rec["t"],
+        rec["object"],
+        rec["primitive"],
+        ref["t"][idx],
+        ref["object"][idx],
+        ref["primitive"][idx],
+    )
+    hits = int(np.count_nonzero(rec["object"] != MISS))
+    return Timing(seconds, len(idx), total, hits, agree, precision)
+
+
 def bench_binary(
     conn,
     scene_id: str,
@@ -187,7 +215,7 @@ def bench_binary(
     precision: str = "fast",
 ) -> Timing:
     """One request per measurement carrying the whole (sampled) set: 1M rays = a 32 MB body."""
-    path = f"/v1/scenes/{scene_id}/intersect?mode={mode}&precision={precision}&dtype=float32"
+    path = binary_path(scene_id, mode, precision)
     probe_status, probe, _ = post(
         conn, path, rays[:16].tobytes(), "application/octet-stream"
     )
@@ -206,25 +234,7 @@ def bench_binary(
         return seconds, data
 
     seconds, idx, data = budgeted(len(rays), budget_s, run)
-    if len(data) != 32 * len(idx):
-        raise RuntimeError(f"binary intersect: {len(data)} bytes for {len(idx)} rays")
-    rec = np.frombuffer(data, dtype=RECORD_DTYPE)
-    agree = agreement(
-        rec["t"],
-        rec["object"],
-        rec["primitive"],
-        ref["t"][idx],
-        ref["object"][idx],
-        ref["primitive"][idx],
-    )
-    return Timing(
-        seconds,
-        len(idx),
-        len(rays),
-        int(np.count_nonzero(rec["object"] != MISS)),
-        agree,
-        headers.get("x-precision"),
-    )
+    return binary_timing(data, seconds, idx, len(rays), ref, headers.get("x-precision"))
 
 
 def bench_binary_curl(
@@ -244,11 +254,7 @@ def bench_binary_curl(
     curl = shutil.which("curl")
     if not curl:
         raise NotAvailable("curl is not installed (scripts/setup.sh installs it)")
-    port = conn.port
-    url = (
-        f"http://127.0.0.1:{port}/v1/scenes/{scene_id}/intersect"
-        f"?mode={mode}&precision={precision}&dtype=float32"
-    )
+    url = f"http://127.0.0.1:{conn.port}" + binary_path(scene_id, mode, precision)
     with tempfile.TemporaryDirectory() as tmp:
         body_path = os.path.join(tmp, "rays.bin")
         out_path = os.path.join(tmp, "hits.bin")
@@ -270,17 +276,8 @@ def bench_binary_curl(
             times.append(float(seconds))
         with open(out_path, "rb") as f:
             data = f.read()
-    if len(data) != 32 * len(rays):
-        raise RuntimeError(f"binary intersect: {len(data)} bytes for {len(rays)} rays")
-    rec = np.frombuffer(data, dtype=RECORD_DTYPE)
-    idx = np.arange(len(rays))
-    agree = agreement(
-        rec["t"], rec["object"], rec["primitive"], ref["t"][idx], ref["object"][idx],
-        ref["primitive"][idx],
-    )
     seconds = sorted(times[1:])[1]
-    return Timing(seconds, len(rays), len(rays), int(np.count_nonzero(rec["object"] != MISS)),
-                  agree, precision)
+    return binary_timing(data, seconds, np.arange(len(rays)), len(rays), ref, precision)
 
 
 def json_body(rays: np.ndarray, mode: str, precision: str) -> bytes:

@@ -165,7 +165,8 @@ int main(int argc, char** argv) {
         } else {
             std::cerr
                 << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n"
-                   "                    [--scenes tutorial_like,duck] [--precisions refined,fast]\n";
+                   "                    [--scenes tutorial_like,duck] [--precisions "
+                   "refined,fast]\n";
             return 2;
         }
     }
@@ -220,8 +221,8 @@ int main(int argc, char** argv) {
                 std::string precision = engine::to_string(r.precision);
                 if (p == engine::Precision::fast)
                     precision += " (default)";
-                rows.push_back({name, precision, spp, m,
-                                r.counts.total() / m / 1e3, pov, r.counts});
+                rows.push_back(
+                    {name, precision, spp, m, r.counts.total() / m / 1e3, pov, r.counts});
                 if (a.smoke)
                     break;
             }

@@ -153,7 +153,8 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
         Hit hits[2];
-        const int n = c.fast ? sphere_hits_fast(o.sphere, ray, hits) : sphere_hits(o.sphere, ray, hits);
+        const int n =
+            c.fast ? sphere_hits_fast(o.sphere, ray, hits) : sphere_hits(o.sphere, ray, hits);
         for (int k = 0; k < n; ++k) {
             hits[k].object = object;
             if (!emit(hits[k]))
@@ -399,10 +400,10 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
     return true;
 }
 
-/// Whether the float ray of the exact path is within the exact BVH's box padding of the double
-/// ray: the shifted origin carries a double rounding of about u·(|o − centre| + |s·d|), which for
-/// an origin very far from a small scene exceeds the padding. Such rays take the linear scan.
-bool exact_ray_within_padding(const EmbreeAccel::Impl& a, const Ray&, const RayContext& c) {
+/// Whether the float ray prepare_ray set up is within the exact BVH's box padding of the double
+/// ray: its start point's double rounding (c.origin_err, plain or double-double) must stay
+/// well inside the padding. Rays where it does not take the linear scan.
+bool exact_ray_within_padding(const EmbreeAccel::Impl& a, const RayContext& c) {
     return c.origin_err <= 0.25 * a.pad;
 }
 
@@ -439,8 +440,8 @@ void fast_hit(const EmbreeAccel::Impl& a, const Ray& ray, double shift, double l
 /// (e.g. the ground plane of a scene of spheres, whose shadow rays mostly escape).
 constexpr std::size_t kConfirmByScanMaxTriangles = 16;
 
-bool can_confirm_by_scan(const EmbreeAccel::Impl& a, const Ray& ray, const RayContext& c) {
-    return a.triangles <= kConfirmByScanMaxTriangles && exact_ray_within_padding(a, ray, c);
+bool can_confirm_by_scan(const EmbreeAccel::Impl& a, const RayContext& c) {
+    return a.triangles <= kConfirmByScanMaxTriangles && exact_ray_within_padding(a, c);
 }
 
 /// The closest triangle hit, every triangle of the scene tested in double (spheres skipped).
@@ -568,7 +569,7 @@ std::optional<Hit> EmbreeAccel::closest_impl(const Ray& ray, Precision precision
         c.exact = true;
         if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray))
             return std::nullopt;
-        if (!exact_ray_within_padding(a, ray, c))
+        if (!exact_ray_within_padding(a, c))
             return linear_closest(*a.scene, ray, want_normal);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(s, &c.rtc, &rh);
@@ -591,7 +592,7 @@ std::optional<Hit> EmbreeAccel::closest_impl(const Ray& ray, Precision precision
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a.native, &c.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID && precision == Precision::refined &&
-        can_confirm_by_scan(a, ray, c)) {
+        can_confirm_by_scan(a, c)) {
         return closest_triangle_scan(*a.scene, ray, want_normal);
     }
     NativeHit nh{rh.hit.geomID, rh.hit.primID, rh.ray.tfar,
@@ -690,6 +691,15 @@ bool coherent(const Ray* rays, std::size_t n, double scene_scale) {
     return true;
 }
 
+/// The context of a packet of rays[0..m): flagged coherent when they are (coherent()).
+RTCIntersectContext packet_context(const Ray* rays, std::size_t m, double scene_scale) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = coherent(rays, m, scene_scale) ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                               : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    return ctx;
+}
+
 }  // namespace
 
 void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precision,
@@ -728,11 +738,6 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             i += m;
             continue;
         }
-        if (packets && precision == Precision::fast && m == kLanes) {
-            fast_packet(rays + i, want_normal, out + i);
-            i += m;
-            continue;
-        }
         if (!packets || m < 4) {
             for (std::size_t k = 0; k < m; ++k) {
                 bool escalated = false;
@@ -751,10 +756,7 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             valid[k] = set_lane(a, rays + i, k, m, precision, lanes[k], rh.ray);
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         }
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        ctx.flags = coherent(rays + i, m, a.float_scale) ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                                         : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        RTCIntersectContext ctx = packet_context(rays + i, m, a.float_scale);
         rtcIntersect16(valid, a.native, &ctx, &rh);
         for (std::size_t k = 0; k < m; ++k) {
             const Ray& ray = rays[i + k];
@@ -774,54 +776,6 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
         }
         exact_first = escalations > 0;
         i += m;
-    }
-}
-
-void EmbreeAccel::fast_packet(const Ray* rays, bool want_normal, Hit* out) const {
-    // fast on a triangle-only scene, 16 rays: each ray goes to Embree as it is (prepare_ray_fast's
-    // conditions) straight into the packet, and the answers come straight back; a ray outside
-    // those conditions is traced alone.
-    const Impl& a = *impl_;
-    constexpr std::size_t kLanes = 16;
-    alignas(64) RTCRayHit16 rh;
-    alignas(64) int valid[kLanes];
-    const double limit2 = 16.0 * a.float_scale * a.float_scale;
-    for (std::size_t k = 0; k < kLanes; ++k) {
-        const Ray& ray = rays[k];
-        const Vec3d org = ray.origin - a.center;
-        const double d2 = dot(ray.direction, ray.direction);
-        const bool ok = ray.tmin >= 0.0 && dot(org, org) <= limit2 && d2 >= 1e-12 && d2 <= 1e12;
-        valid[k] = ok ? -1 : 0;
-        rh.ray.org_x[k] = static_cast<float>(org.x);
-        rh.ray.org_y[k] = static_cast<float>(org.y);
-        rh.ray.org_z[k] = static_cast<float>(org.z);
-        rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
-        rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
-        rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);
-        rh.ray.tnear[k] = ok ? to_float(ray.tmin) : 0.0f;
-        rh.ray.tfar[k] = ok ? to_float(ray.tmax) : -1.0f;
-        rh.ray.time[k] = 0.0f;
-        rh.ray.mask[k] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks
-        rh.ray.id[k] = static_cast<unsigned>(k);
-        rh.ray.flags[k] = 0;
-        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-    }
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = coherent(rays, kLanes, a.float_scale) ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                                      : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-    rtcIntersect16(valid, a.native, &ctx, &rh);
-    for (std::size_t k = 0; k < kLanes; ++k) {
-        if (!valid[k]) {
-            auto h = closest(rays[k], Precision::fast, want_normal);
-            out[k] = h ? *h : Hit{};
-        } else if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
-            out[k] = Hit{};
-        } else {
-            fast_hit(a, rays[k], 0.0, 1.0, rh.ray.tfar[k], rh.hit.geomID[k], rh.hit.primID[k],
-                     rh.hit.u[k], rh.hit.v[k],
-                     Vec3d{rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, want_normal, out[k]);
-        }
     }
 }
 
@@ -861,10 +815,7 @@ void EmbreeAccel::any_range(const Ray* rays, std::size_t n, Precision precision,
         alignas(64) int valid[kLanes];
         for (std::size_t k = 0; k < kLanes; ++k)
             valid[k] = set_lane(a, rays + i, k, m, precision, lanes[k], r16);
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        ctx.flags = coherent(rays + i, m, a.float_scale) ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-                                                         : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        RTCIntersectContext ctx = packet_context(rays + i, m, a.float_scale);
         rtcOccluded16(valid, a.native, &ctx, &r16);
         for (std::size_t k = 0; k < m; ++k) {
             bool hit = valid[k] && r16.tfar[k] == -std::numeric_limits<float>::infinity();
@@ -901,14 +852,14 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
                               : prepare_native_ray(a, ray, precision, c, r);
     if (!prepared)
         return false;
-    if (precision == Precision::exact && !exact_ray_within_padding(a, ray, c)) {
+    if (precision == Precision::exact && !exact_ray_within_padding(a, c)) {
         return linear_any(*a.scene, ray);
     }
     rtcOccluded1(s, &c.rtc, &r);
     const bool hit = r.tfar == -std::numeric_limits<float>::infinity();
     // As in closest: a float miss is confirmed before refined says so.
     if (!hit && precision == Precision::refined) {
-        if (can_confirm_by_scan(a, ray, c))
+        if (can_confirm_by_scan(a, c))
             return closest_triangle_scan(*a.scene, ray, false).has_value();
         return any(ray, Precision::exact);
     }
@@ -933,7 +884,7 @@ void EmbreeAccel::all(const Ray& ray, Precision precision, bool want_normal,
         c.exact = true;
         if (!prepare_ray(a, ray, /*back_off=*/true, c, rh.ray))
             return;
-        if (!exact_ray_within_padding(a, ray, c))
+        if (!exact_ray_within_padding(a, c))
             return linear_all(*a.scene, ray, want_normal, out);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(s, &c.rtc, &rh);

@@ -77,9 +77,6 @@ class EmbreeAccel {
     /// Whether the ray's segment meets the padded scene bounds.
     bool enters_bounds(const Ray& ray) const;
 
-    /// closest_range's fast path for 16 rays on a triangle-only scene.
-    void fast_packet(const Ray* rays, bool want_normal, Hit* out) const;
-
     explicit EmbreeAccel(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };

@@ -152,7 +152,8 @@ TEST(EmbreeAccel, ExactAgreesWithLinearScanForFarOrigins) {
         }
     }
     EXPECT_GT(hits, 300);
-    std::printf("[ info ] far origins: %d hits, %d on the scan's primitive\n", hits, same_primitive);
+    std::printf("[ info ] far origins: %d hits, %d on the scan's primitive\n", hits,
+                same_primitive);
 }
 
 TEST(EmbreeAccel, AllAndCountAgreeWithLinearScan) {

@@ -198,5 +198,4 @@ int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]) {
     return hits_in_range(s, ray, sphere_roots(s, ray), out);
 }
 
-
 }  // namespace raycastd::engine

@@ -1,8 +1,8 @@
 #include "engine/geometry/sphere.h"
 
 #include <cmath>
-#include <random>
 #include <limits>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -178,8 +178,8 @@ TEST(Sphere, FastRootsWithinTheirBound) {
         Ray ray;
         ray.origin = {u(rng) * 20, u(rng) * 20, u(rng) * 20};
         // aim near the sphere's rim so that tangency is common
-        const Vec3d target = s.center + normalize(Vec3d{u(rng), u(rng), u(rng)}) * s.radius *
-                                            (1.0 + 1e-9 * u(rng));
+        const Vec3d target =
+            s.center + normalize(Vec3d{u(rng), u(rng), u(rng)}) * s.radius * (1.0 + 1e-9 * u(rng));
         ray.direction = (target - ray.origin) * std::pow(10.0, 3 * u(rng));
         const SphereRoots ref = sphere_roots(s, ray);
         const SphereRoots fast = sphere_roots_fast(s, ray);

@@ -49,8 +49,7 @@ void for_each_block(std::size_t n, F&& f) {
     // Always the same blocks, from run to run and whatever the scheduling: refined's
     // per-block choice of path (EmbreeAccel::closest_range), and hence its answer to a
     // near-tie, must not depend on which thread stole what.
-    const std::size_t blocks = (n + kBlock - 1) / kBlock;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_count(n)),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t b = r.begin(); b != r.end(); ++b) {
                               f(b * kBlock, std::min(n, (b + 1) * kBlock));
@@ -158,7 +157,8 @@ QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOpti
 
 void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt,
                             QueryResult& out) const {
-    out.hits.clear();
+    // hits is not cleared here: closest and any over the BVH overwrite every answer of a reused
+    // buffer (clearing first would make resize fill it all again); the other paths clear it.
     out.offsets.clear();
     out.counts.clear();
     out.precision = effective_precision(opt.precision);
@@ -169,8 +169,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
     switch (opt.mode) {
         case Mode::closest:
             if (accel) {
-                // closest_range writes every answer: no need to clear a reused buffer first.
-                out.hits.resize(n);
+                out.hits.resize(n);  // closest_range writes every answer
                 for_each_block(n, [&](std::size_t b, std::size_t e) {
                     accel->closest_range(rays.data() + b, e - b, p, opt.want_normal,
                                          out.hits.data() + b);
@@ -204,6 +203,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
             // and `all` concatenates the lists in block order.
             const bool normals = opt.want_normal && opt.mode == Mode::all;
             const bool keep = opt.mode == Mode::all;
+            out.hits.clear();
             out.counts.resize(n);
             std::vector<std::vector<Hit>> block_hits(keep ? block_count(n) : 0);
             for_each_block(n, [&](std::size_t b, std::size_t e) {
