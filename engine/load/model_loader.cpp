@@ -17,7 +17,6 @@ using detail::lower;
 
 namespace {
 
-
 bool starts_with(std::string_view s, std::string_view prefix) {
     return s.size() >= prefix.size() && s.compare(0, prefix.size(), prefix) == 0;
 }

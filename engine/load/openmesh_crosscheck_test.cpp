@@ -7,13 +7,13 @@
 // oracle here: wherever it reads a well-formed file, ours must find the same vertices (as a
 // bounding box) and, up to the degenerate triangles OpenMesh drops, the same triangles.
 
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-#include <gtest/gtest.h>
-
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <gtest/gtest.h>
 
 #include "engine/load/model_loader.h"
 
@@ -33,22 +33,35 @@ std::string read_bytes(const fs::path& p) {
 }
 
 TEST(OpenMeshCrossCheck, SameGeometryAsOpenMesh) {
-    if (!fs::exists(kModels)) GTEST_SKIP() << "models not found at " << kModels;
+    if (!fs::exists(kModels))
+        GTEST_SKIP() << "models not found at " << kModels;
     const char* files[] = {
-        "stanford-bunny/stanford-bunny.obj", "spot/spot.obj",     "suzanne/suzanne.obj",
-        "cow/cow.obj",                       "fandisk/fandisk.obj", "Wuson/WusonOBJ.obj",
-        "Wuson/Wuson.ply",                   "Wuson/Wuson.off",   "bunny_ply/bunny.ply",
-        "suzanne_ply/suzanne.ply",           "teapot_stl/teapot.stl", "cube_off/Cube.off",
-        "ballA_off/ballA.off",               "featuretype/featuretype.STL",
-        "spider/Spider_ascii.stl",           "spider/Spider_binary.stl",
+        "stanford-bunny/stanford-bunny.obj",
+        "spot/spot.obj",
+        "suzanne/suzanne.obj",
+        "cow/cow.obj",
+        "fandisk/fandisk.obj",
+        "Wuson/WusonOBJ.obj",
+        "Wuson/Wuson.ply",
+        "Wuson/Wuson.off",
+        "bunny_ply/bunny.ply",
+        "suzanne_ply/suzanne.ply",
+        "teapot_stl/teapot.stl",
+        "cube_off/Cube.off",
+        "ballA_off/ballA.off",
+        "featuretype/featuretype.STL",
+        "spider/Spider_ascii.stl",
+        "spider/Spider_binary.stl",
     };
     int compared = 0;
     for (const char* name : files) {
         const fs::path path = kModels / name;
-        if (!fs::exists(path)) continue;
+        if (!fs::exists(path))
+            continue;
         OmMesh om;
         OpenMesh::IO::Options opt;
-        if (!OpenMesh::IO::read_mesh(om, path.string(), opt)) continue;  // not OpenMesh's to judge
+        if (!OpenMesh::IO::read_mesh(om, path.string(), opt))
+            continue;  // not OpenMesh's to judge
         const std::string bytes = read_bytes(path);
         auto format = format_from_name(path.filename().string());
         ASSERT_TRUE(format) << name;
@@ -65,7 +78,8 @@ TEST(OpenMeshCrossCheck, SameGeometryAsOpenMesh) {
         }
         Bounds3 our_bounds;
         for (const auto& t : mesh.triangles) {
-            for (auto i : t) our_bounds.extend(mesh.positions[i]);
+            for (auto i : t)
+                our_bounds.extend(mesh.positions[i]);
         }
         const double tol = 1e-6 * (1.0 + length(om_bounds.diagonal()));
         for (std::size_t k = 0; k < 3; ++k) {

@@ -18,7 +18,6 @@ namespace raycastd::engine::detail {
 
 namespace {
 
-
 /// Merges exactly equal positions into one vertex. STL stores every triangle's corners
 /// separately; sharing them gives the mesh the connectivity the file implies, as OpenMesh's
 /// and most STL readers do (−0 and +0 are the same point).

@@ -34,8 +34,12 @@ inline DD add(DD a, DD b) {
     const DD s = two_sum(a.hi, b.hi);
     return fast_two_sum(s.hi, s.lo + (a.lo + b.lo));
 }
-inline DD neg(DD a) { return {-a.hi, -a.lo}; }
-inline DD sub(DD a, DD b) { return add(a, neg(b)); }
+inline DD neg(DD a) {
+    return {-a.hi, -a.lo};
+}
+inline DD sub(DD a, DD b) {
+    return add(a, neg(b));
+}
 inline DD mul(DD a, double b) {
     const DD p = two_prod(a.hi, b);
     return fast_two_sum(p.hi, std::fma(a.lo, b, p.lo));
