@@ -158,6 +158,11 @@ void App::handle(const httplib::Request& req, httplib::Response& res, bool heavy
     }
 }
 
+std::shared_ptr<void> App::extend_work_slot() {
+    in_flight_.fetch_add(1);
+    return std::shared_ptr<void>(nullptr, [this](void*) { in_flight_.fetch_sub(1); });
+}
+
 Json App::parse_json_body(const httplib::Request& req) {
     if (req.body.empty()) throw api_error("bad_json", "empty body: a JSON document is required");
     try {

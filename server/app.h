@@ -14,6 +14,7 @@
 #include "server/config.h"
 #include "server/scene_cache.h"
 #include "server/scene_registry.h"
+#include "server/schema/binary_codec.h"
 #include "server/scratch.h"
 #include "server/schema/json_read.h"
 #include "server/schema/query_doc.h"
@@ -45,6 +46,11 @@ public:
     /// `heavy` work takes one of the limited concurrent-work slots (503 busy when none is free).
     void handle(const httplib::Request& req, httplib::Response& res, bool heavy,
                 const std::function<void()>& work);
+
+    /// Inside heavy work: one more work slot, held until the last copy of the token goes, for
+    /// work that outlives the handler (a streamed answer traces its last chunks while it is
+    /// written). Taken without the limit check: the request asking holds a slot already.
+    std::shared_ptr<void> extend_work_slot();
 
     /// The body parsed as JSON (bad_json with the byte offset on a syntax error).
     static Json parse_json_body(const httplib::Request& req);
@@ -103,6 +109,22 @@ void answer_parsed_intersect(const engine::QueryEngine& engine, const IntersectR
                              engine::QueryResult& result, httplib::Response& res);
 /// True when the request carries binary ray records (Content-Type: application/octet-stream).
 bool is_binary(const httplib::Request& req);
+/// The query string of the binary form: ?mode=&precision=&dtype=&fields=.
+struct BinaryQuery {
+    engine::QueryOptions options;
+    Dtype dtype = Dtype::float32;
+};
+BinaryQuery parse_binary_query(const httplib::Request& req);
+/// Encodes scratch->result (the answers to scratch->rays) and sends it; the response streams
+/// from `scratch`, which it keeps until written.
+void send_binary_answer(const BinaryQuery& q, std::shared_ptr<Scratch> scratch,
+                        httplib::Response& res);
+class StreamedBatch;
+/// Sends the answer of a streamed batch (server/binary_stream.h) after its finish(): chunks are
+/// written as they are traced.
+/// `slot` (App::extend_work_slot) is held until the answer is written.
+void send_streamed_answer(std::shared_ptr<StreamedBatch> batch, std::shared_ptr<void> slot,
+                          httplib::Response& res);
 /// Answers the binary form (see schema/binary_codec.h) from the query string and
 /// `scratch->body`; the response streams from `scratch`, which it keeps until written.
 void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,

@@ -2,6 +2,7 @@
 
 #include "engine/query/intersect.h"
 #include "server/app.h"
+#include "server/binary_stream.h"
 #include "server/schema/binary_codec.h"
 #include "server/schema/query_doc.h"
 #include "server/schema/scene_doc.h"
@@ -26,29 +27,31 @@ bool is_binary(const httplib::Request& req) {
     return ct.rfind("application/octet-stream", 0) == 0;
 }
 
-void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,
-                             std::shared_ptr<Scratch> scratch, std::size_t max_rays,
-                             httplib::Response& res) {
-    engine::QueryOptions opt;
+BinaryQuery parse_binary_query(const httplib::Request& req) {
+    BinaryQuery q;
+    engine::QueryOptions& opt = q.options;
     const auto param = [&](const char* k) {
         return req.has_param(k) ? req.get_param_value(k) : std::string();
     };
     if (req.has_param("mode")) opt.mode = parse_mode(param("mode"), "mode");
     if (req.has_param("precision")) opt.precision = parse_precision(param("precision"), "precision");
-    const Dtype dtype = parse_dtype(param("dtype"));
+    q.dtype = parse_dtype(param("dtype"));
     opt.want_normal = true;
     if (req.has_param("fields")) {
         // ?fields=t,object: normals are left out (zeros) unless asked for.
         const std::string f = param("fields");
         opt.want_normal = f.find("normal") != std::string::npos;
     }
+    return q;
+}
+
+void send_binary_answer(const BinaryQuery& q, std::shared_ptr<Scratch> scratch,
+                        httplib::Response& res) {
     Scratch& s = *scratch;
-    decode_rays(s.body, dtype, max_rays, s.rays);
-    engine.intersect(s.rays, opt, s.result);
-    encode_results(s.result, opt.mode, dtype, s.rays.size(), s.out);
+    encode_results(s.result, q.options.mode, q.dtype, s.rays.size(), s.out);
     res.status = 200;
     res.set_header("X-Precision", engine::to_string(s.result.precision));
-    res.set_header("X-Mode", engine::to_string(opt.mode));
+    res.set_header("X-Mode", engine::to_string(q.options.mode));
     // The provider keeps the scratch (and so `out`) until the response has been written.
     const std::size_t size = s.out.size();
     res.set_content_provider(
@@ -57,6 +60,33 @@ void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::R
                                        httplib::DataSink& sink) {
             return sink.write(scratch->out.data() + offset, length);
         });
+}
+
+void send_streamed_answer(std::shared_ptr<StreamedBatch> batch, std::shared_ptr<void> slot,
+                          httplib::Response& res) {
+    res.status = 200;
+    res.set_header("X-Precision", engine::to_string(batch->precision()));
+    res.set_header("X-Mode", engine::to_string(batch->mode()));
+    const std::size_t size = batch->answer_bytes();
+    // The provider keeps the batch (and its scratch) and the work slot until the answer has
+    // been written; a chunk is handed over as soon as it is traced.
+    res.set_content_provider(
+        size, "application/octet-stream",
+        [batch = std::move(batch), slot = std::move(slot)](std::size_t offset, std::size_t,
+                                                           httplib::DataSink& sink) {
+            return batch->write_answer(
+                offset, [&](const char* p, std::size_t n) { return sink.write(p, n); });
+        });
+}
+
+void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::Request& req,
+                             std::shared_ptr<Scratch> scratch, std::size_t max_rays,
+                             httplib::Response& res) {
+    const BinaryQuery q = parse_binary_query(req);
+    Scratch& s = *scratch;
+    decode_rays(s.body, q.dtype, max_rays, s.rays);
+    engine.intersect(s.rays, q.options, s.result);
+    send_binary_answer(q, std::move(scratch), res);
 }
 
 void install_query_routes(App& app) {

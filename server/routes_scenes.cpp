@@ -1,6 +1,9 @@
 // POST/GET/DELETE /v1/scenes[/{id}] and POST /v1/scenes/{id}/intersect.
 
+#include <charconv>
+
 #include "server/app.h"
+#include "server/binary_stream.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_writer.h"
 #include "server/schema/ray_sax.h"
@@ -8,6 +11,33 @@
 namespace raycastd::server {
 
 namespace {
+
+/// A StreamedBatch (server/binary_stream.h) for a binary closest/any request on a registered
+/// scene that announces a valid batch of at least one chunk within the limits; nullptr
+/// otherwise: that request reads its whole body first, and reports whatever is wrong with it
+/// (an unknown scene, a bad parameter, a bad length) after reading it, as before.
+std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& req,
+                                             const std::shared_ptr<Scratch>& scratch) {
+    if (!is_binary(req) || !req.has_header("Content-Length")) return nullptr;
+    const std::string cl = req.get_header_value("Content-Length");
+    std::size_t bytes = 0;
+    const auto [end, ec] = std::from_chars(cl.data(), cl.data() + cl.size(), bytes);
+    if (ec != std::errc() || end != cl.data() + cl.size()) return nullptr;
+    if (bytes > app.config().limits.max_body_bytes) return nullptr;
+    try {
+        const BinaryQuery q = parse_binary_query(req);
+        if (q.options.mode != engine::Mode::closest && q.options.mode != engine::Mode::any)
+            return nullptr;
+        const std::size_t rays = ray_count(bytes, q.dtype, app.config().limits.max_rays);
+        if (rays < StreamedBatch::kChunkRays) return nullptr;
+        auto engine = app.registry().get(req.matches[1]);
+        if (!engine) return nullptr;
+        return std::make_shared<StreamedBatch>(std::move(engine), q.options, q.dtype, rays,
+                                               scratch);
+    } catch (const ApiError&) {
+        return nullptr;
+    }
+}
 
 std::string info_body(const SceneInfo& i) {
     std::string out;
@@ -87,9 +117,11 @@ void install_scene_routes(App& app) {
                       auto scratch = acquire_scratch();
                       std::string& body = scratch->body;
                       body.clear();
+                      auto stream = plan_streamed(app, req, scratch);
                       const std::size_t limit = app.config().limits.max_body_bytes;
                       bool over = false;
                       read([&](const char* data, std::size_t len) {
+                          if (stream) return stream->append(data, len);
                           if (body.size() + len > limit) {
                               over = true;
                               return false;
@@ -98,6 +130,11 @@ void install_scene_routes(App& app) {
                           return true;
                       });
                       if (over) throw api_error("too_large", "request body is over the configured limit");
+                      if (stream) {
+                          stream->finish();
+                          send_streamed_answer(std::move(stream), app.extend_work_slot(), res);
+                          return;
+                      }
                       auto engine = app.scene_or_404(req.matches[1]);
                       if (is_binary(req)) {
                           answer_binary_intersect(*engine, req, std::move(scratch),

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <cassert>
 #include <cmath>
 
 #include "engine/accel/embree_accel.h"
@@ -34,7 +35,7 @@ void for_each_ray(std::size_t n, F&& f) {
 }
 
 /// The fixed blocks of for_each_block.
-constexpr std::size_t kBlock = 1024;
+constexpr std::size_t kBlock = QueryEngine::kBlockRays;
 std::size_t block_count(std::size_t n) { return n <= kBlock ? 1 : (n + kBlock - 1) / kBlock; }
 std::size_t block_index(std::size_t begin) { return begin / kBlock; }
 
@@ -155,10 +156,41 @@ QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOpti
     return out;
 }
 
+void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOptions& opt,
+                                 Hit* hits) const {
+    assert(opt.mode == Mode::closest || opt.mode == Mode::any);
+    const Precision p = effective_precision(opt.precision);
+    const EmbreeAccel* accel = accel_.get();
+    if (opt.mode == Mode::closest) {
+        if (accel) {
+            for_each_block(n, [&](std::size_t b, std::size_t e) {
+                accel->closest_range(rays + b, e - b, p, opt.want_normal, hits + b);
+            });
+            return;
+        }
+        for_each_ray(n, [&](std::size_t i) {
+            auto h = linear_closest(*scene_, rays[i], opt.want_normal);
+            hits[i] = h ? *h : Hit{};
+        });
+        return;
+    }
+    if (accel) {
+        for_each_block(n, [&](std::size_t b, std::size_t e) {
+            accel->any_range(rays + b, e - b, p, hits + b);
+        });
+        return;
+    }
+    for_each_ray(n, [&](std::size_t i) {
+        // `any` never looks for the closest: it stops at the first hit found.
+        hits[i] = Hit{};
+        if (linear_any(*scene_, rays[i])) hits[i].object = 0;
+    });
+}
+
 void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt,
                             QueryResult& out) const {
-    // hits is not cleared here: closest and any over the BVH overwrite every answer of a reused
-    // buffer (clearing first would make resize fill it all again); the other paths clear it.
+    // hits is not cleared here: closest and any overwrite every answer of a reused buffer
+    // (clearing first would make resize fill it all again); all and count clear it.
     out.offsets.clear();
     out.counts.clear();
     out.precision = effective_precision(opt.precision);
@@ -168,33 +200,9 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
     const EmbreeAccel* accel = accel_.get();
     switch (opt.mode) {
         case Mode::closest:
-            if (accel) {
-                out.hits.resize(n);  // closest_range writes every answer
-                for_each_block(n, [&](std::size_t b, std::size_t e) {
-                    accel->closest_range(rays.data() + b, e - b, p, opt.want_normal,
-                                         out.hits.data() + b);
-                });
-                break;
-            }
-            out.hits.assign(n, Hit{});
-            for_each_ray(n, [&](std::size_t i) {
-                if (auto h = linear_closest(s, rays[i], opt.want_normal)) out.hits[i] = *h;
-            });
-            break;
         case Mode::any:
-            if (accel) {
-                out.hits.resize(n);  // any_range writes every answer
-                for_each_block(n, [&](std::size_t b, std::size_t e) {
-                    accel->any_range(rays.data() + b, e - b, p, out.hits.data() + b);
-                });
-                break;
-            }
-            out.hits.assign(n, Hit{});
-            for_each_ray(n, [&](std::size_t i) {
-                // `any` never looks for the closest: it stops at the first hit found.
-                const bool hit = linear_any(s, rays[i]);
-                if (hit) out.hits[i].object = 0;
-            });
+            out.hits.resize(n);  // intersect_span writes every answer
+            intersect_span(rays.data(), n, opt, out.hits.data());
             break;
         case Mode::all:
         case Mode::count: {

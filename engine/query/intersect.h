@@ -31,6 +31,15 @@ public:
     void intersect(const std::vector<Ray>& rays, const QueryOptions& options,
                    QueryResult& out) const;
 
+    /// Rays are traced in fixed blocks of this many, whatever the threads do (see intersect.cpp).
+    static constexpr std::size_t kBlockRays = 1024;
+    /// closest or any (options.mode must be one of them) for rays[0..n) into hits[0..n); every
+    /// element is written. A span that starts at a multiple of kBlockRays of a batch gets the
+    /// answers intersect() gives those rays of the whole batch, so a server may trace a batch in
+    /// pieces while the rest of it is still arriving.
+    void intersect_span(const Ray* rays, std::size_t n, const QueryOptions& options,
+                        Hit* hits) const;
+
     /// The path a request asking for `asked` is answered by (tiny scenes always take exact).
     Precision effective_precision(Precision asked) const;
 

@@ -71,27 +71,35 @@ char* put_hit(char* p, const engine::Hit& h) {
     return put<F>(p, static_cast<F>(h.normal.z));
 }
 
+/// closest/any answers hits[begin, end) at out + begin × record (closest: hit records; any: u32).
+template <class F>
+void encode_range_as(const engine::Hit* hits, engine::Mode mode, std::size_t begin,
+                     std::size_t end, char* out) {
+    if (mode == engine::Mode::closest) {
+        char* p = out + begin * hit_record_bytes(sizeof(F) == 4 ? Dtype::float32 : Dtype::float64);
+        for (std::size_t i = begin; i < end; ++i) p = put_hit<F>(p, hits[i]);
+        return;
+    }
+    char* p = out + begin * sizeof(std::uint32_t);
+    for (std::size_t i = begin; i < end; ++i) p = put<std::uint32_t>(p, hits[i].valid() ? 1u : 0u);
+}
+
 template <class F>
 void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, std::string& out) {
     constexpr std::size_t rec = 2 * sizeof(std::uint32_t) + 6 * sizeof(F);
     switch (mode) {
-        case engine::Mode::closest: {
-            out.resize(n * rec);
+        case engine::Mode::closest:
+        case engine::Mode::any: {
+            out.resize(n * (mode == engine::Mode::closest ? rec : sizeof(std::uint32_t)));
             for_blocks(n, [&](std::size_t b, std::size_t e) {
-                char* p = out.data() + b * rec;
-                for (std::size_t i = b; i < e; ++i) p = put_hit<F>(p, r.hits[i]);
+                encode_range_as<F>(r.hits.data(), mode, b, e, out.data());
             });
             break;
         }
-        case engine::Mode::any:
         case engine::Mode::count: {
             out.resize(n * sizeof(std::uint32_t));
             char* p = out.data();
-            for (std::size_t i = 0; i < n; ++i) {
-                const std::uint32_t v = mode == engine::Mode::any ? (r.hits[i].valid() ? 1u : 0u)
-                                                                   : r.counts[i];
-                p = put<std::uint32_t>(p, v);
-            }
+            for (std::size_t i = 0; i < n; ++i) p = put<std::uint32_t>(p, r.counts[i]);
             break;
         }
         case engine::Mode::all: {
@@ -116,41 +124,66 @@ Dtype parse_dtype(const std::string& s) {
     throw api_error("invalid_request", "dtype must be float32 or float64, got \"" + s + "\"");
 }
 
-void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
-                 std::vector<engine::Ray>& rays) {
+std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays) {
     const std::size_t rec = ray_record_bytes(dtype);
-    if (body.size() % rec != 0) {
-        throw api_error("invalid_ray", "body of " + std::to_string(body.size()) +
+    if (bytes % rec != 0) {
+        throw api_error("invalid_ray", "body of " + std::to_string(bytes) +
                                            " bytes is not a whole number of " +
                                            std::to_string(rec) + "-byte ray records");
     }
-    const std::size_t n = body.size() / rec;
+    const std::size_t n = bytes / rec;
     if (n > max_rays) {
         throw api_error("too_large", std::to_string(n) + " rays is over the limit of " +
                                          std::to_string(max_rays) + " per request");
     }
+    return n;
+}
+
+std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin,
+                             std::size_t end, std::vector<engine::Ray>& rays) {
+    if (dtype == Dtype::float32) {
+        decode_as<float>(body, rays, begin, end);
+    } else {
+        decode_as<double>(body, rays, begin, end);
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+        if (!engine::validate_ray(rays[i], i).ok()) return i;
+    }
+    return end;
+}
+
+void throw_invalid_ray(const engine::Ray& ray, std::size_t index) {
+    const engine::Status st = engine::validate_ray(ray, index);
+    throw api_error("invalid_ray", st.message, "/rays/" + std::to_string(index));
+}
+
+void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
+                 std::vector<engine::Ray>& rays) {
+    const std::size_t n = ray_count(body.size(), dtype, max_rays);
     rays.resize(n);
     // Decoded and checked in parallel blocks; the error names the lowest bad index, as a
     // serial scan would.
     std::atomic<std::size_t> first_bad{n};
     for_blocks(n, [&](std::size_t b, std::size_t e) {
-        if (dtype == Dtype::float32) {
-            decode_as<float>(body, rays, b, e);
-        } else {
-            decode_as<double>(body, rays, b, e);
-        }
-        for (std::size_t i = b; i < e; ++i) {
-            if (!engine::validate_ray(rays[i], i).ok()) {
-                std::size_t cur = first_bad.load();
-                while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
-                }
-                break;
-            }
+        const std::size_t i = decode_ray_range(body, dtype, b, e, rays);
+        if (i == e) return;
+        std::size_t cur = first_bad.load();
+        while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
         }
     });
-    if (const std::size_t i = first_bad.load(); i < n) {
-        engine::Status st = engine::validate_ray(rays[i], i);
-        throw api_error("invalid_ray", st.message, "/rays/" + std::to_string(i));
+    if (const std::size_t i = first_bad.load(); i < n) throw_invalid_ray(rays[i], i);
+}
+
+std::size_t answer_record_bytes(engine::Mode mode, Dtype dtype) {
+    return mode == engine::Mode::closest ? hit_record_bytes(dtype) : sizeof(std::uint32_t);
+}
+
+void encode_answers(const engine::Hit* hits, engine::Mode mode, Dtype dtype, std::size_t begin,
+                    std::size_t end, char* out) {
+    if (dtype == Dtype::float32) {
+        encode_range_as<float>(hits, mode, begin, end, out);
+    } else {
+        encode_range_as<double>(hits, mode, begin, end, out);
     }
 }
 

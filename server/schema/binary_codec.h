@@ -26,11 +26,31 @@ inline std::size_t hit_record_bytes(Dtype d) { return d == Dtype::float32 ? 32 :
 
 Dtype parse_dtype(const std::string& s);
 
+/// The number of ray records in a body of `bytes` bytes: invalid_ray when that is not a whole
+/// number of records, too_large over max_rays (the errors decode_rays gives).
+std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays);
+
+/// Decodes records [begin, end) of `body` into rays[begin, end) (already sized) and checks
+/// them: the lowest index of a ray that breaks the API's rules, or `end`.
+std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin,
+                             std::size_t end, std::vector<engine::Ray>& rays);
+
+/// Throws invalid_ray naming ray `index` (a ray decode_ray_range reported) and what is wrong.
+[[noreturn]] void throw_invalid_ray(const engine::Ray& ray, std::size_t index);
+
 /// Decodes the body into `rays` (capacity reused). invalid_ray for a length that is not a whole
 /// number of records, and for a NaN/Inf origin or direction, a zero direction, NaN or inverted
 /// tmin/tmax (tmin may be −inf, tmax +inf), naming the ray index; too_large over max_rays.
 void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
                  std::vector<engine::Ray>& rays);
+
+/// Bytes of one answer record of closest (a hit record) or any (a u32).
+std::size_t answer_record_bytes(engine::Mode mode, Dtype dtype);
+
+/// Encodes closest or any answers hits[begin, end) at out + begin × answer_record_bytes (the
+/// buffer sized for the whole batch): a batch can be encoded piece by piece.
+void encode_answers(const engine::Hit* hits, engine::Mode mode, Dtype dtype, std::size_t begin,
+                    std::size_t end, char* out);
 
 /// Encodes the answers of `mode` into `out` (cleared; capacity reused).
 void encode_results(const engine::QueryResult& result, engine::Mode mode, Dtype dtype,

@@ -190,5 +190,80 @@ TEST_F(Intersect, BadBinaryBodiesAreInvalidRay) {
     EXPECT_EQ(post_binary("dtype=float32", good)->status, 200);
 }
 
+/// n float32 ray records aimed around the scene, generated like the fixture's rays.
+std::string many_float_rays(std::size_t n, std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::string body(n * 32, '\0');
+    for (std::size_t i = 0; i < n; ++i) {
+        const float r[8] = {u(rng) * 6, u(rng) * 4, -8, u(rng) * 0.3f, u(rng) * 0.3f, 1, 0, 1e30f};
+        std::memcpy(body.data() + 32 * i, r, sizeof r);
+    }
+    return body;
+}
+
+TEST_F(Intersect, LargeBinaryBatchesAnswerAsSmallOnes) {
+    // 153,600 rays: a large body is traced in 65,536-ray chunks while it arrives and answered
+    // chunk by chunk (server/binary_stream.h); 15 requests of 10,240 rays take the whole-batch
+    // path. Both cut at multiples of the engine's 1024-ray blocks, so the bytes must agree.
+    constexpr std::size_t kSmall = 10240, kCount = 15, n = kSmall * kCount;
+    const std::string body = many_float_rays(n, 7);
+    for (const char* query : {"mode=closest&precision=fast", "mode=closest&precision=refined",
+                              "mode=any&precision=fast", "mode=closest&precision=exact"}) {
+        auto large = post_binary(std::string(query) + "&dtype=float32", body);
+        ASSERT_TRUE(large);
+        ASSERT_EQ(large->status, 200) << large->body;
+        std::string small;
+        for (std::size_t k = 0; k < kCount; ++k) {
+            auto r = post_binary(std::string(query) + "&dtype=float32",
+                                 body.substr(k * kSmall * 32, kSmall * 32));
+            ASSERT_TRUE(r);
+            ASSERT_EQ(r->status, 200);
+            small += r->body;
+        }
+        ASSERT_EQ(large->body.size(), small.size()) << query;
+        EXPECT_TRUE(large->body == small) << query;
+        EXPECT_EQ(large->get_header_value("X-Mode"), std::string(query).substr(5, 3) == "any" ? "any" : "closest");
+    }
+}
+
+TEST_F(Intersect, LargeBinaryBatchesWithABadRayAreInvalidRay) {
+    constexpr std::size_t n = 200000;
+    std::string body = many_float_rays(n, 8);
+    const float nan = std::nanf("");
+    std::memcpy(body.data() + 32 * 190001 + 16, &nan, 4);  // ray 190001, dy (the last chunk)
+    std::memset(body.data() + 32 * 70000 + 12, 0, 12);    // ray 70000, zero direction
+    auto res = post_binary("dtype=float32&precision=fast", body);
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 400);
+    const Json e = Json::parse(res->body).at("error");
+    EXPECT_EQ(e.at("code"), "invalid_ray");
+    EXPECT_EQ(e.at("path"), "/rays/70000");
+}
+
+TEST_F(Intersect, AClientThatStopsReadingALargeAnswerDoesNotHurtTheServer) {
+    const std::string body = many_float_rays(300000, 9);
+    for (int i = 0; i < 3; ++i) {
+        httplib::Request req;
+        req.method = "POST";
+        req.path = "/v1/scenes/" + id_ + "/intersect?dtype=float32&precision=refined";
+        req.set_header("Content-Type", "application/octet-stream");
+        req.body = body;
+        std::size_t got = 0;
+        req.content_receiver = [&](const char*, std::size_t len, std::uint64_t, std::uint64_t) {
+            got += len;
+            return false;  // hang up after the first piece of the answer
+        };
+        auto cut = server_->client()->send(req);
+        EXPECT_FALSE(cut);
+        EXPECT_GT(got, 0u);
+    }
+    // Still there, and answering in full.
+    auto whole = post_binary("dtype=float32&precision=refined", body);
+    ASSERT_TRUE(whole);
+    EXPECT_EQ(whole->status, 200);
+    EXPECT_EQ(whole->body.size(), 300000u * 32);
+}
+
 }  // namespace
 }  // namespace raycastd

@@ -1,0 +1,111 @@
+#pragma once
+// A binary closest/any request traced while its body is still arriving, and answered while
+// its last rays are still being traced.
+//
+// A 1M-ray float32 request moves 32 MB in and 32 MB out. Its body arrives through cpp-httplib's
+// 4 KB reads on one server thread (~55 ms), and the answer leaves at the pace the client reads
+// it (~55 ms for curl); traced in between, the batch costs another 60-90 ms on both cores,
+// during which the connection is idle (docs/benchmarks.md). Here the batch is cut into chunks
+// of kChunkRays rays:
+//   - a chunk is decoded, checked and traced by a TBB task as soon as its bytes are in, while
+//     the request thread goes on reading;
+//   - once the whole body has arrived and every ray has passed the checks, the answer starts:
+//     the response writer takes the chunks in order, tracing a chunk itself (on every core)
+//     when no task has started it yet, or waiting for the task that has, and writes each chunk
+//     as soon as it is traced.
+// Chunks start at multiples of QueryEngine::kBlockRays, so the answers are exactly those of the
+// whole-batch path (QueryEngine::intersect_span); a bad ray anywhere still makes the whole
+// request invalid_ray naming the lowest bad index, before any answer is sent.
+
+#include <atomic>
+#include <condition_variable>
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include <tbb/task_group.h>
+
+#include "engine/query/intersect.h"
+#include "server/schema/binary_codec.h"
+#include "server/scratch.h"
+
+namespace raycastd::server {
+
+class StreamedBatch {
+  public:
+    /// Rays per chunk: a multiple of QueryEngine::kBlockRays; 2 MB of float32 records.
+    static constexpr std::size_t kChunkRays = 64 * engine::QueryEngine::kBlockRays;
+
+    /// A batch of `rays` records (already checked with ray_count) for `options.mode` closest
+    /// or any. The body goes to scratch->body, reserved for all of it up front so that running
+    /// chunks can read what has arrived while more is appended; answers go to scratch->result
+    /// and scratch->out.
+    StreamedBatch(std::shared_ptr<const engine::QueryEngine> engine,
+                  const engine::QueryOptions& options, Dtype dtype, std::size_t rays,
+                  std::shared_ptr<Scratch> scratch);
+    /// Cancels chunks not yet started and waits for running ones (they use the scratch).
+    ~StreamedBatch();
+    StreamedBatch(const StreamedBatch&) = delete;
+    StreamedBatch& operator=(const StreamedBatch&) = delete;
+
+    /// Appends received bytes and starts every chunk they complete. False (nothing appended)
+    /// when they would run past the announced length.
+    bool append(const char* data, std::size_t len);
+    /// After the last byte: waits until every ray is decoded and checked. invalid_ray for the
+    /// lowest bad ray; invalid_request when the body ended short of its announced length.
+    /// Tracing may still be going on when it returns.
+    void finish();
+
+    /// Bytes of the whole answer.
+    std::size_t answer_bytes() const { return rays_ * answer_record_bytes(options_.mode, dtype_); }
+    /// Hands answer bytes from `offset` to the end of the chunk that holds it (tracing that
+    /// chunk first if needed) to `write`, and returns what `write` returned; false, with
+    /// nothing written, if the chunk could not be traced. For cpp-httplib's content provider,
+    /// after finish().
+    template <class Write>
+    bool write_answer(std::size_t offset, Write&& write) {
+        const std::size_t rec = answer_record_bytes(options_.mode, dtype_);
+        const std::size_t c = offset / (kChunkRays * rec);
+        const std::size_t end = std::min(answer_bytes(), (c + 1) * kChunkRays * rec);
+        if (!answer_chunk(c))
+            return false;
+        return write(scratch_->out.data() + offset, end - offset);
+    }
+
+    engine::Precision precision() const { return scratch_->result.precision; }
+    engine::Mode mode() const { return options_.mode; }
+
+  private:
+    // A chunk's life; each step is claimed with a compare-and-swap by whoever takes it.
+    enum State : int { kWaiting, kDecoding, kDecoded, kTracing, kTraced, kFailed };
+    std::size_t chunk_begin(std::size_t c) const { return c * kChunkRays; }
+    std::size_t chunk_end(std::size_t c) const { return std::min(rays_, (c + 1) * kChunkRays); }
+    bool claim(std::size_t c, State from, State to);
+    /// A task: decodes and checks chunk c, then traces it, unless somebody else got to either
+    /// first (or a bad ray makes the answers useless).
+    void decode_and_trace(std::size_t c);
+    void decode(std::size_t c);
+    /// Traces chunk c and encodes its answers; kFailed if the engine threw (out of memory).
+    void trace(std::size_t c);
+    /// Traces chunk c if nobody has started it, else waits for whoever did. False if it failed.
+    bool answer_chunk(std::size_t c);
+    void set_state(std::size_t c, State s);
+
+    std::shared_ptr<const engine::QueryEngine> engine_;
+    engine::QueryOptions options_;
+    Dtype dtype_;
+    std::size_t rays_;
+    std::size_t bytes_;
+    std::shared_ptr<Scratch> scratch_;
+    std::size_t chunks_;
+    std::size_t started_ = 0;  ///< chunks handed to tasks (request thread only)
+    std::atomic<std::size_t> first_bad_;
+    std::unique_ptr<std::atomic<int>[]> state_;
+    std::mutex mutex_;  ///< with changed_: waits for decoded and traced chunks
+    std::condition_variable changed_;
+    std::size_t decoded_ = 0;  ///< chunks decoded and checked (under mutex_)
+    tbb::task_group tasks_;
+};
+
+}  // namespace raycastd::server
