@@ -104,6 +104,8 @@ struct EmbreeAccel::Impl {
     double pad = 0;          ///< absolute padding of every box, in scene units (see build)
     double float_scale = 0;  ///< magnitude of scene coordinates, for the fast path's t_err
     std::size_t triangles = 0, spheres = 0;
+    /// The objects that are triangles or meshes, in order (refined's scan of few triangles).
+    std::vector<std::uint32_t> triangle_objects;
 
     ~Impl() {
         if (native)
@@ -444,13 +446,13 @@ bool can_confirm_by_scan(const EmbreeAccel::Impl& a, const RayContext& c) {
     return a.triangles <= kConfirmByScanMaxTriangles && exact_ray_within_padding(a, c);
 }
 
-/// The closest triangle hit, every triangle of the scene tested in double (spheres skipped).
-std::optional<Hit> closest_triangle_scan(const Scene& scene, const Ray& ray, bool want_normal) {
+/// The closest triangle hit, every triangle of the scene tested in double (spheres skipped:
+/// only the triangle objects are visited, so a scene of 1,000 spheres and a floor scans one).
+std::optional<Hit> closest_triangle_scan(const EmbreeAccel::Impl& a, const Ray& ray,
+                                         bool want_normal) {
     std::optional<Hit> best;
-    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
-        if (scene.objects[i].kind == ObjectKind::sphere)
-            continue;
-        auto h = linear_closest_in_object(scene, i, ray, want_normal);
+    for (const std::uint32_t i : a.triangle_objects) {
+        auto h = linear_closest_in_object(*a.scene, i, ray, want_normal);
         if (h && (!best || closer(*h, *best)))
             best = h;
     }
@@ -519,6 +521,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
         } else {
             g = make_triangle_geometry(device, *o.mesh, impl->center);
             impl->triangles += o.mesh->size();
+            impl->triangle_objects.push_back(i);
         }
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(impl->native, g, i);  // geomID == object index
@@ -593,7 +596,7 @@ std::optional<Hit> EmbreeAccel::closest_impl(const Ray& ray, Precision precision
     rtcIntersect1(a.native, &c.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID && precision == Precision::refined &&
         can_confirm_by_scan(a, c)) {
-        return closest_triangle_scan(*a.scene, ray, want_normal);
+        return closest_triangle_scan(a, ray, want_normal);
     }
     NativeHit nh{rh.hit.geomID, rh.hit.primID, rh.ray.tfar,
                  rh.hit.u,      rh.hit.v,      Vec3d{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}};
@@ -860,7 +863,7 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
     // As in closest: a float miss is confirmed before refined says so.
     if (!hit && precision == Precision::refined) {
         if (can_confirm_by_scan(a, c))
-            return closest_triangle_scan(*a.scene, ray, false).has_value();
+            return closest_triangle_scan(a, ray, false).has_value();
         return any(ray, Precision::exact);
     }
     return hit;

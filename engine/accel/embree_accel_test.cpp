@@ -257,6 +257,61 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
     }
 }
 
+// refined confirms a float miss by scanning the scene's triangles in double when it has at most
+// 16 of them (spheres and a floor). Rays just inside a triangle's edges, where rounding to float
+// moved an edge inward, miss in float and hit in double: refined must find the triangle, listed
+// after 40 spheres.
+TEST(EmbreeAccel, RefinedFindsTrianglesFloatMissesAmongManySpheres) {
+    Scene s;
+    s.materials.push_back(Material{});
+    for (int i = 0; i < 40; ++i) {
+        Object o;
+        o.kind = ObjectKind::sphere;
+        o.name = "s" + std::to_string(i);
+        o.sphere = {Vec3d{-3.0 + 0.15 * i, 2.0, 9.0}, 0.05};
+        s.objects.push_back(o);
+    }
+    // Eight triangles with coordinates float cannot hold: rounding moves some edges inward.
+    std::vector<std::array<Vec3d, 3>> tris;
+    for (int j = 0; j < 8; ++j) {
+        const Vec3d o{-2.9 + 0.73 * j, -0.3 + 0.011 * j, 0.013 * j};
+        tris.push_back(
+            {o + Vec3d{0.1, 0.1, 5.0}, o + Vec3d{0.7, 0.1, 5.3}, o + Vec3d{0.1, 0.7, 4.9}});
+        s.objects.push_back(testing::mesh_object(
+            "t" + std::to_string(j), {tris[j][0], tris[j][1], tris[j][2]}, {{0, 1, 2}}));
+    }
+    Built built = build(s);
+    ASSERT_TRUE(built.accel);
+    int float_misses = 0, rays = 0;
+    for (std::uint32_t j = 0; j < tris.size(); ++j) {
+        const auto& [a, b, c] = tris[j];
+        for (const auto& [p, q] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
+            const Vec3d to_centroid = (a + b + c) / 3.0 - (p + q) * 0.5;
+            const Vec3d inward = to_centroid / length(to_centroid);
+            for (int k = 1; k <= 60; ++k) {
+                for (double along : {0.25, 0.5, 0.75}) {
+                    // k·2e-9 inside the edge: rounding coordinates of a few units (relative to
+                    // the scene's centre) to float moves an edge by up to ~1e-7.
+                    const Vec3d target = p + (q - p) * along + inward * (k * 2e-9);
+                    const Ray ray{target + Vec3d{0.01, -0.02, -6.0}, Vec3d{-0.01, 0.02, 6.0}};
+                    if (!linear_closest(*built.scene, ray, false))
+                        continue;
+                    ++rays;
+                    float_misses += !built.accel->closest(ray, Precision::fast, false);
+                    const auto refined = built.accel->closest(ray, Precision::refined, false);
+                    ASSERT_TRUE(refined) << j << " " << k;
+                    EXPECT_EQ(refined->object, 40 + j);
+                    EXPECT_TRUE(built.accel->any(ray, Precision::refined)) << j << " " << k;
+                }
+            }
+        }
+    }
+    EXPECT_GT(rays, 4000);
+    EXPECT_GT(float_misses, 0) << "no ray exercised the confirmation";
+    std::printf("[ info ] %d of %d rays just inside the edges missed in float\n", float_misses,
+                rays);
+}
+
 TEST(EmbreeAccel, QueryEngineSkipsTheBvhForTinyScenes) {
     auto tiny = QueryEngine::build(std::make_shared<Scene>(testing::tutorial_spheres()));
     ASSERT_TRUE(tiny.ok());
