@@ -130,32 +130,31 @@ class Scanner {
         return r.ec == std::errc() && r.ptr == p_ && std::isfinite(v);
     }
 
+    /// open item, item, ... close (possibly empty), item() reading one.
+    template <class Item>
+    bool sequence(char open, char close, Item&& item) {
+        if (!eat(open))
+            return false;
+        if (eat(close))
+            return true;
+        do {
+            if (!item())
+                return false;
+        } while (eat(','));
+        return eat(close);
+    }
     /// {"key": value, ...}, member(key) reading each value.
     template <class Member>
     bool object(Member&& member) {
-        if (!eat('{'))
-            return false;
-        if (eat('}'))
-            return true;
-        do {
+        return sequence('{', '}', [&] {
             std::string_view key;
-            if (!plain_string(key) || !eat(':') || !member(key))
-                return false;
-        } while (eat(','));
-        return eat('}');
+            return plain_string(key) && eat(':') && member(key);
+        });
     }
     /// [value, ...], element() reading each value.
     template <class Element>
     bool array(Element&& element) {
-        if (!eat('['))
-            return false;
-        if (eat(']'))
-            return true;
-        do {
-            if (!element())
-                return false;
-        } while (eat(','));
-        return eat(']');
+        return sequence('[', ']', element);
     }
 
     /// A value nobody reads (the DOM reader ignores unknown keys too).
