@@ -15,27 +15,30 @@ StreamedBatch::StreamedBatch(std::shared_ptr<const engine::QueryEngine> engine,
     : engine_(std::move(engine)),
       options_(options),
       dtype_(dtype),
+      precision_(engine_->effective_precision(options.precision)),
       rays_(rays),
       bytes_(rays * ray_record_bytes(dtype)),
+      record_(answer_record_bytes(options.mode, dtype)),
       scratch_(std::move(scratch)),
       chunks_((rays + kChunkRays - 1) / kChunkRays),
       first_bad_(rays),
+      chunk_(new StreamChunk*[chunks_]()),
       state_(new std::atomic<int>[chunks_]) {
     for (std::size_t c = 0; c < chunks_; ++c)
         state_[c] = kWaiting;
-    Scratch& s = *scratch_;
-    s.body.clear();
-    s.body.reserve(bytes_);  // never reallocated below: chunks read it while it grows
-    s.rays.resize(rays_);
-    s.result.precision = engine_->effective_precision(options_.precision);
-    s.result.offsets.clear();
-    s.result.counts.clear();
-    s.result.hits.resize(rays_);  // intersect_span writes every answer
-    s.out.resize(answer_bytes());
+    std::string& body = scratch_->body;
+    body.clear();
+    // Reserved, not written: untouched pages cost nothing until bytes arrive. The pointer
+    // stays put, since the body never grows past it (append() checks).
+    body.reserve(bytes_);
+    body_ = body.data();
 }
 
 StreamedBatch::~StreamedBatch() {
-    tasks_.cancel();  // an abandoned answer needs no more tracing
+    // An abandoned answer needs no more tracing: chunks not started yet return at once. (Our
+    // own flag rather than task_group::cancel(), which crashed inside oneTBB 2021.8 under ASan
+    // when called after every task had run: ctest -j2 on build/asan.)
+    abandoned_ = true;
     try {
         tasks_.wait();
     } catch (...) {
@@ -44,15 +47,32 @@ StreamedBatch::~StreamedBatch() {
     }
 }
 
+void StreamedBatch::prepare(std::size_t c) {
+    auto& pool = scratch_->chunks;
+    if (pool.size() <= c)
+        pool.resize(c + 1);
+    if (!pool[c])
+        pool[c] = std::make_unique<StreamChunk>();
+    StreamChunk& k = *pool[c];
+    const std::size_t n = chunk_end(c) - chunk_begin(c);
+    k.rays.resize(n);
+    k.hits.resize(n);  // intersect_span writes every answer
+    k.out.resize(n * record_);
+    chunk_[c] = &k;
+}
+
 bool StreamedBatch::append(const char* data, std::size_t len) {
     std::string& body = scratch_->body;
-    if (len > bytes_ - body.size())
+    if (len > bytes_ - body.size()) {
+        overrun_ = true;
         return false;
+    }
     body.append(data, len);
     // Whole chunks only; finish() takes the last, partial one.
     const std::size_t arrived = body.size() / ray_record_bytes(dtype_);
     while (started_ < chunks_ && (started_ + 1) * kChunkRays <= arrived) {
         const std::size_t c = started_++;
+        prepare(c);
         tasks_.run([this, c] { decode_and_trace(c); });
     }
     return true;
@@ -74,6 +94,8 @@ void StreamedBatch::set_state(std::size_t c, State s) {
 }
 
 void StreamedBatch::decode_and_trace(std::size_t c) {
+    if (abandoned_)
+        return;
     if (claim(c, kWaiting, kDecoding))
         decode(c);
     if (first_bad_.load() < rays_)
@@ -84,10 +106,9 @@ void StreamedBatch::decode_and_trace(std::size_t c) {
 
 void StreamedBatch::decode(std::size_t c) {
     const std::size_t b = chunk_begin(c), e = chunk_end(c);
-    // The whole announced length: data() is stable (reserved), and a chunk is decoded only
-    // once all of its bytes have arrived.
-    const std::string_view body(scratch_->body.data(), bytes_);
-    const std::size_t bad = decode_ray_range(body, dtype_, b, e, scratch_->rays);
+    // A chunk is decoded only once all of its bytes have arrived.
+    const std::string_view body(body_, bytes_);
+    const std::size_t bad = decode_ray_range(body, dtype_, b, e, chunk_[c]->rays.data());
     if (bad < e) {
         std::size_t cur = first_bad_.load();
         while (bad < cur && !first_bad_.compare_exchange_weak(cur, bad)) {
@@ -97,39 +118,42 @@ void StreamedBatch::decode(std::size_t c) {
 }
 
 void StreamedBatch::trace(std::size_t c) {
-    const std::size_t b = chunk_begin(c), e = chunk_end(c);
-    Scratch& s = *scratch_;
+    StreamChunk& k = *chunk_[c];
+    const std::size_t n = k.rays.size();
     try {
-        engine_->intersect_span(s.rays.data() + b, e - b, options_, s.result.hits.data() + b);
+        engine_->intersect_span(k.rays.data(), n, options_, k.hits.data());
+        encode_answers(k.hits.data(), options_.mode, dtype_, 0, n, k.out.data());
     } catch (...) {
         set_state(c, kFailed);  // the writer gives up on the answer; the client sees it cut
         return;
     }
-    encode_answers(s.result.hits.data(), options_.mode, dtype_, b, e, s.out.data());
     set_state(c, kTraced);
 }
 
 void StreamedBatch::finish() {
     const std::size_t got = scratch_->body.size();
-    if (got != bytes_) {
-        throw api_error("invalid_request", "body ended after " + std::to_string(got) + " of " +
-                                               std::to_string(bytes_) + " announced bytes");
+    if (overrun_ || got != bytes_) {
+        throw api_error("invalid_request", "body of " + std::string(overrun_ ? "more than " : "") +
+                                               std::to_string(got) + " bytes, " +
+                                               std::to_string(bytes_) + " announced");
     }
     // Every ray must pass the checks before the answer starts (its status is 200). This thread
     // decodes what no task has begun, the partial last chunk included (~1 ms a chunk), rather
     // than wait for tasks queued behind chunks being traced.
+    for (; started_ < chunks_; ++started_)
+        prepare(started_);
     for (std::size_t c = 0; c < chunks_; ++c) {
         if (claim(c, kWaiting, kDecoding))
             decode(c);
     }
-    started_ = chunks_;
     {
         std::unique_lock<std::mutex> lock(mutex_);
         changed_.wait(lock, [this] { return decoded_ == chunks_; });
     }
     if (const std::size_t i = first_bad_.load(); i < rays_) {
         tasks_.wait();  // no task may still read the rays
-        throw_invalid_ray(scratch_->rays[i], i);
+        const std::size_t c = i / kChunkRays;
+        throw_invalid_ray(chunk_[c]->rays[i - chunk_begin(c)], i);
     }
 }
 

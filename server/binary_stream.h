@@ -15,7 +15,10 @@
 //     as soon as it is traced.
 // Chunks start at multiples of QueryEngine::kBlockRays, so the answers are exactly those of the
 // whole-batch path (QueryEngine::intersect_span); a bad ray anywhere still makes the whole
-// request invalid_ray naming the lowest bad index, before any answer is sent.
+// request invalid_ray naming the lowest bad index, before any answer is sent. A chunk's rays,
+// answers and encoded answer are sized when its bytes have arrived (from buffers the scratch
+// keeps between requests), so memory follows what the client has sent, not what its
+// Content-Length promises.
 
 #include <atomic>
 #include <condition_variable>
@@ -38,42 +41,48 @@ class StreamedBatch {
     static constexpr std::size_t kChunkRays = 64 * engine::QueryEngine::kBlockRays;
 
     /// A batch of `rays` records (already checked with ray_count) for `options.mode` closest
-    /// or any. The body goes to scratch->body, reserved for all of it up front so that running
-    /// chunks can read what has arrived while more is appended; answers go to scratch->result
-    /// and scratch->out.
+    /// or any. The body goes to scratch->body, reserved (not touched) for all of it up front so
+    /// that running chunks can read what has arrived while more is appended; chunk buffers come
+    /// from scratch->chunks.
     StreamedBatch(std::shared_ptr<const engine::QueryEngine> engine,
                   const engine::QueryOptions& options, Dtype dtype, std::size_t rays,
                   std::shared_ptr<Scratch> scratch);
-    /// Cancels chunks not yet started and waits for running ones (they use the scratch).
+    /// Makes chunks not yet started skip their work and waits for running ones (they use the
+    /// scratch).
     ~StreamedBatch();
     StreamedBatch(const StreamedBatch&) = delete;
     StreamedBatch& operator=(const StreamedBatch&) = delete;
 
-    /// Appends received bytes and starts every chunk they complete. False (nothing appended)
-    /// when they would run past the announced length.
+    /// Appends received bytes and starts every chunk they complete. False, and the batch is
+    /// spoilt (finish() throws), when they would run past the announced length.
     bool append(const char* data, std::size_t len);
     /// After the last byte: waits until every ray is decoded and checked. invalid_ray for the
-    /// lowest bad ray; invalid_request when the body ended short of its announced length.
-    /// Tracing may still be going on when it returns.
+    /// lowest bad ray; invalid_request when the body ended short of, or ran past, its announced
+    /// length. Tracing may still be going on when it returns.
     void finish();
 
     /// Bytes of the whole answer.
-    std::size_t answer_bytes() const { return rays_ * answer_record_bytes(options_.mode, dtype_); }
-    /// Hands answer bytes from `offset` to the end of the chunk that holds it (tracing that
-    /// chunk first if needed) to `write`, and returns what `write` returned; false, with
-    /// nothing written, if the chunk could not be traced. For cpp-httplib's content provider,
-    /// after finish().
+    std::size_t answer_bytes() const { return rays_ * record_; }
+    /// Hands answer bytes [offset, offset + length), cut at the end of the chunk that holds
+    /// `offset` (tracing that chunk first if needed), to `write`, and returns what `write`
+    /// returned; false, with nothing written, if the chunk could not be traced. For
+    /// cpp-httplib's content provider, after finish(). Never throws.
     template <class Write>
-    bool write_answer(std::size_t offset, Write&& write) {
-        const std::size_t rec = answer_record_bytes(options_.mode, dtype_);
-        const std::size_t c = offset / (kChunkRays * rec);
-        const std::size_t end = std::min(answer_bytes(), (c + 1) * kChunkRays * rec);
-        if (!answer_chunk(c))
+    bool write_answer(std::size_t offset, std::size_t length, Write&& write) noexcept {
+        try {
+            const std::size_t c = offset / (kChunkRays * record_);
+            const std::size_t begin = c * kChunkRays * record_;
+            const std::size_t end =
+                std::min({answer_bytes(), begin + kChunkRays * record_, offset + length});
+            if (offset >= end || !answer_chunk(c))
+                return false;
+            return write(chunk_[c]->out.data() + (offset - begin), end - offset);
+        } catch (...) {
             return false;
-        return write(scratch_->out.data() + offset, end - offset);
+        }
     }
 
-    engine::Precision precision() const { return scratch_->result.precision; }
+    engine::Precision precision() const { return precision_; }
     engine::Mode mode() const { return options_.mode; }
 
   private:
@@ -81,6 +90,8 @@ class StreamedBatch {
     enum State : int { kWaiting, kDecoding, kDecoded, kTracing, kTraced, kFailed };
     std::size_t chunk_begin(std::size_t c) const { return c * kChunkRays; }
     std::size_t chunk_end(std::size_t c) const { return std::min(rays_, (c + 1) * kChunkRays); }
+    /// Sizes chunk c's buffers (request thread, before anybody else touches the chunk).
+    void prepare(std::size_t c);
     bool claim(std::size_t c, State from, State to);
     /// A task: decodes and checks chunk c, then traces it, unless somebody else got to either
     /// first (or a bad ray makes the answers useless).
@@ -95,12 +106,18 @@ class StreamedBatch {
     std::shared_ptr<const engine::QueryEngine> engine_;
     engine::QueryOptions options_;
     Dtype dtype_;
+    engine::Precision precision_;
     std::size_t rays_;
     std::size_t bytes_;
+    std::size_t record_;  ///< bytes of one answer record
     std::shared_ptr<Scratch> scratch_;
+    const char* body_ = nullptr;  ///< scratch_->body.data(), fixed by the reserve
     std::size_t chunks_;
-    std::size_t started_ = 0;  ///< chunks handed to tasks (request thread only)
+    std::size_t started_ = 0;  ///< chunks prepared and handed to tasks (request thread only)
+    bool overrun_ = false;     ///< append() refused bytes past the announced length
     std::atomic<std::size_t> first_bad_;
+    std::atomic<bool> abandoned_{false};     ///< set by the destructor: tasks not started skip
+    std::unique_ptr<StreamChunk*[]> chunk_;  ///< chunk c's buffers, once prepared
     std::unique_ptr<std::atomic<int>[]> state_;
     std::mutex mutex_;  ///< with changed_: waits for decoded and traced chunks
     std::condition_variable changed_;

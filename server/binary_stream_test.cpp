@@ -77,10 +77,11 @@ void feed(StreamedBatch& b, const std::string& body, std::size_t piece = 4093) {
 std::string streamed(StreamedBatch& b) {
     std::string out;
     while (out.size() < b.answer_bytes()) {
-        const bool ok = b.write_answer(out.size(), [&](const char* p, std::size_t n) {
-            out.append(p, n);
-            return true;
-        });
+        const bool ok = b.write_answer(out.size(), b.answer_bytes() - out.size(),
+                                       [&](const char* p, std::size_t n) {
+                                           out.append(p, n);
+                                           return true;
+                                       });
         if (!ok)
             break;
     }
@@ -161,11 +162,11 @@ TEST(StreamedBatch, ABodyShortOfItsLengthIsAnError) {
     auto b = batch_for(e, {engine::Mode::closest, engine::Precision::fast, true}, n);
     feed(*b, body.substr(0, body.size() / 2 + 17));
     EXPECT_EQ(finish_error(*b), "invalid_request ");
-    // Nor does it take more than it announced.
+    // Nor does it take more than it announced: the batch is spoilt.
     auto c = batch_for(e, {engine::Mode::closest, engine::Precision::fast, true}, n);
     feed(*c, body);
     EXPECT_FALSE(c->append("x", 1));
-    EXPECT_EQ(finish_error(*c), "");
+    EXPECT_EQ(finish_error(*c), "invalid_request ");
 }
 
 TEST(StreamedBatch, AClientThatGoesAwayLeavesNothingRunning) {
@@ -189,7 +190,7 @@ TEST(StreamedBatch, AClientThatGoesAwayLeavesNothingRunning) {
         feed(*b, body);
         b->finish();
         std::string first;
-        EXPECT_FALSE(b->write_answer(0, [&](const char* p, std::size_t len) {
+        EXPECT_FALSE(b->write_answer(0, b->answer_bytes(), [&](const char* p, std::size_t len) {
             first.assign(p, len);
             return false;  // the connection broke: write_answer says so
         }));

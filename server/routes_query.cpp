@@ -33,8 +33,10 @@ BinaryQuery parse_binary_query(const httplib::Request& req) {
     const auto param = [&](const char* k) {
         return req.has_param(k) ? req.get_param_value(k) : std::string();
     };
-    if (req.has_param("mode")) opt.mode = parse_mode(param("mode"), "mode");
-    if (req.has_param("precision")) opt.precision = parse_precision(param("precision"), "precision");
+    if (req.has_param("mode"))
+        opt.mode = parse_mode(param("mode"), "mode");
+    if (req.has_param("precision"))
+        opt.precision = parse_precision(param("precision"), "precision");
     q.dtype = parse_dtype(param("dtype"));
     opt.want_normal = true;
     if (req.has_param("fields")) {
@@ -54,12 +56,11 @@ void send_binary_answer(const BinaryQuery& q, std::shared_ptr<Scratch> scratch,
     res.set_header("X-Mode", engine::to_string(q.options.mode));
     // The provider keeps the scratch (and so `out`) until the response has been written.
     const std::size_t size = s.out.size();
-    res.set_content_provider(
-        size, "application/octet-stream",
-        [scratch = std::move(scratch)](std::size_t offset, std::size_t length,
-                                       httplib::DataSink& sink) {
-            return sink.write(scratch->out.data() + offset, length);
-        });
+    res.set_content_provider(size, "application/octet-stream",
+                             [scratch = std::move(scratch)](std::size_t offset, std::size_t length,
+                                                            httplib::DataSink& sink) {
+                                 return sink.write(scratch->out.data() + offset, length);
+                             });
 }
 
 void send_streamed_answer(std::shared_ptr<StreamedBatch> batch, std::shared_ptr<void> slot,
@@ -72,10 +73,10 @@ void send_streamed_answer(std::shared_ptr<StreamedBatch> batch, std::shared_ptr<
     // been written; a chunk is handed over as soon as it is traced.
     res.set_content_provider(
         size, "application/octet-stream",
-        [batch = std::move(batch), slot = std::move(slot)](std::size_t offset, std::size_t,
+        [batch = std::move(batch), slot = std::move(slot)](std::size_t offset, std::size_t length,
                                                            httplib::DataSink& sink) {
             return batch->write_answer(
-                offset, [&](const char* p, std::size_t n) { return sink.write(p, n); });
+                offset, length, [&](const char* p, std::size_t n) { return sink.write(p, n); });
         });
 }
 
@@ -100,7 +101,8 @@ void install_query_routes(App& app) {
             const Json body = App::parse_json_body(req);
             require_object(body, "", "invalid_request");
             const Json* scene_doc = member(body, "scene");
-            if (!scene_doc) throw api_error("invalid_request", "/scene is required", "/scene");
+            if (!scene_doc)
+                throw api_error("invalid_request", "/scene is required", "/scene");
             auto engine = app.build_stateless_scene(*scene_doc, "/scene");
             answer_intersect(*engine, body, "", app.config().limits.max_rays, res);
         });

@@ -18,7 +18,12 @@ namespace {
 /// (an unknown scene, a bad parameter, a bad length) after reading it, as before.
 std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& req,
                                              const std::shared_ptr<Scratch>& scratch) {
-    if (!is_binary(req) || !req.has_header("Content-Length")) return nullptr;
+    // The announced length must be the body's: not chunked, not compressed (cpp-httplib
+    // inflates gzip/deflate/br bodies, whose Content-Length is then the compressed size).
+    if (!is_binary(req) || !req.has_header("Content-Length") ||
+        req.has_header("Transfer-Encoding") || req.has_header("Content-Encoding")) {
+        return nullptr;
+    }
     const std::string cl = req.get_header_value("Content-Length");
     std::size_t bytes = 0;
     const auto [end, ec] = std::from_chars(cl.data(), cl.data() + cl.size(), bytes);

@@ -17,12 +17,23 @@
 
 namespace raycastd::server {
 
+/// One chunk of a streamed binary batch (server/binary_stream.h): its rays, answers and
+/// encoded answer.
+struct StreamChunk {
+    std::vector<engine::Ray> rays;
+    std::vector<engine::Hit> hits;
+    std::string out;
+};
+
 struct Scratch {
     std::string body;                ///< the request body, streamed in
     std::vector<engine::Ray> rays;   ///< decoded binary rays
     IntersectRequest parsed;         ///< the JSON fast path's parse
     engine::QueryResult result;      ///< the engine's answers
     std::string out;                 ///< an encoded binary answer
+    /// A streamed batch's chunks, kept for the next one (unique_ptr: a chunk stays where it is
+    /// while the list grows under running chunks).
+    std::vector<std::unique_ptr<StreamChunk>> chunks;
 };
 
 /// A Scratch from the pool (or a new one); it returns to the pool when the last copy of the

@@ -31,14 +31,14 @@ void for_blocks(std::size_t n, F&& f) {
                       [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
 }
 
+/// Records [begin, end) of `body` into out[0 .. end-begin).
 template <class F>
-void decode_as(std::string_view body, std::vector<engine::Ray>& rays, std::size_t begin,
-               std::size_t end) {
+void decode_as(std::string_view body, std::size_t begin, std::size_t end, engine::Ray* out) {
     const char* p = body.data() + begin * 8 * sizeof(F);
     for (std::size_t i = begin; i < end; ++i, p += 8 * sizeof(F)) {
         F v[8];
         std::memcpy(v, p, sizeof v);
-        engine::Ray& r = rays[i];
+        engine::Ray& r = out[i - begin];
         r.origin = {double(v[0]), double(v[1]), double(v[2])};
         r.direction = {double(v[3]), double(v[4]), double(v[5])};
         r.tmin = double(v[6]);
@@ -140,14 +140,14 @@ std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays) {
 }
 
 std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin,
-                             std::size_t end, std::vector<engine::Ray>& rays) {
+                             std::size_t end, engine::Ray* out) {
     if (dtype == Dtype::float32) {
-        decode_as<float>(body, rays, begin, end);
+        decode_as<float>(body, begin, end, out);
     } else {
-        decode_as<double>(body, rays, begin, end);
+        decode_as<double>(body, begin, end, out);
     }
     for (std::size_t i = begin; i < end; ++i) {
-        if (!engine::validate_ray(rays[i], i).ok()) return i;
+        if (!engine::validate_ray(out[i - begin], i).ok()) return i;
     }
     return end;
 }
@@ -165,7 +165,7 @@ void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
     // serial scan would.
     std::atomic<std::size_t> first_bad{n};
     for_blocks(n, [&](std::size_t b, std::size_t e) {
-        const std::size_t i = decode_ray_range(body, dtype, b, e, rays);
+        const std::size_t i = decode_ray_range(body, dtype, b, e, rays.data() + b);
         if (i == e) return;
         std::size_t cur = first_bad.load();
         while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {

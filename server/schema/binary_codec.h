@@ -30,10 +30,10 @@ Dtype parse_dtype(const std::string& s);
 /// number of records, too_large over max_rays (the errors decode_rays gives).
 std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays);
 
-/// Decodes records [begin, end) of `body` into rays[begin, end) (already sized) and checks
-/// them: the lowest index of a ray that breaks the API's rules, or `end`.
+/// Decodes records [begin, end) of `body` into out[0 .. end-begin) and checks them: the lowest
+/// index (in the body) of a ray that breaks the API's rules, or `end`.
 std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin,
-                             std::size_t end, std::vector<engine::Ray>& rays);
+                             std::size_t end, engine::Ray* out);
 
 /// Throws invalid_ray naming ray `index` (a ray decode_ray_range reported) and what is wrong.
 [[noreturn]] void throw_invalid_ray(const engine::Ray& ray, std::size_t index);

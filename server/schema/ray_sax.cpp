@@ -3,7 +3,6 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <vector>
 
 namespace raycastd::server {
@@ -48,10 +47,6 @@ class Scanner {
             return false;
         ++p_;
         return true;
-    }
-    bool peek(char c) {
-        ws();
-        return p_ != end_ && *p_ == c;
     }
 
     /// A string of printable ASCII without escapes (else: give up).

@@ -1,12 +1,19 @@
 // Intersect on a registered mesh scene (Embree path) over HTTP: JSON and binary agree, every
 // mode and precision answers, and bad binary bodies are invalid_ray.
 
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <random>
+#include <thread>
+
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <nlohmann/json.hpp>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include "engine/testing/scenes.h"
 #include "tests/support/encode.h"
@@ -23,7 +30,9 @@ struct Intersect : ::testing::Test {
         const auto sphere = engine::testing::icosphere_object(3, {0.5, -0.25, 1}, 2);
         Json doc = {{"objects",
                      {{{"type", "sphere"}, {"center", {4, 0, 0}}, {"radius", 1}},
-                      {{"type", "mesh"}, {"format", "obj"}, {"name", "ico"},
+                      {{"type", "mesh"},
+                       {"format", "obj"},
+                       {"name", "ico"},
                        {"data_base64", testing::base64(testing::to_obj(*sphere.mesh))}}}}};
         auto res = server_->client()->Post("/v1/scenes", doc.dump(), "application/json");
         ASSERT_TRUE(res);
@@ -46,8 +55,10 @@ struct Intersect : ::testing::Test {
     static Json json_rays() {
         Json rays = Json::array();
         for (const auto& r : rays_) {
-            rays.push_back({{"origin", {r[0], r[1], r[2]}}, {"direction", {r[3], r[4], r[5]}},
-                            {"tmin", r[6]}, {"tmax", r[7]}});
+            rays.push_back({{"origin", {r[0], r[1], r[2]}},
+                            {"direction", {r[3], r[4], r[5]}},
+                            {"tmin", r[6]},
+                            {"tmax", r[7]}});
         }
         return rays;
     }
@@ -223,7 +234,8 @@ TEST_F(Intersect, LargeBinaryBatchesAnswerAsSmallOnes) {
         }
         ASSERT_EQ(large->body.size(), small.size()) << query;
         EXPECT_TRUE(large->body == small) << query;
-        EXPECT_EQ(large->get_header_value("X-Mode"), std::string(query).substr(5, 3) == "any" ? "any" : "closest");
+        EXPECT_EQ(large->get_header_value("X-Mode"),
+                  std::string(query).substr(5, 3) == "any" ? "any" : "closest");
     }
 }
 
@@ -232,7 +244,7 @@ TEST_F(Intersect, LargeBinaryBatchesWithABadRayAreInvalidRay) {
     std::string body = many_float_rays(n, 8);
     const float nan = std::nanf("");
     std::memcpy(body.data() + 32 * 190001 + 16, &nan, 4);  // ray 190001, dy (the last chunk)
-    std::memset(body.data() + 32 * 70000 + 12, 0, 12);    // ray 70000, zero direction
+    std::memset(body.data() + 32 * 70000 + 12, 0, 12);     // ray 70000, zero direction
     auto res = post_binary("dtype=float32&precision=fast", body);
     ASSERT_TRUE(res);
     EXPECT_EQ(res->status, 400);
@@ -263,6 +275,109 @@ TEST_F(Intersect, AClientThatStopsReadingALargeAnswerDoesNotHurtTheServer) {
     ASSERT_TRUE(whole);
     EXPECT_EQ(whole->status, 200);
     EXPECT_EQ(whole->body.size(), 300000u * 32);
+}
+
+/// A socket connected to the server on 127.0.0.1.
+int connect_to(int port) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0)
+        return -1;
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+bool send_all(int fd, const std::string& data) {
+    std::size_t sent = 0;
+    while (sent < data.size()) {
+        const ssize_t k = send(fd, data.data() + sent, data.size() - sent, 0);
+        if (k <= 0)
+            return false;
+        sent += static_cast<std::size_t>(k);
+    }
+    return true;
+}
+
+/// The server's resident memory in MB (VmRSS).
+double resident_mb(pid_t pid) {
+    std::ifstream f("/proc/" + std::to_string(pid) + "/status");
+    std::string key;
+    while (f >> key) {
+        if (key == "VmRSS:") {
+            double kb = 0;
+            f >> kb;
+            return kb / 1024.0;
+        }
+    }
+    return -1;
+}
+
+TEST_F(Intersect, MemoryFollowsTheBytesSentNotTheLengthAnnounced) {
+    // A client announces 8M rays (256 MB) and sends 6 MB: the server must not size answers for
+    // all 8M up front (that would be ~1.3 GB: 64-byte rays, 72-byte hits, 32-byte records).
+    const std::size_t announced = 8u << 20;
+    const std::string part = many_float_rays(3 * 65536, 10);
+    const double before = resident_mb(server_->pid());
+    ASSERT_GT(before, 0);
+    const int fd = connect_to(server_->port());
+    ASSERT_GE(fd, 0);
+    const std::string head = "POST /v1/scenes/" + id_ +
+                             "/intersect?dtype=float32&precision=fast HTTP/1.1\r\n"
+                             "Host: 127.0.0.1\r\nContent-Type: application/octet-stream\r\n"
+                             "Content-Length: " +
+                             std::to_string(announced * 32) + "\r\n\r\n";
+    ASSERT_TRUE(send_all(fd, head));
+    ASSERT_TRUE(send_all(fd, part));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    const double during = resident_mb(server_->pid());
+    close(fd);  // and go away
+    EXPECT_LT(during - before, 200.0) << "resident " << before << " -> " << during << " MB";
+    // Still there, and answering.
+    EXPECT_EQ(post_binary("dtype=float32", many_float_rays(100, 11))->status, 200);
+}
+
+TEST_F(Intersect, CompressedAndRangedLargeBinaryRequests) {
+    const std::string body = many_float_rays(100000, 12);
+    auto plain = post_binary("dtype=float32&precision=fast", body);
+    ASSERT_TRUE(plain);
+    ASSERT_EQ(plain->status, 200);
+    // A gzip body (cpp-httplib inflates it; its Content-Length is the compressed size).
+    auto client = server_->client();
+    client->set_compress(true);
+    auto gz =
+        client->Post(("/v1/scenes/" + id_ + "/intersect?dtype=float32&precision=fast").c_str(),
+                     body, "application/octet-stream");
+    ASSERT_TRUE(gz);
+    EXPECT_EQ(gz->status, 200) << gz->body.substr(0, 200);
+    EXPECT_TRUE(gz->body == plain->body);
+    // A Range (cpp-httplib 0.11 applies it to any content provider, the status left at 200):
+    // exactly the bytes announced go out, the start of the answer, nothing after them.
+    const int fd = connect_to(server_->port());
+    ASSERT_GE(fd, 0);
+    ASSERT_TRUE(send_all(fd, "POST /v1/scenes/" + id_ +
+                                 "/intersect?dtype=float32&precision=fast HTTP/1.1\r\n"
+                                 "Host: 127.0.0.1\r\nConnection: close\r\nRange: bytes=0-99\r\n"
+                                 "Content-Type: application/octet-stream\r\nContent-Length: " +
+                                 std::to_string(body.size()) + "\r\n\r\n" + body));
+    std::string got;
+    char buf[65536];
+    for (ssize_t k; (k = recv(fd, buf, sizeof buf, 0)) > 0;)
+        got.append(buf, static_cast<std::size_t>(k));
+    close(fd);
+    const std::size_t head_end = got.find("\r\n\r\n");
+    ASSERT_NE(head_end, std::string::npos);
+    const std::string answer = got.substr(head_end + 4);
+    const std::size_t cl = got.find("Content-Length: ");
+    ASSERT_NE(cl, std::string::npos);
+    EXPECT_EQ(std::stoul(got.substr(cl + 16)), answer.size()) << got.substr(0, head_end);
+    EXPECT_TRUE(answer == plain->body || answer == plain->body.substr(0, 100))
+        << answer.size() << " bytes";
 }
 
 }  // namespace
