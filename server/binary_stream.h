@@ -20,6 +20,7 @@
 // keeps between requests), so memory follows what the client has sent, not what its
 // Content-Length promises.
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
