@@ -598,7 +598,14 @@ def render(results: dict, accuracy: str) -> str:
             f"One-ray JSON `closest` requests on A from {load['connections']} keep-alive "
             f"connections for {load['seconds']:.1f} s: **{load['req_s']:,.0f} requests/s** "
             f"({load['ok']:,} answered 200, {load['errors']:,} otherwise: "
-            f"{json_statuses(load['statuses'])})."
+            f"{json_statuses(load['statuses'])})"
+            + (
+                f", the median of {len(load['runs'])} runs: "
+                + ", ".join(f"{r:,.0f}" for r in load["runs"])
+                + " requests/s."
+                if load.get("runs")
+                else "."
+            )
         )
     else:
         lines.append(f"Not measured ({load.get('error', 'no server run')}).")
