@@ -67,6 +67,14 @@ class Scanner {
         return true;
     }
 
+    /// One or more decimal digits; false (nothing consumed) when there is none.
+    bool digits() {
+        const char* d = p_;
+        while (p_ != end_ && *p_ >= '0' && *p_ <= '9')
+            ++p_;
+        return p_ != d;
+    }
+
     /// A JSON number, converted as nlohmann's reader converts it: a token without fraction or
     /// exponent that fits a 64-bit integer is that integer (so "-0" is +0.0), anything else the
     /// correctly rounded double; out of range (1e400) gives up.
@@ -79,20 +87,14 @@ class Scanner {
             return false;
         if (*p_ == '0') {
             ++p_;
-        } else if (*p_ >= '1' && *p_ <= '9') {
-            while (p_ != end_ && *p_ >= '0' && *p_ <= '9')
-                ++p_;
-        } else {
+        } else if (!(*p_ >= '1' && *p_ <= '9') || !digits()) {
             return false;
         }
         bool integer = true;
         if (p_ != end_ && *p_ == '.') {
             integer = false;
             ++p_;
-            const char* d = p_;
-            while (p_ != end_ && *p_ >= '0' && *p_ <= '9')
-                ++p_;
-            if (p_ == d)
+            if (!digits())
                 return false;
         }
         if (p_ != end_ && (*p_ == 'e' || *p_ == 'E')) {
@@ -100,10 +102,7 @@ class Scanner {
             ++p_;
             if (p_ != end_ && (*p_ == '+' || *p_ == '-'))
                 ++p_;
-            const char* d = p_;
-            while (p_ != end_ && *p_ >= '0' && *p_ <= '9')
-                ++p_;
-            if (p_ == d)
+            if (!digits())
                 return false;
         }
         if (integer) {
