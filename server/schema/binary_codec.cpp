@@ -71,12 +71,18 @@ char* put_hit(char* p, const engine::Hit& h) {
     return put<F>(p, static_cast<F>(h.normal.z));
 }
 
+/// Bytes of one hit record with floats of type F (hit_record_bytes of its dtype).
+template <class F>
+constexpr std::size_t kHitRecord = 2 * sizeof(std::uint32_t) + 6 * sizeof(F);
+static_assert(kHitRecord<float> == 32 && kHitRecord<double> == 56,
+              "hit_record_bytes (binary_codec.h) must agree");
+
 /// closest/any answers hits[begin, end) at out + begin × record (closest: hit records; any: u32).
 template <class F>
 void encode_range_as(const engine::Hit* hits, engine::Mode mode, std::size_t begin,
                      std::size_t end, char* out) {
     if (mode == engine::Mode::closest) {
-        char* p = out + begin * hit_record_bytes(sizeof(F) == 4 ? Dtype::float32 : Dtype::float64);
+        char* p = out + begin * kHitRecord<F>;
         for (std::size_t i = begin; i < end; ++i) p = put_hit<F>(p, hits[i]);
         return;
     }
@@ -86,7 +92,7 @@ void encode_range_as(const engine::Hit* hits, engine::Mode mode, std::size_t beg
 
 template <class F>
 void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, std::string& out) {
-    constexpr std::size_t rec = 2 * sizeof(std::uint32_t) + 6 * sizeof(F);
+    constexpr std::size_t rec = kHitRecord<F>;
     switch (mode) {
         case engine::Mode::closest:
         case engine::Mode::any: {
