@@ -13,7 +13,8 @@ namespace raycastd::server {
 namespace {
 
 int pick_worker_threads(const Config& c) {
-    if (c.threads > 0) return c.threads;
+    if (c.threads > 0)
+        return c.threads;
     // cpp-httplib serves a keep-alive connection on one worker thread until the client goes
     // quiet for the keep-alive timeout, so the worker count is the number of clients served at
     // once: with 4 workers a fifth keep-alive client waited 30 s (measured). Idle workers
@@ -25,13 +26,14 @@ int pick_worker_threads(const Config& c) {
 /// turned away while a worker is free to serve it (each request runs on every core through
 /// TBB, so more of them share the cores rather than queue). Operators bound memory with it.
 std::size_t pick_max_concurrent(const Config& c, int threads) {
-    if (c.limits.max_concurrent) return c.limits.max_concurrent;
+    if (c.limits.max_concurrent)
+        return c.limits.max_concurrent;
     return static_cast<std::size_t>(threads);
 }
 
 /// Holds one concurrent-work slot for the life of a request.
 class WorkSlot {
-public:
+  public:
     WorkSlot(std::atomic<std::size_t>& counter, std::size_t limit) : counter_(counter) {
         if (counter_.fetch_add(1) >= limit) {
             counter_.fetch_sub(1);
@@ -43,7 +45,7 @@ public:
     WorkSlot(const WorkSlot&) = delete;
     WorkSlot& operator=(const WorkSlot&) = delete;
 
-private:
+  private:
     std::atomic<std::size_t>& counter_;
 };
 
@@ -59,9 +61,11 @@ void send_json(httplib::Response& res, std::string body, int status) {
 }
 
 App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_root) {
-    registry_ = std::make_unique<SceneRegistry>(
-        config_.data_dir, config_.limits.memory_budget_bytes,
-        [this](const SceneSource& src, const FileSource& files) { return build_scene(src, files); });
+    registry_ =
+        std::make_unique<SceneRegistry>(config_.data_dir, config_.limits.memory_budget_bytes,
+                                        [this](const SceneSource& src, const FileSource& files) {
+                                            return build_scene(src, files);
+                                        });
     const int threads = threads_ = pick_worker_threads(config_);
     max_concurrent_ = pick_max_concurrent(config_, threads);
     http_.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
@@ -82,10 +86,11 @@ App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_
     // shape as ours; responses we already filled in are left alone.
     http_.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request& req,
                                                                     httplib::Response& res) {
-        if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+        if (!res.body.empty())
+            return httplib::Server::HandlerResponse::Unhandled;
         if (res.status == 404) {
-            send_error(res, api_error("not_found", "no such endpoint: " + req.method + " " +
-                                                       req.path));
+            send_error(res,
+                       api_error("not_found", "no such endpoint: " + req.method + " " + req.path));
         } else if (res.status == 413) {
             send_error(res, api_error("too_large", "request body is over the configured limit"));
         } else if (res.status == 400) {
@@ -99,14 +104,15 @@ App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_
         [](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
             std::string what = "unknown exception";
             try {
-                if (ep) std::rethrow_exception(ep);
+                if (ep)
+                    std::rethrow_exception(ep);
             } catch (const std::exception& e) {
                 what = e.what();
             } catch (...) {
             }
             const std::string id = res.get_header_value("X-Request-Id");
-            std::fprintf(stderr, "raycastd: internal error in %s %s [%s]: %s\n",
-                         req.method.c_str(), req.path.c_str(), id.c_str(), what.c_str());
+            std::fprintf(stderr, "raycastd: internal error in %s %s [%s]: %s\n", req.method.c_str(),
+                         req.path.c_str(), id.c_str(), what.c_str());
             send_error(res, api_error("internal", "internal error (request " + id + ")"));
         });
     if (config_.access_log) {
@@ -118,7 +124,9 @@ App::App(Config config) : config_(std::move(config)), scene_root_(config_.scene_
     install_routes();
 }
 
-App::~App() { stop(); }
+App::~App() {
+    stop();
+}
 
 void App::install_routes() {
     install_meta_routes(*this);
@@ -129,13 +137,18 @@ void App::install_routes() {
 }
 
 int App::bind() {
-    if (config_.port == 0) return http_.bind_to_any_port(config_.host);
+    if (config_.port == 0)
+        return http_.bind_to_any_port(config_.host);
     return http_.bind_to_port(config_.host, config_.port) ? config_.port : -1;
 }
 
-bool App::listen_after_bind() { return http_.listen_after_bind(); }
+bool App::listen_after_bind() {
+    return http_.listen_after_bind();
+}
 
-void App::stop() { http_.stop(); }
+void App::stop() {
+    http_.stop();
+}
 
 void App::handle(const httplib::Request& req, httplib::Response& res, bool heavy,
                  const std::function<void()>& work) {
@@ -164,12 +177,13 @@ std::shared_ptr<void> App::extend_work_slot() {
 }
 
 Json App::parse_json_body(const httplib::Request& req) {
-    if (req.body.empty()) throw api_error("bad_json", "empty body: a JSON document is required");
+    if (req.body.empty())
+        throw api_error("bad_json", "empty body: a JSON document is required");
     try {
         return Json::parse(req.body);
     } catch (const Json::parse_error& e) {
-        throw api_error("bad_json", "body is not valid JSON: byte " + std::to_string(e.byte) +
-                                        ": " + e.what());
+        throw api_error("bad_json",
+                        "body is not valid JSON: byte " + std::to_string(e.byte) + ": " + e.what());
     } catch (const Json::exception& e) {
         // e.g. out_of_range.406 for 1e400: JSON cannot carry infinity.
         throw api_error("bad_json", std::string("body is not usable JSON: ") + e.what());
@@ -185,13 +199,14 @@ namespace {
 std::shared_ptr<const engine::QueryEngine> prepare(engine::Scene scene, const Limits& limits,
                                                    const std::string& prefix) {
     if (scene.triangle_count() > limits.max_triangles) {
-        throw api_error("too_large", "the scene has " + std::to_string(scene.triangle_count()) +
-                                         " triangles, over the limit of " +
-                                         std::to_string(limits.max_triangles),
+        throw api_error("too_large",
+                        "the scene has " + std::to_string(scene.triangle_count()) +
+                            " triangles, over the limit of " + std::to_string(limits.max_triangles),
                         prefix);
     }
     auto built = engine::QueryEngine::build(std::make_shared<engine::Scene>(std::move(scene)));
-    if (!built.ok()) throw from_status(built.status(), prefix);
+    if (!built.ok())
+        throw from_status(built.status(), prefix);
     return *built;
 }
 
@@ -220,8 +235,10 @@ std::shared_ptr<const engine::QueryEngine> App::build_scene(const SceneSource& s
         return prepare(scene_from_document(doc, "", files, config_.limits), config_.limits, "");
     }
     auto format = format_from_content_type(src.content_type);
-    if (!format) throw api_error("unsupported_format", "cannot load " + src.content_type);
-    return prepare(scene_from_model(src.body, *format, "model", config_.limits), config_.limits, "");
+    if (!format)
+        throw api_error("unsupported_format", "cannot load " + src.content_type);
+    return prepare(scene_from_model(src.body, *format, "model", config_.limits), config_.limits,
+                   "");
 }
 
 FileSource App::scene_root_files() const {
@@ -236,18 +253,22 @@ ApiError App::scene_not_found(const std::string& id) {
 
 std::shared_ptr<const engine::QueryEngine> App::scene_or_404(const std::string& id) {
     auto engine = registry_->get(id);
-    if (!engine) throw scene_not_found(id);
+    if (!engine)
+        throw scene_not_found(id);
     return engine;
 }
 
 std::string App::classify_scene_body(const httplib::Request& req) const {
-    if (req.body.empty()) throw api_error("bad_json", "empty body: a scene document or model file is required");
+    if (req.body.empty())
+        throw api_error("bad_json", "empty body: a scene document or model file is required");
     std::string ct = req.get_header_value("Content-Type");
     ct = ct.substr(0, ct.find(';'));
-    if (ct == "application/json") return ct;
-    if (format_from_content_type(ct)) return ct;
-    if (!ct.empty() && ct != "application/octet-stream" && ct != "application/x-www-form-urlencoded" &&
-        ct != "text/plain") {
+    if (ct == "application/json")
+        return ct;
+    if (format_from_content_type(ct))
+        return ct;
+    if (!ct.empty() && ct != "application/octet-stream" &&
+        ct != "application/x-www-form-urlencoded" && ct != "text/plain") {
         throw api_error("unsupported_format",
                         "Content-Type " + ct +
                             " is not a scene document (application/json) or a model type "
@@ -257,12 +278,18 @@ std::string App::classify_scene_body(const httplib::Request& req) const {
     // No usable type (curl -d sends form-urlencoded): tell by the bytes.
     if (auto f = engine::sniff_format(req.body)) {
         switch (*f) {
-            case engine::ModelFormat::glb: return "model/gltf-binary";
-            case engine::ModelFormat::ply: return "application/x-ply";
-            case engine::ModelFormat::stl: return "application/sla";
-            case engine::ModelFormat::off: return "model/off";
-            case engine::ModelFormat::obj: return "model/obj";
-            case engine::ModelFormat::gltf: break;  // JSON: a glTF or a scene document
+            case engine::ModelFormat::glb:
+                return "model/gltf-binary";
+            case engine::ModelFormat::ply:
+                return "application/x-ply";
+            case engine::ModelFormat::stl:
+                return "application/sla";
+            case engine::ModelFormat::off:
+                return "model/off";
+            case engine::ModelFormat::obj:
+                return "model/obj";
+            case engine::ModelFormat::gltf:
+                break;  // JSON: a glTF or a scene document
         }
     }
     const auto first = req.body.find_first_not_of(" \t\r\n");
@@ -270,7 +297,8 @@ std::string App::classify_scene_body(const httplib::Request& req) const {
         // A glTF document has an "asset" object; a scene document has "objects".
         try {
             const Json j = Json::parse(req.body);
-            if (j.is_object() && j.contains("asset") && !j.contains("objects")) return "model/gltf+json";
+            if (j.is_object() && j.contains("asset") && !j.contains("objects"))
+                return "model/gltf+json";
         } catch (const Json::exception&) {
         }
         return "application/json";
@@ -286,7 +314,8 @@ void App::add_registry_info(Json& info) const {
 }
 
 bool App::start(std::string& error) {
-    if (!registry_->open(error)) return false;
+    if (!registry_->open(error))
+        return false;
     for (const std::string& path : config_.demo) {
         std::ifstream f(path, std::ios::binary);
         if (!f) {
@@ -296,7 +325,8 @@ bool App::start(std::string& error) {
         std::stringstream ss;
         ss << f.rdbuf();
         try {
-            auto added = registry_->add(SceneSource{"application/json", ss.str()}, scene_root_files());
+            auto added =
+                registry_->add(SceneSource{"application/json", ss.str()}, scene_root_files());
             std::fprintf(stderr, "raycastd: demo scene %s registered as %s\n", path.c_str(),
                          added.info.id.c_str());
         } catch (const std::exception& e) {

@@ -2,12 +2,12 @@
 // App: the HTTP front of raycastd. Builds the httplib::Server (routes, error and exception
 // handlers, request ids, limits) over the engine; owns the scene registry.
 
-#include <httplib.h>
-
 #include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
+
+#include <httplib.h>
 
 #include "engine/query/intersect.h"
 #include "server/api_error.h"
@@ -15,15 +15,15 @@
 #include "server/scene_cache.h"
 #include "server/scene_registry.h"
 #include "server/schema/binary_codec.h"
-#include "server/scratch.h"
 #include "server/schema/json_read.h"
 #include "server/schema/query_doc.h"
+#include "server/scratch.h"
 #include "server/uri_resolver.h"
 
 namespace raycastd::server {
 
 class App {
-public:
+  public:
     explicit App(Config config);
     ~App();
     App(const App&) = delete;
@@ -61,8 +61,8 @@ public:
 
     /// Parses a scene document of a stateless call and prepares it for queries (ApiError on
     /// any problem; paths start with `prefix`).
-    std::shared_ptr<const engine::QueryEngine> build_stateless_scene(const Json& doc,
-                                                                     const std::string& prefix) const;
+    std::shared_ptr<const engine::QueryEngine> build_stateless_scene(
+        const Json& doc, const std::string& prefix) const;
     SceneRegistry& registry() { return *registry_; }
     /// Reads files under --scene-root (confined; see uri_resolver.h).
     FileSource scene_root_files() const;
@@ -79,7 +79,7 @@ public:
     /// Adds the registry's figures (scenes, memory) to a /v1/info document.
     void add_registry_info(Json& info) const;
 
-private:
+  private:
     void install_routes();
 
     Config config_;

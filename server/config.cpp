@@ -56,7 +56,8 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             c.access_log = true;
             continue;
         }
-        if (i + 1 >= argc) return fail("missing value for " + a);
+        if (i + 1 >= argc)
+            return fail("missing value for " + a);
         const char* v = argv[++i];
         std::size_t n = 0;
         const bool numeric = to_size(v, n);
@@ -71,10 +72,12 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
         } else if (!numeric) {
             return fail(a + " needs a non-negative whole number, got \"" + v + "\"");
         } else if (a == "--port") {
-            if (n > 65535) return fail("--port must be at most 65535");
+            if (n > 65535)
+                return fail("--port must be at most 65535");
             c.port = static_cast<int>(n);
         } else if (a == "--threads") {
-            if (n > 1024) return fail("--threads must be at most 1024");
+            if (n > 1024)
+                return fail("--threads must be at most 1024");
             c.threads = static_cast<int>(n);
         } else if (a == "--max-body-mb") {
             c.limits.max_body_bytes = n << 20;

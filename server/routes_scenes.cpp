@@ -27,16 +27,20 @@ std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& r
     const std::string cl = req.get_header_value("Content-Length");
     std::size_t bytes = 0;
     const auto [end, ec] = std::from_chars(cl.data(), cl.data() + cl.size(), bytes);
-    if (ec != std::errc() || end != cl.data() + cl.size()) return nullptr;
-    if (bytes > app.config().limits.max_body_bytes) return nullptr;
+    if (ec != std::errc() || end != cl.data() + cl.size())
+        return nullptr;
+    if (bytes > app.config().limits.max_body_bytes)
+        return nullptr;
     try {
         const BinaryQuery q = parse_binary_query(req);
         if (q.options.mode != engine::Mode::closest && q.options.mode != engine::Mode::any)
             return nullptr;
         const std::size_t rays = ray_count(bytes, q.dtype, app.config().limits.max_rays);
-        if (rays < StreamedBatch::kChunkRays) return nullptr;
+        if (rays < StreamedBatch::kChunkRays)
+            return nullptr;
         auto engine = app.registry().get(req.matches[1]);
-        if (!engine) return nullptr;
+        if (!engine)
+            return nullptr;
         return std::make_shared<StreamedBatch>(std::move(engine), q.options, q.dtype, rays,
                                                scratch);
     } catch (const ApiError&) {
@@ -65,7 +69,8 @@ std::string info_body(const SceneInfo& i) {
     w.raw(",\"memory_bytes\":").integer(i.memory_bytes);
     w.raw(",\"warnings\":[");
     for (std::size_t k = 0; k < i.warnings.size(); ++k) {
-        if (k) w.ch(',');
+        if (k)
+            w.ch(',');
         w.string(i.warnings[k]);
     }
     w.raw("]}");
@@ -89,7 +94,8 @@ void install_scene_routes(App& app) {
             std::string out = "{\"scenes\":[";
             bool first = true;
             for (const SceneInfo& i : app.registry().list()) {
-                if (!first) out += ',';
+                if (!first)
+                    out += ',';
                 first = false;
                 out += info_body(i);
             }
@@ -100,7 +106,8 @@ void install_scene_routes(App& app) {
              [&app](const httplib::Request& req, httplib::Response& res) {
                  app.handle(req, res, false, [&] {
                      auto info = app.registry().info(req.matches[1]);
-                     if (!info) throw App::scene_not_found(req.matches[1]);
+                     if (!info)
+                         throw App::scene_not_found(req.matches[1]);
                      send_json(res, info_body(*info));
                  });
              });
@@ -108,7 +115,8 @@ void install_scene_routes(App& app) {
                 [&app](const httplib::Request& req, httplib::Response& res) {
                     app.handle(req, res, false, [&] {
                         const std::string id = req.matches[1];
-                        if (!app.registry().remove(id)) throw App::scene_not_found(id);
+                        if (!app.registry().remove(id))
+                            throw App::scene_not_found(id);
                         send_json(res, "{\"id\":\"" + id + "\",\"deleted\":true}");
                     });
                 });
@@ -126,7 +134,8 @@ void install_scene_routes(App& app) {
                       const std::size_t limit = app.config().limits.max_body_bytes;
                       bool over = false;
                       read([&](const char* data, std::size_t len) {
-                          if (stream) return stream->append(data, len);
+                          if (stream)
+                              return stream->append(data, len);
                           if (body.size() + len > limit) {
                               over = true;
                               return false;
@@ -134,7 +143,8 @@ void install_scene_routes(App& app) {
                           body.append(data, len);
                           return true;
                       });
-                      if (over) throw api_error("too_large", "request body is over the configured limit");
+                      if (over)
+                          throw api_error("too_large", "request body is over the configured limit");
                       if (stream) {
                           stream->finish();
                           send_streamed_answer(std::move(stream), app.extend_work_slot(), res);
@@ -146,7 +156,8 @@ void install_scene_routes(App& app) {
                                                   app.config().limits.max_rays, res);
                           return;
                       }
-                      if (body.empty()) throw api_error("bad_json", "empty body: a JSON document is required");
+                      if (body.empty())
+                          throw api_error("bad_json", "empty body: a JSON document is required");
                       const std::size_t max_rays = app.config().limits.max_rays;
                       IntersectRequest& fast = scratch->parsed;
                       fast.rays.clear();  // keeps its capacity for the next request
@@ -160,7 +171,8 @@ void install_scene_routes(App& app) {
                       try {
                           doc = Json::parse(body);
                       } catch (const Json::exception& e) {
-                          throw api_error("bad_json", std::string("body is not valid JSON: ") + e.what());
+                          throw api_error("bad_json",
+                                          std::string("body is not valid JSON: ") + e.what());
                       }
                       answer_intersect(*engine, doc, "", app.config().limits.max_rays, res);
                   });

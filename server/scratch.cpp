@@ -28,12 +28,14 @@ std::shared_ptr<Scratch> acquire_scratch() {
             pool().free.pop_back();
         }
     }
-    if (!s) s = std::make_unique<Scratch>();
+    if (!s)
+        s = std::make_unique<Scratch>();
     return std::shared_ptr<Scratch>(s.release(), [](Scratch* p) {
         std::unique_ptr<Scratch> owned(p);
         {
             std::lock_guard<std::mutex> lock(pool().mutex);
-            if (pool().free.size() < kRetained) pool().free.push_back(std::move(owned));
+            if (pool().free.size() < kRetained)
+                pool().free.push_back(std::move(owned));
         }
         // A set the pool does not keep is freed here, outside the lock.
     });

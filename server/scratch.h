@@ -26,11 +26,11 @@ struct StreamChunk {
 };
 
 struct Scratch {
-    std::string body;                ///< the request body, streamed in
-    std::vector<engine::Ray> rays;   ///< decoded binary rays
-    IntersectRequest parsed;         ///< the JSON fast path's parse
-    engine::QueryResult result;      ///< the engine's answers
-    std::string out;                 ///< an encoded binary answer
+    std::string body;               ///< the request body, streamed in
+    std::vector<engine::Ray> rays;  ///< decoded binary rays
+    IntersectRequest parsed;        ///< the JSON fast path's parse
+    engine::QueryResult result;     ///< the engine's answers
+    std::string out;                ///< an encoded binary answer
     /// A streamed batch's chunks, kept for the next one (unique_ptr: a chunk stays where it is
     /// while the list grows under running chunks).
     std::vector<std::unique_ptr<StreamChunk>> chunks;

@@ -1,9 +1,9 @@
 #include "engine/query/intersect.h"
 
-#include <tbb/parallel_for.h>
-
 #include <cassert>
 #include <cmath>
+
+#include <tbb/parallel_for.h>
 
 #include "engine/accel/embree_accel.h"
 #include "engine/accel/linear_accel.h"
@@ -25,19 +25,25 @@ constexpr std::size_t kBruteForceMaxPrimitives = 16;
 template <class F>
 void for_each_ray(std::size_t n, F&& f) {
     if (n <= kSerialBatch) {
-        for (std::size_t i = 0; i < n; ++i) f(i);
+        for (std::size_t i = 0; i < n; ++i)
+            f(i);
         return;
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kSerialBatch),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+                          for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              f(i);
                       });
 }
 
 /// The fixed blocks of for_each_block.
 constexpr std::size_t kBlock = QueryEngine::kBlockRays;
-std::size_t block_count(std::size_t n) { return n <= kBlock ? 1 : (n + kBlock - 1) / kBlock; }
-std::size_t block_index(std::size_t begin) { return begin / kBlock; }
+std::size_t block_count(std::size_t n) {
+    return n <= kBlock ? 1 : (n + kBlock - 1) / kBlock;
+}
+std::size_t block_index(std::size_t begin) {
+    return begin / kBlock;
+}
 
 /// Like for_each_ray, handing out fixed blocks of 1024 rays (whole packets of 16
 /// where possible, and few enough tasks that scheduling costs nothing per ray).
@@ -62,19 +68,26 @@ void for_each_block(std::size_t n, F&& f) {
 
 const char* to_string(Mode m) {
     switch (m) {
-        case Mode::closest: return "closest";
-        case Mode::any: return "any";
-        case Mode::all: return "all";
-        case Mode::count: return "count";
+        case Mode::closest:
+            return "closest";
+        case Mode::any:
+            return "any";
+        case Mode::all:
+            return "all";
+        case Mode::count:
+            return "count";
     }
     return "closest";
 }
 
 const char* to_string(Precision p) {
     switch (p) {
-        case Precision::fast: return "fast";
-        case Precision::refined: return "refined";
-        case Precision::exact: return "exact";
+        case Precision::fast:
+            return "fast";
+        case Precision::refined:
+            return "refined";
+        case Precision::exact:
+            return "exact";
     }
     return "exact";
 }
@@ -119,14 +132,17 @@ QueryEngine::QueryEngine(std::shared_ptr<const Scene> scene) : scene_(std::move(
 QueryEngine::~QueryEngine() = default;
 
 Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<const Scene> scene) {
-    if (!scene) return Status::error(Code::internal, "no scene");
+    if (!scene)
+        return Status::error(Code::internal, "no scene");
     Status st = validate(*scene);
-    if (!st.ok()) return st;
+    if (!st.ok())
+        return st;
     std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
     if (prims > kBruteForceMaxPrimitives) {
         auto accel = EmbreeAccel::build(*engine->scene_);
-        if (!accel.ok()) return accel.status();
+        if (!accel.ok())
+            return accel.status();
         engine->accel_ = std::move(*accel);
     }
     return std::shared_ptr<const QueryEngine>(std::move(engine));
@@ -183,7 +199,8 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
     for_each_ray(n, [&](std::size_t i) {
         // `any` never looks for the closest: it stops at the first hit found.
         hits[i] = Hit{};
-        if (linear_any(*scene_, rays[i])) hits[i].object = 0;
+        if (linear_any(*scene_, rays[i]))
+            hits[i].object = 0;
     });
 }
 
@@ -224,16 +241,20 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
                         linear_all(s, rays[i], normals, one);
                     }
                     out.counts[i] = static_cast<std::uint32_t>(one.size());
-                    if (mine) mine->insert(mine->end(), one.begin(), one.end());
+                    if (mine)
+                        mine->insert(mine->end(), one.begin(), one.end());
                 }
             });
-            if (!keep) break;
+            if (!keep)
+                break;
             out.offsets.resize(n + 1);
             out.offsets[0] = 0;
-            for (std::size_t i = 0; i < n; ++i) out.offsets[i + 1] = out.offsets[i] + out.counts[i];
+            for (std::size_t i = 0; i < n; ++i)
+                out.offsets[i + 1] = out.offsets[i] + out.counts[i];
             out.counts.clear();  // all answers with offsets (query_types.h)
             out.hits.reserve(out.offsets[n]);
-            for (auto& v : block_hits) out.hits.insert(out.hits.end(), v.begin(), v.end());
+            for (auto& v : block_hits)
+                out.hits.insert(out.hits.end(), v.begin(), v.end());
             break;
         }
     }

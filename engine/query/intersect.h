@@ -17,7 +17,7 @@ class EmbreeAccel;
 
 /// A scene made ready for queries.
 class QueryEngine {
-public:
+  public:
     /// Validates the scene and builds what its size calls for. Never throws.
     static Result<std::shared_ptr<const QueryEngine>> build(std::shared_ptr<const Scene> scene);
 
@@ -51,7 +51,7 @@ public:
 
     ~QueryEngine();
 
-private:
+  private:
     explicit QueryEngine(std::shared_ptr<const Scene> scene);
     std::shared_ptr<const Scene> scene_;
     std::unique_ptr<EmbreeAccel> accel_;

@@ -1,11 +1,11 @@
 #include "server/schema/binary_codec.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <atomic>
 #include <cmath>
 #include <cstring>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "engine/query/intersect.h"
 #include "server/api_error.h"
@@ -79,15 +79,17 @@ static_assert(kHitRecord<float> == 32 && kHitRecord<double> == 56,
 
 /// closest/any answers hits[begin, end) at out + begin × record (closest: hit records; any: u32).
 template <class F>
-void encode_range_as(const engine::Hit* hits, engine::Mode mode, std::size_t begin,
-                     std::size_t end, char* out) {
+void encode_range_as(const engine::Hit* hits, engine::Mode mode, std::size_t begin, std::size_t end,
+                     char* out) {
     if (mode == engine::Mode::closest) {
         char* p = out + begin * kHitRecord<F>;
-        for (std::size_t i = begin; i < end; ++i) p = put_hit<F>(p, hits[i]);
+        for (std::size_t i = begin; i < end; ++i)
+            p = put_hit<F>(p, hits[i]);
         return;
     }
     char* p = out + begin * sizeof(std::uint32_t);
-    for (std::size_t i = begin; i < end; ++i) p = put<std::uint32_t>(p, hits[i].valid() ? 1u : 0u);
+    for (std::size_t i = begin; i < end; ++i)
+        p = put<std::uint32_t>(p, hits[i].valid() ? 1u : 0u);
 }
 
 template <class F>
@@ -105,7 +107,8 @@ void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, s
         case engine::Mode::count: {
             out.resize(n * sizeof(std::uint32_t));
             char* p = out.data();
-            for (std::size_t i = 0; i < n; ++i) p = put<std::uint32_t>(p, r.counts[i]);
+            for (std::size_t i = 0; i < n; ++i)
+                p = put<std::uint32_t>(p, r.counts[i]);
             break;
         }
         case engine::Mode::all: {
@@ -125,8 +128,10 @@ void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, s
 }  // namespace
 
 Dtype parse_dtype(const std::string& s) {
-    if (s.empty() || s == "float32") return Dtype::float32;
-    if (s == "float64") return Dtype::float64;
+    if (s.empty() || s == "float32")
+        return Dtype::float32;
+    if (s == "float64")
+        return Dtype::float64;
     throw api_error("invalid_request", "dtype must be float32 or float64, got \"" + s + "\"");
 }
 
@@ -145,15 +150,16 @@ std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays) {
     return n;
 }
 
-std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin,
-                             std::size_t end, engine::Ray* out) {
+std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end,
+                             engine::Ray* out) {
     if (dtype == Dtype::float32) {
         decode_as<float>(body, begin, end, out);
     } else {
         decode_as<double>(body, begin, end, out);
     }
     for (std::size_t i = begin; i < end; ++i) {
-        if (!engine::validate_ray(out[i - begin], i).ok()) return i;
+        if (!engine::validate_ray(out[i - begin], i).ok())
+            return i;
     }
     return end;
 }
@@ -172,12 +178,14 @@ void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
     std::atomic<std::size_t> first_bad{n};
     for_blocks(n, [&](std::size_t b, std::size_t e) {
         const std::size_t i = decode_ray_range(body, dtype, b, e, rays.data() + b);
-        if (i == e) return;
+        if (i == e)
+            return;
         std::size_t cur = first_bad.load();
         while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
         }
     });
-    if (const std::size_t i = first_bad.load(); i < n) throw_invalid_ray(rays[i], i);
+    if (const std::size_t i = first_bad.load(); i < n)
+        throw_invalid_ray(rays[i], i);
 }
 
 std::size_t answer_record_bytes(engine::Mode mode, Dtype dtype) {

@@ -20,9 +20,13 @@ namespace raycastd::server {
 enum class Dtype { float32, float64 };
 
 /// Bytes of one request record.
-inline std::size_t ray_record_bytes(Dtype d) { return d == Dtype::float32 ? 32 : 64; }
+inline std::size_t ray_record_bytes(Dtype d) {
+    return d == Dtype::float32 ? 32 : 64;
+}
 /// Bytes of one hit record.
-inline std::size_t hit_record_bytes(Dtype d) { return d == Dtype::float32 ? 32 : 56; }
+inline std::size_t hit_record_bytes(Dtype d) {
+    return d == Dtype::float32 ? 32 : 56;
+}
 
 Dtype parse_dtype(const std::string& s);
 
@@ -32,8 +36,8 @@ std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays);
 
 /// Decodes records [begin, end) of `body` into out[0 .. end-begin) and checks them: the lowest
 /// index (in the body) of a ray that breaks the API's rules, or `end`.
-std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin,
-                             std::size_t end, engine::Ray* out);
+std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end,
+                             engine::Ray* out);
 
 /// Throws invalid_ray naming ray `index` (a ray decode_ray_range reported) and what is wrong.
 [[noreturn]] void throw_invalid_ray(const engine::Ray& ray, std::size_t index);
