@@ -91,7 +91,13 @@ struct GeomData {
 
 struct EmbreeAccel::Impl {
     const Scene* scene = nullptr;
-    RTCScene native = nullptr;         ///< float triangles + sphere user geometry (fast, refined)
+    RTCScene native = nullptr;  ///< float triangles + sphere user geometry (fast, refined)
+    /// The same geometries in a BVH without RTC_SCENE_FLAG_ROBUST, for fast's closest and any
+    /// (see build_fast); built by the first such query.
+    mutable RTCScene fast = nullptr;
+    mutable std::atomic<bool> fast_ready{false};
+    mutable std::once_flag fast_once;
+    mutable Status fast_status;
     mutable RTCScene exact = nullptr;  ///< every primitive as user geometry, double tests
     mutable std::atomic<bool> exact_ready{false};
     mutable std::once_flag exact_once;
@@ -112,8 +118,17 @@ struct EmbreeAccel::Impl {
             rtcReleaseScene(native);
         if (exact)
             rtcReleaseScene(exact);
+        if (fast)
+            rtcReleaseScene(fast);
     }
     void build_exact() const;
+    void build_fast() const;
+    /// The scene fast's closest and any trace: the non-robust one, or `native` if it could not
+    /// be built.
+    RTCScene fast_scene() const {
+        std::call_once(fast_once, [this] { build_fast(); });
+        return fast_status.ok() ? fast : native;
+    }
     RTCScene exact_scene() const {
         std::call_once(exact_once, [this] { build_exact(); });
         return exact_status.ok() ? exact : nullptr;
@@ -376,13 +391,17 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
 /// clipping to the bounds and no renormalisation (t comes back in the client's units). Used
 /// when that loses nothing the float kernel had anyway: tmin ≥ 0, an origin within a few
 /// scene sizes of the scene, and a direction of moderate length. Otherwise prepare_ray.
-bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c, RTCRay& r) {
-    const Vec3d org = ray.origin - a.center;
+/// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org.
+bool fast_ray_applies(const EmbreeAccel::Impl& a, const Ray& ray, const Vec3d& org) {
     const double d2 = dot(ray.direction, ray.direction);
     const double scale = a.float_scale;
-    if (!(ray.tmin >= 0.0) || dot(org, org) > 16.0 * scale * scale || d2 < 1e-12 || d2 > 1e12) {
+    return ray.tmin >= 0.0 && dot(org, org) <= 16.0 * scale * scale && d2 >= 1e-12 && d2 <= 1e12;
+}
+
+bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c, RTCRay& r) {
+    const Vec3d org = ray.origin - a.center;
+    if (!fast_ray_applies(a, ray, org))
         return false;
-    }
     c.ray = &ray;
     c.shift = 0.0;
     c.len = 1.0;
@@ -502,12 +521,10 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
 
     take_embree_error("");  // start clean on this thread
     impl->native = rtcNewScene(device);
-    // ROBUST: Embree's watertight traversal and triangle test. It costs 7-15% of fast's
-    // throughput (bench_intersect's "ROBUST" rows), but without it fast leaked through 6.5% of
-    // the stress suite's rays aimed at shared edges (912 of 14,000, Open3D 11; 1,218 leaks over
-    // all suites against 16 with it: docs/accuracy.md), which a user aiming rays at vertices,
-    // as the tutorial does, would meet. refined and exact would not care: they never trust a
-    // float miss.
+    // ROBUST: Embree's watertight traversal and triangle test, for refined (and fast's all and
+    // count). refined re-decides every float miss, but a float ray that leaks through an open
+    // mesh can meet a farther front face, which it would accept (Fuzz.RegressionCases, with
+    // this flag off). fast's closest and any trace a non-robust copy (build_fast).
     rtcSetSceneFlags(
         impl->native,
         static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
@@ -553,6 +570,25 @@ void EmbreeAccel::Impl::build_exact() const {
     exact_ready = true;
 }
 
+void EmbreeAccel::Impl::build_fast() const {
+    // fast is Embree's plain float traversal, what a program of one's own calling rtcIntersect
+    // gets, and its speed is the point of asking for it: without ROBUST it is 10-20% faster on
+    // random rays (bench_intersect's "ROBUST" rows). The price is leaks through shared edges and
+    // vertices (docs/accuracy.md counts them). refined keeps the ROBUST scene: with this one it
+    // took the far side of a leak through an open mesh for the answer (Fuzz.RegressionCases).
+    // The geometries are shared, not copied (an Embree geometry may be attached to several
+    // scenes); only the BVH is built again.
+    RTCDevice device = shared_device();
+    take_embree_error("");
+    RTCScene s = rtcNewScene(device);
+    for (std::uint32_t i = 0; i < scene->objects.size(); ++i)
+        rtcAttachGeometryByID(s, rtcGetGeometry(native, i), i);
+    rtcCommitScene(s);
+    fast_status = take_embree_error("building the fast BVH");
+    fast = s;  // written once, under call_once, before any query can read it
+    fast_ready = true;
+}
+
 std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
                                         bool want_normal) const {
     return closest_impl(ray, precision, want_normal, nullptr);
@@ -593,7 +629,7 @@ std::optional<Hit> EmbreeAccel::closest_impl(const Ray& ray, Precision precision
     if (!prepare_native_ray(a, ray, precision, c, rh.ray))
         return std::nullopt;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(a.native, &c.rtc, &rh);
+    rtcIntersect1(precision == Precision::fast ? a.fast_scene() : a.native, &c.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID && precision == Precision::refined &&
         can_confirm_by_scan(a, c)) {
         return closest_triangle_scan(a, ray, want_normal);
@@ -703,6 +739,72 @@ RTCIntersectContext packet_context(const Ray* rays, std::size_t m, double scene_
     return ctx;
 }
 
+/// fast's packet of m (4 ≤ m ≤ 16) rays of a triangle-only scene when every one of them takes
+/// prepare_ray_fast's float ray, i.e. almost always: t needs no shift or rescale, so the lanes
+/// are filled straight from the double rays and the answers written straight from Embree's,
+/// with no per-lane RayContext, no coherence test in double and no std::optional<Hit> in
+/// between. That per-ray work was 40% of a camera-ray batch on B (perf: closest_range,
+/// prepare_native_ray, finish_native, coherent), against 12% in raw Embree's own loop. False,
+/// with nothing written, when some ray needs prepare_ray.
+bool fast_packet(const EmbreeAccel::Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
+                 bool want_normal, Hit* out) {
+    constexpr std::size_t kLanes = 16;
+    alignas(64) RTCRayHit16 rh;
+    alignas(64) int valid[kLanes];
+    for (std::size_t k = 0; k < kLanes; ++k) {
+        // Lanes past m repeat the last ray, switched off, so that the coherence test below
+        // needs no mask.
+        const Ray& ray = rays[std::min(k, m - 1)];
+        const Vec3d org = ray.origin - a.center;
+        if (!fast_ray_applies(a, ray, org))
+            return false;
+        rh.ray.org_x[k] = static_cast<float>(org.x);
+        rh.ray.org_y[k] = static_cast<float>(org.y);
+        rh.ray.org_z[k] = static_cast<float>(org.z);
+        rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
+        rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
+        rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);
+        rh.ray.tnear[k] = to_float(ray.tmin);
+        rh.ray.tfar[k] = to_float(ray.tmax);
+        rh.ray.time[k] = 0.0f;
+        rh.ray.mask[k] = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks
+        rh.ray.id[k] = static_cast<unsigned>(k);
+        rh.ray.flags[k] = 0;
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        valid[k] = k < m ? -1 : 0;
+    }
+    // coherent()'s test on the float lanes, without early exits so that it vectorises:
+    // directions within ~10° of the first (cos² ≥ 0.97) and origins within 5% of the scene.
+    const float d0x = rh.ray.dir_x[0], d0y = rh.ray.dir_y[0], d0z = rh.ray.dir_z[0];
+    const float d0d0 = d0x * d0x + d0y * d0y + d0z * d0z;
+    const float spread2 = static_cast<float>(0.0025 * a.float_scale * a.float_scale);
+    int incoherent = 0;
+    for (std::size_t k = 1; k < kLanes; ++k) {
+        const float dx = rh.ray.dir_x[k], dy = rh.ray.dir_y[k], dz = rh.ray.dir_z[k];
+        const float c = dx * d0x + dy * d0y + dz * d0z;
+        const float ox = rh.ray.org_x[k] - rh.ray.org_x[0];
+        const float oy = rh.ray.org_y[k] - rh.ray.org_y[0];
+        const float oz = rh.ray.org_z[k] - rh.ray.org_z[0];
+        incoherent |= (c <= 0.0f) | (c * c < 0.97f * (dx * dx + dy * dy + dz * dz) * d0d0) |
+                      (ox * ox + oy * oy + oz * oz > spread2);
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags =
+        incoherent ? RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT : RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect16(valid, scene, &ctx, &rh);
+    for (std::size_t k = 0; k < m; ++k) {
+        if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+            out[k] = Hit{};  // fast takes a float miss as it is
+            continue;
+        }
+        fast_hit(a, rays[k], 0.0, 1.0, rh.ray.tfar[k], rh.hit.geomID[k], rh.hit.primID[k],
+                 rh.hit.u[k], rh.hit.v[k], Vec3d{rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]},
+                 want_normal, out[k]);
+    }
+    return true;
+}
+
 }  // namespace
 
 void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precision,
@@ -741,6 +843,11 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             i += m;
             continue;
         }
+        if (packets && m >= 4 && precision == Precision::fast &&
+            fast_packet(a, a.fast_scene(), rays + i, m, want_normal, out + i)) {
+            i += m;
+            continue;
+        }
         if (!packets || m < 4) {
             for (std::size_t k = 0; k < m; ++k) {
                 bool escalated = false;
@@ -760,7 +867,7 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         }
         RTCIntersectContext ctx = packet_context(rays + i, m, a.float_scale);
-        rtcIntersect16(valid, a.native, &ctx, &rh);
+        rtcIntersect16(valid, precision == Precision::fast ? a.fast_scene() : a.native, &ctx, &rh);
         for (std::size_t k = 0; k < m; ++k) {
             const Ray& ray = rays[i + k];
             if (!valid[k]) {
@@ -819,7 +926,7 @@ void EmbreeAccel::any_range(const Ray* rays, std::size_t n, Precision precision,
         for (std::size_t k = 0; k < kLanes; ++k)
             valid[k] = set_lane(a, rays + i, k, m, precision, lanes[k], r16);
         RTCIntersectContext ctx = packet_context(rays + i, m, a.float_scale);
-        rtcOccluded16(valid, a.native, &ctx, &r16);
+        rtcOccluded16(valid, precision == Precision::fast ? a.fast_scene() : a.native, &ctx, &r16);
         for (std::size_t k = 0; k < m; ++k) {
             bool hit = valid[k] && r16.tfar[k] == -std::numeric_limits<float>::infinity();
             if (valid[k] && !hit && precision == Precision::refined) {
@@ -843,7 +950,7 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
     RayContext c;
     rtcInitIntersectContext(&c.rtc);
     c.accel = &a;
-    RTCScene s = a.native;
+    RTCScene s = precision == Precision::fast ? a.fast_scene() : a.native;
     if (precision == Precision::exact) {
         s = a.exact_scene();
         if (!s)
@@ -935,6 +1042,8 @@ std::size_t EmbreeAccel::memory_bytes() const {
         a.triangles * (kBytesPerTriangle + 12 * sizeof(float)) + a.spheres * kBytesPerUserPrimitive;
     if (a.exact_ready)
         bytes += (a.triangles + a.spheres) * kBytesPerUserPrimitive;
+    if (a.fast_ready)
+        bytes += a.triangles * kBytesPerTriangle + a.spheres * kBytesPerUserPrimitive;
     return bytes;
 }
 

@@ -2,11 +2,12 @@
 // EmbreeAccel: Embree 3 BVHs over a scene, answering single rays at the three precisions of
 // the API. No Embree type appears here (Mitsuba's pattern: the backend stays in the .cpp).
 //
-//   fast     Embree's float traversal and intersection (RTC_SCENE_FLAG_ROBUST: Embree's
-//            watertight triangle test); spheres are user geometry running the engine's double
-//            sphere test; t and the normal from Embree's float hit. Batches of 16 go through
-//            Embree's packets.
-//   refined  the same traversal; the primitive Embree found is re-intersected in double. A float
+//   fast     Embree's float traversal and intersection in its default (non-robust) mode, on a
+//            BVH of its own built by the first fast query (the geometries are shared); spheres
+//            are user geometry running the engine's double sphere test; t and the normal from
+//            Embree's float hit. Batches of 16 go through Embree's packets. Not watertight.
+//   refined  float traversal on the ROBUST (watertight) BVH built with the accelerator; the
+//            primitive Embree found is re-intersected in double. A float
 //            miss is confirmed on the exact BVH (Embree's float test can leak at a shared
 //            vertex), and all/count run on the exact BVH, so refined never leaks. In a batch,
 //            rays that would need that confirmation anyway go to the exact path directly.

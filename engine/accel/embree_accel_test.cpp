@@ -230,6 +230,11 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
         }
     }
     rays[5].tmax = 5.0;  // a lane whose segment stops short of everything
+    // A last group of 7 (fast's lean packet fills the lanes past them), and one group with a
+    // ray from far away, which fast's lean packet leaves to the general one (prepare_ray).
+    for (int k = 0; k < 7; ++k)
+        rays.push_back(Ray{{0.5, 0.5, -6}, {0.01 * k, -0.02 * k, 1}});
+    rays[40] = Ray{{0.5, 0.5, -600}, {-0.5, -0.5, 600}};  // at the icosphere's centre
     for (Precision p : {Precision::fast, Precision::refined}) {
         std::vector<Hit> packed(rays.size());
         b.accel->closest_range(rays.data(), rays.size(), p, true, packed.data());
@@ -254,7 +259,38 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
         EXPECT_LT(edge_ties, 64);
         EXPECT_GT(hits, 1500);
         EXPECT_FALSE(packed[5].valid());
+        EXPECT_TRUE(packed[40].valid());
     }
+}
+
+// fast traces a BVH of its own, without ROBUST (docs/numerics.md), built by its first query:
+// a scene that is only ever asked refined or exact questions does not pay for it.
+TEST(EmbreeAccel, FastBuildsItsOwnBvhOnFirstUse) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::icosphere_object(3, {0, 0, 0}, 1.0));
+    s.objects.push_back(Object{});
+    s.objects.back().kind = ObjectKind::sphere;
+    s.objects.back().sphere = {{3, 0, 0}, 0.5};
+    Built b = build(s);
+    ASSERT_TRUE(b.accel);
+    const Ray at_mesh{{0, 0, -5}, {0.01, 0.02, 1}};
+    const Ray at_sphere{{3, 0, -5}, {0, 0, 1}};
+    const std::size_t before = b.accel->memory_bytes();
+    const auto refined = b.accel->closest(at_mesh, Precision::refined, true);
+    EXPECT_EQ(b.accel->memory_bytes(), before);
+    const auto fast = b.accel->closest(at_mesh, Precision::fast, true);
+    EXPECT_GT(b.accel->memory_bytes(), before);
+    ASSERT_TRUE(refined && fast);
+    EXPECT_EQ(fast->object, refined->object);
+    EXPECT_EQ(fast->primitive, refined->primitive);
+    EXPECT_NEAR(fast->t, refined->t, fast->t_err);
+    // The geometries are shared with the robust scene: the sphere's callback answers there too.
+    const auto sphere = b.accel->closest(at_sphere, Precision::fast, true);
+    ASSERT_TRUE(sphere);
+    EXPECT_EQ(sphere->object, 1u);
+    EXPECT_NEAR(sphere->t, 4.5, 1e-6);
+    EXPECT_TRUE(b.accel->any(at_sphere, Precision::fast));
 }
 
 // refined confirms a float miss by scanning the scene's triangles in double when it has at most

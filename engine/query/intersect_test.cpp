@@ -44,7 +44,8 @@ TEST(Query, ParallelBatchMatchesSerial) {
     auto engine = build(testing::tutorial_spheres());
     std::vector<Ray> rays;
     for (int i = 0; i < 5000; ++i) {
-        rays.push_back(Ray{{0, 0, 0}, {0.0005 * (i % 100) - 0.025, 0.0005 * (i / 100) - 0.0125, 1}});
+        rays.push_back(
+            Ray{{0, 0, 0}, {0.0005 * (i % 100) - 0.025, 0.0005 * (i / 100) - 0.0125, 1}});
     }
     QueryOptions opt;
     QueryResult batch = engine->intersect(rays, opt);
@@ -76,6 +77,54 @@ TEST(Query, BuildRejectsInvalidScene) {
     ASSERT_FALSE(e.ok());
     EXPECT_EQ(e.status().code, Code::invalid_scene);
     EXPECT_EQ(e.status().path, "/objects/1/radius");
+}
+
+// intersect_blocks hands out the blocks intersect() traces and answers them as intersect() does,
+// whatever the caller's format; a block whose source reports a bad ray is neither traced nor
+// handed to the sink.
+TEST(Query, IntersectBlocksAnswersAsIntersect) {
+    Scene s = testing::tutorial_spheres();
+    s.objects.push_back(testing::icosphere_object(2, {0, 0, 20}, 3.0));  // past the brute force
+    auto engine = build(std::move(s));
+    ASSERT_FALSE(engine->brute_force());
+    std::vector<Ray> rays;
+    for (int i = 0; i < 3 * 1024 + 100; ++i) {
+        rays.push_back(Ray{{0, 0, 0}, {0.002 * (i % 64) - 0.064, 0.002 * (i / 64) - 0.05, 1}});
+    }
+    for (Mode mode : {Mode::closest, Mode::any}) {
+        for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+            const QueryOptions opt{mode, p, true};
+            const QueryResult whole = engine->intersect(rays, opt);
+            std::vector<Hit> got(rays.size());
+            std::vector<int> stored(rays.size(), 0);
+            engine->intersect_blocks(
+                rays.size(), opt,
+                [&](std::size_t b, std::size_t e, Ray* out) {
+                    std::copy(rays.begin() + b, rays.begin() + e, out);
+                    return b != 2048;  // the third block "has a bad ray"
+                },
+                [&](std::size_t b, std::size_t e, const Hit* h) {
+                    for (std::size_t i = b; i < e; ++i) {
+                        got[i] = h[i - b];
+                        ++stored[i];
+                    }
+                });
+            int hits = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const bool skipped = i >= 2048 && i < 3072;
+                ASSERT_EQ(stored[i], skipped ? 0 : 1) << i;
+                if (skipped)
+                    continue;
+                ASSERT_EQ(got[i].valid(), whole.hits[i].valid()) << i;
+                EXPECT_EQ(got[i].t, whole.hits[i].t) << i;
+                EXPECT_EQ(got[i].object, whole.hits[i].object) << i;
+                EXPECT_EQ(got[i].primitive, whole.hits[i].primitive) << i;
+                EXPECT_EQ(got[i].normal, whole.hits[i].normal) << i;
+                hits += got[i].valid();
+            }
+            EXPECT_GT(hits, 1000) << to_string(mode) << " " << to_string(p);
+        }
+    }
 }
 
 }  // namespace
