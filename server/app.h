@@ -115,10 +115,10 @@ struct BinaryQuery {
     Dtype dtype = Dtype::float32;
 };
 BinaryQuery parse_binary_query(const httplib::Request& req);
-/// Encodes scratch->result (the answers to scratch->rays) and sends it; the response streams
-/// from `scratch`, which it keeps until written.
-void send_binary_answer(const BinaryQuery& q, std::shared_ptr<Scratch> scratch,
-                        httplib::Response& res);
+/// Sends the encoded answer in scratch->out, answered at `precision`; the response streams from
+/// `scratch`, which it keeps until written.
+void send_binary_answer(const BinaryQuery& q, engine::Precision precision,
+                        std::shared_ptr<Scratch> scratch, httplib::Response& res);
 class StreamedBatch;
 /// Sends the answer of a streamed batch (server/binary_stream.h) after its finish(): chunks are
 /// written as they are traced.

@@ -55,8 +55,6 @@ void StreamedBatch::prepare(std::size_t c) {
         pool[c] = std::make_unique<StreamChunk>();
     StreamChunk& k = *pool[c];
     const std::size_t n = chunk_end(c) - chunk_begin(c);
-    k.rays.resize(n);
-    k.hits.resize(n);  // intersect_span writes every answer
     k.out.resize(n * record_);
     chunk_[c] = &k;
 }
@@ -108,7 +106,7 @@ void StreamedBatch::decode(std::size_t c) {
     const std::size_t b = chunk_begin(c), e = chunk_end(c);
     // A chunk is decoded only once all of its bytes have arrived.
     const std::string_view body(body_, bytes_);
-    const std::size_t bad = decode_ray_range(body, dtype_, b, e, chunk_[c]->rays.data());
+    const std::size_t bad = first_bad_ray(body, dtype_, b, e);
     if (bad < e) {
         std::size_t cur = first_bad_.load();
         while (bad < cur && !first_bad_.compare_exchange_weak(cur, bad)) {
@@ -118,11 +116,12 @@ void StreamedBatch::decode(std::size_t c) {
 }
 
 void StreamedBatch::trace(std::size_t c) {
-    StreamChunk& k = *chunk_[c];
-    const std::size_t n = k.rays.size();
+    const std::string_view body(body_, bytes_);
     try {
-        engine_->intersect_span(k.rays.data(), n, options_, k.hits.data());
-        encode_answers(k.hits.data(), options_.mode, dtype_, 0, n, k.out.data());
+        // Decoded again, a block at a time, as it is traced: cheaper than keeping 64-byte rays
+        // and 72-byte hits for the chunk (intersect_records). Every ray was checked by decode().
+        intersect_records(*engine_, body, dtype_, options_, chunk_begin(c), chunk_end(c),
+                          chunk_[c]->out.data());
     } catch (...) {
         set_state(c, kFailed);  // the writer gives up on the answer; the client sees it cut
         return;
@@ -152,8 +151,7 @@ void StreamedBatch::finish() {
     }
     if (const std::size_t i = first_bad_.load(); i < rays_) {
         tasks_.wait();  // no task may still read the rays
-        const std::size_t c = i / kChunkRays;
-        throw_invalid_ray(chunk_[c]->rays[i - chunk_begin(c)], i);
+        throw_invalid_ray(ray_at(std::string_view(body_, bytes_), dtype_, i), i);
     }
 }
 

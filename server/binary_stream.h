@@ -14,11 +14,10 @@
 //     when no task has started it yet, or waiting for the task that has, and writes each chunk
 //     as soon as it is traced.
 // Chunks start at multiples of QueryEngine::kBlockRays, so the answers are exactly those of the
-// whole-batch path (QueryEngine::intersect_span); a bad ray anywhere still makes the whole
-// request invalid_ray naming the lowest bad index, before any answer is sent. A chunk's rays,
-// answers and encoded answer are sized when its bytes have arrived (from buffers the scratch
-// keeps between requests), so memory follows what the client has sent, not what its
-// Content-Length promises.
+// whole-batch path (both trace through intersect_records); a bad ray anywhere still makes the
+// whole request invalid_ray naming the lowest bad index, before any answer is sent. A chunk's
+// encoded answer is sized when its bytes have arrived (from buffers the scratch keeps between
+// requests), so memory follows what the client has sent, not what its Content-Length promises.
 
 #include <algorithm>
 #include <atomic>

@@ -198,5 +198,59 @@ TEST(StreamedBatch, AClientThatGoesAwayLeavesNothingRunning) {
     }
 }
 
+/// The float32 body as float64 records (the same rays: float to double is exact).
+std::string as_float64(const std::string& body32) {
+    std::string out(body32.size() * 2, '\0');
+    for (std::size_t i = 0; i < body32.size() / 4; ++i) {
+        float f;
+        std::memcpy(&f, body32.data() + 4 * i, 4);
+        const double d = f;
+        std::memcpy(out.data() + 8 * i, &d, 8);
+    }
+    return out;
+}
+
+// intersect_records (the binary path of both the whole batch and the streamed chunks) answers
+// byte for byte what decoding every ray, QueryEngine::intersect and encode_results answer, for
+// either dtype, and names the lowest bad ray.
+TEST(IntersectRecords, AnswersAsDecodeIntersectAndEncode) {
+    const std::string body32 = ray_body(5000, 11);
+    // Without the sphere, fast and refined take Embree's packets; with it, single rays.
+    for (const auto& e : {scene(false), scene(true)}) {
+        for (Dtype dtype : {Dtype::float32, Dtype::float64}) {
+            const std::string body = dtype == Dtype::float32 ? body32 : as_float64(body32);
+            for (engine::Mode mode : {engine::Mode::closest, engine::Mode::any}) {
+                for (engine::Precision p : {engine::Precision::fast, engine::Precision::refined,
+                                            engine::Precision::exact}) {
+                    const engine::QueryOptions opt{mode, p, true};
+                    std::vector<engine::Ray> rays;
+                    decode_rays(body, dtype, body.size(), rays);
+                    engine::QueryResult r;
+                    e->intersect(rays, opt, r);
+                    std::string want;
+                    encode_results(r, mode, dtype, rays.size(), want);
+                    std::string got(want.size(), '\0');
+                    EXPECT_EQ(intersect_records(*e, body, dtype, opt, 0, rays.size(), got.data()),
+                              rays.size());
+                    EXPECT_TRUE(got == want)
+                        << engine::to_string(mode) << " " << engine::to_string(p);
+                }
+            }
+        }
+    }
+    const auto e = scene(true);
+    // Two bad rays in different blocks: the lower one is named, whichever block ran first.
+    std::string bad = body32;
+    const float nan = std::nanf("");
+    std::memcpy(bad.data() + 32 * 4500 + 12, &nan, 4);  // direction x of ray 4500
+    const float zero[3] = {0, 0, 0};
+    std::memcpy(bad.data() + 32 * 1100 + 12, zero, 12);  // ray 1100: zero direction
+    std::string out(5000 * 32, '\0');
+    EXPECT_EQ(intersect_records(*e, bad, Dtype::float32, {}, 0, 5000, out.data()), 1100u);
+    EXPECT_EQ(first_bad_ray(bad, Dtype::float32, 0, 5000), 1100u);
+    EXPECT_EQ(first_bad_ray(bad, Dtype::float32, 1101, 5000), 4500u);
+    EXPECT_EQ(ray_at(bad, Dtype::float32, 1100).direction, (engine::Vec3d{0, 0, 0}));
+}
+
 }  // namespace
 }  // namespace raycastd::server

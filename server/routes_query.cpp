@@ -47,15 +47,13 @@ BinaryQuery parse_binary_query(const httplib::Request& req) {
     return q;
 }
 
-void send_binary_answer(const BinaryQuery& q, std::shared_ptr<Scratch> scratch,
-                        httplib::Response& res) {
-    Scratch& s = *scratch;
-    encode_results(s.result, q.options.mode, q.dtype, s.rays.size(), s.out);
+void send_binary_answer(const BinaryQuery& q, engine::Precision precision,
+                        std::shared_ptr<Scratch> scratch, httplib::Response& res) {
     res.status = 200;
-    res.set_header("X-Precision", engine::to_string(s.result.precision));
+    res.set_header("X-Precision", engine::to_string(precision));
     res.set_header("X-Mode", engine::to_string(q.options.mode));
     // The provider keeps the scratch (and so `out`) until the response has been written.
-    const std::size_t size = s.out.size();
+    const std::size_t size = scratch->out.size();
     res.set_content_provider(size, "application/octet-stream",
                              [scratch = std::move(scratch)](std::size_t offset, std::size_t length,
                                                             httplib::DataSink& sink) {
@@ -85,9 +83,22 @@ void answer_binary_intersect(const engine::QueryEngine& engine, const httplib::R
                              httplib::Response& res) {
     const BinaryQuery q = parse_binary_query(req);
     Scratch& s = *scratch;
-    decode_rays(s.body, q.dtype, max_rays, s.rays);
-    engine.intersect(s.rays, q.options, s.result);
-    send_binary_answer(q, std::move(scratch), res);
+    const engine::Mode mode = q.options.mode;
+    if (mode == engine::Mode::closest || mode == engine::Mode::any) {
+        // Records in, records out, a block at a time (intersect_records).
+        const std::size_t n = ray_count(s.body.size(), q.dtype, max_rays);
+        s.out.resize(n * answer_record_bytes(mode, q.dtype));
+        if (const std::size_t bad =
+                intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
+            bad < n) {
+            throw_invalid_ray(ray_at(s.body, q.dtype, bad), bad);
+        }
+    } else {
+        decode_rays(s.body, q.dtype, max_rays, s.rays);
+        engine.intersect(s.rays, q.options, s.result);
+        encode_results(s.result, mode, q.dtype, s.rays.size(), s.out);
+    }
+    send_binary_answer(q, engine.effective_precision(q.options.precision), std::move(scratch), res);
 }
 
 void install_query_routes(App& app) {

@@ -17,12 +17,10 @@
 
 namespace raycastd::server {
 
-/// One chunk of a streamed binary batch (server/binary_stream.h): its rays, answers and
-/// encoded answer.
+/// One chunk of a streamed binary batch (server/binary_stream.h): its encoded answer (its rays
+/// are decoded from the body a block at a time as they are traced).
 struct StreamChunk {
-    std::vector<engine::Ray> rays;
-    std::vector<engine::Hit> hits;
-    std::string out;
+    std::string out;  ///< the chunk's encoded answer
 };
 
 struct Scratch {

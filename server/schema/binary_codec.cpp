@@ -1,5 +1,6 @@
 #include "server/schema/binary_codec.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -162,6 +163,48 @@ std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t beg
             return i;
     }
     return end;
+}
+
+std::size_t first_bad_ray(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end) {
+    // In pieces through a small buffer that stays in L1.
+    constexpr std::size_t kPiece = 128;
+    engine::Ray rays[kPiece];
+    for (std::size_t b = begin; b < end; b += kPiece) {
+        const std::size_t e = std::min(end, b + kPiece);
+        if (const std::size_t bad = decode_ray_range(body, dtype, b, e, rays); bad < e)
+            return bad;
+    }
+    return end;
+}
+
+engine::Ray ray_at(std::string_view body, Dtype dtype, std::size_t index) {
+    engine::Ray ray;
+    decode_ray_range(body, dtype, index, index + 1, &ray);
+    return ray;
+}
+
+std::size_t intersect_records(const engine::QueryEngine& engine, std::string_view body, Dtype dtype,
+                              const engine::QueryOptions& options, std::size_t begin,
+                              std::size_t end, char* out) {
+    std::atomic<std::size_t> first_bad{end};
+    const auto source = [&](std::size_t b, std::size_t e, engine::Ray* rays) {
+        const std::size_t bad = decode_ray_range(body, dtype, begin + b, begin + e, rays);
+        if (bad < begin + e) {
+            std::size_t cur = first_bad.load();
+            while (bad < cur && !first_bad.compare_exchange_weak(cur, bad)) {
+            }
+            return false;
+        }
+        // Every block is still checked (the lowest bad index is the answer), but none is
+        // traced once the request is known to be an error.
+        return first_bad.load() == end;
+    };
+    const std::size_t record = answer_record_bytes(options.mode, dtype);
+    const auto sink = [&](std::size_t b, std::size_t e, const engine::Hit* hits) {
+        encode_answers(hits, options.mode, dtype, 0, e - b, out + b * record);
+    };
+    engine.intersect_blocks(end - begin, options, source, sink);
+    return first_bad.load();
 }
 
 void throw_invalid_ray(const engine::Ray& ray, std::size_t index) {

@@ -15,6 +15,10 @@
 
 #include "engine/query/query_types.h"
 
+namespace raycastd::engine {
+class QueryEngine;
+}
+
 namespace raycastd::server {
 
 enum class Dtype { float32, float64 };
@@ -38,6 +42,24 @@ std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays);
 /// index (in the body) of a ray that breaks the API's rules, or `end`.
 std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end,
                              engine::Ray* out);
+
+/// The lowest index in [begin, end) of a record of `body` that breaks the API's rules, or `end`
+/// (decode_ray_range's check, without keeping the rays).
+std::size_t first_bad_ray(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end);
+
+/// Ray `index` of `body`, decoded.
+engine::Ray ray_at(std::string_view body, Dtype dtype, std::size_t index);
+
+/// closest or any for records [begin, end) of `body` (begin a multiple of
+/// QueryEngine::kBlockRays), answered into `out` at (i − begin) × answer_record_bytes, through
+/// QueryEngine::intersect_blocks: records are decoded, checked, traced and encoded a block at a
+/// time, so the batch never exists as engine rays and hits (1M rays: 136 MB less memory traffic
+/// than decode_rays + intersect + encode_results). Returns the lowest index of a bad record, or
+/// `end` if all are good; once one is found, blocks not yet traced are skipped (their answers
+/// are left unwritten: the request is an error).
+std::size_t intersect_records(const engine::QueryEngine& engine, std::string_view body, Dtype dtype,
+                              const engine::QueryOptions& options, std::size_t begin,
+                              std::size_t end, char* out);
 
 /// Throws invalid_ray naming ray `index` (a ray decode_ray_range reported) and what is wrong.
 [[noreturn]] void throw_invalid_ray(const engine::Ray& ray, std::size_t index);
