@@ -66,12 +66,22 @@ bool StreamedBatch::append(const char* data, std::size_t len) {
         return false;
     }
     body.append(data, len);
-    // Whole chunks only; finish() takes the last, partial one.
     const std::size_t arrived = body.size() / ray_record_bytes(dtype_);
+    // The records these bytes complete are checked now, while they are in cache: a pass over
+    // the whole body later costs ~14 ns a ray on this machine (memory-bound; perf put it at
+    // 11% of a 1M-ray request's server CPU), against ~1 ns here.
+    if (checked_ < arrived && first_bad_.load() == rays_) {
+        const std::size_t bad =
+            first_bad_ray(std::string_view(body_, bytes_), dtype_, checked_, arrived);
+        if (bad < arrived)
+            first_bad_ = bad;
+    }
+    checked_ = arrived;
+    // Whole chunks only; finish() takes the last, partial one.
     while (started_ < chunks_ && (started_ + 1) * kChunkRays <= arrived) {
         const std::size_t c = started_++;
         prepare(c);
-        tasks_.run([this, c] { decode_and_trace(c); });
+        tasks_.run([this, c] { trace_if_needed(c); });
     }
     return true;
 }
@@ -85,41 +95,22 @@ void StreamedBatch::set_state(std::size_t c, State s) {
     {
         std::lock_guard<std::mutex> lock(mutex_);
         state_[c] = s;
-        if (s == kDecoded)
-            ++decoded_;
     }
     changed_.notify_all();
 }
 
-void StreamedBatch::decode_and_trace(std::size_t c) {
-    if (abandoned_)
-        return;
-    if (claim(c, kWaiting, kDecoding))
-        decode(c);
-    if (first_bad_.load() < rays_)
-        return;  // the request is an error: no answers needed
-    if (claim(c, kDecoded, kTracing))
+void StreamedBatch::trace_if_needed(std::size_t c) {
+    if (abandoned_ || first_bad_.load() < rays_)
+        return;  // nobody will read the answer, or the request is an error
+    if (claim(c, kWaiting, kTracing))
         trace(c);
-}
-
-void StreamedBatch::decode(std::size_t c) {
-    const std::size_t b = chunk_begin(c), e = chunk_end(c);
-    // A chunk is decoded only once all of its bytes have arrived.
-    const std::string_view body(body_, bytes_);
-    const std::size_t bad = first_bad_ray(body, dtype_, b, e);
-    if (bad < e) {
-        std::size_t cur = first_bad_.load();
-        while (bad < cur && !first_bad_.compare_exchange_weak(cur, bad)) {
-        }
-    }
-    set_state(c, kDecoded);
 }
 
 void StreamedBatch::trace(std::size_t c) {
     const std::string_view body(body_, bytes_);
     try {
-        // Decoded again, a block at a time, as it is traced: cheaper than keeping 64-byte rays
-        // and 72-byte hits for the chunk (intersect_records). Every ray was checked by decode().
+        // Decoded a block at a time as it is traced: cheaper than keeping 64-byte rays and
+        // 72-byte hits for the chunk (intersect_records). Every ray was checked in append().
         intersect_records(*engine_, body, dtype_, options_, chunk_begin(c), chunk_end(c),
                           chunk_[c]->out.data());
     } catch (...) {
@@ -136,27 +127,18 @@ void StreamedBatch::finish() {
                                                std::to_string(got) + " bytes, " +
                                                std::to_string(bytes_) + " announced");
     }
-    // Every ray must pass the checks before the answer starts (its status is 200). This thread
-    // decodes what no task has begun, the partial last chunk included (~1 ms a chunk), rather
-    // than wait for tasks queued behind chunks being traced.
+    // Every ray has been checked as it arrived (append), so the answer may start: its status is
+    // 200. The partial last chunk is prepared here and traced by the writer.
     for (; started_ < chunks_; ++started_)
         prepare(started_);
-    for (std::size_t c = 0; c < chunks_; ++c) {
-        if (claim(c, kWaiting, kDecoding))
-            decode(c);
-    }
-    {
-        std::unique_lock<std::mutex> lock(mutex_);
-        changed_.wait(lock, [this] { return decoded_ == chunks_; });
-    }
     if (const std::size_t i = first_bad_.load(); i < rays_) {
-        tasks_.wait();  // no task may still read the rays
+        tasks_.wait();  // no task may still read the body
         throw_invalid_ray(ray_at(std::string_view(body_, bytes_), dtype_, i), i);
     }
 }
 
 bool StreamedBatch::answer_chunk(std::size_t c) {
-    if (claim(c, kDecoded, kTracing))
+    if (claim(c, kWaiting, kTracing))
         trace(c);
     std::unique_lock<std::mutex> lock(mutex_);
     changed_.wait(lock, [this, c] { return state_[c].load() >= kTraced; });

@@ -7,8 +7,9 @@
 // it (~55 ms for curl); traced in between, the batch costs another 60-90 ms on both cores,
 // during which the connection is idle (docs/benchmarks.md). Here the batch is cut into chunks
 // of kChunkRays rays:
-//   - a chunk is decoded, checked and traced by a TBB task as soon as its bytes are in, while
-//     the request thread goes on reading;
+//   - records are checked by the request thread as their bytes arrive (still in cache), and a
+//     chunk is traced by a TBB task as soon as its bytes are in, while the request thread goes
+//     on reading;
 //   - once the whole body has arrived and every ray has passed the checks, the answer starts:
 //     the response writer takes the chunks in order, tracing a chunk itself (on every core)
 //     when no task has started it yet, or waiting for the task that has, and writes each chunk
@@ -53,12 +54,13 @@ class StreamedBatch {
     StreamedBatch(const StreamedBatch&) = delete;
     StreamedBatch& operator=(const StreamedBatch&) = delete;
 
-    /// Appends received bytes and starts every chunk they complete. False, and the batch is
-    /// spoilt (finish() throws), when they would run past the announced length.
+    /// Appends received bytes, checks the records they complete and starts every chunk they
+    /// complete. False, and the batch is spoilt (finish() throws), when they would run past
+    /// the announced length.
     bool append(const char* data, std::size_t len);
-    /// After the last byte: waits until every ray is decoded and checked. invalid_ray for the
-    /// lowest bad ray; invalid_request when the body ended short of, or ran past, its announced
-    /// length. Tracing may still be going on when it returns.
+    /// After the last byte: invalid_ray for the lowest bad ray; invalid_request when the body
+    /// ended short of, or ran past, its announced length. Tracing may still be going on when it
+    /// returns.
     void finish();
 
     /// Bytes of the whole answer.
@@ -86,17 +88,17 @@ class StreamedBatch {
     engine::Mode mode() const { return options_.mode; }
 
   private:
-    // A chunk's life; each step is claimed with a compare-and-swap by whoever takes it.
-    enum State : int { kWaiting, kDecoding, kDecoded, kTracing, kTraced, kFailed };
+    // A chunk's life once its bytes are in; tracing is claimed with a compare-and-swap by
+    // whoever takes it (a task, or the writer).
+    enum State : int { kWaiting, kTracing, kTraced, kFailed };
     std::size_t chunk_begin(std::size_t c) const { return c * kChunkRays; }
     std::size_t chunk_end(std::size_t c) const { return std::min(rays_, (c + 1) * kChunkRays); }
     /// Sizes chunk c's buffers (request thread, before anybody else touches the chunk).
     void prepare(std::size_t c);
     bool claim(std::size_t c, State from, State to);
-    /// A task: decodes and checks chunk c, then traces it, unless somebody else got to either
-    /// first (or a bad ray makes the answers useless).
-    void decode_and_trace(std::size_t c);
-    void decode(std::size_t c);
+    /// A task: traces chunk c unless somebody else has begun it, the answer was abandoned or a
+    /// bad ray makes the answers useless.
+    void trace_if_needed(std::size_t c);
     /// Traces chunk c and encodes its answers; kFailed if the engine threw (out of memory).
     void trace(std::size_t c);
     /// Traces chunk c if nobody has started it, else waits for whoever did. False if it failed.
@@ -114,14 +116,14 @@ class StreamedBatch {
     const char* body_ = nullptr;  ///< scratch_->body.data(), fixed by the reserve
     std::size_t chunks_;
     std::size_t started_ = 0;  ///< chunks prepared and handed to tasks (request thread only)
+    std::size_t checked_ = 0;  ///< records checked as they arrived (request thread only)
     bool overrun_ = false;     ///< append() refused bytes past the announced length
     std::atomic<std::size_t> first_bad_;
     std::atomic<bool> abandoned_{false};     ///< set by the destructor: tasks not started skip
     std::unique_ptr<StreamChunk*[]> chunk_;  ///< chunk c's buffers, once prepared
     std::unique_ptr<std::atomic<int>[]> state_;
-    std::mutex mutex_;  ///< with changed_: waits for decoded and traced chunks
+    std::mutex mutex_;  ///< with changed_: waits for traced chunks
     std::condition_variable changed_;
-    std::size_t decoded_ = 0;  ///< chunks decoded and checked (under mutex_)
     tbb::task_group tasks_;
 };
 

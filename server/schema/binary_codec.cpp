@@ -32,9 +32,10 @@ void for_blocks(std::size_t n, F&& f) {
                       [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
 }
 
-/// Records [begin, end) of `body` into out[0 .. end-begin).
+/// Records [begin, end) of `body` into out[0 .. end-begin), each checked as it is decoded: the
+/// index of the first bad one (decoded, the rest not), or `end`.
 template <class F>
-void decode_as(std::string_view body, std::size_t begin, std::size_t end, engine::Ray* out) {
+std::size_t decode_as(std::string_view body, std::size_t begin, std::size_t end, engine::Ray* out) {
     const char* p = body.data() + begin * 8 * sizeof(F);
     for (std::size_t i = begin; i < end; ++i, p += 8 * sizeof(F)) {
         F v[8];
@@ -44,7 +45,10 @@ void decode_as(std::string_view body, std::size_t begin, std::size_t end, engine
         r.direction = {double(v[3]), double(v[4]), double(v[5])};
         r.tmin = double(v[6]);
         r.tmax = double(v[7]);
+        if (!engine::is_valid_ray(r))
+            return i;
     }
+    return end;
 }
 
 template <class F>
@@ -153,16 +157,8 @@ std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays) {
 
 std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end,
                              engine::Ray* out) {
-    if (dtype == Dtype::float32) {
-        decode_as<float>(body, begin, end, out);
-    } else {
-        decode_as<double>(body, begin, end, out);
-    }
-    for (std::size_t i = begin; i < end; ++i) {
-        if (!engine::validate_ray(out[i - begin], i).ok())
-            return i;
-    }
-    return end;
+    return dtype == Dtype::float32 ? decode_as<float>(body, begin, end, out)
+                                   : decode_as<double>(body, begin, end, out);
 }
 
 std::size_t first_bad_ray(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end) {

@@ -39,7 +39,8 @@ Dtype parse_dtype(const std::string& s);
 std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays);
 
 /// Decodes records [begin, end) of `body` into out[0 .. end-begin) and checks them: the lowest
-/// index (in the body) of a ray that breaks the API's rules, or `end`.
+/// index (in the body) of a ray that breaks the API's rules, or `end`. Records after a bad one
+/// are not decoded.
 std::size_t decode_ray_range(std::string_view body, Dtype dtype, std::size_t begin, std::size_t end,
                              engine::Ray* out);
 
