@@ -12,8 +12,9 @@
 //     on reading;
 //   - once the whole body has arrived and every ray has passed the checks, the answer starts:
 //     the response writer takes the chunks in order, tracing a chunk itself (on every core)
-//     when no task has started it yet, or waiting for the task that has, and writes each chunk
-//     as soon as it is traced.
+//     when no task has started it yet; while a task traces the chunk it is to write next, it
+//     traces later chunks nobody has begun (TBB has one worker thread on two cores, so waiting
+//     would leave a core idle), and it writes each chunk as soon as it is traced.
 // Chunks start at multiples of QueryEngine::kBlockRays, so the answers are exactly those of the
 // whole-batch path (both trace through intersect_records); a bad ray anywhere still makes the
 // whole request invalid_ray naming the lowest bad index, before any answer is sent. A chunk's
