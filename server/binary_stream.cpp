@@ -111,8 +111,11 @@ void StreamedBatch::trace(std::size_t c) {
     try {
         // Decoded a block at a time as it is traced: cheaper than keeping 64-byte rays and
         // 72-byte hits for the chunk (intersect_records). Every ray was checked in append().
-        intersect_records(*engine_, body, dtype_, options_, chunk_begin(c), chunk_end(c),
-                          chunk_[c]->out.data());
+        if (intersect_records(*engine_, body, dtype_, options_, chunk_begin(c), chunk_end(c),
+                              chunk_[c]->out.data()) < chunk_end(c)) {
+            set_state(c, kFailed);  // cannot happen (append() checked them): never send it
+            return;
+        }
     } catch (...) {
         set_state(c, kFailed);  // the writer gives up on the answer; the client sees it cut
         return;

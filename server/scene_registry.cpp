@@ -309,6 +309,7 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::get(const std::string&
         if (it == entries_.end()) return nullptr;
         if (it->second.engine) {
             touch(it->second);
+            refresh_bytes(it->second);
             return it->second.engine;
         }
     }
@@ -328,7 +329,18 @@ void SceneRegistry::make_resident(Entry& e, std::shared_ptr<const engine::QueryE
     e.engine = std::move(engine);
     lru_.push_front(e.info.id);
     e.lru = lru_.begin();
+    e.info.memory_bytes = e.engine->memory_bytes();  // a rebuilt engine has no lazy BVHs yet
     resident_bytes_ += e.info.memory_bytes;
+}
+
+void SceneRegistry::refresh_bytes(Entry& e) {
+    // The first exact or fast query builds another BVH (engine/accel/embree_accel.h): count it
+    // against the budget from the next request on, and show it in the scene's info.
+    const std::size_t now = e.engine->memory_bytes();
+    if (now == e.info.memory_bytes) return;
+    resident_bytes_ = resident_bytes_ - e.info.memory_bytes + now;
+    e.info.memory_bytes = now;
+    evict_over_budget(e.info.id);
 }
 
 void SceneRegistry::touch(Entry& e) {

@@ -87,6 +87,8 @@ private:
     std::shared_ptr<const engine::QueryEngine> rebuild(const std::string& id);
     void make_resident(Entry& e, std::shared_ptr<const engine::QueryEngine> engine);
     void touch(Entry& e);
+    /// Takes e's memory_bytes anew (it grows when a query builds a lazy BVH).
+    void refresh_bytes(Entry& e);
     void evict_over_budget(const std::string& keep);
     bool persist(const std::string& id, const SceneSource& source,
                  const std::map<std::string, std::string>& files, const Entry& e,

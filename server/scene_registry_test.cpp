@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <thread>
 
+#include "engine/query/intersect.h"
 #include "server/app.h"
 
 namespace raycastd::server {
@@ -132,6 +133,32 @@ TEST(SceneRegistry, EvictsLeastRecentlyUsedAndReloads) {
     EXPECT_EQ(engine->scene().objects.size(), 2u);
     EXPECT_EQ(f.registry.resident(), 1u);
     EXPECT_TRUE(f.registry.get(b));
+}
+
+// The first fast (or exact) query builds another BVH: the registry counts it from the next
+// request on, in the resident total and in the scene's info.
+TEST(SceneRegistry, CountsTheBvhsQueriesBuildLater) {
+    Fixture f("");
+    std::string spheres = R"({"objects":[)";
+    for (int i = 0; i < 40; ++i) {  // past the brute-force threshold: an Embree BVH
+        spheres += std::string(i ? "," : "") + R"({"type":"sphere","center":[)" +
+                   std::to_string(3 * i) + R"(,0,10],"radius":1})";
+    }
+    spheres += "]}";
+    const auto added = f.registry.add({"application/json", spheres}, no_files());
+    const std::size_t before = f.registry.resident_bytes();
+    EXPECT_EQ(added.info.memory_bytes, before);
+    auto engine = f.registry.get(added.info.id);
+    ASSERT_TRUE(engine);
+    ASSERT_FALSE(engine->brute_force());
+    EXPECT_EQ(f.registry.resident_bytes(), before);
+    engine->intersect({engine::Ray{{0, 0, 0}, {0, 0, 1}}},
+                      engine::QueryOptions{engine::Mode::closest, engine::Precision::fast});
+    ASSERT_TRUE(f.registry.get(added.info.id));
+    const std::size_t after = f.registry.resident_bytes();
+    EXPECT_GT(after, before);
+    EXPECT_EQ(after, engine->memory_bytes());
+    EXPECT_EQ(f.registry.info(added.info.id)->memory_bytes, after);
 }
 
 TEST(SceneRegistry, ConcurrentAddsAndGets) {

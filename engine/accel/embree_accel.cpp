@@ -566,8 +566,8 @@ void EmbreeAccel::Impl::build_exact() const {
     }
     rtcCommitScene(s);
     exact_status = take_embree_error("building the exact BVH");
-    exact = s;  // written once, under call_once, before any query can read it
-    exact_ready = true;
+    exact = s;                        // written once, under call_once, before any query can read it
+    exact_ready = exact_status.ok();  // counted in memory_bytes once it exists
 }
 
 void EmbreeAccel::Impl::build_fast() const {
@@ -586,7 +586,7 @@ void EmbreeAccel::Impl::build_fast() const {
     rtcCommitScene(s);
     fast_status = take_embree_error("building the fast BVH");
     fast = s;  // written once, under call_once, before any query can read it
-    fast_ready = true;
+    fast_ready = fast_status.ok();
 }
 
 std::optional<Hit> EmbreeAccel::closest(const Ray& ray, Precision precision,
@@ -777,7 +777,7 @@ bool fast_packet(const EmbreeAccel::Impl& a, RTCScene scene, const Ray* rays, st
     // directions within ~10° of the first (cos² ≥ 0.97) and origins within 5% of the scene.
     const float d0x = rh.ray.dir_x[0], d0y = rh.ray.dir_y[0], d0z = rh.ray.dir_z[0];
     const float d0d0 = d0x * d0x + d0y * d0y + d0z * d0z;
-    const float spread2 = static_cast<float>(0.0025 * a.float_scale * a.float_scale);
+    const float spread2 = to_float(0.0025 * a.float_scale * a.float_scale);  // may exceed FLT_MAX
     int incoherent = 0;
     for (std::size_t k = 1; k < kLanes; ++k) {
         const float dx = rh.ray.dir_x[k], dy = rh.ray.dir_y[k], dz = rh.ray.dir_z[k];

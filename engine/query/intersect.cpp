@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "engine/accel/embree_accel.h"
 #include "engine/accel/linear_accel.h"
@@ -136,6 +137,7 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     if (!st.ok())
         return st;
     std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
+    engine->scene_bytes_ = engine->scene_memory_bytes();
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
     if (prims > kBruteForceMaxPrimitives) {
         auto accel = EmbreeAccel::build(*engine->scene_);
@@ -151,7 +153,13 @@ Precision QueryEngine::effective_precision(Precision asked) const {
 }
 
 std::size_t QueryEngine::memory_bytes() const {
-    std::size_t bytes = sizeof(Scene) + (accel_ ? accel_->memory_bytes() : 0);
+    // The scene's part is fixed once built; the accelerator's grows when a query builds the
+    // exact or the fast BVH.
+    return scene_bytes_ + (accel_ ? accel_->memory_bytes() : 0);
+}
+
+std::size_t QueryEngine::scene_memory_bytes() const {
+    std::size_t bytes = sizeof(Scene);
     for (const Object& o : scene_->objects) {
         bytes += sizeof(Object) + o.name.size();
         if (o.mesh) {
@@ -205,17 +213,23 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
 void QueryEngine::intersect_blocks(std::size_t n, const QueryOptions& opt,
                                    const BlockSource& source, const BlockSink& sink) const {
     for_each_block(n, [&](std::size_t b, std::size_t e) {
-        // One block of each per worker thread, reused: 64 + 72 KB, which stay in L2.
-        thread_local std::vector<Ray> rays;
-        thread_local std::vector<Hit> hits;
-        rays.resize(e - b);
-        hits.resize(e - b);
-        if (!source(b, e, rays.data()))
-            return;
-        // A block that starts on a multiple of kBlockRays: intersect_span answers it as part
-        // of the whole batch.
-        intersect_span(rays.data(), e - b, opt, hits.data());
-        sink(b, e, hits.data());
+        // Isolated: a brute-force scene traces a block with a parallel loop of its own, and a
+        // thread waiting in it must not take up another block of this or any other batch, which
+        // would reuse the thread's buffers under the first block's feet (found in review: wrong
+        // answers with 8 or more threads; BatchesOnManyThreadsKeepTheirBlocksApart).
+        tbb::this_task_arena::isolate([&] {
+            // One block of each per thread, reused: 64 + 72 KB, which stay in L2.
+            thread_local std::vector<Ray> rays;
+            thread_local std::vector<Hit> hits;
+            rays.resize(e - b);
+            hits.resize(e - b);
+            if (!source(b, e, rays.data()))
+                return;
+            // A block that starts on a multiple of kBlockRays: intersect_span answers it as
+            // part of the whole batch.
+            intersect_span(rays.data(), e - b, opt, hits.data());
+            sink(b, e, hits.data());
+        });
     });
 }
 

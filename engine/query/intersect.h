@@ -59,7 +59,8 @@ class QueryEngine {
     /// The path a request asking for `asked` is answered by (tiny scenes always take exact).
     Precision effective_precision(Precision asked) const;
 
-    /// Estimated bytes held by the scene and its acceleration structure.
+    /// Estimated bytes held by the scene and its acceleration structures, including the BVHs
+    /// built since by the first exact or fast query (cheap: no walk over the scene).
     std::size_t memory_bytes() const;
 
     /// True when the scene is small enough that brute force beats a BVH (no BVH is built).
@@ -69,7 +70,9 @@ class QueryEngine {
 
   private:
     explicit QueryEngine(std::shared_ptr<const Scene> scene);
+    std::size_t scene_memory_bytes() const;
     std::shared_ptr<const Scene> scene_;
+    std::size_t scene_bytes_ = 0;  ///< scene_memory_bytes(), once
     std::unique_ptr<EmbreeAccel> accel_;
 };
 
