@@ -299,9 +299,11 @@ RTCGeometry make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
         return g;  // the error callback has recorded why; commit reports it
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         const Vec3d q = mesh.positions[i] - center;
-        v[3 * i + 0] = static_cast<float>(q.x);
-        v[3 * i + 1] = static_cast<float>(q.y);
-        v[3 * i + 2] = static_cast<float>(q.z);
+        // to_float: a scene may be finite in double and still span more than float can hold
+        // (±inf then, which Embree ignores; refined and exact decide such triangles in double).
+        v[3 * i + 0] = to_float(q.x);
+        v[3 * i + 1] = to_float(q.y);
+        v[3 * i + 2] = to_float(q.z);
     }
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
         idx[3 * i + 0] = mesh.triangles[i][0];
@@ -372,9 +374,9 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
                        2.0 * kDoubleUnitRoundoff * length(org);
     }
     const Vec3d dir = ray.direction / c.len;
-    r.org_x = static_cast<float>(org.x);
-    r.org_y = static_cast<float>(org.y);
-    r.org_z = static_cast<float>(org.z);
+    r.org_x = to_float(org.x);  // inside the bounds, which may exceed float's range
+    r.org_y = to_float(org.y);
+    r.org_z = to_float(org.z);
     r.dir_x = static_cast<float>(dir.x);
     r.dir_y = static_cast<float>(dir.y);
     r.dir_z = static_cast<float>(dir.z);
@@ -406,9 +408,9 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
     c.shift = 0.0;
     c.len = 1.0;
     c.margin = 0.0;
-    r.org_x = static_cast<float>(org.x);
-    r.org_y = static_cast<float>(org.y);
-    r.org_z = static_cast<float>(org.z);
+    r.org_x = to_float(org.x);  // within a few scene sizes, which may exceed float's range
+    r.org_y = to_float(org.y);
+    r.org_z = to_float(org.z);
     r.dir_x = static_cast<float>(ray.direction.x);
     r.dir_y = static_cast<float>(ray.direction.y);
     r.dir_z = static_cast<float>(ray.direction.z);
@@ -758,9 +760,9 @@ bool fast_packet(const EmbreeAccel::Impl& a, RTCScene scene, const Ray* rays, st
         const Vec3d org = ray.origin - a.center;
         if (!fast_ray_applies(a, ray, org))
             return false;
-        rh.ray.org_x[k] = static_cast<float>(org.x);
-        rh.ray.org_y[k] = static_cast<float>(org.y);
-        rh.ray.org_z[k] = static_cast<float>(org.z);
+        rh.ray.org_x[k] = to_float(org.x);  // as prepare_ray_fast
+        rh.ray.org_y[k] = to_float(org.y);
+        rh.ray.org_z[k] = to_float(org.z);
         rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
         rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
         rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);

@@ -23,6 +23,18 @@ constexpr std::size_t kSerialBatch = 64;
 /// bench/bench_intersect (see docs/benchmarks.md).
 constexpr std::size_t kBruteForceMaxPrimitives = 16;
 
+/// Embree works in float, relative to the scene's centre: a scene wider than this (finite in
+/// double, but its float vertices, boxes and ray origins would overflow to infinity, which
+/// Embree drops) is answered by brute force in double whatever its size. 1e36 leaves room for
+/// the boxes' padding and the fast path's origins (up to 8 diagonals from the centre) below
+/// float's 3.4e38.
+constexpr double kMaxFloatSceneDiagonal = 1e36;
+
+bool fits_float(const Scene& s) {
+    const Bounds3 b = s.bounds();
+    return b.empty() || length(b.diagonal()) <= kMaxFloatSceneDiagonal;
+}
+
 template <class F>
 void for_each_ray(std::size_t n, F&& f) {
     if (n <= kSerialBatch) {
@@ -139,7 +151,7 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
     engine->scene_bytes_ = engine->scene_memory_bytes();
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
-    if (prims > kBruteForceMaxPrimitives) {
+    if (prims > kBruteForceMaxPrimitives && fits_float(*engine->scene_)) {
         auto accel = EmbreeAccel::build(*engine->scene_);
         if (!accel.ok())
             return accel.status();
