@@ -408,9 +408,11 @@ bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c,
     c.shift = 0.0;
     c.len = 1.0;
     c.margin = 0.0;
-    r.org_x = to_float(org.x);  // within a few scene sizes, which may exceed float's range
-    r.org_y = to_float(org.y);
-    r.org_z = to_float(org.z);
+    // Within 4 scene diagonals of the centre: in float's range, since wider scenes get no
+    // Embree BVH (QueryEngine::build).
+    r.org_x = static_cast<float>(org.x);
+    r.org_y = static_cast<float>(org.y);
+    r.org_z = static_cast<float>(org.z);
     r.dir_x = static_cast<float>(ray.direction.x);
     r.dir_y = static_cast<float>(ray.direction.y);
     r.dir_z = static_cast<float>(ray.direction.z);
@@ -760,9 +762,9 @@ bool fast_packet(const EmbreeAccel::Impl& a, RTCScene scene, const Ray* rays, st
         const Vec3d org = ray.origin - a.center;
         if (!fast_ray_applies(a, ray, org))
             return false;
-        rh.ray.org_x[k] = to_float(org.x);  // as prepare_ray_fast
-        rh.ray.org_y[k] = to_float(org.y);
-        rh.ray.org_z[k] = to_float(org.z);
+        rh.ray.org_x[k] = static_cast<float>(org.x);  // in range: see prepare_ray_fast
+        rh.ray.org_y[k] = static_cast<float>(org.y);
+        rh.ray.org_z[k] = static_cast<float>(org.z);
         rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
         rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
         rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);
