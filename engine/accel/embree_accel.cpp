@@ -129,6 +129,8 @@ struct EmbreeAccel::Impl {
         std::call_once(fast_once, [this] { build_fast(); });
         return fast_status.ok() ? fast : native;
     }
+    /// The float BVH a fast or refined query traverses: fast's own, or the ROBUST one.
+    RTCScene float_scene(Precision p) const { return p == Precision::fast ? fast_scene() : native; }
     RTCScene exact_scene() const {
         std::call_once(exact_once, [this] { build_exact(); });
         return exact_status.ok() ? exact : nullptr;
@@ -389,10 +391,6 @@ bool prepare_ray(const EmbreeAccel::Impl& a, const Ray& ray, bool back_off, RayC
     return true;
 }
 
-/// The fast path's float ray: the double ray as it is, relative to the scene centre, with no
-/// clipping to the bounds and no renormalisation (t comes back in the client's units). Used
-/// when that loses nothing the float kernel had anyway: tmin ≥ 0, an origin within a few
-/// scene sizes of the scene, and a direction of moderate length. Otherwise prepare_ray.
 /// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org.
 bool fast_ray_applies(const EmbreeAccel::Impl& a, const Ray& ray, const Vec3d& org) {
     const double d2 = dot(ray.direction, ray.direction);
@@ -400,6 +398,10 @@ bool fast_ray_applies(const EmbreeAccel::Impl& a, const Ray& ray, const Vec3d& o
     return ray.tmin >= 0.0 && dot(org, org) <= 16.0 * scale * scale && d2 >= 1e-12 && d2 <= 1e12;
 }
 
+/// The fast path's float ray: the double ray as it is, relative to the scene centre, with no
+/// clipping to the bounds and no renormalisation (t comes back in the client's units). Used
+/// when that loses nothing the float kernel had anyway: tmin ≥ 0, an origin within a few
+/// scene sizes of the scene, and a direction of moderate length. Otherwise prepare_ray.
 bool prepare_ray_fast(const EmbreeAccel::Impl& a, const Ray& ray, RayContext& c, RTCRay& r) {
     const Vec3d org = ray.origin - a.center;
     if (!fast_ray_applies(a, ray, org))
@@ -633,7 +635,7 @@ std::optional<Hit> EmbreeAccel::closest_impl(const Ray& ray, Precision precision
     if (!prepare_native_ray(a, ray, precision, c, rh.ray))
         return std::nullopt;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(precision == Precision::fast ? a.fast_scene() : a.native, &c.rtc, &rh);
+    rtcIntersect1(a.float_scene(precision), &c.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID && precision == Precision::refined &&
         can_confirm_by_scan(a, c)) {
         return closest_triangle_scan(a, ray, want_normal);
@@ -871,7 +873,7 @@ void EmbreeAccel::closest_range(const Ray* rays, std::size_t n, Precision precis
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         }
         RTCIntersectContext ctx = packet_context(rays + i, m, a.float_scale);
-        rtcIntersect16(valid, precision == Precision::fast ? a.fast_scene() : a.native, &ctx, &rh);
+        rtcIntersect16(valid, a.float_scene(precision), &ctx, &rh);
         for (std::size_t k = 0; k < m; ++k) {
             const Ray& ray = rays[i + k];
             if (!valid[k]) {
@@ -930,7 +932,7 @@ void EmbreeAccel::any_range(const Ray* rays, std::size_t n, Precision precision,
         for (std::size_t k = 0; k < kLanes; ++k)
             valid[k] = set_lane(a, rays + i, k, m, precision, lanes[k], r16);
         RTCIntersectContext ctx = packet_context(rays + i, m, a.float_scale);
-        rtcOccluded16(valid, precision == Precision::fast ? a.fast_scene() : a.native, &ctx, &r16);
+        rtcOccluded16(valid, a.float_scene(precision), &ctx, &r16);
         for (std::size_t k = 0; k < m; ++k) {
             bool hit = valid[k] && r16.tfar[k] == -std::numeric_limits<float>::infinity();
             if (valid[k] && !hit && precision == Precision::refined) {
@@ -954,7 +956,7 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
     RayContext c;
     rtcInitIntersectContext(&c.rtc);
     c.accel = &a;
-    RTCScene s = precision == Precision::fast ? a.fast_scene() : a.native;
+    RTCScene s = a.float_scene(precision);
     if (precision == Precision::exact) {
         s = a.exact_scene();
         if (!s)

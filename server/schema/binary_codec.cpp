@@ -32,6 +32,14 @@ void for_blocks(std::size_t n, F&& f) {
                       [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
 }
 
+/// Lowers `first_bad` to `i` if `i` is lower: blocks checked in parallel report the lowest bad
+/// index, as a serial scan would.
+void lower_to(std::atomic<std::size_t>& first_bad, std::size_t i) {
+    std::size_t cur = first_bad.load();
+    while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
+    }
+}
+
 /// Records [begin, end) of `body` into out[0 .. end-begin), each checked as it is decoded: the
 /// index of the first bad one (decoded, the rest not), or `end`.
 template <class F>
@@ -186,9 +194,7 @@ std::size_t intersect_records(const engine::QueryEngine& engine, std::string_vie
     const auto source = [&](std::size_t b, std::size_t e, engine::Ray* rays) {
         const std::size_t bad = decode_ray_range(body, dtype, begin + b, begin + e, rays);
         if (bad < begin + e) {
-            std::size_t cur = first_bad.load();
-            while (bad < cur && !first_bad.compare_exchange_weak(cur, bad)) {
-            }
+            lower_to(first_bad, bad);
             return false;
         }
         // Every block is still checked (the lowest bad index is the answer), but none is
@@ -217,11 +223,8 @@ void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,
     std::atomic<std::size_t> first_bad{n};
     for_blocks(n, [&](std::size_t b, std::size_t e) {
         const std::size_t i = decode_ray_range(body, dtype, b, e, rays.data() + b);
-        if (i == e)
-            return;
-        std::size_t cur = first_bad.load();
-        while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
-        }
+        if (i < e)
+            lower_to(first_bad, i);
     });
     if (const std::size_t i = first_bad.load(); i < n)
         throw_invalid_ray(rays[i], i);
