@@ -1,13 +1,13 @@
 #include "server/scene_registry.h"
 
-#include <fcntl.h>
-#include <openssl/evp.h>
-#include <unistd.h>
-
 #include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <fcntl.h>
+#include <openssl/evp.h>
+#include <unistd.h>
 
 #include "server/api_error.h"
 #include "server/scene_cache.h"
@@ -22,7 +22,8 @@ namespace {
 /// Writes the whole buffer and fsyncs it: the data is on disk before the scene is acknowledged.
 bool write_synced(const fs::path& path, std::string_view bytes) {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) return false;
+    if (fd < 0)
+        return false;
     std::size_t done = 0;
     while (done < bytes.size()) {
         const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
@@ -38,7 +39,8 @@ bool write_synced(const fs::path& path, std::string_view bytes) {
 
 bool fsync_dir(const fs::path& dir) {
     const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd < 0) return false;
+    if (fd < 0)
+        return false;
     const bool ok = ::fsync(fd) == 0;
     ::close(fd);
     return ok;
@@ -46,7 +48,8 @@ bool fsync_dir(const fs::path& dir) {
 
 std::optional<std::string> read_all(const fs::path& path) {
     std::ifstream f(path, std::ios::binary);
-    if (!f) return std::nullopt;
+    if (!f)
+        return std::nullopt;
     std::stringstream ss;
     ss << f.rdbuf();
     return ss.str();
@@ -55,7 +58,8 @@ std::optional<std::string> read_all(const fs::path& path) {
 /// The request in canonical form: a document re-serialised (sorted keys, one spelling per
 /// number), a model file as its bytes. Two requests that mean the same scene hash the same.
 std::string canonical_request(const SceneSource& s) {
-    if (s.content_type != "application/json") return s.body;
+    if (s.content_type != "application/json")
+        return s.body;
     try {
         return canonical_json(Json::parse(s.body));
     } catch (const Json::exception&) {
@@ -64,14 +68,18 @@ std::string canonical_request(const SceneSource& s) {
 }
 
 Json info_json(const SceneInfo& i) {
-    Json j = {{"id", i.id},           {"objects", i.objects}, {"triangles", i.triangles},
-              {"spheres", i.spheres}, {"build_ms", i.build_ms},
+    Json j = {{"id", i.id},
+              {"objects", i.objects},
+              {"triangles", i.triangles},
+              {"spheres", i.spheres},
+              {"build_ms", i.build_ms},
               {"features",
                {{"shadows", i.features.shadows},
                 {"reflection", i.features.reflection},
                 {"refraction", i.features.refraction},
                 {"textures", i.features.textures}}},
-              {"warnings", i.warnings}, {"memory_bytes", i.memory_bytes}};
+              {"warnings", i.warnings},
+              {"memory_bytes", i.memory_bytes}};
     if (i.bounds.empty()) {
         j["bounds"] = nullptr;
     } else {
@@ -134,7 +142,8 @@ SceneRegistry::SceneRegistry(std::string data_dir, std::size_t memory_budget, Bu
     : data_dir_(std::move(data_dir)), budget_(memory_budget), builder_(std::move(builder)) {}
 
 bool SceneRegistry::open(std::string& error) {
-    if (data_dir_.empty()) return true;
+    if (data_dir_.empty())
+        return true;
     std::error_code ec;
     fs::create_directories(fs::path(data_dir_) / "scenes", ec);
     fs::create_directories(fs::path(data_dir_) / "tmp", ec);
@@ -149,7 +158,8 @@ bool SceneRegistry::open(std::string& error) {
     std::lock_guard<std::mutex> lock(mu_);
     for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "scenes", ec)) {
         auto meta = read_all(d.path() / "meta.json");
-        if (!meta) continue;
+        if (!meta)
+            continue;
         try {
             const Json m = Json::parse(*meta);
             Entry e;
@@ -190,17 +200,20 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
                 break;
             }
         }
-        if (!same) continue;
+        if (!same)
+            continue;
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
-        if (it != entries_.end()) return {it->second.info, false};
+        if (it != entries_.end())
+            return {it->second.info, false};
     }
 
     // Build, recording every file read; the id covers the request and those files.
     std::map<std::string, std::string> read_files;
     FileSource recording = [&](const std::string& path) -> engine::Result<std::string> {
         auto bytes = root_files(path);
-        if (bytes.ok()) read_files[path] = *bytes;
+        if (bytes.ok())
+            read_files[path] = *bytes;
         return bytes;
     };
     const auto t0 = std::chrono::steady_clock::now();
@@ -223,7 +236,8 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
     {
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
-        if (it != entries_.end()) return {it->second.info, false};
+        if (it != entries_.end())
+            return {it->second.info, false};
     }
     std::string error;
     if (!data_dir_.empty() && !persist(id, source, read_files, e, error)) {
@@ -231,7 +245,8 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
     }
     std::lock_guard<std::mutex> lock(mu_);
     auto [it, inserted] = entries_.emplace(id, std::move(e));
-    if (!inserted) return {it->second.info, false};  // a concurrent post of the same content
+    if (!inserted)
+        return {it->second.info, false};  // a concurrent post of the same content
     by_request_key_.emplace(request_key, id);
     make_resident(it->second, std::move(engine));
     evict_over_budget(id);
@@ -245,7 +260,8 @@ bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
     const fs::path scenes = fs::path(data_dir_) / "scenes";
     const fs::path final_dir = scenes / id;
     std::error_code ec;
-    if (fs::exists(final_dir / "meta.json", ec)) return true;  // saved by an earlier run
+    if (fs::exists(final_dir / "meta.json", ec))
+        return true;  // saved by an earlier run
     const fs::path tmp = fs::path(data_dir_) / "tmp" /
                          (id + "." + std::to_string(::getpid()) + "." + std::to_string(counter++));
     fs::create_directories(tmp, ec);
@@ -285,7 +301,8 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::str
     const fs::path dir = fs::path(data_dir_) / "scenes" / id;
     auto meta_text = read_all(dir / "meta.json");
     auto body = read_all(dir / "body");
-    if (!meta_text || !body) throw api_error("internal", "saved copy of " + id + " is missing");
+    if (!meta_text || !body)
+        throw api_error("internal", "saved copy of " + id + " is missing");
     const Json meta = Json::parse(*meta_text);
     const auto names = meta.at("files").get<std::map<std::string, std::string>>();
     // Replay exactly the bytes the scene was built from, not today's files under the root.
@@ -296,7 +313,8 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::str
                                          "\"" + path + "\" was not part of the saved scene");
         }
         auto bytes = read_all(dir / it->second);
-        if (!bytes) return engine::Status::error(engine::Code::internal, "saved file missing");
+        if (!bytes)
+            return engine::Status::error(engine::Code::internal, "saved file missing");
         return *bytes;
     };
     return builder_(SceneSource{meta.at("content_type").get<std::string>(), *body}, saved);
@@ -306,7 +324,8 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::get(const std::string&
     {
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
-        if (it == entries_.end()) return nullptr;
+        if (it == entries_.end())
+            return nullptr;
         if (it->second.engine) {
             touch(it->second);
             refresh_bytes(it->second);
@@ -318,8 +337,10 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::get(const std::string&
     auto engine = rebuild(id);
     std::lock_guard<std::mutex> lock(mu_);
     auto it = entries_.find(id);
-    if (it == entries_.end()) return engine;  // deleted meanwhile: serve this request only
-    if (!it->second.engine) make_resident(it->second, engine);
+    if (it == entries_.end())
+        return engine;  // deleted meanwhile: serve this request only
+    if (!it->second.engine)
+        make_resident(it->second, engine);
     touch(it->second);
     evict_over_budget(id);
     return it->second.engine;
@@ -337,21 +358,25 @@ void SceneRegistry::refresh_bytes(Entry& e) {
     // The first exact or fast query builds another BVH (engine/accel/embree_accel.h): count it
     // against the budget from the next request on, and show it in the scene's info.
     const std::size_t now = e.engine->memory_bytes();
-    if (now == e.info.memory_bytes) return;
+    if (now == e.info.memory_bytes)
+        return;
     resident_bytes_ = resident_bytes_ - e.info.memory_bytes + now;
     e.info.memory_bytes = now;
     evict_over_budget(e.info.id);
 }
 
 void SceneRegistry::touch(Entry& e) {
-    if (e.lru != lru_.end()) lru_.splice(lru_.begin(), lru_, e.lru);
+    if (e.lru != lru_.end())
+        lru_.splice(lru_.begin(), lru_, e.lru);
 }
 
 void SceneRegistry::evict_over_budget(const std::string& keep) {
-    if (data_dir_.empty()) return;  // nothing to reload from
+    if (data_dir_.empty())
+        return;  // nothing to reload from
     while (resident_bytes_ > budget_ && !lru_.empty()) {
         const std::string victim = lru_.back();
-        if (victim == keep) break;
+        if (victim == keep)
+            break;
         Entry& e = entries_.at(victim);
         lru_.pop_back();
         e.lru = lru_.end();
@@ -363,14 +388,16 @@ void SceneRegistry::evict_over_budget(const std::string& keep) {
 std::optional<SceneInfo> SceneRegistry::info(const std::string& id) const {
     std::lock_guard<std::mutex> lock(mu_);
     auto it = entries_.find(id);
-    if (it == entries_.end()) return std::nullopt;
+    if (it == entries_.end())
+        return std::nullopt;
     return it->second.info;
 }
 
 std::vector<SceneInfo> SceneRegistry::list() const {
     std::lock_guard<std::mutex> lock(mu_);
     std::vector<SceneInfo> out;
-    for (const auto& [id, e] : entries_) out.push_back(e.info);
+    for (const auto& [id, e] : entries_)
+        out.push_back(e.info);
     return out;
 }
 
@@ -378,10 +405,13 @@ bool SceneRegistry::remove(const std::string& id) {
     {
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
-        if (it == entries_.end()) return false;
+        if (it == entries_.end())
+            return false;
         Entry& e = it->second;
-        if (e.engine) resident_bytes_ -= e.info.memory_bytes;
-        if (e.lru != lru_.end()) lru_.erase(e.lru);
+        if (e.engine)
+            resident_bytes_ -= e.info.memory_bytes;
+        if (e.lru != lru_.end())
+            lru_.erase(e.lru);
         auto range = by_request_key_.equal_range(e.request_key);
         for (auto k = range.first; k != range.second; ++k) {
             if (k->second == id) {

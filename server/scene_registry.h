@@ -45,7 +45,7 @@ struct SceneInfo {
 };
 
 class SceneRegistry {
-public:
+  public:
     /// Builds a scene from its source, reading the files it refers to through `files`.
     /// Throws ApiError for bad input.
     using Builder = std::function<std::shared_ptr<const engine::QueryEngine>(
@@ -75,11 +75,11 @@ public:
     std::size_t resident() const;
     std::size_t resident_bytes() const;
 
-private:
+  private:
     struct Entry {
         SceneInfo info;
-        std::string request_key;                     ///< hash of the canonical request alone
-        std::map<std::string, std::string> file_sha;  ///< files it read → their SHA-256
+        std::string request_key;                            ///< hash of the canonical request alone
+        std::map<std::string, std::string> file_sha;        ///< files it read → their SHA-256
         std::shared_ptr<const engine::QueryEngine> engine;  ///< null while evicted
         std::list<std::string>::iterator lru;
     };

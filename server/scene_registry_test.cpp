@@ -1,11 +1,11 @@
 #include "server/scene_registry.h"
 
-#include <gtest/gtest.h>
-#include <unistd.h>
-
 #include <atomic>
 #include <filesystem>
 #include <thread>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "engine/query/intersect.h"
 #include "server/app.h"
@@ -60,11 +60,10 @@ TEST(SceneRegistry, SameContentSameIdNoSecondBuild) {
     EXPECT_EQ(a.info.id.rfind("sc_", 0), 0u);
     EXPECT_EQ(a.info.spheres, 2u);
     // The same document with other whitespace and key order is the same scene.
-    auto b = f.registry.add(
-        {"application/json",
-         R"({ "objects" : [ {"radius":2, "type":"sphere","center":[0,0,10]},
+    auto b = f.registry.add({"application/json",
+                             R"({ "objects" : [ {"radius":2, "type":"sphere","center":[0,0,10]},
                             {"type":"sphere","center":[0,1,9],"radius":2.0} ] })"},
-        no_files());
+                            no_files());
     EXPECT_FALSE(b.created);
     EXPECT_EQ(b.info.id, a.info.id);
     EXPECT_EQ(f.builds.load(), 1);
@@ -75,8 +74,9 @@ TEST(SceneRegistry, SameContentSameIdNoSecondBuild) {
 TEST(SceneRegistry, FailedBuildLeavesRegistryUntouched) {
     Fixture f("");
     auto a = f.registry.add({"application/json", kSpheres}, no_files());
-    EXPECT_THROW(f.registry.add({"application/json", R"({"objects":[{"type":"sphere"}]})"}, no_files()),
-                 ApiError);
+    EXPECT_THROW(
+        f.registry.add({"application/json", R"({"objects":[{"type":"sphere"}]})"}, no_files()),
+        ApiError);
     EXPECT_THROW(f.registry.add({"application/json", "{oops"}, no_files()), ApiError);
     EXPECT_EQ(f.registry.size(), 1u);
     EXPECT_TRUE(f.registry.get(a.info.id));
@@ -122,8 +122,10 @@ TEST(SceneRegistry, EvictsLeastRecentlyUsedAndReloads) {
     Fixture f(dir.path.string(), /*budget=*/1);  // every scene is over budget but the newest
     const std::string a = f.registry.add({"application/json", kSpheres}, no_files()).info.id;
     const std::string b =
-        f.registry.add({"application/json", R"({"objects":[{"type":"sphere","center":[1,2,3],"radius":1}]})"},
-                       no_files())
+        f.registry
+            .add({"application/json",
+                  R"({"objects":[{"type":"sphere","center":[1,2,3],"radius":1}]})"},
+                 no_files())
             .info.id;
     EXPECT_EQ(f.registry.resident(), 1u);
     EXPECT_EQ(f.builds.load(), 2);
@@ -171,12 +173,14 @@ TEST(SceneRegistry, ConcurrentAddsAndGets) {
                 const std::string doc = R"({"objects":[{"type":"sphere","center":[0,0,)" +
                                         std::to_string(i % 5) + R"(],"radius":1}]})";
                 auto added = f.registry.add({"application/json", doc}, no_files());
-                if (added.created) ++created;
+                if (added.created)
+                    ++created;
                 EXPECT_TRUE(f.registry.get(added.info.id)) << t;
             }
         });
     }
-    for (auto& th : threads) th.join();
+    for (auto& th : threads)
+        th.join();
     EXPECT_EQ(f.registry.size(), 5u);
     EXPECT_EQ(created.load(), 5);
 }
