@@ -380,5 +380,112 @@ TEST_F(Intersect, CompressedAndRangedLargeBinaryRequests) {
         << answer.size() << " bytes";
 }
 
+/// Registers a scene document on the suite's server and returns its id.
+std::string register_scene(testing::ServerProcess& server, const Json& doc) {
+    auto res = server.client()->Post("/v1/scenes", doc.dump(), "application/json");
+    EXPECT_TRUE(res);
+    EXPECT_TRUE(res->status == 201 || res->status == 200) << res->body;
+    return Json::parse(res->body).at("id").get<std::string>();
+}
+
+std::size_t memory_bytes(testing::ServerProcess& server, const std::string& id) {
+    auto res = server.client()->Get(("/v1/scenes/" + id).c_str());
+    EXPECT_TRUE(res);
+    return Json::parse(res->body).at("memory_bytes").get<std::size_t>();
+}
+
+// Queries build BVHs on first use (docs/numerics.md): refined's confirmation of float misses
+// the exact one, the first fast query fast's own. The scene's memory_bytes counts each from the
+// next request on (the registry takes the scene's bytes anew when a request looks it up), and
+// queries that build nothing leave it alone.
+TEST_F(Intersect, MemoryBytesCountTheBvhsQueriesBuild) {
+    const auto mesh = engine::testing::icosphere_object(2, {0, 0, 40}, 3);
+    const std::string id = register_scene(
+        *server_, Json{{"objects",
+                        {{{"type", "mesh"},
+                          {"format", "obj"},
+                          {"data_base64", testing::base64(testing::to_obj(*mesh.mesh))}}}}});
+    const std::string body = many_float_rays(2048, 9);
+    const auto post = [&](const char* precision) {
+        auto res = server_->client()->Post(
+            ("/v1/scenes/" + id + "/intersect?dtype=float32&precision=" + precision).c_str(), body,
+            "application/octet-stream");
+        ASSERT_TRUE(res);
+        ASSERT_EQ(res->status, 200);
+    };
+    const std::size_t registered = memory_bytes(*server_, id);
+    post("refined");  // its float misses inside the bounds build the exact BVH
+    post("refined");
+    const std::size_t with_exact = memory_bytes(*server_, id);
+    EXPECT_GT(with_exact, registered);
+    post("refined");
+    EXPECT_EQ(memory_bytes(*server_, id), with_exact);
+    post("fast");
+    post("refined");
+    EXPECT_GT(memory_bytes(*server_, id), with_exact);
+}
+
+// A scene finite in double but wider than float can hold is answered by brute force in double,
+// whatever the precision asked (Embree would drop its vertices as infinities).
+TEST_F(Intersect, SceneWiderThanFloatIsAnsweredInDouble) {
+    Json objects = Json::array();
+    for (int i = 0; i < 20; ++i) {
+        const double x = i % 2 ? 1e39 : -1e39, z = 10.0 + i;
+        objects.push_back(
+            {{"type", "triangle"},
+             {"vertices", {{x - 1e30, -1e30, z}, {x + 1e30, -1e30, z}, {x, 1e30, z}}}});
+    }
+    const std::string id = register_scene(*server_, Json{{"objects", objects}});
+    for (const char* precision : {"fast", "refined", "exact"}) {
+        const Json q = {{"rays",
+                         {{{"origin", {-1e39, 0, 0}}, {"direction", {0, 0, 1}}},
+                          {{"origin", {1e39, 0, 100}}, {"direction", {0, 0, -1}}}}},
+                        {"precision", precision}};
+        auto res = server_->client()->Post(("/v1/scenes/" + id + "/intersect").c_str(), q.dump(),
+                                           "application/json");
+        ASSERT_TRUE(res);
+        ASSERT_EQ(res->status, 200) << res->body;
+        const Json r = Json::parse(res->body);
+        EXPECT_EQ(r.at("precision"), "exact") << precision;
+        EXPECT_EQ(r.at("hits").at(0).at("object"), 0) << precision;
+        EXPECT_EQ(r.at("hits").at(0).at("t"), 10.0) << precision;
+        EXPECT_EQ(r.at("hits").at(1).at("object"), 19) << precision;
+        EXPECT_EQ(r.at("hits").at(1).at("t"), 71.0) << precision;
+    }
+}
+
+// Binary batches on a scene small enough for brute force (no BVH) go through the same
+// block-at-a-time path: a streamed 70,000-ray request answers as seven small ones.
+TEST_F(Intersect, LargeBinaryBatchesOnABruteForceScene) {
+    const std::string id = register_scene(
+        *server_, Json{{"objects",
+                        {{{"type", "sphere"}, {"center", {0, 0, 10}}, {"radius", 2}},
+                         {{"type", "sphere"}, {"center", {3, 1, 12}}, {"radius", 2}}}}});
+    constexpr std::size_t kSmall = 10000, kCount = 7;
+    const std::string body = many_float_rays(kSmall * kCount, 10);
+    const std::string path = "/v1/scenes/" + id + "/intersect?dtype=float32&precision=fast";
+    auto large = server_->client()->Post(path.c_str(), body, "application/octet-stream");
+    ASSERT_TRUE(large);
+    ASSERT_EQ(large->status, 200);
+    EXPECT_EQ(large->get_header_value("X-Precision"), "exact");
+    std::string small;
+    for (std::size_t k = 0; k < kCount; ++k) {
+        auto r = server_->client()->Post(path.c_str(), body.substr(k * kSmall * 32, kSmall * 32),
+                                         "application/octet-stream");
+        ASSERT_TRUE(r);
+        ASSERT_EQ(r->status, 200);
+        small += r->body;
+    }
+    ASSERT_EQ(large->body.size(), small.size());
+    EXPECT_TRUE(large->body == small);
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < kSmall * kCount; ++i) {
+        std::uint32_t object;
+        std::memcpy(&object, small.data() + 32 * i + 4, 4);
+        hits += object != 0xFFFFFFFFu;
+    }
+    EXPECT_GT(hits, 1000u);
+}
+
 }  // namespace
 }  // namespace raycastd
