@@ -4,6 +4,8 @@
 
 namespace raycastd::engine {
 
-std::string backend_version() { return RTC_VERSION_STRING; }
+std::string backend_version() {
+    return RTC_VERSION_STRING;
+}
 
 }  // namespace raycastd::engine

@@ -11,7 +11,8 @@ namespace raycastd::engine {
 /// Non-finite values are written as "inf", "-inf" or "nan" (callers that emit JSON must not
 /// pass them).
 inline std::size_t format_shortest(double v, char* buf) {
-    if (v == 0.0) v = 0.0;  // print −0 as 0: a signed zero only confuses a reader
+    if (v == 0.0)
+        v = 0.0;  // print −0 as 0: a signed zero only confuses a reader
     auto r = std::to_chars(buf, buf + 32, v);
     return static_cast<std::size_t>(r.ptr - buf);
 }

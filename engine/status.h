@@ -12,14 +12,14 @@ namespace raycastd::engine {
 /// What went wrong, in the engine's terms; the server owns the mapping to HTTP.
 enum class Code {
     ok,
-    invalid_scene,      ///< a scene description breaks a rule (negative radius, unknown material)
-    invalid_ray,        ///< a ray is unusable (zero or non-finite direction, tmin > tmax)
-    invalid_request,    ///< a request option is unusable (unknown mode, bad field name)
-    model_load_failed,  ///< a model file parsed but cannot be used (index out of range, ...)
-    unsupported_format, ///< a model format we do not read
-    too_large,          ///< over a configured limit, or out of memory in a backend
-    not_found,          ///< a referenced thing does not exist
-    internal,           ///< a bug or a backend failure we cannot attribute to the input
+    invalid_scene,       ///< a scene description breaks a rule (negative radius, unknown material)
+    invalid_ray,         ///< a ray is unusable (zero or non-finite direction, tmin > tmax)
+    invalid_request,     ///< a request option is unusable (unknown mode, bad field name)
+    model_load_failed,   ///< a model file parsed but cannot be used (index out of range, ...)
+    unsupported_format,  ///< a model format we do not read
+    too_large,           ///< over a configured limit, or out of memory in a backend
+    not_found,           ///< a referenced thing does not exist
+    internal,            ///< a bug or a backend failure we cannot attribute to the input
 };
 
 /// A Code with a human message and, where it applies, a JSON pointer to the offending input.
@@ -37,9 +37,9 @@ struct Status {
 /// A value or the Status that explains why there is none.
 template <class T>
 class Result {
-public:
-    Result(T value) : v_(std::move(value)) {}                   // NOLINT: implicit by design
-    Result(Status status) : v_(std::move(status)) {}            // NOLINT: implicit by design
+  public:
+    Result(T value) : v_(std::move(value)) {}         // NOLINT: implicit by design
+    Result(Status status) : v_(std::move(status)) {}  // NOLINT: implicit by design
 
     bool ok() const { return std::holds_alternative<T>(v_); }
     explicit operator bool() const { return ok(); }
@@ -53,7 +53,7 @@ public:
     /// The error; only meaningful when !ok().
     const Status& status() const { return std::get<Status>(v_); }
 
-private:
+  private:
     std::variant<T, Status> v_;
 };
 

@@ -9,6 +9,7 @@ packages=(
     build-essential cmake pkg-config git curl ca-certificates
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
     nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
+    clang-format
 )
 if [[ "${1:-}" == "--bench" ]]; then
     packages+=(python3 python3-numpy python3-open3d python3-matplotlib povray)

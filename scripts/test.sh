@@ -4,6 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
+# Formatting first: it takes a second and names the one command that fixes it.
+scripts/check_format.sh
 jobs="$(nproc)"
 presets=(release asan)
 [[ "${1:-}" == "--release-only" ]] && presets=(release)

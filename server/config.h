@@ -21,7 +21,7 @@ struct Limits {
 struct Config {
     std::string host = "127.0.0.1";
     int port = 8080;
-    int threads = 0;  ///< HTTP worker threads (0: hardware concurrency, at least 4)
+    int threads = 0;                ///< HTTP worker threads (0: hardware concurrency, at least 4)
     std::string scene_root = ".";   ///< mesh `uri`s resolve inside this directory only
     std::string data_dir;           ///< registered scenes persist here ("" = memory only)
     std::vector<std::string> demo;  ///< scene documents registered at start-up

@@ -7,7 +7,8 @@ namespace {
 
 std::optional<Config> parse(std::vector<std::string> args, std::string& msg, bool& error) {
     std::vector<char*> argv = {const_cast<char*>("raycastd")};
-    for (auto& a : args) argv.push_back(a.data());
+    for (auto& a : args)
+        argv.push_back(a.data());
     return parse_args(static_cast<int>(argv.size()), argv.data(), msg, error);
 }
 

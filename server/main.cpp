@@ -1,13 +1,13 @@
 // raycastd: parse flags, build the App, listen; SIGINT/SIGTERM stop it cleanly.
 
-#include <pthread.h>
-#include <signal.h>
-
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <thread>
+
+#include <pthread.h>
+#include <signal.h>
 
 #include "server/app.h"
 

@@ -14,17 +14,22 @@ namespace {
 using engine::Code;
 
 ApiError load_error(const engine::Status& st, const std::string& path) {
-    if (st.code == Code::model_load_failed) return api_error("model_load_failed", st.message, path);
-    if (st.code == Code::unsupported_format) return api_error("unsupported_format", st.message, path);
-    if (st.code == Code::too_large) return api_error("too_large", st.message, path);
+    if (st.code == Code::model_load_failed)
+        return api_error("model_load_failed", st.message, path);
+    if (st.code == Code::unsupported_format)
+        return api_error("unsupported_format", st.message, path);
+    if (st.code == Code::too_large)
+        return api_error("too_large", st.message, path);
     return api_error("invalid_scene", st.message, path);
 }
 
 engine::Transform parse_transform(const Json& j, const std::string& path) {
     require_object(j, path, "invalid_scene");
     engine::Vec3d translate{0, 0, 0}, rotate{0, 0, 0}, scale{1, 1, 1};
-    if (const Json* t = member(j, "translate")) translate = read_vec3(*t, path + "/translate", "invalid_scene");
-    if (const Json* r = member(j, "rotate_deg")) rotate = read_vec3(*r, path + "/rotate_deg", "invalid_scene");
+    if (const Json* t = member(j, "translate"))
+        translate = read_vec3(*t, path + "/translate", "invalid_scene");
+    if (const Json* r = member(j, "rotate_deg"))
+        rotate = read_vec3(*r, path + "/rotate_deg", "invalid_scene");
     if (const Json* s = member(j, "scale")) {
         if (s->is_number()) {
             const double k = read_number(*s, path + "/scale", "invalid_scene");
@@ -45,16 +50,16 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
                                                   std::uint32_t material_base,
                                                   std::uint32_t fallback) {
     auto mesh = std::make_shared<engine::TriangleMesh>();
-    const bool all_normals = std::all_of(model.parts.begin(), model.parts.end(), [](const auto& p) {
-        return !p.mesh.normals.empty();
-    });
+    const bool all_normals = std::all_of(model.parts.begin(), model.parts.end(),
+                                         [](const auto& p) { return !p.mesh.normals.empty(); });
     const bool any_material = !model.materials.empty();
     for (const auto& part : model.parts) {
         const auto base = static_cast<std::uint32_t>(mesh->positions.size());
         mesh->positions.insert(mesh->positions.end(), part.mesh.positions.begin(),
                                part.mesh.positions.end());
         if (all_normals) {
-            mesh->normals.insert(mesh->normals.end(), part.mesh.normals.begin(), part.mesh.normals.end());
+            mesh->normals.insert(mesh->normals.end(), part.mesh.normals.begin(),
+                                 part.mesh.normals.end());
         }
         for (std::size_t t = 0; t < part.mesh.triangles.size(); ++t) {
             const auto& tri = part.mesh.triangles[t];
@@ -62,17 +67,22 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
             if (any_material) {
                 mesh->triangle_material.push_back(part.mesh.triangle_material.empty()
                                                       ? fallback
-                                                      : material_base + part.mesh.triangle_material[t]);
+                                                      : material_base +
+                                                            part.mesh.triangle_material[t]);
             }
         }
     }
     return mesh;
 }
 
-void adopt_model_extras(engine::LoadedModel& model, const std::string& prefix, engine::Scene& scene) {
-    for (auto& l : model.lights) scene.lights.push_back(l);
-    if (!scene.camera && model.camera) scene.camera = model.camera;
-    for (auto& w : model.warnings) scene.warnings.push_back(prefix + w);
+void adopt_model_extras(engine::LoadedModel& model, const std::string& prefix,
+                        engine::Scene& scene) {
+    for (auto& l : model.lights)
+        scene.lights.push_back(l);
+    if (!scene.camera && model.camera)
+        scene.camera = model.camera;
+    for (auto& w : model.warnings)
+        scene.warnings.push_back(prefix + w);
 }
 
 std::uint32_t adopt_materials(const engine::LoadedModel& model, const std::string& owner,
@@ -97,14 +107,15 @@ engine::LoadLimits load_limits(const Limits& limits) {
 
 engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
                                   const FileSource& files, const Limits& limits) {
-    MeshObjectLoader load_mesh = [&](const Json& obj, const std::string& path,
-                                     engine::Scene& scene) -> std::shared_ptr<const engine::TriangleMesh> {
+    MeshObjectLoader load_mesh =
+        [&](const Json& obj, const std::string& path,
+            engine::Scene& scene) -> std::shared_ptr<const engine::TriangleMesh> {
         const Json* uri = member(obj, "uri");
         const Json* data = member(obj, "data_base64");
         const Json* fmt = member(obj, "format");
         if ((uri != nullptr) == (data != nullptr)) {
-            throw api_error("invalid_scene", path + ": a mesh needs exactly one of uri and data_base64",
-                            path);
+            throw api_error("invalid_scene",
+                            path + ": a mesh needs exactly one of uri and data_base64", path);
         }
         std::optional<engine::ModelFormat> format;
         if (fmt) {
@@ -121,16 +132,21 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         if (uri) {
             const std::string u = read_string(*uri, path + "/uri", "invalid_scene");
             auto norm = normalize_relative(u);
-            if (!norm.ok()) throw api_error("invalid_scene", norm.status().message, path + "/uri");
+            if (!norm.ok())
+                throw api_error("invalid_scene", norm.status().message, path + "/uri");
             auto content = files(*norm);
-            if (!content.ok()) throw load_error(content.status(), path + "/uri");
+            if (!content.ok())
+                throw load_error(content.status(), path + "/uri");
             bytes = std::move(*content);
-            display = norm->substr(norm->rfind('/') == std::string::npos ? 0 : norm->rfind('/') + 1);
-            if (!format) format = engine::format_from_name(*norm);
+            display =
+                norm->substr(norm->rfind('/') == std::string::npos ? 0 : norm->rfind('/') + 1);
+            if (!format)
+                format = engine::format_from_name(*norm);
             dir = dirname_of(*norm);
             resources = [&files, dir](const std::string& ref) -> engine::Result<std::string> {
                 auto joined = join_relative(dir, ref);
-                if (!joined.ok()) return joined.status();
+                if (!joined.ok())
+                    return joined.status();
                 return files(*joined);
             };
         } else {
@@ -139,7 +155,8 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
                                 path + "/format");
             }
             if (!data->is_string()) {
-                throw api_error("invalid_scene", path + "/data_base64 must be a string", path + "/data_base64");
+                throw api_error("invalid_scene", path + "/data_base64 must be a string",
+                                path + "/data_base64");
             }
             auto decoded = decode_base64(data->get_ref<const std::string&>());
             if (!decoded) {
@@ -149,14 +166,18 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             bytes = std::move(*decoded);
             display = "inline model";
         }
-        if (!format) format = engine::sniff_format(bytes);
+        if (!format)
+            format = engine::sniff_format(bytes);
         if (!format) {
-            throw api_error("unsupported_format", path + ": cannot tell the model format; set \"format\"",
+            throw api_error("unsupported_format",
+                            path + ": cannot tell the model format; set \"format\"",
                             path + "/format");
         }
-        if (const Json* n = member(obj, "name"); n && n->is_string()) display = n->get<std::string>();
+        if (const Json* n = member(obj, "name"); n && n->is_string())
+            display = n->get<std::string>();
         auto loaded = engine::load_model(bytes, *format, resources, display, load_limits(limits));
-        if (!loaded.ok()) throw load_error(loaded.status(), path);
+        if (!loaded.ok())
+            throw load_error(loaded.status(), path);
         engine::LoadedModel& model = *loaded;
         if (const Json* t = member(obj, "transform")) {
             engine::apply_transform(model, parse_transform(*t, path + "/transform"));
@@ -182,7 +203,8 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
                                const std::string& display_name, const Limits& limits) {
     auto loaded = engine::load_model(bytes, format, engine::no_resources(), display_name,
                                      load_limits(limits));
-    if (!loaded.ok()) throw load_error(loaded.status(), "");
+    if (!loaded.ok())
+        throw load_error(loaded.status(), "");
     engine::LoadedModel& model = *loaded;
     engine::Scene scene;
     scene.materials.push_back(engine::Material{});
@@ -193,41 +215,54 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
         o.kind = engine::ObjectKind::mesh;
         o.name = part.name;
         auto mesh = std::make_shared<engine::TriangleMesh>(std::move(part.mesh));
-        for (auto& m : mesh->triangle_material) m += base;
+        for (auto& m : mesh->triangle_material)
+            m += base;
         o.mesh = std::move(mesh);
         scene.objects.push_back(std::move(o));
     }
     adopt_model_extras(model, "", scene);
     engine::Status st = engine::validate(scene);
-    if (!st.ok()) throw load_error(st, st.path);
+    if (!st.ok())
+        throw load_error(st, st.path);
     return scene;
 }
 
 std::optional<engine::ModelFormat> format_from_content_type(const std::string& content_type) {
     std::string ct = content_type.substr(0, content_type.find(';'));
-    while (!ct.empty() && std::isspace(static_cast<unsigned char>(ct.back()))) ct.pop_back();
+    while (!ct.empty() && std::isspace(static_cast<unsigned char>(ct.back())))
+        ct.pop_back();
     std::transform(ct.begin(), ct.end(), ct.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     using F = engine::ModelFormat;
-    if (ct == "model/gltf-binary") return F::glb;
-    if (ct == "model/gltf+json") return F::gltf;
-    if (ct == "model/obj" || ct == "text/x-obj" || ct == "application/x-tgif") return F::obj;
+    if (ct == "model/gltf-binary")
+        return F::glb;
+    if (ct == "model/gltf+json")
+        return F::gltf;
+    if (ct == "model/obj" || ct == "text/x-obj" || ct == "application/x-tgif")
+        return F::obj;
     if (ct == "application/sla" || ct == "model/stl" || ct == "application/vnd.ms-pki.stl" ||
         ct == "model/x.stl-binary" || ct == "model/x.stl-ascii") {
         return F::stl;
     }
-    if (ct == "application/x-ply" || ct == "model/x-ply" || ct == "application/ply") return F::ply;
-    if (ct == "model/off" || ct == "application/off" || ct == "model/x-off") return F::off;
+    if (ct == "application/x-ply" || ct == "model/x-ply" || ct == "application/ply")
+        return F::ply;
+    if (ct == "model/off" || ct == "application/off" || ct == "model/x-off")
+        return F::off;
     return std::nullopt;
 }
 
 std::optional<std::string> decode_base64(std::string_view text) {
     auto value = [](char c) -> int {
-        if (c >= 'A' && c <= 'Z') return c - 'A';
-        if (c >= 'a' && c <= 'z') return c - 'a' + 26;
-        if (c >= '0' && c <= '9') return c - '0' + 52;
-        if (c == '+' || c == '-') return 62;  // '-' and '_': the URL-safe alphabet (§5)
-        if (c == '/' || c == '_') return 63;
+        if (c >= 'A' && c <= 'Z')
+            return c - 'A';
+        if (c >= 'a' && c <= 'z')
+            return c - 'a' + 26;
+        if (c >= '0' && c <= '9')
+            return c - '0' + 52;
+        if (c == '+' || c == '-')
+            return 62;  // '-' and '_': the URL-safe alphabet (§5)
+        if (c == '/' || c == '_')
+            return 63;
         return -1;
     };
     std::string out;
@@ -236,14 +271,17 @@ std::optional<std::string> decode_base64(std::string_view text) {
     int bits = 0;
     std::size_t padding = 0;
     for (char c : text) {
-        if (std::isspace(static_cast<unsigned char>(c))) continue;
+        if (std::isspace(static_cast<unsigned char>(c)))
+            continue;
         if (c == '=') {
             ++padding;
             continue;
         }
-        if (padding) return std::nullopt;  // data after padding
+        if (padding)
+            return std::nullopt;  // data after padding
         const int v = value(c);
-        if (v < 0) return std::nullopt;
+        if (v < 0)
+            return std::nullopt;
         acc = (acc << 6) | static_cast<std::uint32_t>(v);
         bits += 6;
         if (bits >= 8) {
@@ -251,7 +289,8 @@ std::optional<std::string> decode_base64(std::string_view text) {
             out.push_back(static_cast<char>((acc >> bits) & 0xFF));
         }
     }
-    if (padding > 2 || bits >= 6) return std::nullopt;
+    if (padding > 2 || bits >= 6)
+        return std::nullopt;
     return out;
 }
 

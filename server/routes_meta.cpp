@@ -1,10 +1,10 @@
 // GET /v1/health, GET /v1/info, GET /v1/openapi.json
 
-#include <embree3/rtcore_config.h>
-
 #include <fstream>
 #include <sstream>
 #include <thread>
+
+#include <embree3/rtcore_config.h>
 
 #include "server/app.h"
 #include "server/openapi.h"
@@ -18,7 +18,8 @@ namespace {
 std::size_t resident_bytes() {
     std::ifstream f("/proc/self/statm");
     std::size_t pages_total = 0, pages_resident = 0;
-    if (!(f >> pages_total >> pages_resident)) return 0;
+    if (!(f >> pages_total >> pages_resident))
+        return 0;
     return pages_resident * 4096;
 }
 

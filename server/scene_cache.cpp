@@ -10,15 +10,18 @@ void numbers_as_doubles(Json& j) {
     if (j.is_number()) {
         j = j.get<double>();
     } else if (j.is_structured()) {
-        for (auto& child : j) numbers_as_doubles(child);
+        for (auto& child : j)
+            numbers_as_doubles(child);
     }
 }
 
 bool names_files(const Json& doc) {
     const Json* objects = member(doc, "objects");
-    if (!objects || !objects->is_array()) return false;
+    if (!objects || !objects->is_array())
+        return false;
     for (const Json& o : *objects) {
-        if (o.is_object() && o.contains("uri")) return true;
+        if (o.is_object() && o.contains("uri"))
+            return true;
     }
     return false;
 }
@@ -32,13 +35,15 @@ std::string canonical_json(const Json& doc) {
 }
 
 std::string SceneCache::cache_key(const Json& doc) {
-    if (!doc.is_object() || names_files(doc)) return {};
+    if (!doc.is_object() || names_files(doc))
+        return {};
     return sha256_hex(canonical_json(doc));
 }
 
 void SceneCache::insert(const std::string& key, std::shared_ptr<const engine::QueryEngine> engine) {
     std::lock_guard<std::mutex> lock(mu_);
-    if (capacity_ == 0 || map_.count(key)) return;
+    if (capacity_ == 0 || map_.count(key))
+        return;
     order_.push_front(key);
     map_.emplace(key, std::make_pair(std::move(engine), order_.begin()));
     while (map_.size() > capacity_) {

@@ -16,7 +16,7 @@
 namespace raycastd::server {
 
 class SceneCache {
-public:
+  public:
     explicit SceneCache(std::size_t capacity) : capacity_(capacity) {}
 
     /// The cached scene for `doc`, or the result of `build()` (cached when cacheable).
@@ -33,7 +33,8 @@ public:
             }
         }
         std::shared_ptr<const engine::QueryEngine> engine = build();
-        if (!key.empty()) insert(key, engine);
+        if (!key.empty())
+            insert(key, engine);
         return engine;
     }
 
@@ -45,15 +46,14 @@ public:
     /// "" when the document must not be cached (it refers to files).
     static std::string cache_key(const Json& doc);
 
-private:
+  private:
     void insert(const std::string& key, std::shared_ptr<const engine::QueryEngine> engine);
 
     std::size_t capacity_;
     mutable std::mutex mu_;
     std::list<std::string> order_;  ///< most recently used first
-    std::unordered_map<std::string,
-                       std::pair<std::shared_ptr<const engine::QueryEngine>,
-                                 std::list<std::string>::iterator>>
+    std::unordered_map<std::string, std::pair<std::shared_ptr<const engine::QueryEngine>,
+                                              std::list<std::string>::iterator>>
         map_;
     std::size_t hits_ = 0;
 };

@@ -1,13 +1,13 @@
 #include "server/uri_resolver.h"
 
-#include <sys/stat.h>
-
 #include <cctype>
 #include <climits>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <vector>
+
+#include <sys/stat.h>
 
 namespace raycastd::server {
 
@@ -18,9 +18,11 @@ using engine::Status;
 
 bool has_scheme(const std::string& p) {
     // RFC 3986 §3.1: scheme = ALPHA *( ALPHA / DIGIT / "+" / "-" / "." ) ":"
-    if (p.empty() || !std::isalpha(static_cast<unsigned char>(p[0]))) return false;
+    if (p.empty() || !std::isalpha(static_cast<unsigned char>(p[0])))
+        return false;
     for (char c : p) {
-        if (c == ':') return true;
+        if (c == ':')
+            return true;
         if (!std::isalnum(static_cast<unsigned char>(c)) && c != '+' && c != '-' && c != '.') {
             return false;
         }
@@ -36,25 +38,27 @@ std::string real_path(const std::string& p) {
 }  // namespace
 
 engine::Result<std::string> normalize_relative(const std::string& path) {
-    if (path.empty()) return Status::error(Code::invalid_scene, "empty path");
+    if (path.empty())
+        return Status::error(Code::invalid_scene, "empty path");
     if (path.find('\0') != std::string::npos) {
         return Status::error(Code::invalid_scene, "path contains a NUL byte");
     }
     if (path[0] == '/' || path[0] == '\\') {
-        return Status::error(Code::invalid_scene,
-                             "absolute paths are refused: \"" + path + "\" (use a path relative "
-                             "to the scene root)");
+        return Status::error(Code::invalid_scene, "absolute paths are refused: \"" + path +
+                                                      "\" (use a path relative "
+                                                      "to the scene root)");
     }
     if (has_scheme(path)) {
-        return Status::error(Code::invalid_scene,
-                             "only files inside the scene root can be referenced, not \"" + path +
-                                 "\"");
+        return Status::error(
+            Code::invalid_scene,
+            "only files inside the scene root can be referenced, not \"" + path + "\"");
     }
     std::vector<std::string> parts;
     std::stringstream ss(path);
     std::string part;
     while (std::getline(ss, part, '/')) {
-        if (part.empty() || part == ".") continue;
+        if (part.empty() || part == ".")
+            continue;
         if (part == "..") {
             if (parts.empty()) {
                 return Status::error(Code::invalid_scene,
@@ -65,9 +69,11 @@ engine::Result<std::string> normalize_relative(const std::string& path) {
         }
         parts.push_back(part);
     }
-    if (parts.empty()) return Status::error(Code::invalid_scene, "\"" + path + "\" names no file");
+    if (parts.empty())
+        return Status::error(Code::invalid_scene, "\"" + path + "\" names no file");
     std::string out;
-    for (const auto& p : parts) out += (out.empty() ? "" : "/") + p;
+    for (const auto& p : parts)
+        out += (out.empty() ? "" : "/") + p;
     return out;
 }
 
@@ -77,7 +83,8 @@ std::string dirname_of(const std::string& path) {
 }
 
 engine::Result<std::string> join_relative(const std::string& dir, const std::string& ref) {
-    if (!ref.empty() && (ref[0] == '/' || has_scheme(ref))) return normalize_relative(ref);
+    if (!ref.empty() && (ref[0] == '/' || has_scheme(ref)))
+        return normalize_relative(ref);
     return normalize_relative(dir.empty() ? ref : dir + "/" + ref);
 }
 
@@ -91,7 +98,8 @@ engine::Result<std::string> SceneRoot::read(const std::string& normalized,
     }
     const std::string full = real_path(root_ + "/" + normalized);
     if (full.empty()) {
-        return Status::error(Code::invalid_scene, "no such file in the scene root: \"" + normalized + "\"");
+        return Status::error(Code::invalid_scene,
+                             "no such file in the scene root: \"" + normalized + "\"");
     }
     if (full.compare(0, root_real.size() + 1, root_real + "/") != 0) {
         return Status::error(Code::invalid_scene,

@@ -21,7 +21,7 @@ std::string dirname_of(const std::string& path);
 engine::Result<std::string> join_relative(const std::string& dir, const std::string& ref);
 
 class SceneRoot {
-public:
+  public:
     explicit SceneRoot(std::string root);
 
     /// The bytes of the normalised relative path inside the root: invalid_scene when it escapes
@@ -30,7 +30,7 @@ public:
 
     const std::string& root() const { return root_; }
 
-private:
+  private:
     std::string root_;
 };
 

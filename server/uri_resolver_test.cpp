@@ -1,10 +1,10 @@
 #include "server/uri_resolver.h"
 
-#include <gtest/gtest.h>
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 namespace raycastd::server {
 namespace {
@@ -31,7 +31,8 @@ TEST(UriResolver, NormalizesAndRefusesEscapes) {
 }
 
 TEST(UriResolver, SymlinksOutOfTheRootAreRefused) {
-    const fs::path base = fs::temp_directory_path() / ("raycastd_root_" + std::to_string(::getpid()));
+    const fs::path base =
+        fs::temp_directory_path() / ("raycastd_root_" + std::to_string(::getpid()));
     fs::remove_all(base);
     fs::create_directories(base / "root" / "sub");
     std::ofstream(base / "root" / "sub" / "in.obj") << "v 0 0 0\n";

@@ -1,9 +1,9 @@
 #include "engine/accel/linear_accel.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "engine/testing/scenes.h"
 
@@ -96,8 +96,8 @@ TEST(Linear, ClosedMeshParityOnEdgesAndVertices) {
         }
         std::vector<Hit> hits;
         linear_all(s, Ray{origin, target - origin, -kInfinity, kInfinity}, false, hits);
-        EXPECT_EQ(hits.size() % 2, 0u) << "origin " << origin.x << "," << origin.y << ","
-                                       << origin.z;
+        EXPECT_EQ(hits.size() % 2, 0u)
+            << "origin " << origin.x << "," << origin.y << "," << origin.z;
     }
 }
 

@@ -9,33 +9,45 @@ namespace raycastd::engine {
 
 namespace {
 
-std::string num(double v) { return format_shortest(v); }
+std::string num(double v) {
+    return format_shortest(v);
+}
 
-std::string vec(const Vec3d& v) { return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")"; }
+std::string vec(const Vec3d& v) {
+    return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")";
+}
 
 /// The ray's coordinate p + t·v as a student writes it: "0", "t", "2t", "1+t", "1-0.5t".
 std::string coordinate(double p, double v) {
-    if (v == 0.0) return num(p);
+    if (v == 0.0)
+        return num(p);
     std::string tv = v == 1.0 ? "t" : (v == -1.0 ? "-t" : num(v) + "t");
-    if (p == 0.0) return tv;
-    if (tv[0] == '-') return num(p) + tv;
+    if (p == 0.0)
+        return tv;
+    if (tv[0] == '-')
+        return num(p) + tv;
     return num(p) + "+" + tv;
 }
 
 /// "(X-a)^2" with a sign-aware minus: "(t-10)^2", "(0+3)^2".
 std::string squared_difference(const std::string& x, double a) {
-    if (a < 0.0) return "(" + x + "+" + num(-a) + ")^2";
+    if (a < 0.0)
+        return "(" + x + "+" + num(-a) + ")^2";
     return "(" + x + "-" + num(a) + ")^2";
 }
 
 std::string quadratic(double a, double b, double c) {
     auto term = [](double k, const char* var, bool first) {
-        if (k == 0.0 && !first) return std::string();
+        if (k == 0.0 && !first)
+            return std::string();
         std::string s;
-        if (!first) s += k < 0.0 ? " - " : " + ";
-        else if (k < 0.0) s += "-";
+        if (!first)
+            s += k < 0.0 ? " - " : " + ";
+        else if (k < 0.0)
+            s += "-";
         double m = std::abs(k);
-        if (*var == '\0' || m != 1.0) s += num(m);
+        if (*var == '\0' || m != 1.0)
+            s += num(m);
         return s + var;
     };
     return term(a, "t^2", true) + term(b, "t", false) + term(c, "", false) + " = 0";
@@ -51,8 +63,7 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
                       squared_difference("z", c.z) + " = " + num(s.radius) + "^2");
     w.steps.push_back(squared_difference(coordinate(p.x, v.x), c.x) + "+" +
                       squared_difference(coordinate(p.y, v.y), c.y) + "+" +
-                      squared_difference(coordinate(p.z, v.z), c.z) + " = " + num(s.radius) +
-                      "^2");
+                      squared_difference(coordinate(p.z, v.z), c.z) + " = " + num(s.radius) + "^2");
     SphereWork sw;
     const Vec3d f = p - c;
     sw.a = dot(v, v);
@@ -67,7 +78,8 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     w.steps.push_back("discriminant B^2-4AC = " + num(sw.discriminant));
 
     const SphereRoots r = sphere_roots(s, ray);
-    for (int i = 0; i < r.count; ++i) sw.roots.push_back(r.t[i]);
+    for (int i = 0; i < r.count; ++i)
+        sw.roots.push_back(r.t[i]);
     if (r.count == 0) {
         w.reason = "no real roots: the ray misses";
         w.steps.push_back(w.reason);
@@ -177,7 +189,8 @@ Explanation explain(const Scene& scene, const Ray& ray) {
         ex.objects.push_back(std::move(w));
     }
     ex.first_hit = linear_closest(scene, ray, true);
-    if (ex.first_hit) ex.first_point = ray.at(ex.first_hit->t);
+    if (ex.first_hit)
+        ex.first_point = ray.at(ex.first_hit->t);
     return ex;
 }
 

@@ -24,9 +24,9 @@ struct SphereWork {
 };
 
 struct TriangleWork {
-    Vec3d normal;          ///< n = ac × ab (not normalised, as in the tutorial)
-    double plane_d = 0;    ///< ⟨n,a⟩
-    double n_dot_v = 0;    ///< ⟨n,v⟩; zero means the ray is parallel to the plane
+    Vec3d normal;        ///< n = ac × ab (not normalised, as in the tutorial)
+    double plane_d = 0;  ///< ⟨n,a⟩
+    double n_dot_v = 0;  ///< ⟨n,v⟩; zero means the ray is parallel to the plane
     std::optional<double> t;
     std::optional<Vec3d> point;  ///< d = l(t)
     Vec3d cross[3];              ///< da×db, db×dc, dc×da

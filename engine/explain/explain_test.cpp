@@ -1,8 +1,8 @@
 #include "engine/explain/explain.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
+
+#include <gtest/gtest.h>
 
 #include "engine/testing/scenes.h"
 
@@ -50,7 +50,8 @@ TEST(Explain, TutorialQuestion1) {
 TEST(Explain, TriangleByThePlaneMethod) {
     Scene s;
     s.materials.push_back(Material{});
-    s.objects.push_back(testing::mesh_object("abc", {{0, 0, 5}, {2, 0, 5}, {0, 2, 5}}, {{0, 1, 2}}));
+    s.objects.push_back(
+        testing::mesh_object("abc", {{0, 0, 5}, {2, 0, 5}, {0, 2, 5}}, {{0, 1, 2}}));
     Explanation ex = explain(s, Ray{{0.5, 0.5, 0}, {0, 0, 1}});
     const ObjectWork& w = ex.objects[0];
     ASSERT_TRUE(w.triangle);
@@ -62,7 +63,8 @@ TEST(Explain, TriangleByThePlaneMethod) {
     EXPECT_TRUE(w.hit);
     // For an inside point all three cross products point the same way, here along +z (the
     // winding of abc seen from the ray's side): da×db = (−.5,−.5,0)×(1.5,−.5,0) = (0,0,1).
-    for (const Vec3d& c : w.triangle->cross) EXPECT_GT(c.z, 0.0);
+    for (const Vec3d& c : w.triangle->cross)
+        EXPECT_GT(c.z, 0.0);
     EXPECT_EQ(w.triangle->cross[0], (Vec3d{0, 0, 1}));
 
     Explanation miss = explain(s, Ray{{1.5, 1.5, 0}, {0, 0, 1}});

@@ -27,7 +27,8 @@ struct TriangleMesh {
     }
     Bounds3 bounds() const {
         Bounds3 b;
-        for (const auto& p : positions) b.extend(p);
+        for (const auto& p : positions)
+            b.extend(p);
         return b;
     }
 };

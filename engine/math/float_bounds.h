@@ -22,7 +22,9 @@ constexpr double gamma_float(int n) {
 }
 
 /// The next representable double above v (v itself for +inf).
-inline double next_up(double v) { return std::nextafter(v, std::numeric_limits<double>::infinity()); }
+inline double next_up(double v) {
+    return std::nextafter(v, std::numeric_limits<double>::infinity());
+}
 /// The next representable double below v (v itself for −inf).
 inline double next_down(double v) {
     return std::nextafter(v, -std::numeric_limits<double>::infinity());

@@ -44,8 +44,10 @@ struct Hit {
 /// Closest-hit ordering of the API: smaller t first; exact ties go to the lower object index,
 /// then to the lower primitive index.
 inline bool closer(const Hit& a, const Hit& b) {
-    if (a.t != b.t) return a.t < b.t;
-    if (a.object != b.object) return a.object < b.object;
+    if (a.t != b.t)
+        return a.t < b.t;
+    if (a.object != b.object)
+        return a.object < b.object;
     return a.primitive < b.primitive;
 }
 

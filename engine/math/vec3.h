@@ -71,7 +71,8 @@ T max_component(const Vec3<T>& v) {
 template <class T>
 std::size_t max_abs_dimension(const Vec3<T>& v) {
     T ax = std::abs(v.x), ay = std::abs(v.y), az = std::abs(v.z);
-    if (ax >= ay && ax >= az) return 0;
+    if (ax >= ay && ax >= az)
+        return 0;
     return ay >= az ? 1 : 2;
 }
 template <class T>

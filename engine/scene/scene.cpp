@@ -8,14 +8,16 @@ namespace raycastd::engine {
 std::size_t Scene::triangle_count() const {
     std::size_t n = 0;
     for (const auto& o : objects) {
-        if (o.kind != ObjectKind::sphere) n += o.mesh->size();
+        if (o.kind != ObjectKind::sphere)
+            n += o.mesh->size();
     }
     return n;
 }
 
 std::size_t Scene::sphere_count() const {
-    return static_cast<std::size_t>(std::count_if(
-        objects.begin(), objects.end(), [](const Object& o) { return o.kind == ObjectKind::sphere; }));
+    return static_cast<std::size_t>(
+        std::count_if(objects.begin(), objects.end(),
+                      [](const Object& o) { return o.kind == ObjectKind::sphere; }));
 }
 
 Bounds3 Scene::bounds() const {
@@ -35,19 +37,24 @@ Bounds3 Scene::bounds() const {
 Features Scene::features() const {
     Features f;
     for (const auto& l : lights) {
-        if (l.type != LightType::ambient) f.shadows = true;
+        if (l.type != LightType::ambient)
+            f.shadows = true;
     }
     f.shadows = f.shadows && !objects.empty();
     for (const auto& m : materials) {
-        if (m.reflectivity > 0.0) f.reflection = true;
-        if (m.transparency > 0.0) f.refraction = true;
+        if (m.reflectivity > 0.0)
+            f.reflection = true;
+        if (m.transparency > 0.0)
+            f.refraction = true;
     }
     return f;
 }
 
 namespace {
 
-std::string object_path(std::size_t i) { return "/objects/" + std::to_string(i); }
+std::string object_path(std::size_t i) {
+    return "/objects/" + std::to_string(i);
+}
 
 }  // namespace
 
@@ -55,9 +62,10 @@ Status validate(const Scene& scene) {
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         if (o.material >= scene.materials.size()) {
-            return Status::error(Code::invalid_scene, "object " + std::to_string(i) +
-                                                          " names a material that does not exist",
-                                 object_path(i) + "/material");
+            return Status::error(
+                Code::invalid_scene,
+                "object " + std::to_string(i) + " names a material that does not exist",
+                object_path(i) + "/material");
         }
         if (o.kind == ObjectKind::sphere) {
             if (!is_finite(o.sphere.center)) {
@@ -98,7 +106,8 @@ Status validate(const Scene& scene) {
 
 Camera default_camera(const Bounds3& bounds) {
     Camera cam;
-    if (bounds.empty()) return cam;
+    if (bounds.empty())
+        return cam;
     const Vec3d c = bounds.center();
     const double radius = std::max(0.5 * length(bounds.diagonal()), 1e-9);
     const double half_fov = 0.5 * cam.fov_y_deg * M_PI / 180.0;

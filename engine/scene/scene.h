@@ -24,8 +24,8 @@ enum class ObjectKind { sphere, triangle, mesh };
 struct Object {
     ObjectKind kind = ObjectKind::sphere;
     std::string name;
-    std::uint32_t material = 0;  ///< index into Scene::materials
-    Sphere sphere;               ///< kind == sphere
+    std::uint32_t material = 0;                ///< index into Scene::materials
+    Sphere sphere;                             ///< kind == sphere
     std::shared_ptr<const TriangleMesh> mesh;  ///< kind == triangle or mesh
 
     std::size_t primitive_count() const { return kind == ObjectKind::sphere ? 1 : mesh->size(); }

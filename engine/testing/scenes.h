@@ -62,20 +62,22 @@ inline Object cube_object(double lo, double hi) {
 /// vertices projected onto the sphere, faces counter-clockwise seen from outside.
 inline Object icosphere_object(int level, Vec3d center = {0, 0, 0}, double radius = 1.0) {
     const double g = (1.0 + std::sqrt(5.0)) / 2.0;
-    std::vector<Vec3d> p = {{-1, g, 0}, {1, g, 0},  {-1, -g, 0}, {1, -g, 0},
-                            {0, -1, g}, {0, 1, g},  {0, -1, -g}, {0, 1, -g},
-                            {g, 0, -1}, {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
-    for (auto& v : p) v = normalize(v);
+    std::vector<Vec3d> p = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
+                            {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
+                            {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+    for (auto& v : p)
+        v = normalize(v);
     std::vector<std::array<std::uint32_t, 3>> t = {
-        {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+        {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
         {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-        {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+        {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
     for (int l = 0; l < level; ++l) {
         std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
         auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
             auto key = std::minmax(a, b);
             auto it = mid.find(key);
-            if (it != mid.end()) return it->second;
+            if (it != mid.end())
+                return it->second;
             p.push_back(normalize((p[a] + p[b]) * 0.5));
             const auto id = static_cast<std::uint32_t>(p.size() - 1);
             mid.emplace(key, id);
@@ -91,7 +93,8 @@ inline Object icosphere_object(int level, Vec3d center = {0, 0, 0}, double radiu
         }
         t.swap(next);
     }
-    for (auto& v : p) v = center + v * radius;
+    for (auto& v : p)
+        v = center + v * radius;
     return mesh_object("icosphere", std::move(p), std::move(t));
 }
 

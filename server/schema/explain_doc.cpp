@@ -10,9 +10,12 @@ using engine::format_shortest;
 
 const char* kind_name(engine::ObjectKind k) {
     switch (k) {
-        case engine::ObjectKind::sphere: return "sphere";
-        case engine::ObjectKind::triangle: return "triangle";
-        case engine::ObjectKind::mesh: return "mesh";
+        case engine::ObjectKind::sphere:
+            return "sphere";
+        case engine::ObjectKind::triangle:
+            return "triangle";
+        case engine::ObjectKind::mesh:
+            return "mesh";
     }
     return "mesh";
 }
@@ -23,7 +26,8 @@ void write_object(JsonWriter& w, const engine::ObjectWork& o) {
     w.raw(",\"type\":").string(kind_name(o.kind));
     w.raw(",\"steps\":[");
     for (std::size_t i = 0; i < o.steps.size(); ++i) {
-        if (i) w.ch(',');
+        if (i)
+            w.ch(',');
         w.string(o.steps[i]);
     }
     w.ch(']');
@@ -33,7 +37,8 @@ void write_object(JsonWriter& w, const engine::ObjectWork& o) {
         w.raw(",\"c\":").number(s.c).raw("},\"discriminant\":").number(s.discriminant);
         w.raw(",\"roots\":[");
         for (std::size_t i = 0; i < s.roots.size(); ++i) {
-            if (i) w.ch(',');
+            if (i)
+                w.ch(',');
             w.number(s.roots[i]);
         }
         w.ch(']');
@@ -49,17 +54,21 @@ void write_object(JsonWriter& w, const engine::ObjectWork& o) {
         } else {
             w.raw("null");
         }
-        if (t.point) w.raw(",\"point\":").vec(*t.point);
+        if (t.point)
+            w.raw(",\"point\":").vec(*t.point);
         if (t.t) {
             w.raw(",\"cross_products\":[").vec(t.cross[0]).ch(',').vec(t.cross[1]).ch(',');
             w.vec(t.cross[2]).ch(']');
             w.raw(",\"same_direction\":").boolean(t.same_direction);
         }
     }
-    if (o.kind == engine::ObjectKind::mesh) w.raw(",\"triangles\":").integer(o.triangles);
+    if (o.kind == engine::ObjectKind::mesh)
+        w.raw(",\"triangles\":").integer(o.triangles);
     w.raw(",\"hit\":").boolean(o.hit);
-    if (o.t && !o.triangle) w.raw(",\"t\":").number(*o.t);
-    if (!o.hit) w.raw(",\"reason\":").string(o.reason);
+    if (o.t && !o.triangle)
+        w.raw(",\"t\":").number(*o.t);
+    if (!o.hit)
+        w.raw(",\"reason\":").string(o.reason);
     w.ch('}');
 }
 
@@ -71,7 +80,8 @@ std::string write_explain_json(const engine::Explanation& ex, const engine::Ray&
     w.raw("{\"ray\":{\"origin\":").vec(ray.origin).raw(",\"direction\":").vec(ray.direction);
     w.raw(",\"tmin\":").number(ray.tmin).raw(",\"tmax\":").number(ray.tmax).raw("},\"objects\":[");
     for (std::size_t i = 0; i < ex.objects.size(); ++i) {
-        if (i) w.ch(',');
+        if (i)
+            w.ch(',');
         write_object(w, ex.objects[i]);
     }
     w.raw("],\"first_hit\":");
@@ -105,18 +115,20 @@ std::string write_explain_markdown(const engine::Explanation& ex, const engine::
           tex_vec(ray.direction) + "$$\n\n";
     for (const auto& o : ex.objects) {
         md += "## " + o.name + " (" + kind_name(o.kind) + ")\n\n";
-        for (const auto& s : o.steps) md += "- $" + s + "$\n";
+        for (const auto& s : o.steps)
+            md += "- $" + s + "$\n";
         md += "\n";
         if (o.sphere) {
             const auto& s = *o.sphere;
             md += "Coefficients $A = " + format_shortest(s.a) + "$, $B = " + format_shortest(s.b) +
-                  "$, $C = " + format_shortest(s.c) + "$; discriminant $B^2 - 4AC = " +
-                  format_shortest(s.discriminant) + "$.\n\n";
+                  "$, $C = " + format_shortest(s.c) +
+                  "$; discriminant $B^2 - 4AC = " + format_shortest(s.discriminant) + "$.\n\n";
         }
         if (o.triangle && o.triangle->t) {
             md += "The cross products $da \\times db$, $db \\times dc$, $dc \\times da$ ";
-            md += o.triangle->same_direction ? "point the same way: $d$ is inside $abc$.\n\n"
-                                             : "do not point the same way: $d$ is outside $abc$.\n\n";
+            md += o.triangle->same_direction
+                      ? "point the same way: $d$ is inside $abc$.\n\n"
+                      : "do not point the same way: $d$ is outside $abc$.\n\n";
         }
         md += o.hit ? "**Hit** at $t = " + format_shortest(*o.t) + "$.\n\n"
                     : "**Miss**: " + o.reason + ".\n\n";

@@ -19,7 +19,8 @@ std::string child_path(const std::string& path, const std::string& key) {
 }
 
 double read_number(const Json& j, const std::string& path, const char* code) {
-    if (!j.is_number()) throw api_error(code, path + " must be a number", path);
+    if (!j.is_number())
+        throw api_error(code, path + " must be a number", path);
     const double v = j.get<double>();
     if (!std::isfinite(v)) {
         throw api_error("bad_json", path + " is out of range (JSON cannot carry infinity)", path);
@@ -36,7 +37,8 @@ engine::Vec3d read_vec3(const Json& j, const std::string& path, const char* code
 }
 
 std::string read_string(const Json& j, const std::string& path, const char* code) {
-    if (!j.is_string()) throw api_error(code, path + " must be a string", path);
+    if (!j.is_string())
+        throw api_error(code, path + " must be a string", path);
     return j.get<std::string>();
 }
 
@@ -47,8 +49,8 @@ const Json* member(const Json& j, const char* key) {
 
 void require_object(const Json& j, const std::string& path, const char* code) {
     if (!j.is_object()) {
-        throw api_error(code, (path.empty() ? std::string("the body") : path) + " must be an object",
-                        path);
+        throw api_error(
+            code, (path.empty() ? std::string("the body") : path) + " must be an object", path);
     }
 }
 

@@ -2,9 +2,9 @@
 // Typed reads from a parsed JSON document, each naming the JSON pointer of what it reads so that
 // an error says exactly which input is wrong. Reads go through find()/at(), never operator[].
 
-#include <nlohmann/json.hpp>
-
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "engine/math/vec3.h"
 #include "server/api_error.h"

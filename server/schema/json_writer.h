@@ -15,7 +15,7 @@
 namespace raycastd::server {
 
 class JsonWriter {
-public:
+  public:
     explicit JsonWriter(std::string& out) : out_(out) {}
 
     JsonWriter& raw(std::string_view s) {
@@ -28,7 +28,8 @@ public:
     }
     /// A double; non-finite values (which JSON cannot carry) are written as null.
     JsonWriter& number(double v) {
-        if (!std::isfinite(v)) return raw("null");
+        if (!std::isfinite(v))
+            return raw("null");
         char buf[32];
         out_.append(buf, engine::format_shortest(v, buf));
         return *this;
@@ -52,7 +53,7 @@ public:
         return ch(':');
     }
 
-private:
+  private:
     std::string& out_;
 };
 
@@ -62,11 +63,21 @@ inline JsonWriter& JsonWriter::string(std::string_view s) {
     for (char c : s) {
         const auto u = static_cast<unsigned char>(c);
         switch (c) {
-            case '"': out_.append("\\\""); break;
-            case '\\': out_.append("\\\\"); break;
-            case '\n': out_.append("\\n"); break;
-            case '\r': out_.append("\\r"); break;
-            case '\t': out_.append("\\t"); break;
+            case '"':
+                out_.append("\\\"");
+                break;
+            case '\\':
+                out_.append("\\\\");
+                break;
+            case '\n':
+                out_.append("\\n");
+                break;
+            case '\r':
+                out_.append("\\r");
+                break;
+            case '\t':
+                out_.append("\\t");
+                break;
             default:
                 if (u < 0x20) {
                     out_.append("\\u00");

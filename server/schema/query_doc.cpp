@@ -1,8 +1,8 @@
 #include "server/schema/query_doc.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
+
+#include <tbb/parallel_for.h>
 
 #include "server/schema/json_writer.h"
 
@@ -14,16 +14,23 @@ constexpr const char* kInvalidRay = "invalid_ray";
 constexpr const char* kInvalidRequest = "invalid_request";
 
 engine::Ray parse_ray(const Json& j, const std::string& path, std::size_t index) {
-    if (!j.is_object()) throw api_error(kInvalidRay, "ray " + std::to_string(index) + " must be an object", path);
+    if (!j.is_object())
+        throw api_error(kInvalidRay, "ray " + std::to_string(index) + " must be an object", path);
     engine::Ray r;
     const Json* o = member(j, "origin");
-    if (!o) throw api_error(kInvalidRay, "ray " + std::to_string(index) + ": origin is required", path + "/origin");
+    if (!o)
+        throw api_error(kInvalidRay, "ray " + std::to_string(index) + ": origin is required",
+                        path + "/origin");
     r.origin = read_vec3(*o, path + "/origin", kInvalidRay);
     const Json* d = member(j, "direction");
-    if (!d) throw api_error(kInvalidRay, "ray " + std::to_string(index) + ": direction is required", path + "/direction");
+    if (!d)
+        throw api_error(kInvalidRay, "ray " + std::to_string(index) + ": direction is required",
+                        path + "/direction");
     r.direction = read_vec3(*d, path + "/direction", kInvalidRay);
-    if (const Json* v = member(j, "tmin")) r.tmin = read_number(*v, path + "/tmin", kInvalidRay);
-    if (const Json* v = member(j, "tmax")) r.tmax = read_number(*v, path + "/tmax", kInvalidRay);
+    if (const Json* v = member(j, "tmin"))
+        r.tmin = read_number(*v, path + "/tmin", kInvalidRay);
+    if (const Json* v = member(j, "tmax"))
+        r.tmax = read_number(*v, path + "/tmax", kInvalidRay);
     engine::Status st = engine::validate_ray(r, index);
     if (!st.ok()) {
         // validate_ray names "/rays/i/..."; re-root it under this request's prefix.
@@ -36,20 +43,30 @@ engine::Ray parse_ray(const Json& j, const std::string& path, std::size_t index)
 }  // namespace
 
 FieldMask parse_fields(const Json& j, const std::string& path) {
-    if (!j.is_array()) throw api_error(kInvalidRequest, path + " must be an array of names", path);
+    if (!j.is_array())
+        throw api_error(kInvalidRequest, path + " must be an array of names", path);
     FieldMask m{false, false, false, false, false, false, false, false, false};
     for (std::size_t i = 0; i < j.size(); ++i) {
         const std::string p = child_path(path, i);
         const std::string f = read_string(j.at(i), p, kInvalidRequest);
-        if (f == "t") m.t = true;
-        else if (f == "t_err") m.t_err = true;
-        else if (f == "point") m.point = true;
-        else if (f == "normal") m.normal = m.front_face = true;
-        else if (f == "front_face") m.front_face = true;
-        else if (f == "object") m.object = true;
-        else if (f == "name") m.name = true;
-        else if (f == "primitive") m.primitive = true;
-        else if (f == "barycentric") m.barycentric = true;
+        if (f == "t")
+            m.t = true;
+        else if (f == "t_err")
+            m.t_err = true;
+        else if (f == "point")
+            m.point = true;
+        else if (f == "normal")
+            m.normal = m.front_face = true;
+        else if (f == "front_face")
+            m.front_face = true;
+        else if (f == "object")
+            m.object = true;
+        else if (f == "name")
+            m.name = true;
+        else if (f == "primitive")
+            m.primitive = true;
+        else if (f == "barycentric")
+            m.barycentric = true;
         else {
             throw api_error(kInvalidRequest,
                             "unknown field \"" + f +
@@ -66,33 +83,49 @@ namespace {
 void write_hit(JsonWriter& w, const engine::Scene& scene, const engine::Ray& ray,
                const engine::Hit& h, const FieldMask& f) {
     w.raw("{\"hit\":true");
-    if (f.t) w.raw(",\"t\":").number(h.t);
-    if (f.t_err) w.raw(",\"t_err\":").number(h.t_err);
-    if (f.point) w.raw(",\"point\":").vec(ray.at(h.t));
-    if (f.normal) w.raw(",\"normal\":").vec(h.normal);
-    if (f.front_face) w.raw(",\"front_face\":").boolean(h.front_face);
-    if (f.object) w.raw(",\"object\":").integer(h.object);
-    if (f.name) w.raw(",\"name\":").string(scene.objects[h.object].name);
-    if (f.primitive) w.raw(",\"primitive\":").integer(h.primitive);
-    if (f.barycentric) w.raw(",\"barycentric\":[").number(h.u).ch(',').number(h.v).ch(']');
+    if (f.t)
+        w.raw(",\"t\":").number(h.t);
+    if (f.t_err)
+        w.raw(",\"t_err\":").number(h.t_err);
+    if (f.point)
+        w.raw(",\"point\":").vec(ray.at(h.t));
+    if (f.normal)
+        w.raw(",\"normal\":").vec(h.normal);
+    if (f.front_face)
+        w.raw(",\"front_face\":").boolean(h.front_face);
+    if (f.object)
+        w.raw(",\"object\":").integer(h.object);
+    if (f.name)
+        w.raw(",\"name\":").string(scene.objects[h.object].name);
+    if (f.primitive)
+        w.raw(",\"primitive\":").integer(h.primitive);
+    if (f.barycentric)
+        w.raw(",\"barycentric\":[").number(h.u).ch(',').number(h.v).ch(']');
     w.ch('}');
 }
 
 }  // namespace
 
 engine::Mode parse_mode(const std::string& s, const std::string& path) {
-    if (s == "closest") return engine::Mode::closest;
-    if (s == "any") return engine::Mode::any;
-    if (s == "all") return engine::Mode::all;
-    if (s == "count") return engine::Mode::count;
+    if (s == "closest")
+        return engine::Mode::closest;
+    if (s == "any")
+        return engine::Mode::any;
+    if (s == "all")
+        return engine::Mode::all;
+    if (s == "count")
+        return engine::Mode::count;
     throw api_error(kInvalidRequest,
                     "unknown mode \"" + s + "\" (expected closest, any, all, count)", path);
 }
 
 engine::Precision parse_precision(const std::string& s, const std::string& path) {
-    if (s == "fast") return engine::Precision::fast;
-    if (s == "refined") return engine::Precision::refined;
-    if (s == "exact") return engine::Precision::exact;
+    if (s == "fast")
+        return engine::Precision::fast;
+    if (s == "refined")
+        return engine::Precision::refined;
+    if (s == "exact")
+        return engine::Precision::exact;
     throw api_error(kInvalidRequest,
                     "unknown precision \"" + s + "\" (expected fast, refined, exact)", path);
 }
@@ -102,19 +135,23 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
     require_object(body, prefix, kInvalidRequest);
     IntersectRequest req;
     if (const Json* m = member(body, "mode")) {
-        req.options.mode = parse_mode(read_string(*m, prefix + "/mode", kInvalidRequest), prefix + "/mode");
+        req.options.mode =
+            parse_mode(read_string(*m, prefix + "/mode", kInvalidRequest), prefix + "/mode");
     }
     if (const Json* p = member(body, "precision")) {
         req.options.precision = parse_precision(
             read_string(*p, prefix + "/precision", kInvalidRequest), prefix + "/precision");
     }
-    if (const Json* f = member(body, "fields")) req.fields = parse_fields(*f, prefix + "/fields");
+    if (const Json* f = member(body, "fields"))
+        req.fields = parse_fields(*f, prefix + "/fields");
     req.options.want_normal = req.fields.normal || req.fields.front_face;
 
     const Json* rays = member(body, "rays");
     const std::string rpath = prefix + "/rays";
-    if (!rays) throw api_error(kInvalidRequest, rpath + " is required", rpath);
-    if (!rays->is_array()) throw api_error(kInvalidRequest, rpath + " must be an array", rpath);
+    if (!rays)
+        throw api_error(kInvalidRequest, rpath + " is required", rpath);
+    if (!rays->is_array())
+        throw api_error(kInvalidRequest, rpath + " must be an array", rpath);
     if (rays->size() > max_rays) {
         throw api_error("too_large",
                         std::to_string(rays->size()) + " rays is over the limit of " +
@@ -136,7 +173,8 @@ void write_entries(const engine::Scene& scene, const IntersectRequest& req,
                    std::string& out) {
     JsonWriter w(out);
     for (std::size_t i = begin; i < end; ++i) {
-        if (i) w.ch(',');
+        if (i)
+            w.ch(',');
         switch (req.options.mode) {
             case engine::Mode::closest:
                 if (r.hits[i].valid()) {
@@ -155,7 +193,8 @@ void write_entries(const engine::Scene& scene, const IntersectRequest& req,
                 const std::uint32_t b = r.offsets[i], e = r.offsets[i + 1];
                 w.raw("{\"count\":").integer(e - b).raw(",\"hits\":[");
                 for (std::uint32_t k = b; k < e; ++k) {
-                    if (k != b) w.ch(',');
+                    if (k != b)
+                        w.ch(',');
                     write_hit(w, scene, req.rays[i], r.hits[k], req.fields);
                 }
                 w.raw("]}");
@@ -190,7 +229,8 @@ std::string write_intersect_response(const engine::Scene& scene, const Intersect
             parts[c].reserve((e - b) * 220);
             write_entries(scene, req, r, b, e, parts[c]);
         });
-        for (const auto& p : parts) out.append(p);
+        for (const auto& p : parts)
+            out.append(p);
     }
     w.raw("]}");
     return out;

@@ -1,11 +1,11 @@
 #include "server/schema/scene_doc.h"
 
-#include "engine/format.h"
-
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <map>
+
+#include "engine/format.h"
 
 namespace raycastd::server {
 
@@ -28,19 +28,23 @@ void warn_unknown_keys(const Json& j, const std::string& path,
 double read_in_range(const Json& obj, const char* key, const std::string& path, double fallback,
                      double lo, double hi, const char* what) {
     const Json* v = member(obj, key);
-    if (!v) return fallback;
+    if (!v)
+        return fallback;
     const std::string p = child_path(path, key);
     const double x = read_number(*v, p, kInvalid);
-    if (x < lo || x > hi) throw api_error(kInvalid, p + " must be " + what, p);
+    if (x < lo || x > hi)
+        throw api_error(kInvalid, p + " must be " + what, p);
     return x;
 }
 
 Vec3d read_color(const Json& obj, const char* key, const std::string& path, const Vec3d& fallback) {
     const Json* v = member(obj, key);
-    if (!v) return fallback;
+    if (!v)
+        return fallback;
     const std::string p = child_path(path, key);
     const Vec3d c = read_vec3(*v, p, kInvalid);
-    if (c.x < 0 || c.y < 0 || c.z < 0) throw api_error(kInvalid, p + " must be ≥ 0", p);
+    if (c.x < 0 || c.y < 0 || c.z < 0)
+        throw api_error(kInvalid, p + " must be ≥ 0", p);
     return c;
 }
 
@@ -67,7 +71,8 @@ void parse_materials(const Json& doc, const std::string& prefix, Scene& scene,
     scene.materials.push_back(engine::Material{});  // 0: the default grey Phong material
     scene.material_names.push_back("default");
     const Json* mats = member(doc, "materials");
-    if (!mats) return;
+    if (!mats)
+        return;
     const std::string path = prefix + "/materials";
     require_object(*mats, path, kInvalid);
     for (auto it = mats->begin(); it != mats->end(); ++it) {
@@ -82,7 +87,8 @@ engine::Light parse_light(const Json& j, const std::string& path, Scene& scene) 
     require_object(j, path, kInvalid);
     warn_unknown_keys(j, path, {"type", "position", "direction", "intensity", "name"}, scene);
     const Json* type = member(j, "type");
-    if (!type) throw api_error(kInvalid, path + "/type is required", path + "/type");
+    if (!type)
+        throw api_error(kInvalid, path + "/type is required", path + "/type");
     const std::string t = read_string(*type, path + "/type", kInvalid);
     engine::Light l;
     l.intensity = read_color(j, "intensity", path, l.intensity);
@@ -91,12 +97,14 @@ engine::Light parse_light(const Json& j, const std::string& path, Scene& scene) 
     } else if (t == "point") {
         l.type = engine::LightType::point;
         const Json* pos = member(j, "position");
-        if (!pos) throw api_error(kInvalid, path + "/position is required", path + "/position");
+        if (!pos)
+            throw api_error(kInvalid, path + "/position is required", path + "/position");
         l.position = read_vec3(*pos, path + "/position", kInvalid);
     } else if (t == "directional") {
         l.type = engine::LightType::directional;
         const Json* dir = member(j, "direction");
-        if (!dir) throw api_error(kInvalid, path + "/direction is required", path + "/direction");
+        if (!dir)
+            throw api_error(kInvalid, path + "/direction is required", path + "/direction");
         l.direction = read_vec3(*dir, path + "/direction", kInvalid);
         if (l.direction == Vec3d{0, 0, 0}) {
             throw api_error(kInvalid, path + "/direction must not be zero", path + "/direction");
@@ -109,22 +117,25 @@ engine::Light parse_light(const Json& j, const std::string& path, Scene& scene) 
     return l;
 }
 
-engine::Object parse_object(const Json& j, const std::string& path, std::size_t index,
-                            Scene& scene, const std::map<std::string, std::uint32_t>& materials,
+engine::Object parse_object(const Json& j, const std::string& path, std::size_t index, Scene& scene,
+                            const std::map<std::string, std::uint32_t>& materials,
                             const MeshObjectLoader& load_mesh) {
     require_object(j, path, kInvalid);
     const Json* type = member(j, "type");
-    if (!type) throw api_error(kInvalid, path + "/type is required", path + "/type");
+    if (!type)
+        throw api_error(kInvalid, path + "/type is required", path + "/type");
     const std::string t = read_string(*type, path + "/type", kInvalid);
     engine::Object o;
     if (t == "sphere") {
         warn_unknown_keys(j, path, {"type", "name", "material", "center", "radius"}, scene);
         o.kind = engine::ObjectKind::sphere;
         const Json* c = member(j, "center");
-        if (!c) throw api_error(kInvalid, path + "/center is required", path + "/center");
+        if (!c)
+            throw api_error(kInvalid, path + "/center is required", path + "/center");
         o.sphere.center = read_vec3(*c, path + "/center", kInvalid);
         const Json* r = member(j, "radius");
-        if (!r) throw api_error(kInvalid, path + "/radius is required", path + "/radius");
+        if (!r)
+            throw api_error(kInvalid, path + "/radius is required", path + "/radius");
         o.sphere.radius = read_number(*r, path + "/radius", kInvalid);
         if (!(o.sphere.radius > 0)) {
             throw api_error(kInvalid,
@@ -161,7 +172,8 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
                         path + "/type");
     }
     o.name = (t == "mesh" ? std::string("mesh") : t) + " " + std::to_string(index + 1);
-    if (const Json* n = member(j, "name")) o.name = read_string(*n, path + "/name", kInvalid);
+    if (const Json* n = member(j, "name"))
+        o.name = read_string(*n, path + "/name", kInvalid);
     if (const Json* m = member(j, "material")) {
         const std::string name = read_string(*m, path + "/material", kInvalid);
         auto it = materials.find(name);
@@ -179,9 +191,12 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
 engine::Camera parse_camera(const Json& j, const std::string& path, const char* code) {
     require_object(j, path, code);
     engine::Camera c;
-    if (const Json* v = member(j, "position")) c.position = read_vec3(*v, path + "/position", code);
-    if (const Json* v = member(j, "look_at")) c.look_at = read_vec3(*v, path + "/look_at", code);
-    if (const Json* v = member(j, "up")) c.up = read_vec3(*v, path + "/up", code);
+    if (const Json* v = member(j, "position"))
+        c.position = read_vec3(*v, path + "/position", code);
+    if (const Json* v = member(j, "look_at"))
+        c.look_at = read_vec3(*v, path + "/look_at", code);
+    if (const Json* v = member(j, "up"))
+        c.up = read_vec3(*v, path + "/up", code);
     if (const Json* v = member(j, "fov_y_deg")) {
         c.fov_y_deg = read_number(*v, path + "/fov_y_deg", code);
         if (!(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0)) {
@@ -208,15 +223,18 @@ engine::Scene parse_scene_doc(const Json& doc, const std::string& prefix,
 
     const Json* objects = member(doc, "objects");
     const std::string opath = prefix + "/objects";
-    if (!objects) throw api_error(kInvalid, opath + " is required", opath);
-    if (!objects->is_array()) throw api_error(kInvalid, opath + " must be an array", opath);
+    if (!objects)
+        throw api_error(kInvalid, opath + " is required", opath);
+    if (!objects->is_array())
+        throw api_error(kInvalid, opath + " must be an array", opath);
     for (std::size_t i = 0; i < objects->size(); ++i) {
         scene.objects.push_back(
             parse_object(objects->at(i), child_path(opath, i), i, scene, materials, load_mesh));
     }
     if (const Json* lights = member(doc, "lights")) {
         const std::string lpath = prefix + "/lights";
-        if (!lights->is_array()) throw api_error(kInvalid, lpath + " must be an array", lpath);
+        if (!lights->is_array())
+            throw api_error(kInvalid, lpath + " must be an array", lpath);
         for (std::size_t i = 0; i < lights->size(); ++i) {
             scene.lights.push_back(parse_light(lights->at(i), child_path(lpath, i), scene));
         }
@@ -229,7 +247,8 @@ engine::Scene parse_scene_doc(const Json& doc, const std::string& prefix,
         scene.camera = parse_camera(*cam, cpath, kInvalid);
     }
     engine::Status st = engine::validate(scene);
-    if (!st.ok()) throw from_status(st, prefix);
+    if (!st.ok())
+        throw from_status(st, prefix);
     return scene;
 }
 

@@ -1,8 +1,8 @@
 #include "server/schema/scene_doc.h"
 
-#include <gtest/gtest.h>
-
 #include <limits>
+
+#include <gtest/gtest.h>
 
 namespace raycastd::server {
 namespace {
@@ -54,24 +54,29 @@ TEST(SceneDoc, ErrorsCarryJsonPointers) {
     EXPECT_STREQ(e.what(), "objects[2].radius must be > 0, got -1");
 
     EXPECT_EQ(parse_error(R"({"objects": [{"type":"cone"}]})").path, "/objects/0/type");
-    EXPECT_EQ(parse_error(R"({"objects": [{"type":"sphere","radius":1}]})").path, "/objects/0/center");
+    EXPECT_EQ(parse_error(R"({"objects": [{"type":"sphere","radius":1}]})").path,
+              "/objects/0/center");
     EXPECT_EQ(parse_error(R"({"objects": [{"type":"sphere","center":[0,0],"radius":1}]})").path,
               "/objects/0/center");
     EXPECT_EQ(parse_error(R"({"objects": [{"type":"sphere","center":[0,"x",0],"radius":1}]})").path,
               "/objects/0/center/1");
-    EXPECT_EQ(parse_error(R"({"objects": [{"type":"sphere","center":[0,0,0],"radius":1,"material":"nope"}]})")
-                  .path,
-              "/objects/0/material");
+    EXPECT_EQ(
+        parse_error(
+            R"({"objects": [{"type":"sphere","center":[0,0,0],"radius":1,"material":"nope"}]})")
+            .path,
+        "/objects/0/material");
     EXPECT_EQ(parse_error(R"({"objects": []," lights": 1, "lights": [{"type":"spot"}]})").path,
               "/lights/0/type");
     EXPECT_EQ(parse_error(R"({"objects": [], "materials": {"a/b": {"ior": 0}}})").path,
               "/materials/a~1b/ior");
     EXPECT_EQ(parse_error(R"({"objects": {}})").path, "/objects");
     EXPECT_EQ(parse_error(R"([1,2])").code, "invalid_scene");
-    EXPECT_EQ(parse_error(R"({"objects": [{"type":"triangle","vertices":[[0,0,0],[1,0,0]]}]})").path,
-              "/objects/0/vertices");
-    EXPECT_EQ(parse_error(R"({"objects": [], "camera": {"position":[0,0,0],"look_at":[0,0,0]}})").path,
-              "/camera/look_at");
+    EXPECT_EQ(
+        parse_error(R"({"objects": [{"type":"triangle","vertices":[[0,0,0],[1,0,0]]}]})").path,
+        "/objects/0/vertices");
+    EXPECT_EQ(
+        parse_error(R"({"objects": [], "camera": {"position":[0,0,0],"look_at":[0,0,0]}})").path,
+        "/camera/look_at");
 }
 
 // nlohmann's parser refuses 1e400 itself (App::parse_json_body maps that to bad_json); a

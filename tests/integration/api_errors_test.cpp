@@ -14,7 +14,7 @@ using Json = nlohmann::json;
 const char* kScene = R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2}]})";
 
 class ApiErrors : public ::testing::Test {
-protected:
+  protected:
     static void SetUpTestSuite() {
         server_ = new testing::ServerProcess({"--max-body-mb", "1", "--max-rays", "1000"});
     }
@@ -83,8 +83,7 @@ TEST_F(ApiErrors, InvalidScene) {
 }
 
 TEST_F(ApiErrors, InvalidRequest) {
-    expect_error("/v1/intersect",
-                 R"({"scene":{"objects":[]},"rays":[],"mode":"nearest"})", 400,
+    expect_error("/v1/intersect", R"({"scene":{"objects":[]},"rays":[],"mode":"nearest"})", 400,
                  "invalid_request", "/mode");
     expect_error("/v1/explain?format=pdf", R"({})", 400, "unsupported_format");
     expect_error("/v1/explain", R"({"scene":{"objects":[]}})", 400, "invalid_request", "/ray");
@@ -92,7 +91,8 @@ TEST_F(ApiErrors, InvalidRequest) {
 
 TEST_F(ApiErrors, TooLarge) {
     std::string rays = "[";
-    for (int i = 0; i < 1001; ++i) rays += std::string(i ? "," : "") + R"({"origin":[0,0,0],"direction":[0,0,1]})";
+    for (int i = 0; i < 1001; ++i)
+        rays += std::string(i ? "," : "") + R"({"origin":[0,0,0],"direction":[0,0,1]})";
     rays += "]";
     expect_error("/v1/intersect", intersect(kScene, rays), 413, "too_large", "/rays");
     expect_error("/v1/intersect", std::string(2u << 20, ' '), 413, "too_large");

@@ -1,13 +1,13 @@
 // The scene registry over HTTP with the real binary: registration (documents and raw models),
 // content addressing, confinement to the scene root, broken files, and restarts after kill -9.
 
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
 
 #include "tests/support/encode.h"
 #include "tests/support/server_process.h"
@@ -27,8 +27,8 @@ std::string read_file(const fs::path& p) {
     return ss.str();
 }
 
-#define REQUIRE_MODELS()                                                      \
-    if (!fs::exists(kModels)) {                                               \
+#define REQUIRE_MODELS()                                                     \
+    if (!fs::exists(kModels)) {                                              \
         GTEST_SKIP() << "models not found at " << kModels << " (../shared)"; \
     }
 
@@ -36,8 +36,9 @@ const char* kTutorial = R"({"objects":[{"type":"sphere","center":[0,0,10],"radiu
     {"type":"sphere","center":[0,3,8],"radius":2},{"type":"sphere","center":[0,1,9],"radius":2}]})";
 
 struct Scenes : ::testing::Test {
-    fs::path data = fs::temp_directory_path() / ("raycastd_it_" + std::to_string(::getpid()) + "_" +
-                                                 ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::path data = fs::temp_directory_path() /
+                    ("raycastd_it_" + std::to_string(::getpid()) + "_" +
+                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::unique_ptr<testing::ServerProcess> server;
 
     void SetUp() override {
@@ -49,7 +50,8 @@ struct Scenes : ::testing::Test {
         fs::remove_all(data);
     }
     void start() {
-        const std::string root = fs::exists(kModels) ? kModels.string() : std::string(RAYCASTD_SOURCE_DIR);
+        const std::string root =
+            fs::exists(kModels) ? kModels.string() : std::string(RAYCASTD_SOURCE_DIR);
         server = std::make_unique<testing::ServerProcess>(
             std::vector<std::string>{"--data-dir", data.string(), "--scene-root", root});
     }
@@ -61,7 +63,8 @@ struct Scenes : ::testing::Test {
                  const std::string& type = "application/json") {
         auto res = post(path, body, type);
         EXPECT_TRUE(res);
-        if (!res) return Json();
+        if (!res)
+            return Json();
         EXPECT_EQ(res->status, status) << res->body;
         return Json::parse(res->body);
     }
@@ -69,7 +72,8 @@ struct Scenes : ::testing::Test {
                            const std::string& type = "application/json") {
         auto res = post(path, body, type);
         EXPECT_TRUE(res);
-        if (!res) return "";
+        if (!res)
+            return "";
         EXPECT_EQ(res->status, status) << res->body;
         return Json::parse(res->body).at("error").at("code").get<std::string>();
     }
@@ -106,12 +110,14 @@ TEST_F(Scenes, RegisterTwiceSameIdThenQueryListDelete) {
     auto gone = server->client()->Get(("/v1/scenes/" + id).c_str());
     EXPECT_EQ(gone->status, 404);
     EXPECT_EQ(Json::parse(gone->body).at("error").at("code"), "scene_not_found");
-    EXPECT_EQ(error_code("/v1/scenes/" + id + "/intersect", R"({"rays":[]})", 404), "scene_not_found");
+    EXPECT_EQ(error_code("/v1/scenes/" + id + "/intersect", R"({"rays":[]})", 404),
+              "scene_not_found");
 }
 
 TEST_F(Scenes, BadDocumentsLeaveTheRegistryAlone) {
     post_ok("/v1/scenes", kTutorial, 201);
-    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"sphere","center":[0,0,0],"radius":-1}]})", 400),
+    EXPECT_EQ(error_code("/v1/scenes",
+                         R"({"objects":[{"type":"sphere","center":[0,0,0],"radius":-1}]})", 400),
               "invalid_scene");
     EXPECT_EQ(error_code("/v1/scenes", "{nope", 400), "bad_json");
     EXPECT_EQ(error_code("/v1/scenes", "hello", 400, "text/html"), "unsupported_format");
@@ -126,7 +132,8 @@ TEST_F(Scenes, RestartAfterKill9AnswersTheSameHits) {
                                    201, "model/gltf-binary");
     const std::string duck = duck_info.at("id");
     const std::string box =
-        post_ok("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"Box/glTF/Box.gltf"}]})", 201).at("id");
+        post_ok("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"Box/glTF/Box.gltf"}]})", 201)
+            .at("id");
     // Down the z axis through the centre of the duck's bounds.
     const Json& lo = duck_info.at("bounds").at("min");
     const Json& hi = duck_info.at("bounds").at("max");
@@ -145,7 +152,8 @@ TEST_F(Scenes, RestartAfterKill9AnswersTheSameHits) {
     EXPECT_EQ(Json::parse(list->body).at("scenes").size(), 3u);
     EXPECT_EQ(closest(duck, ray), duck_hit);
     EXPECT_EQ(closest(box, {{"origin", {0.1, 0.2, 5}}, {"direction", {0, 0, -1}}}), box_hit);
-    EXPECT_EQ(closest(tutorial, {{"origin", {0, 0, 0}}, {"direction", {0, 0, 1}}}).at("name"), "sphere 3");
+    EXPECT_EQ(closest(tutorial, {{"origin", {0, 0, 0}}, {"direction", {0, 0, 1}}}).at("name"),
+              "sphere 3");
     // Posting again after the restart still finds the same scene.
     EXPECT_EQ(post_ok("/v1/scenes", kTutorial, 200).at("id"), tutorial);
 }
@@ -155,21 +163,24 @@ TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
     Json duck = post_ok("/v1/scenes", read_file(kModels / "Duck/glTF-Binary/Duck.glb"), 201,
                         "model/gltf-binary");
     EXPECT_EQ(duck.at("triangles"), 4212);
-    Json bunny = post_ok("/v1/scenes", read_file(kModels / "stanford-bunny/stanford-bunny.obj"), 201,
-                         "model/obj");
+    Json bunny = post_ok("/v1/scenes", read_file(kModels / "stanford-bunny/stanford-bunny.obj"),
+                         201, "model/obj");
     EXPECT_EQ(bunny.at("triangles"), 69451);
-    Json stl = post_ok("/v1/scenes", read_file(kModels / "teapot_stl/teapot.stl"), 201, "application/sla");
+    Json stl =
+        post_ok("/v1/scenes", read_file(kModels / "teapot_stl/teapot.stl"), 201, "application/sla");
     EXPECT_EQ(stl.at("triangles"), 894);
     // Without a content type the bytes tell.
-    Json ply = post_ok("/v1/scenes", read_file(kModels / "Wuson/Wuson.ply"), 201, "application/octet-stream");
+    Json ply = post_ok("/v1/scenes", read_file(kModels / "Wuson/Wuson.ply"), 201,
+                       "application/octet-stream");
     EXPECT_EQ(ply.at("triangles"), 3732);
 }
 
 TEST_F(Scenes, SameGeometryInThreeGltfVariantsGivesIdenticalHits) {
     REQUIRE_MODELS();
     std::vector<std::string> ids;
-    for (const char* uri : {"BoxTextured/glTF/BoxTextured.gltf", "BoxTextured/glTF-Binary/BoxTextured.glb",
-                            "BoxTextured/glTF-Embedded/BoxTextured.gltf"}) {
+    for (const char* uri :
+         {"BoxTextured/glTF/BoxTextured.gltf", "BoxTextured/glTF-Binary/BoxTextured.glb",
+          "BoxTextured/glTF-Embedded/BoxTextured.gltf"}) {
         Json doc = {{"objects", {{{"type", "mesh"}, {"uri", uri}, {"name", "box"}}}}};
         ids.push_back(post_ok("/v1/scenes", doc.dump(), 201).at("id"));
     }
@@ -203,15 +214,17 @@ TEST_F(Scenes, MeshTransformAndInlineData) {
     ASSERT_EQ(hit.at("hit"), true);
     EXPECT_EQ(hit.at("t").get<double>(), 9.0);
     EXPECT_EQ(hit.at("normal"), Json::parse("[1, 0, 0]"));
-    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","data_base64":"AAAA"}]})", 400),
-              "invalid_scene");
-    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","format":"obj","data_base64":"@@"}]})", 400),
+    EXPECT_EQ(
+        error_code("/v1/scenes", R"({"objects":[{"type":"mesh","data_base64":"AAAA"}]})", 400),
+        "invalid_scene");
+    EXPECT_EQ(error_code("/v1/scenes",
+                         R"({"objects":[{"type":"mesh","format":"obj","data_base64":"@@"}]})", 400),
               "invalid_scene");
 }
 
 TEST_F(Scenes, PathTraversalIsRefused) {
-    for (const char* uri : {"../API.md", "/etc/passwd", "Box/../../API.md", "http://example.com/a.glb",
-                            "file:///etc/passwd"}) {
+    for (const char* uri : {"../API.md", "/etc/passwd", "Box/../../API.md",
+                            "http://example.com/a.glb", "file:///etc/passwd"}) {
         Json doc = {{"objects", {{{"type", "mesh"}, {"uri", uri}}}}};
         auto res = post("/v1/scenes", doc.dump());
         ASSERT_TRUE(res);
@@ -228,9 +241,13 @@ TEST_F(Scenes, SymlinkOutOfTheRootIsRefused) {
     std::ofstream(data.string() + "_secret.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     fs::create_symlink(data.string() + "_secret.obj", root / "link.obj");
     std::ofstream(root / "ok.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-    server = std::make_unique<testing::ServerProcess>(std::vector<std::string>{"--scene-root", root.string()});
-    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"link.obj"}]})", 400), "invalid_scene");
-    EXPECT_EQ(post_ok("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"ok.obj"}]})", 201).at("triangles"), 1);
+    server = std::make_unique<testing::ServerProcess>(
+        std::vector<std::string>{"--scene-root", root.string()});
+    EXPECT_EQ(error_code("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"link.obj"}]})", 400),
+              "invalid_scene");
+    EXPECT_EQ(post_ok("/v1/scenes", R"({"objects":[{"type":"mesh","uri":"ok.obj"}]})", 201)
+                  .at("triangles"),
+              1);
     fs::remove_all(root);
     fs::remove(data.string() + "_secret.obj");
 }
@@ -241,15 +258,22 @@ TEST_F(Scenes, BrokenModelsGet422AndNeverCrash) {
     for (const auto& entry : fs::recursive_directory_iterator(kModels / "invalid")) {
         const std::string ext = entry.path().extension().string();
         std::string type;
-        if (ext == ".glb") type = "model/gltf-binary";
-        if (ext == ".obj") type = "model/obj";
-        if (ext == ".stl") type = "application/sla";
-        if (ext == ".ply") type = "application/x-ply";
-        if (ext == ".off") type = "model/off";
-        if (type.empty() || !entry.is_regular_file()) continue;
+        if (ext == ".glb")
+            type = "model/gltf-binary";
+        if (ext == ".obj")
+            type = "model/obj";
+        if (ext == ".stl")
+            type = "application/sla";
+        if (ext == ".ply")
+            type = "application/x-ply";
+        if (ext == ".off")
+            type = "model/off";
+        if (type.empty() || !entry.is_regular_file())
+            continue;
         auto res = post("/v1/scenes", read_file(entry.path()), type);
         ASSERT_TRUE(res) << "server died on " << entry.path();
-        EXPECT_TRUE(res->status == 201 || res->status == 200 || (res->status >= 400 && res->status < 500))
+        EXPECT_TRUE(res->status == 201 || res->status == 200 ||
+                    (res->status >= 400 && res->status < 500))
             << entry.path() << " " << res->status << " " << res->body;
         if (res->status >= 400) {
             Json e = Json::parse(res->body).at("error");

@@ -1,11 +1,11 @@
 // The tutorial's Question 1 against the real raycastd binary: the grading-script path.
 
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <fstream>
 #include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "tests/support/server_process.h"
 
@@ -22,7 +22,7 @@ std::string read_file(const std::string& path) {
 }
 
 class Tutorial : public ::testing::Test {
-protected:
+  protected:
     static void SetUpTestSuite() { server_ = new testing::ServerProcess(); }
     static void TearDownTestSuite() {
         delete server_;
@@ -102,7 +102,8 @@ TEST_F(Tutorial, ExplainGivesTheWorkedSolution) {
 }
 
 TEST_F(Tutorial, ExplainMissIsNull) {
-    Json body = Json::parse(read_file(RAYCASTD_SOURCE_DIR "/clients/examples/tutorial-q1-explain.json"));
+    Json body =
+        Json::parse(read_file(RAYCASTD_SOURCE_DIR "/clients/examples/tutorial-q1-explain.json"));
     body["ray"]["direction"] = {0, 0, -1};
     auto res = server_->client()->Post("/v1/explain", body.dump(), "application/json");
     ASSERT_TRUE(res);

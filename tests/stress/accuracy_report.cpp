@@ -44,7 +44,8 @@ void write_raw(const std::filesystem::path& file, const std::vector<T>& v) {
 std::string json_string(const std::string& s) {
     std::string out = "\"";
     for (char ch : s) {
-        if (ch == '"' || ch == '\\') out += '\\';
+        if (ch == '"' || ch == '\\')
+            out += '\\';
         out += ch;
     }
     return out + "\"";
@@ -53,7 +54,8 @@ std::string json_string(const std::string& s) {
 /// A number for JSON; an infinite error (a nonzero t against a reference of exactly 0) is
 /// written as Infinity, which Python's json module reads.
 std::string num(double v) {
-    if (std::isinf(v)) return v > 0 ? "Infinity" : "-Infinity";
+    if (std::isinf(v))
+        return v > 0 ? "Infinity" : "-Infinity";
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.6g", v);
     return buf;
@@ -70,14 +72,15 @@ std::string stats_json(const std::string& suite, const ModeStats& m) {
                   json_string(suite).c_str(), json_string(m.path).c_str(),
                   json_string(m.mode).c_str(), m.rays, m.judged, m.near_ties, m.near_tie_disagree,
                   m.wrong_hit, m.wrong_object, m.leaks, m.t_err_violations,
-                  num(m.max_rel()).c_str(), num(m.median_rel()).c_str(),
-                  num(m.max_ulps()).c_str(), num(m.median_ulps()).c_str(), m.seconds);
+                  num(m.max_rel()).c_str(), num(m.median_rel()).c_str(), num(m.max_ulps()).c_str(),
+                  num(m.median_ulps()).c_str(), m.seconds);
     return buf;
 }
 
 bool triangles_only(const StressCase& c) {
     for (const auto& o : c.scene->objects) {
-        if (o.kind == raycastd::engine::ObjectKind::sphere) return false;
+        if (o.kind == raycastd::engine::ObjectKind::sphere)
+            return false;
     }
     return true;
 }
@@ -90,9 +93,11 @@ void export_case(const StressCase& c, const std::filesystem::path& dir, const st
     for (std::uint32_t i = 0; i < c.scene->objects.size(); ++i) {
         const engine::TriangleMesh& m = *c.scene->objects[i].mesh;
         const auto base = static_cast<std::uint32_t>(vertices.size() / 3);
-        for (const auto& p : m.positions) vertices.insert(vertices.end(), {p.x, p.y, p.z});
+        for (const auto& p : m.positions)
+            vertices.insert(vertices.end(), {p.x, p.y, p.z});
         for (std::uint32_t t = 0; t < m.size(); ++t) {
-            for (auto k : m.triangles[t]) tris.push_back(base + k);
+            for (auto k : m.triangles[t])
+                tris.push_back(base + k);
             tri_object.push_back(i);
             tri_prim.push_back(t);
         }
@@ -105,9 +110,9 @@ void export_case(const StressCase& c, const std::filesystem::path& dir, const st
         rays.insert(rays.end(), {ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x,
                                  ray.direction.y, ray.direction.z, ray.tmin, ray.tmax});
         const stress::RefAnswer& a = answers.coarse[r];
-        ref.insert(ref.end(), {double(a.hit_robust), double(a.hit), double(a.object),
-                               double(a.object_robust), double(a.first_on_closed),
-                               stress::to_double(a.t_first_robust)});
+        ref.insert(ref.end(),
+                   {double(a.hit_robust), double(a.hit), double(a.object), double(a.object_robust),
+                    double(a.first_on_closed), stress::to_double(a.t_first_robust)});
         for (const stress::RefCrossing& x : a.crossings) {
             const double t = stress::to_double(x.t);
             const double tie = std::max(bands.tie_ulps * stress::ulp(t), bands.tie_rel * x.t_scale);
@@ -150,8 +155,8 @@ int explain(const std::string& file) {
         std::printf("ray %zu: o = (%a, %a, %a) d = (%a, %a, %a) [%g, %g]\n", i, r.origin.x,
                     r.origin.y, r.origin.z, r.direction.x, r.direction.y, r.direction.z, r.tmin,
                     r.tmax);
-        for (auto p : {engine::Precision::fast, engine::Precision::refined,
-                       engine::Precision::exact}) {
+        for (auto p :
+             {engine::Precision::fast, engine::Precision::refined, engine::Precision::exact}) {
             engine::QueryOptions opt;
             opt.precision = p;
             const auto res = e.intersect({r}, opt);
@@ -231,13 +236,14 @@ int main(int argc, char** argv) {
     first = true;
     int index = 0;
     for (const StressCase& c : cases) {
-        if (!triangles_only(c)) continue;
+        if (!triangles_only(c))
+            continue;
         const std::string stem = "case" + std::to_string(index++);
         export_case(c, out_dir / "open3d", stem);
         json += (first ? "  " : ",\n  ") + std::string("{\"suite\": ") + json_string(c.suite) +
-                ", \"stem\": " + json_string(stem) + ", \"rays\": " +
-                std::to_string(c.rays.size()) + ", \"triangles\": " +
-                std::to_string(c.scene->triangle_count()) + "}";
+                ", \"stem\": " + json_string(stem) +
+                ", \"rays\": " + std::to_string(c.rays.size()) +
+                ", \"triangles\": " + std::to_string(c.scene->triangle_count()) + "}";
         first = false;
     }
     json += "\n ]}\n";

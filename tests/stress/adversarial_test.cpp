@@ -7,10 +7,10 @@
 //            its t_err;
 //   fast     recorded (printed and RecordProperty), never asserted.
 
-#include <gtest/gtest.h>
-
 #include <cstdio>
 #include <functional>
+
+#include <gtest/gtest.h>
 
 #include "tests/stress/generators.h"
 
@@ -34,7 +34,8 @@ void check(const std::vector<StressCase>& cases) {
         record(key + ".wrong", static_cast<double>(m.wrong()));
         record(key + ".leaks", static_cast<double>(m.leaks));
         SCOPED_TRACE(s.suite + " " + m.mode);
-        if (m.mode == "fast") continue;  // recorded, not asserted
+        if (m.mode == "fast")
+            continue;  // recorded, not asserted
         // Under the float bands every ray of a suite may be a near-tie (a sphere of radius 1e-6
         // at distance 1e3 is below what a float traversal resolves); exact must judge some.
         if (m.mode == "exact") {
@@ -60,21 +61,44 @@ GenOptions options() {
     return g;
 }
 
-TEST(Stress, FarSpheres) { check(far_spheres(options())); }
-TEST(Stress, TinySpheres) { check(tiny_spheres(options())); }
-TEST(Stress, TangentRays) { check(tangent_rays(options())); }
-TEST(Stress, MeshEdgesAndVertices) { check(mesh_edges(options())); }
-TEST(Stress, Slivers) { check(slivers(options())); }
-TEST(Stress, HugeCoordinates) { check(huge_coordinates(options())); }
-TEST(Stress, NearlyParallel) { check(nearly_parallel(options())); }
-TEST(Stress, OriginOnSurface) { check(origin_on_surface(options())); }
-TEST(Stress, DirectionLengths) { check(direction_lengths(options())); }
-TEST(Stress, NearTies) { check(near_ties(options())); }
-TEST(Stress, FarMeshSpheres) { check(far_mesh_spheres(options())); }
+TEST(Stress, FarSpheres) {
+    check(far_spheres(options()));
+}
+TEST(Stress, TinySpheres) {
+    check(tiny_spheres(options()));
+}
+TEST(Stress, TangentRays) {
+    check(tangent_rays(options()));
+}
+TEST(Stress, MeshEdgesAndVertices) {
+    check(mesh_edges(options()));
+}
+TEST(Stress, Slivers) {
+    check(slivers(options()));
+}
+TEST(Stress, HugeCoordinates) {
+    check(huge_coordinates(options()));
+}
+TEST(Stress, NearlyParallel) {
+    check(nearly_parallel(options()));
+}
+TEST(Stress, OriginOnSurface) {
+    check(origin_on_surface(options()));
+}
+TEST(Stress, DirectionLengths) {
+    check(direction_lengths(options()));
+}
+TEST(Stress, NearTies) {
+    check(near_ties(options()));
+}
+TEST(Stress, FarMeshSpheres) {
+    check(far_mesh_spheres(options()));
+}
 
 TEST(Stress, ClosedModels) {
     const auto cases = closed_models(options(), RAYCASTD_SHARED_DIR);
-    if (cases.empty()) GTEST_SKIP() << "models not found at " RAYCASTD_SHARED_DIR "/data/models";
+    if (cases.empty())
+        GTEST_SKIP() << "models not found at " RAYCASTD_SHARED_DIR "/data/models";
     check(cases);
 }
 

@@ -15,11 +15,14 @@ std::string hex(double v) {
     std::snprintf(buf, sizeof buf, "%a", v);
     return buf;
 }
-std::string hex(const engine::Vec3d& v) { return hex(v.x) + " " + hex(v.y) + " " + hex(v.z); }
+std::string hex(const engine::Vec3d& v) {
+    return hex(v.x) + " " + hex(v.y) + " " + hex(v.z);
+}
 
 bool parse(std::istringstream& in, double& v) {
     std::string tok;
-    if (!(in >> tok)) return false;
+    if (!(in >> tok))
+        return false;
     char* end = nullptr;
     v = std::strtod(tok.c_str(), &end);  // reads hex floats, decimals and inf
     return end && *end == '\0';
@@ -33,7 +36,8 @@ bool parse(std::istringstream& in, engine::Vec3d& v) {
 std::string write_case(const StressCase& c, const std::string& comment) {
     std::ostringstream out;
     std::istringstream lines(comment);
-    for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
+    for (std::string line; std::getline(lines, line);)
+        out << "# " << line << "\n";
     for (std::size_t i = 0; i < c.scene->objects.size(); ++i) {
         const engine::Object& o = c.scene->objects[i];
         if (o.kind == engine::ObjectKind::sphere) {
@@ -49,8 +53,10 @@ std::string write_case(const StressCase& c, const std::string& comment) {
         const bool closed = i < c.closed.size() && c.closed[i];
         out << "mesh " << m.positions.size() << " " << m.size() << (closed ? " closed" : "")
             << "\n";
-        for (const auto& p : m.positions) out << "v " << hex(p) << "\n";
-        for (const auto& t : m.triangles) out << "f " << t[0] << " " << t[1] << " " << t[2] << "\n";
+        for (const auto& p : m.positions)
+            out << "v " << hex(p) << "\n";
+        for (const auto& t : m.triangles)
+            out << "f " << t[0] << " " << t[1] << " " << t[2] << "\n";
     }
     for (const engine::Ray& r : c.rays) {
         out << "ray " << hex(r.origin) << " " << hex(r.direction) << " " << hex(r.tmin) << " "
@@ -74,33 +80,39 @@ bool read_case(const std::string& text, StressCase& out, std::string& error) {
         ++line_no;
         std::istringstream in(line);
         std::string kind;
-        if (!(in >> kind) || kind[0] == '#') continue;
+        if (!(in >> kind) || kind[0] == '#')
+            continue;
         if (kind == "sphere") {
             engine::Vec3d c;
             double r = 0;
-            if (!parse(in, c) || !parse(in, r)) return fail("bad sphere");
+            if (!parse(in, c) || !parse(in, r))
+                return fail("bad sphere");
             out.scene->objects.push_back(sphere(c, r));
             out.closed.push_back(false);
         } else if (kind == "triangle") {
             engine::Vec3d a, b, c;
-            if (!parse(in, a) || !parse(in, b) || !parse(in, c)) return fail("bad triangle");
+            if (!parse(in, a) || !parse(in, b) || !parse(in, c))
+                return fail("bad triangle");
             out.scene->objects.push_back(triangle(a, b, c));
             out.closed.push_back(false);
         } else if (kind == "mesh") {
             std::size_t nv = 0, nt = 0;
             std::string flag;
-            if (!(in >> nv >> nt)) return fail("bad mesh header");
+            if (!(in >> nv >> nt))
+                return fail("bad mesh header");
             in >> flag;
             auto mesh = std::make_shared<engine::TriangleMesh>();
             for (std::size_t i = 0; i < nv + nt; ++i) {
-                if (!std::getline(lines, line)) return fail("mesh cut short");
+                if (!std::getline(lines, line))
+                    return fail("mesh cut short");
                 ++line_no;
                 std::istringstream ml(line);
                 std::string tag;
                 ml >> tag;
                 if (i < nv) {
                     engine::Vec3d p;
-                    if (tag != "v" || !parse(ml, p)) return fail("bad vertex");
+                    if (tag != "v" || !parse(ml, p))
+                        return fail("bad vertex");
                     mesh->positions.push_back(p);
                 } else {
                     std::array<std::uint32_t, 3> t{};

@@ -10,14 +10,14 @@
 // Asserted for refined and exact: no wrong decision outside the bands, no leak, t within the
 // hit's own t_err; for exact also t within 4 ulps of the reference.
 
-#include <gtest/gtest.h>
-
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
+
+#include <gtest/gtest.h>
 
 #include "engine/testing/scenes.h"
 #include "tests/stress/case_file.h"
@@ -53,8 +53,7 @@ StressCase random_case(std::uint64_t seed) {
     c.scene = std::make_shared<Scene>(empty_scene());
     const int spheres = static_cast<int>(rng() % 5), tris = static_cast<int>(rng() % 6);
     for (int k = 0; k < spheres; ++k) {
-        c.scene->objects.push_back(
-            sphere(offset + vec() * (3 * scale), scale * pow10(-3, 0.3)));
+        c.scene->objects.push_back(sphere(offset + vec() * (3 * scale), scale * pow10(-3, 0.3)));
     }
     for (int k = 0; k < tris; ++k) {
         const Vec3d a = offset + vec() * (3 * scale);
@@ -80,8 +79,12 @@ StressCase random_case(std::uint64_t seed) {
             const auto& t = m.triangles[rng() % m.size()];
             const double s = u01(rng), w = u01(rng) * (1 - s);
             switch (rng() % 3) {
-                case 0: target = m.positions[t[0]]; break;
-                case 1: target = m.positions[t[0]] + (m.positions[t[1]] - m.positions[t[0]]) * s; break;
+                case 0:
+                    target = m.positions[t[0]];
+                    break;
+                case 1:
+                    target = m.positions[t[0]] + (m.positions[t[1]] - m.positions[t[0]]) * s;
+                    break;
                 default:
                     target = m.positions[t[0]] + (m.positions[t[1]] - m.positions[t[0]]) * s +
                              (m.positions[t[2]] - m.positions[t[0]]) * w;
@@ -94,7 +97,8 @@ StressCase random_case(std::uint64_t seed) {
             !std::isfinite(engine::dot(r.direction, r.direction))) {
             continue;
         }
-        if (rng() % 8 == 0) r.tmin = u01(rng) * 0.5;
+        if (rng() % 8 == 0)
+            r.tmin = u01(rng) * 0.5;
         c.rays.push_back(r);
     }
     return c;
@@ -106,7 +110,8 @@ std::string judge_case(const StressCase& c, std::vector<std::size_t>& bad_rays) 
     std::string wrong;
     const ReferenceAnswers refs = reference_answers(c);
     auto built = engine::QueryEngine::build(c.scene);
-    if (!built.ok()) return wrong;  // a scene the engine rejects is not a disagreement
+    if (!built.ok())
+        return wrong;  // a scene the engine rejects is not a disagreement
     for (engine::Precision p : {engine::Precision::refined, engine::Precision::exact}) {
         engine::QueryOptions opt;
         opt.precision = p;
@@ -114,8 +119,8 @@ std::string judge_case(const StressCase& c, std::vector<std::size_t>& bad_rays) 
         const bool exact = res.precision == engine::Precision::exact;
         for (std::size_t i = 0; i < c.rays.size(); ++i) {
             StressCase one{c.suite, c.scene, {c.rays[i]}, c.closed};
-            const ModeStats m = judge(one, {exact ? refs.exact[i] : refs.coarse[i]},
-                                      {res.hits[i]}, exact ? "exact" : "refined", "");
+            const ModeStats m = judge(one, {exact ? refs.exact[i] : refs.coarse[i]}, {res.hits[i]},
+                                      exact ? "exact" : "refined", "");
             if (m.wrong() || m.leaks || m.t_err_violations ||
                 (exact && m.max_ulps() > kExactMaxUlps)) {
                 bad_rays.push_back(i);
@@ -123,7 +128,8 @@ std::string judge_case(const StressCase& c, std::vector<std::size_t>& bad_rays) 
                          std::to_string(i) + ": " + m.summary() + "\n";
             }
         }
-        if ((*built)->brute_force()) break;
+        if ((*built)->brute_force())
+            break;
     }
     return wrong;
 }
@@ -139,7 +145,8 @@ TEST(Fuzz, DifferentialAgainstReference) {
     for (std::uint64_t seed = seed0;; ++seed) {
         const double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (elapsed > budget) break;
+        if (elapsed > budget)
+            break;
         // Each scene twice: as generated (brute force when small), and padded for Embree.
         StressCase base = random_case(seed);
         StressCase padded = base;
@@ -150,16 +157,18 @@ TEST(Fuzz, DifferentialAgainstReference) {
             rays += c->rays.size();
             std::vector<std::size_t> bad;
             const std::string wrong = judge_case(*c, bad);
-            if (wrong.empty()) continue;
+            if (wrong.empty())
+                continue;
             ++failures;
             StressCase keep = *c;
             keep.rays.clear();
-            for (std::size_t i : bad) keep.rays.push_back(c->rays[i]);
+            for (std::size_t i : bad)
+                keep.rays.push_back(c->rays[i]);
             std::filesystem::create_directories(dir);
-            const auto file = dir / ("fuzz-" + std::to_string(seed) +
-                                     (c == &padded ? "-embree" : "") + ".txt");
-            std::ofstream(file) << write_case(keep, "differential fuzz, seed " +
-                                                        std::to_string(seed) + "\n" + wrong);
+            const auto file =
+                dir / ("fuzz-" + std::to_string(seed) + (c == &padded ? "-embree" : "") + ".txt");
+            std::ofstream(file) << write_case(
+                keep, "differential fuzz, seed " + std::to_string(seed) + "\n" + wrong);
             ADD_FAILURE() << "disagreement saved to " << file << "\n" << wrong;
         }
     }
@@ -175,7 +184,8 @@ TEST(Fuzz, RegressionCases) {
     const std::filesystem::path dir = std::filesystem::path(RAYCASTD_STRESS_DIR) / "regressions";
     std::size_t files = 0;
     for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-        if (entry.path().extension() != ".txt") continue;
+        if (entry.path().extension() != ".txt")
+            continue;
         ++files;
         std::ifstream in(entry.path());
         std::stringstream text;

@@ -24,7 +24,9 @@ using Rng = std::mt19937_64;
 double uniform(Rng& rng, double lo, double hi) {
     return std::uniform_real_distribution<double>(lo, hi)(rng);
 }
-int uniform_int(Rng& rng, int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
+int uniform_int(Rng& rng, int lo, int hi) {
+    return std::uniform_int_distribution<int>(lo, hi)(rng);
+}
 double log_uniform(Rng& rng, double lo, double hi) {
     return std::exp(uniform(rng, std::log(lo), std::log(hi)));
 }
@@ -32,7 +34,8 @@ Vec3d unit(Rng& rng) {
     for (;;) {
         const Vec3d v{uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)};
         const double l = engine::length(v);
-        if (l > 0.1 && l <= 1.0) return v / l;
+        if (l > 0.1 && l <= 1.0)
+            return v / l;
     }
 }
 /// A unit vector perpendicular to n.
@@ -40,10 +43,13 @@ Vec3d perpendicular(Rng& rng, const Vec3d& n) {
     for (;;) {
         const Vec3d v = engine::cross(n, unit(rng));
         const double l = engine::length(v);
-        if (l > 0.1) return v / l;
+        if (l > 0.1)
+            return v / l;
     }
 }
-Ray ray_to(const Vec3d& origin, const Vec3d& target) { return Ray{origin, target - origin}; }
+Ray ray_to(const Vec3d& origin, const Vec3d& target) {
+    return Ray{origin, target - origin};
+}
 
 /// The case as given, and (when it is small enough for the brute-force path) its padded twin
 /// for the Embree path.
@@ -63,7 +69,8 @@ std::vector<StressCase> both_paths(const std::string& suite, Scene scene, std::v
 std::vector<StressCase> embree_only(const std::string& suite, Scene scene, std::vector<Ray> rays,
                                     std::vector<bool> closed) {
     closed.resize(scene.objects.size(), false);
-    if (primitive_count(scene) <= 16) pad_for_embree(scene, closed);
+    if (primitive_count(scene) <= 16)
+        pad_for_embree(scene, closed);
     return {{suite + "/embree", std::make_shared<Scene>(std::move(scene)), std::move(rays),
              std::move(closed)}};
 }
@@ -83,9 +90,15 @@ std::vector<Ray> edge_and_vertex_rays(Rng& rng, const engine::TriangleMesh& m, i
         const Vec3d q = m.positions[t[static_cast<std::size_t>((k + 1) % 3)]];
         Vec3d target;
         switch (i % 3) {
-            case 0: target = p; break;
-            case 1: target = p + (q - p) * uniform(rng, 0, 1); break;
-            default: target = (p + q) * 0.5; break;
+            case 0:
+                target = p;
+                break;
+            case 1:
+                target = p + (q - p) * uniform(rng, 0, 1);
+                break;
+            default:
+                target = (p + q) * 0.5;
+                break;
         }
         const Vec3d n_out = outward(target);
         const Vec3d side = perpendicular(rng, n_out) * uniform(rng, 0, 0.5);
@@ -118,7 +131,8 @@ Object triangle(Vec3d a, Vec3d b, Vec3d c, std::string name) {
 std::vector<StressCase> far_spheres(const GenOptions& g) {
     Rng rng(g.seed * 1000 + 1);
     Scene s = empty_scene();
-    for (int k = 3; k <= 9; ++k) s.objects.push_back(sphere(unit(rng) * std::pow(10.0, k), 1.0));
+    for (int k = 3; k <= 9; ++k)
+        s.objects.push_back(sphere(unit(rng) * std::pow(10.0, k), 1.0));
     std::vector<Ray> rays;
     for (int i = 0; i < g.rays; ++i) {
         const Object& o = s.objects[static_cast<std::size_t>(i) % s.objects.size()];
@@ -137,7 +151,8 @@ std::vector<StressCase> tiny_spheres(const GenOptions& g) {
     Scene s = empty_scene();
     const double radii[] = {1e-6, 1e-6, 1e-5, 1e-4, 1e-3, 1e-6, 1e-5, 1e-6};
     const double dists[] = {1e3, 1e2, 1e3, 1e3, 1e3, 1.0, 10.0, 5e2};
-    for (int k = 0; k < 8; ++k) s.objects.push_back(sphere(unit(rng) * dists[k], radii[k]));
+    for (int k = 0; k < 8; ++k)
+        s.objects.push_back(sphere(unit(rng) * dists[k], radii[k]));
     std::vector<Ray> rays;
     for (int i = 0; i < g.rays; ++i) {
         const Object& o = s.objects[static_cast<std::size_t>(i) % s.objects.size()];
@@ -153,9 +168,9 @@ std::vector<StressCase> tangent_rays(const GenOptions& g) {
     Rng rng(g.seed * 1000 + 3);
     Scene s = empty_scene();
     for (int k = 0; k < 6; ++k) {
-        s.objects.push_back(sphere(Vec3d{uniform(rng, -10, 10), uniform(rng, -10, 10),
-                                         uniform(rng, -10, 10)},
-                                   uniform(rng, 0.5, 2)));
+        s.objects.push_back(
+            sphere(Vec3d{uniform(rng, -10, 10), uniform(rng, -10, 10), uniform(rng, -10, 10)},
+                   uniform(rng, 0.5, 2)));
     }
     // Exactly tangent by construction: representable points at distance exactly r.
     s.objects.push_back(sphere({0, 0, 40}, 5));  // tangent to lines through (3, 4, 40) ⟂ (3, 4, 0)
@@ -212,28 +227,33 @@ std::vector<StressCase> mesh_edges(const GenOptions& g) {
 
 std::vector<StressCase> closed_models(const GenOptions& g, const std::string& shared_dir) {
     Rng rng(g.seed * 1000 + 5);
-    const char* files[] = {"spot/spot.obj", "fandisk/fandisk.obj", "cube_off/Cube.off",
-                           "suzanne/suzanne.obj", "cow/cow.obj", "bunny_ply/bunny.ply",
+    const char* files[] = {"spot/spot.obj",       "fandisk/fandisk.obj", "cube_off/Cube.off",
+                           "suzanne/suzanne.obj", "cow/cow.obj",         "bunny_ply/bunny.ply",
                            "ballA_off/ballA.off", "beetle/beetle.obj"};
     std::vector<StressCase> out;
     for (const char* f : files) {
         const std::string path = shared_dir + "/data/models/" + f;
         std::ifstream in(path, std::ios::binary);
-        if (!in) continue;
+        if (!in)
+            continue;
         std::stringstream bytes;
         bytes << in.rdbuf();
         auto fmt = engine::format_from_name(path);
-        if (!fmt) continue;
+        if (!fmt)
+            continue;
         auto model = engine::load_model(bytes.str(), *fmt, engine::no_resources(), f);
-        if (!model.ok() || model->parts.size() != 1) continue;
+        if (!model.ok() || model->parts.size() != 1)
+            continue;
         engine::TriangleMesh mesh = model->parts[0].mesh;
-        if (!is_closed_mesh(mesh) || mesh.size() > 40000) continue;
+        if (!is_closed_mesh(mesh) || mesh.size() > 40000)
+            continue;
         // Outward vertex directions: the area-weighted normals of the incident triangles.
         std::vector<Vec3d> vn(mesh.positions.size());
         for (std::size_t t = 0; t < mesh.size(); ++t) {
             const engine::Triangle tri = mesh.triangle(t);
             const Vec3d n = engine::cross(tri.b - tri.a, tri.c - tri.a);
-            for (auto idx : mesh.triangles[t]) vn[idx] += n;
+            for (auto idx : mesh.triangles[t])
+                vn[idx] += n;
         }
         const engine::Bounds3 b = mesh.bounds();
         const double size = engine::length(b.diagonal());
@@ -257,12 +277,11 @@ std::vector<StressCase> closed_models(const GenOptions& g, const std::string& sh
         o.name = f;
         o.mesh = std::make_shared<engine::TriangleMesh>(mesh);
         s.objects.push_back(o);
-        const int n = std::max(1, static_cast<int>(g.rays * 2000 / std::max<std::size_t>(
-                                                                   2000, mesh.size())));
+        const int n =
+            std::max(1, static_cast<int>(g.rays * 2000 / std::max<std::size_t>(2000, mesh.size())));
         auto rays = edge_and_vertex_rays(rng, mesh, n, 0.3 * size, outward);
-        for (auto& cs :
-             embree_only(std::string("closed models (") + f + ")", std::move(s), std::move(rays),
-                         {true})) {
+        for (auto& cs : embree_only(std::string("closed models (") + f + ")", std::move(s),
+                                    std::move(rays), {true})) {
             out.push_back(std::move(cs));
         }
     }
@@ -293,7 +312,8 @@ std::vector<StressCase> slivers(const GenOptions& g) {
             u = 1 - u;
             v = 1 - v;
         }
-        if (i % 4 == 3) v = 0;  // on edge ab (rounded)
+        if (i % 4 == 3)
+            v = 0;  // on edge ab (rounded)
         const Vec3d target = t.a + (t.b - t.a) * u + (t.c - t.a) * v;
         rays.push_back(ray_to(target + unit(rng) * uniform(rng, 2, 8), target));
     }
@@ -310,7 +330,8 @@ std::vector<StressCase> huge_coordinates(const GenOptions& g) {
         Scene s = empty_scene();
         std::vector<bool> closed;
         for (int k = 0; k < (variant == 2 ? 0 : 4); ++k) {
-            s.objects.push_back(sphere(offset + unit(rng) * uniform(rng, 2, 6), uniform(rng, 0.3, 1)));
+            s.objects.push_back(
+                sphere(offset + unit(rng) * uniform(rng, 2, 6), uniform(rng, 0.3, 1)));
             closed.push_back(false);
         }
         for (int k = 0; k < 3; ++k) {
@@ -344,7 +365,8 @@ std::vector<StressCase> huge_coordinates(const GenOptions& g) {
                                   : embree_only(variant == 1 ? "huge coordinates (mesh)"
                                                              : "huge coordinates (triangles)",
                                                 std::move(s), std::move(rays), std::move(closed));
-        for (auto& cs : cases) out.push_back(std::move(cs));
+        for (auto& cs : cases)
+            out.push_back(std::move(cs));
     }
     return out;
 }
@@ -391,10 +413,11 @@ std::vector<StressCase> origin_on_surface(const GenOptions& g) {
             e[static_cast<std::size_t>(axis)] = uniform_int(rng, 0, 1) ? 1.0 : -1.0;
             origin = sp.center + e * sp.radius;
         } else if (which == 2) {
-            origin = {std::ldexp(uniform_int(rng, -60, 60), -4), std::ldexp(uniform_int(rng, -60, 0), -4),
-                      3};
+            origin = {std::ldexp(uniform_int(rng, -60, 60), -4),
+                      std::ldexp(uniform_int(rng, -60, 0), -4), 3};
         } else if (which == 3) {
-            origin = {2, std::ldexp(uniform_int(rng, -60, 0), -4), std::ldexp(uniform_int(rng, -60, 0), -4)};
+            origin = {2, std::ldexp(uniform_int(rng, -60, 0), -4),
+                      std::ldexp(uniform_int(rng, -60, 0), -4)};
         } else {
             const engine::Triangle t = s.objects[4].mesh->triangle(0);
             const Vec3d vs[3] = {t.a, t.b, t.c};
@@ -402,7 +425,8 @@ std::vector<StressCase> origin_on_surface(const GenOptions& g) {
         }
         Ray r{origin, unit(rng) * log_uniform(rng, 0.1, 10)};
         // Half the rays leave the surface with a small tmin, as a spawned ray would.
-        if (i % 2 == 1) r.tmin = 1e-6 / engine::length(r.direction);
+        if (i % 2 == 1)
+            r.tmin = 1e-6 / engine::length(r.direction);
         rays.push_back(r);
     }
     return both_paths("origin on surface", std::move(s), std::move(rays));
@@ -457,7 +481,8 @@ std::vector<StressCase> near_ties(const GenOptions& g) {
     for (int i = 0; i < 6; ++i) {
         const double zb = 20.0 * i + z;
         double z2 = zb;
-        for (int k = 0; k < ks[i]; ++k) z2 = engine::next_up(z2);
+        for (int k = 0; k < ks[i]; ++k)
+            z2 = engine::next_up(z2);
         const Vec3d a{-10, -10, 0}, b{30, -10, 0}, c{-10, 30, 0};
         const Vec3d lo{0, 0, zb}, hi{0, 0, z2};
         if (i % 2 == 0) {
@@ -482,7 +507,8 @@ std::vector<StressCase> near_ties(const GenOptions& g) {
         }
         const int pair = uniform_int(rng, 0, 5);
         // From below the pair's near plane, steeply upwards, hitting inside both.
-        const Vec3d origin{uniform(rng, 0, 5), uniform(rng, 0, 5), 20.0 * pair + uniform(rng, 1, 6)};
+        const Vec3d origin{uniform(rng, 0, 5), uniform(rng, 0, 5),
+                           20.0 * pair + uniform(rng, 1, 6)};
         const Vec3d d{uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3), 1};
         rays.push_back(Ray{origin, d});
     }
@@ -513,7 +539,8 @@ std::vector<StressCase> far_mesh_spheres(const GenOptions& g) {
 std::vector<StressCase> all_suites(const GenOptions& g, const std::string& shared_dir) {
     std::vector<StressCase> out;
     auto add = [&](std::vector<StressCase> v) {
-        for (auto& c : v) out.push_back(std::move(c));
+        for (auto& c : v)
+            out.push_back(std::move(c));
     };
     add(far_spheres(g));
     add(tiny_spheres(g));

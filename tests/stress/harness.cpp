@@ -21,20 +21,25 @@ double max_of(const std::vector<double>& v) {
     return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
 }
 double median_of(std::vector<double> v) {
-    if (v.empty()) return 0.0;
+    if (v.empty())
+        return 0.0;
     const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
     return *mid;
 }
-Quad qabs(Quad v) { return v < 0 ? -v : v; }
+Quad qabs(Quad v) {
+    return v < 0 ? -v : v;
+}
 
 /// The reference crossing the engine's hit corresponds to: same object and primitive, the
 /// nearest in t (a sphere has two).
 const RefCrossing* match(const RefAnswer& ref, const Hit& h) {
     const RefCrossing* best = nullptr;
     for (const RefCrossing& c : ref.crossings) {
-        if (c.parallel || c.object != h.object || c.primitive != h.primitive) continue;
-        if (!best || qabs(c.t - Quad(h.t)) < qabs(best->t - Quad(h.t))) best = &c;
+        if (c.parallel || c.object != h.object || c.primitive != h.primitive)
+            continue;
+        if (!best || qabs(c.t - Quad(h.t)) < qabs(best->t - Quad(h.t)))
+            best = &c;
     }
     return best;
 }
@@ -45,10 +50,18 @@ double tie_band(const Bands& b, Quad t, double t_scale) {
 
 }  // namespace
 
-double ModeStats::max_rel() const { return max_of(rel_err); }
-double ModeStats::median_rel() const { return median_of(rel_err); }
-double ModeStats::max_ulps() const { return max_of(ulp_err); }
-double ModeStats::median_ulps() const { return median_of(ulp_err); }
+double ModeStats::max_rel() const {
+    return max_of(rel_err);
+}
+double ModeStats::median_rel() const {
+    return median_of(rel_err);
+}
+double ModeStats::max_ulps() const {
+    return max_of(ulp_err);
+}
+double ModeStats::median_ulps() const {
+    return median_of(ulp_err);
+}
 
 std::string ModeStats::summary() const {
     char buf[512];
@@ -56,9 +69,9 @@ std::string ModeStats::summary() const {
                   "%-8s %-12s rays %6zu judged %6zu near-ties %5zu (differ %4zu) | t rel max "
                   "%.3g med %.3g | ulps max %.3g med %.3g | wrong hit/miss %zu object %zu "
                   "leaks %zu t_err-violations %zu | %.1f ns/ray",
-                  mode.c_str(), path.c_str(), rays, judged, near_ties, near_tie_disagree,
-                  max_rel(), median_rel(), max_ulps(), median_ulps(), wrong_hit, wrong_object,
-                  leaks, t_err_violations, rays ? seconds * 1e9 / double(rays) : 0.0);
+                  mode.c_str(), path.c_str(), rays, judged, near_ties, near_tie_disagree, max_rel(),
+                  median_rel(), max_ulps(), median_ulps(), wrong_hit, wrong_object, leaks,
+                  t_err_violations, rays ? seconds * 1e9 / double(rays) : 0.0);
     return buf;
 }
 
@@ -78,8 +91,8 @@ void pad_for_embree(Scene& scene, std::vector<bool>& closed) {
         engine::Object o;
         o.kind = engine::ObjectKind::sphere;
         o.name = "pad " + std::to_string(k);
-        o.sphere.center = c + engine::Vec3d{std::cos(phi), std::sin(phi), 0.3 * std::cos(3 * phi)} *
-                                  (0.6 * size);
+        o.sphere.center =
+            c + engine::Vec3d{std::cos(phi), std::sin(phi), 0.3 * std::cos(3 * phi)} * (0.6 * size);
         o.sphere.radius = 1e-3 * size;
         scene.objects.push_back(o);
         closed.push_back(false);
@@ -118,12 +131,14 @@ ModeStats judge(const StressCase& c, const std::vector<RefAnswer>& refs,
         }
         ++s.judged;
         if (!ref.hit) {
-            if (h.valid()) ++s.wrong_hit;
+            if (h.valid())
+                ++s.wrong_hit;
             continue;
         }
         if (!h.valid()) {
             ++s.wrong_hit;
-            if (ref.first_on_closed) ++s.leaks;
+            if (ref.first_on_closed)
+                ++s.leaks;
             continue;
         }
         const RefCrossing* x = match(ref, h);
@@ -133,7 +148,8 @@ ModeStats judge(const StressCase& c, const std::vector<RefAnswer>& refs,
         }
         const RefCrossing* first = nullptr;
         for (const RefCrossing& y : ref.crossings) {
-            if (!y.parallel && y.t == ref.t_first_robust) first = &y;
+            if (!y.parallel && y.t == ref.t_first_robust)
+                first = &y;
         }
         const double tb = first ? tie_band(bands, first->t, first->t_scale) : 0.0;
         if (x->t > ref.t_first_robust + tb) {
@@ -151,16 +167,23 @@ ModeStats judge(const StressCase& c, const std::vector<RefAnswer>& refs,
         }
         // A sphere candidate inside the band has no real root in quad: t is not comparable.
         const bool sphere = c.scene->objects[h.object].kind == engine::ObjectKind::sphere;
-        if (sphere && std::abs(x->margin) <= bands.decision) continue;
+        if (sphere && std::abs(x->margin) <= bands.decision)
+            continue;
         const Quad diff = qabs(Quad(h.t) - x->t);
         const double tr = to_double(x->t);
         s.rel_err.push_back(tr != 0.0 ? to_double(diff / qabs(x->t)) : to_double(diff));
         s.ulp_err.push_back(to_double(diff) / ulp(tr));
         if (std::getenv("STRESS_DEBUG") && s.ulp_err.back() > 4 && mode == "exact") {
             const Ray& r = c.rays[i];
-            std::fprintf(stderr, "DEBUG %s ray %zu o=(%a %a %a) d=(%a %a %a) tmin=%g t=%a tref=%a obj=%u refobj=%u margin=%g\n", c.suite.c_str(), i, r.origin.x, r.origin.y, r.origin.z, r.direction.x, r.direction.y, r.direction.z, r.tmin, h.t, tr, h.object, ref.object, x->margin);
+            std::fprintf(stderr,
+                         "DEBUG %s ray %zu o=(%a %a %a) d=(%a %a %a) tmin=%g t=%a tref=%a obj=%u "
+                         "refobj=%u margin=%g\n",
+                         c.suite.c_str(), i, r.origin.x, r.origin.y, r.origin.z, r.direction.x,
+                         r.direction.y, r.direction.z, r.tmin, h.t, tr, h.object, ref.object,
+                         x->margin);
         }
-        if (diff > Quad(h.t_err)) ++s.t_err_violations;
+        if (diff > Quad(h.t_err))
+            ++s.t_err_violations;
     }
     return s;
 }

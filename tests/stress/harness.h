@@ -23,8 +23,8 @@ struct StressCase {
 
 /// What one precision mode did on one case, judged against the reference.
 struct ModeStats {
-    std::string mode;     ///< fast / refined / exact
-    std::string path;     ///< "embree" or "brute force" (the QueryEngine path that answered)
+    std::string mode;  ///< fast / refined / exact
+    std::string path;  ///< "embree" or "brute force" (the QueryEngine path that answered)
     std::size_t rays = 0;
     std::size_t near_ties = 0;          ///< the reference's own decision is inside the bands
     std::size_t near_tie_disagree = 0;  ///< of those, where the engine differs (not an error)

@@ -10,14 +10,14 @@
 //   a line through a closed mesh crosses it an even number of times.
 // exact (and refined, for t) are asserted; fast is recorded.
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "engine/query/intersect.h"
 #include "engine/testing/scenes.h"
@@ -40,7 +40,9 @@ using engine::Vec3d;
 double dyadic(std::mt19937_64& rng) {
     return std::ldexp(std::uniform_int_distribution<long>(-(8L << 20), 8L << 20)(rng), -20);
 }
-Vec3d dyadic3(std::mt19937_64& rng) { return {dyadic(rng), dyadic(rng), dyadic(rng)}; }
+Vec3d dyadic3(std::mt19937_64& rng) {
+    return {dyadic(rng), dyadic(rng), dyadic(rng)};
+}
 Vec3d on_grid(const Vec3d& v) {
     return {std::ldexp(std::round(std::ldexp(v.x, 20)), -20),
             std::ldexp(std::round(std::ldexp(v.y, 20)), -20),
@@ -57,13 +59,14 @@ Scene dyadic_scene(std::uint64_t seed) {
     }
     for (int k = 0; k < 4; ++k) {
         const Vec3d a = dyadic3(rng);
-        s.objects.push_back(triangle(a, on_grid(a + dyadic3(rng) * 0.25),
-                                     on_grid(a + dyadic3(rng) * 0.25)));
+        s.objects.push_back(
+            triangle(a, on_grid(a + dyadic3(rng) * 0.25), on_grid(a + dyadic3(rng) * 0.25)));
     }
     s.objects.push_back(engine::testing::cube_object(-1.5, -0.5));
     Object ico = engine::testing::icosphere_object(3, {1, 1, 1}, 1.25);
     auto mesh = std::make_shared<engine::TriangleMesh>(*ico.mesh);
-    for (auto& p : mesh->positions) p = on_grid(p);
+    for (auto& p : mesh->positions)
+        p = on_grid(p);
     ico.mesh = mesh;
     s.objects.push_back(ico);
     return s;
@@ -74,13 +77,14 @@ std::vector<Ray> dyadic_rays(std::uint64_t seed, const Scene& s, int n) {
     std::vector<Ray> rays;
     for (int i = 0; i < n; ++i) {
         const Object& o = s.objects[static_cast<std::size_t>(i) % s.objects.size()];
-        const Vec3d target = o.kind == ObjectKind::sphere ? o.sphere.center
-                                                          : o.mesh->positions[0] * 0.5 +
-                                                                o.mesh->positions[1] * 0.25 +
-                                                                o.mesh->positions[2] * 0.25;
+        const Vec3d target = o.kind == ObjectKind::sphere
+                                 ? o.sphere.center
+                                 : o.mesh->positions[0] * 0.5 + o.mesh->positions[1] * 0.25 +
+                                       o.mesh->positions[2] * 0.25;
         const Vec3d origin = dyadic3(rng) * 2.0;
         Vec3d d = target - origin + dyadic3(rng) * 0.125;
-        if (engine::length(d) < 1e-3) d = {1, 0, 0};
+        if (engine::length(d) < 1e-3)
+            d = {1, 0, 0};
         rays.push_back(Ray{origin, d});
     }
     return rays;
@@ -113,13 +117,15 @@ void expect_same(const std::string& what, const std::vector<Hit>& a, const std::
             ++differ;
             continue;
         }
-        if (a[i].valid()) worst = std::max(worst, ulps_apart(a[i].t, b[i].t * t_factor));
+        if (a[i].valid())
+            worst = std::max(worst, ulps_apart(a[i].t, b[i].t * t_factor));
     }
     std::printf("[ metamorph] %-34s %-8s decisions differ %zu, t differs by ≤ %.3g ulps\n",
                 what.c_str(), engine::to_string(p), differ, worst);
     ::testing::Test::RecordProperty(what + "." + engine::to_string(p) + ".max_ulps",
                                     std::to_string(worst));
-    if (p == Precision::fast) return;
+    if (p == Precision::fast)
+        return;
     EXPECT_EQ(differ, 0u) << what << " " << engine::to_string(p);
     EXPECT_LE(worst, max_ulps) << what << " " << engine::to_string(p);
 }
@@ -136,7 +142,8 @@ Scene map_scene(const Scene& s, const std::function<Vec3d(const Vec3d&)>& f, dou
             continue;
         }
         auto mesh = std::make_shared<engine::TriangleMesh>(*o.mesh);
-        for (auto& p : mesh->positions) p = f(p);
+        for (auto& p : mesh->positions)
+            p = f(p);
         o.mesh = mesh;
     }
     return out;
@@ -151,7 +158,8 @@ TEST(Metamorphic, TranslateSceneAndRays) {
         auto shift = [&](const Vec3d& p) { return p + offset; };
         const auto moved = build(map_scene(s, shift, 1.0));
         std::vector<Ray> moved_rays = rays;
-        for (Ray& r : moved_rays) r.origin = shift(r.origin);
+        for (Ray& r : moved_rays)
+            r.origin = shift(r.origin);
         for (Precision p : kAll) {
             char what[64];
             std::snprintf(what, sizeof what, "translate by %.3g", offset.x);
@@ -166,7 +174,8 @@ TEST(Metamorphic, ScaleSceneAndRays) {
     const auto base = build(s);
     for (int k : {-20, -7, 3, 15}) {
         const double f = std::ldexp(1.0, k);
-        const auto scaled = build(map_scene(s, [&](const Vec3d& p) { return p * f; }, f));
+        const auto scaled = build(map_scene(
+            s, [&](const Vec3d& p) { return p * f; }, f));
         std::vector<Ray> scaled_rays = rays;
         for (Ray& r : scaled_rays) {
             r.origin = r.origin * f;
@@ -190,7 +199,8 @@ TEST(Metamorphic, RotateSceneAndRays) {
         const bool odd = pi >= 3;
         for (int signs = 0; signs < 8; ++signs) {
             const int flips = __builtin_popcount(static_cast<unsigned>(signs));
-            if ((flips % 2 == 1) != odd) continue;  // keep det = +1: a mirror would flip winding
+            if ((flips % 2 == 1) != odd)
+                continue;  // keep det = +1: a mirror would flip winding
             auto rot = [&](const Vec3d& v) {
                 Vec3d out;
                 for (std::size_t k = 0; k < 3; ++k) {
@@ -222,7 +232,8 @@ TEST(Metamorphic, DirectionScaleDividesT) {
     for (int k : {-20, -1, 1, 20}) {
         const double f = std::ldexp(1.0, k);
         std::vector<Ray> scaled = rays;
-        for (Ray& r : scaled) r.direction = r.direction * f;
+        for (Ray& r : scaled)
+            r.direction = r.direction * f;
         for (Precision p : kAll) {
             expect_same("direction × 2^" + std::to_string(k), closest(*e, rays, p),
                         closest(*e, scaled, p), p, f);
@@ -232,7 +243,8 @@ TEST(Metamorphic, DirectionScaleDividesT) {
     // answer moves by about an ulp: t·k must still agree to a few ulps.
     for (double f : {1e-6, 3e-3, 7.0, 1e6}) {
         std::vector<Ray> scaled = rays;
-        for (Ray& r : scaled) r.direction = r.direction * f;
+        for (Ray& r : scaled)
+            r.direction = r.direction * f;
         for (Precision p : kAll) {
             char what[64];
             std::snprintf(what, sizeof what, "direction × %g", f);
@@ -257,12 +269,14 @@ TEST(Metamorphic, ReverseFromBeyondTheFirstHit) {
         std::vector<Vec3d> point;
         for (std::size_t i = 0; i < rays.size(); ++i) {
             const std::uint32_t b = all.offsets[i], n = all.offsets[i + 1] - b;
-            if (n == 0) continue;
+            if (n == 0)
+                continue;
             const Hit& h = all.hits[b];
             const double next =
                 n > 1 ? all.hits[b + 1].t : h.t + 1.0 / engine::length(rays[i].direction);
             const double beyond = h.t + 0.5 * (next - h.t);
-            if (!(beyond - h.t > 1e-9 * h.t)) continue;  // hits too close to separate
+            if (!(beyond - h.t > 1e-9 * h.t))
+                continue;  // hits too close to separate
             back.push_back(Ray{rays[i].at(beyond), -rays[i].direction});
             first.push_back(h);
             point.push_back(rays[i].at(h.t));
@@ -278,9 +292,10 @@ TEST(Metamorphic, ReverseFromBeyondTheFirstHit) {
             const double gap = engine::length(back[i].at(rev[i].t) - point[i]);
             worst = std::max(worst, gap / (engine::length(point[i]) + 1.0));
         }
-        std::printf("[ metamorph] reverse from beyond the first hit %-8s %zu rays, wrong "
-                    "surface %zu, points apart ≤ %.3g (relative)\n",
-                    engine::to_string(p), back.size(), wrong, worst);
+        std::printf(
+            "[ metamorph] reverse from beyond the first hit %-8s %zu rays, wrong "
+            "surface %zu, points apart ≤ %.3g (relative)\n",
+            engine::to_string(p), back.size(), wrong, worst);
         ::testing::Test::RecordProperty(std::string("reverse.") + engine::to_string(p) + ".wrong",
                                         std::to_string(wrong));
         if (p != Precision::fast) {
@@ -312,12 +327,19 @@ void expect_even_counts(const Object& mesh_object, std::uint64_t seed, int n,
         const auto& t = m.triangles[rng() % m.size()];
         Vec3d target;
         switch (i % 3) {
-            case 0: target = m.positions[t[0]]; break;
-            case 1: target = (m.positions[t[0]] + m.positions[t[1]]) * 0.5; break;
-            default: target = c + Vec3d{u(rng), u(rng), u(rng)} * (0.2 * radius); break;
+            case 0:
+                target = m.positions[t[0]];
+                break;
+            case 1:
+                target = (m.positions[t[0]] + m.positions[t[1]]) * 0.5;
+                break;
+            default:
+                target = c + Vec3d{u(rng), u(rng), u(rng)} * (0.2 * radius);
+                break;
         }
         Vec3d dir{u(rng), u(rng), u(rng)};
-        if (engine::length(dir) < 0.1) dir = {0.3, -0.7, 0.2};
+        if (engine::length(dir) < 0.1)
+            dir = {0.3, -0.7, 0.2};
         dir = engine::normalize(dir);
         rays.push_back(Ray{target - dir * (2 * radius), dir});
     }
@@ -329,7 +351,8 @@ void expect_even_counts(const Object& mesh_object, std::uint64_t seed, int n,
         std::size_t odd = 0, odd_at_vertex = 0;
         StressCase bad{name, std::make_shared<Scene>(s), {}, {true}};
         for (std::size_t i = 0; i < rays.size(); ++i) {
-            if (res.counts[i] % 2 == 0) continue;
+            if (res.counts[i] % 2 == 0)
+                continue;
             bad.rays.push_back(rays[i]);
             ++(i % 3 == 0 ? odd_at_vertex : odd);
         }
@@ -338,10 +361,11 @@ void expect_even_counts(const Object& mesh_object, std::uint64_t seed, int n,
                                std::to_string(seed) + ".txt";
             std::ofstream(file) << write_case(bad, "odd crossing counts: " + name);
         }
-        std::printf("[ metamorph] even counts %-22s %-8s %s %d lines, odd %zu (+ %zu of the "
-                    "lines through vertices)\n",
-                    name.c_str(), engine::to_string(p), e->brute_force() ? "brute" : "embree", n,
-                    odd, odd_at_vertex);
+        std::printf(
+            "[ metamorph] even counts %-22s %-8s %s %d lines, odd %zu (+ %zu of the "
+            "lines through vertices)\n",
+            name.c_str(), engine::to_string(p), e->brute_force() ? "brute" : "embree", n, odd,
+            odd_at_vertex);
         const std::string key = "even." + name + "." + engine::to_string(p);
         ::testing::Test::RecordProperty(key + ".odd", std::to_string(odd));
         ::testing::Test::RecordProperty(key + ".odd_at_vertex", std::to_string(odd_at_vertex));
@@ -351,7 +375,8 @@ void expect_even_counts(const Object& mesh_object, std::uint64_t seed, int n,
                 EXPECT_EQ(odd_at_vertex, 0u) << name << " " << engine::to_string(p);
             }
         }
-        if (e->brute_force()) break;  // every precision is the exact path
+        if (e->brute_force())
+            break;  // every precision is the exact path
     }
 }
 
@@ -371,7 +396,8 @@ TEST(Metamorphic, EvenCountsThroughClosedModels) {
     GenOptions g;
     g.rays = 50;
     const auto cases = closed_models(g, RAYCASTD_SHARED_DIR);
-    if (cases.empty()) GTEST_SKIP() << "models not found at " RAYCASTD_SHARED_DIR "/data/models";
+    if (cases.empty())
+        GTEST_SKIP() << "models not found at " RAYCASTD_SHARED_DIR "/data/models";
     std::uint64_t seed = 60;
     for (const StressCase& c : cases) {
         expect_even_counts(c.scene->objects[0], seed++, 600, c.scene->objects[0].name,

@@ -1,12 +1,12 @@
 #include "tests/stress/reference.h"
 
-#include <quadmath.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <utility>
+
+#include <quadmath.h>
 
 #include "engine/math/float_bounds.h"
 
@@ -24,13 +24,21 @@ namespace {
 struct QVec {
     Quad x = 0, y = 0, z = 0;
 };
-QVec q(const Vec3d& v) { return {v.x, v.y, v.z}; }
-QVec operator-(const QVec& a, const QVec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Quad dot(const QVec& a, const QVec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+QVec q(const Vec3d& v) {
+    return {v.x, v.y, v.z};
+}
+QVec operator-(const QVec& a, const QVec& b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+Quad dot(const QVec& a, const QVec& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 QVec cross(const QVec& a, const QVec& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-Quad norm(const QVec& a) { return sqrtq(dot(a, a)); }
+Quad norm(const QVec& a) {
+    return sqrtq(dot(a, a));
+}
 
 /// The sphere: Δ/4 = a·r² − |f × d|² (Lagrange's identity) with f = o − c exact in quad.
 void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& ray,
@@ -50,7 +58,8 @@ void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& 
     c.primitive = 0;
     c.margin = to_double((r - dist) / (len_f + r));
     c.t_scale = to_double((len_f + r) / sqrtq(a));
-    if (c.margin < -bands.decision) return;
+    if (c.margin < -bands.decision)
+        return;
     if (disc <= 0) {
         // Tangent, or a near miss within the band: the candidate point is the closest approach.
         c.t = c.t_hi = -beta / a;
@@ -62,7 +71,8 @@ void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& 
     const Quad qq = -(beta + (beta < 0 ? -sq : sq));
     const Quad gamma_c = dot(f, f) - r * r;
     Quad t0 = qq / a, t1 = gamma_c / qq;
-    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t1)
+        std::swap(t0, t1);
     c.t = c.t_hi = t0;
     c.front_face = true;  // below the closest approach the ray moves towards the centre
     out.push_back(c);
@@ -84,7 +94,8 @@ S triangle_margin(const V& A, const V& B, const V& C, const V& d, S len_d, Norm&
     const S r = std::max(nrm(A), std::max(nrm(B), nrm(C)));
     const S l = std::max(nrm(e[0]), std::max(nrm(e[1]), nrm(e[2])));
     const S scale = len_d * r * l;
-    if (!(scale > 0)) return -std::numeric_limits<double>::infinity();
+    if (!(scale > 0))
+        return -std::numeric_limits<double>::infinity();
     S mp = std::numeric_limits<double>::infinity(), mm = mp;
     for (int i = 0; i < 3; ++i) {
         const S E = dot(d, cross(p[i], e[i]));
@@ -102,12 +113,14 @@ void triangle_crossings(const engine::Triangle& tri, std::uint32_t object, std::
         const Vec3d A = tri.a - ray.origin, B = tri.b - ray.origin, C = tri.c - ray.origin;
         const double m = triangle_margin(A, B, C, ray.direction, engine::length(ray.direction),
                                          [](const Vec3d& v) { return engine::length(v); });
-        if (!(m >= -bands.decision - 1e-9)) return;
+        if (!(m >= -bands.decision - 1e-9))
+            return;
     }
     const QVec o = q(ray.origin), d = q(ray.direction);
     const QVec a = q(tri.a), b = q(tri.b), c = q(tri.c);
     const QVec n = cross(b - a, c - a);
-    if (n.x == 0 && n.y == 0 && n.z == 0) return;  // degenerate: never hit
+    if (n.x == 0 && n.y == 0 && n.z == 0)
+        return;  // degenerate: never hit
     const Quad nd = dot(n, d);
     const QVec A = a - o, B = b - o, C = c - o;
     const Quad len_d = norm(d);
@@ -115,7 +128,8 @@ void triangle_crossings(const engine::Triangle& tri, std::uint32_t object, std::
     x.object = object;
     x.primitive = prim;
     x.margin = to_double(triangle_margin(A, B, C, d, len_d, [](const QVec& v) { return norm(v); }));
-    if (x.margin < -bands.decision) return;
+    if (x.margin < -bands.decision)
+        return;
     x.t_scale = to_double(std::max(norm(A), std::max(norm(B), norm(C))) / len_d);
     if (nd == 0) {
         // The line lies in (or parallel to) the plane: no crossing, but where it runs alongside
@@ -144,11 +158,13 @@ bool line_near_box(const engine::Bounds3& box, const Ray& ray) {
         const double lo = box.lo[k] - slack, hi = box.hi[k] + slack;
         const double o = ray.origin[k], dk = ray.direction[k];
         if (dk == 0.0) {
-            if (o < lo || o > hi) return false;
+            if (o < lo || o > hi)
+                return false;
             continue;
         }
         double ta = (lo - o) / dk, tb = (hi - o) / dk;
-        if (ta > tb) std::swap(ta, tb);
+        if (ta > tb)
+            std::swap(ta, tb);
         t0 = std::max(t0, ta - 1e-9 * std::abs(ta));
         t1 = std::min(t1, tb + 1e-9 * std::abs(tb));
     }
@@ -193,7 +209,8 @@ std::vector<RefCrossing> reference_crossings(const Scene& scene, const Ray& ray,
             sphere_crossings(o.sphere, i, ray, bands, all);
             continue;
         }
-        if (!line_near_box(o.mesh->bounds(), ray)) continue;
+        if (!line_near_box(o.mesh->bounds(), ray))
+            continue;
         for (std::size_t p = 0; p < o.mesh->size(); ++p) {
             triangle_crossings(o.mesh->triangle(p), i, static_cast<std::uint32_t>(p), ray, bands,
                                all);
@@ -202,7 +219,8 @@ std::vector<RefCrossing> reference_crossings(const Scene& scene, const Ray& ray,
     std::vector<RefCrossing> kept;
     for (const RefCrossing& c : all) {
         const double band_t = bands.range * c.t_scale;
-        if (c.t_hi >= Quad(ray.tmin) - band_t && c.t <= Quad(ray.tmax) + band_t) kept.push_back(c);
+        if (c.t_hi >= Quad(ray.tmin) - band_t && c.t <= Quad(ray.tmax) + band_t)
+            kept.push_back(c);
     }
     return kept;
 }
@@ -235,10 +253,11 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
     // The exact answer: margins ≥ 0 in range, ordered by (t, object, primitive) as the API does.
     const RefCrossing* best = nullptr;
     for (const RefCrossing& c : cs) {
-        if (c.parallel || c.margin < 0 || !in_range_exact(c)) continue;
-        if (!best || c.t < best->t || (c.t == best->t && std::make_pair(c.object, c.primitive) <
-                                                              std::make_pair(best->object,
-                                                                             best->primitive))) {
+        if (c.parallel || c.margin < 0 || !in_range_exact(c))
+            continue;
+        if (!best || c.t < best->t ||
+            (c.t == best->t && std::make_pair(c.object, c.primitive) <
+                                   std::make_pair(best->object, best->primitive))) {
             best = &c;
         }
     }
@@ -253,22 +272,28 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
     // crossing of that mesh within the tie band faces the same way (the line passes through the
     // surface at a shared edge or vertex, whichever triangle takes it).
     auto robust = [&](const RefCrossing& c) {
-        if (c.parallel || !in_range_robust(c)) return false;
-        if (c.margin > bands.decision) return true;
-        if (c.margin < 0 || !is_closed(c.object)) return false;
+        if (c.parallel || !in_range_robust(c))
+            return false;
+        if (c.margin > bands.decision)
+            return true;
+        if (c.margin < 0 || !is_closed(c.object))
+            return false;
         // The neighbourhood of the crossing: 1e-9 of the distance scale, far wider than any
         // double kernel's uncertainty, so that an exit right after the entry (a corner clipped
         // at a vertex, a silhouette) makes it a near-tie.
         const double tb = std::max(tie_band(bands, c.t, c.t_scale), 1e-9 * c.t_scale);
         for (const RefCrossing& o : cs) {
-            if (o.object != c.object || o.t > c.t + tb || o.t_hi < c.t - tb) continue;
-            if (o.parallel || o.front_face != c.front_face) return false;  // grazes, not enters
+            if (o.object != c.object || o.t > c.t + tb || o.t_hi < c.t - tb)
+                continue;
+            if (o.parallel || o.front_face != c.front_face)
+                return false;  // grazes, not enters
         }
         return true;
     };
     const RefCrossing* first_robust = nullptr;
     for (const RefCrossing& c : cs) {
-        if (robust(c) && (!first_robust || c.t < first_robust->t)) first_robust = &c;
+        if (robust(c) && (!first_robust || c.t < first_robust->t))
+            first_robust = &c;
     }
     if (!first_robust) {
         ans.hit_robust = cs.empty();  // nothing within the bands at all: a robust miss
@@ -292,12 +317,15 @@ RefAnswer classify(const std::vector<RefCrossing>& crossings, const Ray& ray, co
 bool is_closed_mesh(const engine::TriangleMesh& mesh) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
     for (const auto& t : mesh.triangles) {
-        for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+        for (int k = 0; k < 3; ++k)
+            ++directed[{t[k], t[(k + 1) % 3]}];
     }
     for (const auto& [edge, n] : directed) {
-        if (n != 1) return false;
+        if (n != 1)
+            return false;
         auto it = directed.find({edge.second, edge.first});
-        if (it == directed.end() || it->second != 1) return false;
+        if (it == directed.end() || it->second != 1)
+            return false;
     }
     return !mesh.triangles.empty();
 }

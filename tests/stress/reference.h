@@ -35,9 +35,9 @@ using Quad = __float128;
 struct RefCrossing {
     std::uint32_t object = 0;
     std::uint32_t primitive = 0;
-    Quad t = 0;            ///< parameter along the ray, in units of the given direction
-    double margin = 0;     ///< signed relative decision margin (see header comment)
-    double t_scale = 0;    ///< distance scale of the computation / |d|: the unit of range bands
+    Quad t = 0;              ///< parameter along the ray, in units of the given direction
+    double margin = 0;       ///< signed relative decision margin (see header comment)
+    double t_scale = 0;      ///< distance scale of the computation / |d|: the unit of range bands
     bool front_face = true;  ///< the ray arrives against the stored normal
     /// The line is parallel to (or lies in) the triangle's plane: never a hit (the API's
     /// in-plane rule), but a line touching a closed mesh along a face makes nearby crossings
@@ -98,6 +98,8 @@ bool is_closed_mesh(const engine::TriangleMesh& mesh);
 double ulp(double x);
 
 /// quad → double, rounded to nearest.
-inline double to_double(Quad q) { return static_cast<double>(q); }
+inline double to_double(Quad q) {
+    return static_cast<double>(q);
+}
 
 }  // namespace raycastd::stress

@@ -16,7 +16,9 @@ using engine::Ray;
 using engine::Scene;
 using engine::Vec3d;
 
-Quad qabs(Quad v) { return v < 0 ? -v : v; }
+Quad qabs(Quad v) {
+    return v < 0 ? -v : v;
+}
 
 Scene one(engine::Object o) {
     Scene s = empty_scene();
@@ -89,14 +91,12 @@ TEST(Reference, ClosedMeshEdgeCrossingIsRobust) {
     Scene s = one(engine::testing::cube_object(-1, 1));
     const std::vector<bool> closed{true};
     // Through the diagonal shared by the two triangles of the z = −1 face.
-    const RefAnswer a =
-        reference_closest(s, Ray{{0, 0, -5}, {0, 0, 1}}, exact_bands(), closed);
+    const RefAnswer a = reference_closest(s, Ray{{0, 0, -5}, {0, 0, 1}}, exact_bands(), closed);
     EXPECT_TRUE(a.hit);
     EXPECT_TRUE(a.hit_robust);
     EXPECT_EQ(to_double(a.t), 4.0);
     // Grazing along the edge x = 1, y = 1: touches, never enters.
-    const RefAnswer g =
-        reference_closest(s, Ray{{1, 1, -5}, {0, 0, 1}}, exact_bands(), closed);
+    const RefAnswer g = reference_closest(s, Ray{{1, 1, -5}, {0, 0, 1}}, exact_bands(), closed);
     EXPECT_FALSE(g.hit_robust);
 }
 

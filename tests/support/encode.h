@@ -28,7 +28,8 @@ inline std::string base64(const std::string& in) {
 inline std::string to_obj(const engine::TriangleMesh& mesh) {
     std::ostringstream os;
     os.precision(17);
-    for (const auto& p : mesh.positions) os << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    for (const auto& p : mesh.positions)
+        os << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
     for (const auto& t : mesh.triangles) {
         os << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
     }

@@ -3,31 +3,33 @@
 // port from its first line of output, and kills it (SIGKILL by default, like a crash) when the
 // test is done. The binary's path comes from the RAYCASTD_BINARY compile definition.
 
-#include <httplib.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <httplib.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 extern char** environ;
 
 namespace raycastd::testing {
 
 class ServerProcess {
-public:
+  public:
     explicit ServerProcess(std::vector<std::string> extra_args = {}) {
         int out[2];
-        if (pipe(out) != 0) throw std::runtime_error("pipe failed");
+        if (pipe(out) != 0)
+            throw std::runtime_error("pipe failed");
         std::vector<std::string> args = {RAYCASTD_BINARY, "--port", "0", "--threads", "4"};
         args.insert(args.end(), extra_args.begin(), extra_args.end());
         std::vector<char*> argv;
-        for (auto& a : args) argv.push_back(a.data());
+        for (auto& a : args)
+            argv.push_back(a.data());
         argv.push_back(nullptr);
         posix_spawn_file_actions_t fa;
         posix_spawn_file_actions_init(&fa);
@@ -44,7 +46,8 @@ public:
         FILE* f = fdopen(out[0], "r");
         char line[256] = {0};
         if (!f || !std::fgets(line, sizeof line, f)) {
-            if (f) std::fclose(f);
+            if (f)
+                std::fclose(f);
             stop();
             throw std::runtime_error("raycastd printed nothing (did it fail to start?)");
         }
@@ -67,7 +70,8 @@ public:
     }
     /// Kills the server with `sig` and waits for it; true if it was still running.
     bool stop(int sig = SIGKILL) {
-        if (pid_ <= 0) return false;
+        if (pid_ <= 0)
+            return false;
         kill(pid_, sig);
         int status = 0;
         waitpid(pid_, &status, 0);
@@ -76,12 +80,13 @@ public:
     }
     /// True while the process has not exited.
     bool alive() {
-        if (pid_ <= 0) return false;
+        if (pid_ <= 0)
+            return false;
         int status = 0;
         return waitpid(pid_, &status, WNOHANG) == 0;
     }
 
-private:
+  private:
     pid_t pid_ = -1;
     int port_ = 0;
 };
