@@ -478,6 +478,9 @@ class Ledger:
 
     def check(self, suite, name, ok, detail=""):
         status = "pass" if ok else "fail"
+        detail = str(detail)
+        if len(detail) > 600:
+            detail = detail[:600] + "… (%d chars)" % len(detail)
         with self.lock:
             self.results.append((suite, name, status, detail))
         if self.verbose:

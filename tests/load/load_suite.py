@@ -77,11 +77,15 @@ class Stats:
         self.compared = collections.Counter()  # rays/answers compared with the reference, by kind
         self.ambiguous = 0
         self.busy_without_retry_after = 0
-        self.unexpected = []  # (kind, label, body excerpt)
+        self.unexpected = []  # (kind, label, body excerpt, what went before)
         self.errors_5xx = []
+        # answers on a connection where the server sent 503 without (necessarily) reading the
+        # request body: a server that keeps such a connection alive desynchronises it
+        self.desync = []
 
-    def record(self, kind, resp):
+    def record(self, kind, resp, prev=None):
         label = resp.label()
+        tainted = getattr(threading.current_thread(), "tainted", False)
         with self.lock:
             self.by_kind[kind][label] += 1
             if resp.status is not None:
@@ -89,14 +93,21 @@ class Stats:
             if resp.status == 503 and resp.code() == "busy":
                 if "retry-after" not in resp.headers:
                     self.busy_without_retry_after += 1
+            elif tainted and (resp.status is None or resp.status not in OK_STATUS[kind]):
+                self.desync.append((kind, label, resp.error or resp.body[:120], prev))
             elif resp.status is None or resp.status >= 500:
-                self.errors_5xx.append((kind, label, (resp.error or resp.body[:200])))
+                self.errors_5xx.append((kind, label, (resp.error or resp.body[:200]), prev))
             elif resp.status not in OK_STATUS[kind]:
-                self.unexpected.append((kind, label, resp.body[:200]))
+                self.unexpected.append((kind, label, resp.body[:200], prev))
 
     def wrong_answer(self, kind, detail):
+        detail = str(detail)[:300]
+        me = threading.current_thread()
         with self.lock:
-            self.wrong.append((kind, detail))
+            if getattr(me, "tainted", False):
+                self.desync.append((kind, "wrong answer", detail, getattr(me, "prev", "")))
+            else:
+                self.wrong.append((kind, detail))
 
     def compared_n(self, kind, n=1):
         with self.lock:
@@ -149,6 +160,8 @@ class Worker(threading.Thread):
         self.max_requests = max_requests
         self.sent = 0
         self.crashed = None
+        self.prev = "first request of the connection"
+        self.tainted = False
 
     def pick(self):
         x = self.rng.uniform(0, self.total)
@@ -180,7 +193,14 @@ class Worker(threading.Thread):
     # --- helpers ---
     def send(self, kind, method, path, body=None, content_type=None):
         resp = self.client.request(method, path, body=body, content_type=content_type)
-        self.stats.record(kind, resp)
+        # what went before on this connection, for the failure message
+        self.stats.record(kind, resp, prev=self.prev)
+        if resp.status == 503:
+            self.tainted = True
+        elif self.client.conn is None:
+            self.tainted = False  # the next request opens a new connection
+        self.prev = "after %s %s %s -> %s on the same connection" % (kind, method, path[:60],
+                                                                     resp.label())
         return resp
 
     def rays(self, scene_bounds, n):
@@ -447,6 +467,110 @@ class Worker(threading.Thread):
 
 def run(opts, ledger, tmp_root):
     """Returns the summary the report prints."""
+    summary = run_load(opts, ledger, tmp_root)
+    summary["busy_probe"] = busy_probe(opts, ledger, tmp_root)
+    return summary
+
+
+Q1_T = 7.267949192431123  # the tutorial's question 1: sphere 3 at t = 4 + ... (docs/api.md)
+
+
+def busy_probe(opts, ledger, tmp_root):
+    """A server with --max-concurrent 1, kept busy by two clients sending heavy stateless
+    batches, and four keep-alive clients sending small binary and JSON intersects: every 503
+    must be `busy` with Retry-After, and the next request on the same connection must get its
+    own, right answer (a server that answers 503 before reading the body must drain it or close
+    the connection)."""
+    print("\n== load: busy probe (--max-concurrent 1)", flush=True)
+    d = os.path.join(tmp_root, "busy")
+    os.makedirs(d)
+    server = harness.ServerProcess(opts.server, args=["--max-concurrent", "1"], log_dir=d, name="busy")
+    try:
+        c = server.client()
+        r = c.post("/v1/scenes", R.tutorial_scene())
+        sid = r.json()["id"]
+        c.close()
+        mdoc, _ = R.mesh_scene()
+        heavy = {"scene": mdoc, "precision": "exact",
+                 "rays": [{"origin": [0.001 * k, 0, 0], "direction": [0, 0, 1]} for k in range(4000)]}
+        stop = time.monotonic() + (3.0 if opts.mode == "quick" else 10.0)
+        counts = collections.Counter()
+        problems = []
+        lock = threading.Lock()
+        q1_f32 = R.f32(Q1_T)
+
+        def hog():
+            cl = server.client()
+            n = 0
+            while time.monotonic() < stop and n < 2000:
+                cl.post("/v1/intersect", heavy)
+                n += 1
+            cl.close()
+
+        def prober(k):
+            cl = server.client()
+            after_busy = False
+            busy_kind = None
+            n = 0
+            body = struct.pack("<8f", 0, 0, 0, 0, 0, 1, 0, math.inf) * 256
+            while time.monotonic() < stop and n < 20000:
+                n += 1
+                kind = "binary" if n % 2 else "JSON"
+                if n % 2:
+                    r = cl.post("/v1/scenes/%s/intersect?dtype=float32" % sid, body,
+                                content_type="application/octet-stream")
+                    good = (r.status == 200 and len(r.body) == 32 * 256
+                            and struct.unpack_from("<f", r.body, 0)[0] == q1_f32)
+                else:
+                    r = cl.post("/v1/scenes/%s/intersect" % sid,
+                                {"rays": [{"origin": [0, 0, 0], "direction": [0, 0, 1]}]})
+                    try:
+                        good = r.status == 200 and r.json()["hits"][0]["t"] == Q1_T
+                    except Exception:  # noqa: BLE001
+                        good = False
+                busy = r.status == 503 and r.code() == "busy"
+                with lock:
+                    counts[r.label()] += 1
+                    if busy and "retry-after" not in r.headers:
+                        counts["busy without Retry-After"] += 1
+                    if not busy and not good and after_busy:
+                        problems.append("%s intersect after a 503 to a %s intersect on this "
+                                        "connection: %s %r" % (kind, busy_kind, r.label(),
+                                                                (r.error or r.body[:80])))
+                    elif not busy and not good:
+                        problems.append("%s intersect: %s %r" % (kind, r.label(), (r.error or r.body[:80])))
+                after_busy = busy or (after_busy and cl.conn is not None)
+                if busy:
+                    busy_kind = kind
+                if busy:
+                    time.sleep(0.01)
+            cl.close()
+
+        threads = [threading.Thread(target=hog, daemon=True) for _ in range(2)]
+        threads += [threading.Thread(target=prober, args=(k,), daemon=True) for k in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=60)
+        busy = sum(v for k, v in counts.items() if k == "503 busy")
+        no_ra = counts.pop("busy without Retry-After", 0)
+        print("  probes: %s" % dict(counts), flush=True)
+        ledger.check(SUITE, "busy_probe.server_answers_busy", busy > 0,
+                     "%d of %d probe requests answered 503 busy" % (busy, sum(counts.values())))
+        ledger.check(SUITE, "busy_probe.busy_carries_retry_after", busy > 0 and no_ra == 0,
+                     "%d of %d 503 busy answers had no Retry-After" % (no_ra, busy))
+        kinds_seen = collections.Counter(p.split(":")[0] for p in problems)
+        ledger.check(SUITE, "busy_probe.next_request_on_connection_answered_right", not problems,
+                     "%d wrong answers %s; e.g. %s" % (len(problems), dict(kinds_seen), problems[:2])
+                     if problems else "")
+        ledger.check(SUITE, "busy_probe.server_alive", server.alive(), server.exit_description())
+        return {"statuses": dict(counts), "busy_without_retry_after": no_ra,
+                "wrong_after_busy": len(problems)}
+    finally:
+        server.kill()
+
+
+def run_load(opts, ledger, tmp_root):
     print("\n== load: %d clients for %.0f s" % (opts.clients, opts.duration), flush=True)
     data_dir = os.path.join(tmp_root, "load-data")
     os.makedirs(data_dir)
@@ -516,6 +640,7 @@ def _run(opts, ledger, server, summary):
     summary["wrong"] = len(stats.wrong)
     summary["wrong_examples"] = [("%s: %s" % w) for w in stats.wrong[:5]]
     summary["5xx"] = len(stats.errors_5xx)
+    summary["desync_after_busy"] = len(stats.desync)
     busy = sum(v.get("503 busy", 0) for v in stats.by_kind.values())
     summary["busy"] = busy
     summary["kinds"] = kinds
@@ -542,6 +667,9 @@ def _run(opts, ledger, server, summary):
     ledger.check(SUITE, "answers_match_reference", not stats.wrong,
                  "%d wrong: %s" % (len(stats.wrong), stats.wrong[:3]) if stats.wrong else
                  "%d answers compared" % sum(stats.compared.values()))
+    ledger.check(SUITE, "keepalive_in_sync_after_busy", not stats.desync,
+                 "%d answers after a 503 on the same kept-alive connection were wrong, e.g. %s"
+                 % (len(stats.desync), stats.desync[:2]) if stats.desync else "")
     missing = [k for k in kinds if not stats.by_kind.get(k)]
     ledger.check(SUITE, "every_kind_sent", not missing, "never sent: %s" % missing if missing else "")
     ray_checks = sum(v for k, v in stats.compared.items()

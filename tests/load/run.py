@@ -43,8 +43,8 @@ def parse_args(argv):
     p.add_argument("--clients", type=int, help="load clients (quick 16, long 64)")
     p.add_argument("--duration", type=float, help="load seconds (quick 20, long 300)")
     p.add_argument("--max-concurrent", type=int,
-                   help="--max-concurrent for the load server (quick 8, so 503 busy is "
-                        "exercised; long: the server's default)")
+                   help="--max-concurrent for the load server (default: the server's own; 503 "
+                        "busy is exercised separately by the busy probe)")
     p.add_argument("--max-requests-per-client", type=int, default=10 ** 7,
                    help="a bound on each client's loop besides the duration")
     p.add_argument("--seed", default="13", help="seed of every random choice (default 13)")
@@ -60,8 +60,6 @@ def parse_args(argv):
     a.mode = "quick" if quick else "long"
     a.clients = a.clients or (16 if quick else 64)
     a.duration = a.duration if a.duration is not None else (20.0 if quick else 300.0)
-    if a.max_concurrent is None and quick:
-        a.max_concurrent = 8
     a.max_seconds = a.max_seconds or (200.0 if quick else 1200.0)
     a.parts = [x.strip() for x in a.only.split(",") if x.strip()]
     a.models = None
