@@ -179,6 +179,13 @@ def kill_during_registration(opts, ledger, d):
             if len(acked) >= 40:
                 break
         time.sleep(0.01)
+    # then the first moment at least 4 registrations are in flight (for at most 1 s)
+    deadline = time.monotonic() + 1
+    while time.monotonic() < deadline:
+        with lock:
+            if in_flight[0] >= 4:
+                break
+        time.sleep(0.0005)
     with lock:
         flying = in_flight[0]
     server.kill()  # kill -9 while registrations are in flight
