@@ -382,7 +382,7 @@ def mount_tmpfs(path, size, read_only=False):
     if rc != 0:
         return False, "mount -t tmpfs failed: " + out
     _MOUNTS.append(path)
-    return True, "tmpfs size=%s at %s" % (size, path)
+    return True, "tmpfs size=%s" % size
 
 
 def bind_mount(path):
