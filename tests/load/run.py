@@ -90,7 +90,7 @@ def main(argv):
         print("load: 0 passed, 1 failed")
         return 2
     opts.server = os.path.abspath(opts.server)
-    command = "tests/load/run.py " + " ".join(shlex.quote(x) for x in argv)
+    command = " ".join([sys.executable, "tests/load/run.py"] + [shlex.quote(x) for x in argv])
     started = datetime.datetime.now(datetime.timezone.utc)
     print("load: %s run of %s, seed %s, models: %s" % (opts.mode, opts.server, opts.seed,
                                                      opts.models or "absent"), flush=True)
