@@ -25,7 +25,7 @@ EXPECTED = {
                                 "API.md: 507, the data dir is read-only: nothing was deleted"),
     # --- hostile inputs (class -> statuses, codes) ------------------------------------------
     "hostile.deep_json": (BAD, {"invalid_request", "bad_json"},
-                          "100,000 nested arrays: a bad request never crashes the server"),
+                          "100,000 levels of nesting: a bad request never crashes the server"),
     "hostile.nan_inf_literal": (BAD, {"bad_json"},
                                 "API.md: JSON cannot carry NaN or Inf: such a body is bad_json"),
     "hostile.overflowing_number": (BAD, {"bad_json"},

@@ -92,8 +92,10 @@ DIAGNOSES = {
         "brings it back.",
     "faults.read_only.scene_stays_after_refused_delete": "As `read_only.delete`.",
     "hostile.deep_json":
-        "100,000 nested arrays or objects overflow the stack of the recursive JSON parser: the "
-        "server dies with SIGSEGV and logs nothing. A depth limit is needed before parsing.",
+        "100,000 levels of nesting overflow a worker thread's 8 MB stack somewhere in the "
+        "recursive handling of the document: the server dies with SIGSEGV and logs nothing. Run "
+        "under `ulimit -s 1000000` the same body registers (201), so it is stack depth; a nesting "
+        "limit checked before any recursive walk is needed.",
     "hostile.no_crashes": "The deep-JSON crashes.",
     "hostile.long_url":
         "cpp-httplib answers 414 itself and the error handler (server/app.cpp) maps only "

@@ -118,10 +118,15 @@ def main(argv):
                     continue
             except harness.ServerStartError as e:
                 ledger.check(part, "server_starts", False, str(e))
+            except Exception as e:  # noqa: BLE001 - a harness bug fails the run, with the closing line
+                import traceback
+                ledger.check(part, "part_ran", False, "%r\n%s" % (e, traceback.format_exc(limit=5)))
             summaries.setdefault(part, {})["seconds"] = time.monotonic() - pt
     finally:
-        harness.stop_all()
+        harness.stop_all()  # servers first, then mounts
         dog.cancel()
+        if not opts.keep_tmp:
+            shutil.rmtree(tmp_root, ignore_errors=True)
     seconds = time.monotonic() - t0
     passed, failed, skipped = ledger.counts()
 
@@ -144,8 +149,6 @@ def main(argv):
                        "checks": [list(r) for r in ledger.results]}, f, indent=1, default=str)
     if opts.keep_tmp:
         print("  temporary files kept in %s" % tmp_root)
-    else:
-        shutil.rmtree(tmp_root, ignore_errors=True)
     print("load: %d passed, %d failed" % (passed, failed), flush=True)
     return 1 if failed else 0
 
