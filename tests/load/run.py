@@ -54,6 +54,9 @@ def parse_args(argv):
     p.add_argument("--json", metavar="FILE", help="also write every summary and check as JSON")
     p.add_argument("--max-seconds", type=float,
                    help="watchdog: stop everything after this long (quick 200, long 1200)")
+    p.add_argument("--no-mount", action="store_true",
+                   help="mount nothing, even as root: the full disk is RLIMIT_FSIZE and the "
+                        "read-only checks are skipped (what a run without root does)")
     p.add_argument("--keep-tmp", action="store_true", help="keep the temporary data dirs and logs")
     a = p.parse_args(argv)
     quick = a.quick
@@ -90,6 +93,7 @@ def main(argv):
         print("load: 0 passed, 1 failed")
         return 2
     opts.server = os.path.abspath(opts.server)
+    harness.NO_MOUNT = opts.no_mount
     command = " ".join([sys.executable, "tests/load/run.py"] + [shlex.quote(x) for x in argv])
     started = datetime.datetime.now(datetime.timezone.utc)
     print("load: %s run of %s, seed %s, models: %s" % (opts.mode, opts.server, opts.seed,
