@@ -26,8 +26,8 @@ ConnectionRegistry::Handle ConnectionRegistry::add(int sock, std::string client,
     }
     if (oldest && same >= max_evictable_per_client)
         evict_locked(*oldest);
-    entries_.push_back(Entry{sock, std::move(client), ConnPhase::idle,
-                             std::chrono::steady_clock::now(), false});
+    entries_.push_back(
+        Entry{sock, std::move(client), ConnPhase::idle, std::chrono::steady_clock::now(), false});
     if (closing_)
         evict_locked(entries_.back());
     return std::prev(entries_.end());

@@ -1,5 +1,9 @@
 #include "server/http/http_server.h"
 
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
 #include <arpa/inet.h>
 #include <malloc.h>
 #include <netinet/in.h>
@@ -7,10 +11,6 @@
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <algorithm>
-#include <cerrno>
-#include <cstring>
 
 #include "server/api_error.h"
 
@@ -69,13 +69,20 @@ void address_of(int sock, bool peer, std::string& ip, int& port) {
 
 const char* reason_phrase(int status) {
     switch (status) {
-        case 400: return "Bad Request";
-        case 413: return "Content Too Large";
-        case 414: return "URI Too Long";
-        case 431: return "Request Header Fields Too Large";
-        case 503: return "Service Unavailable";
-        case 505: return "HTTP Version Not Supported";
-        default: return "Error";
+        case 400:
+            return "Bad Request";
+        case 413:
+            return "Content Too Large";
+        case 414:
+            return "URI Too Long";
+        case 431:
+            return "Request Header Fields Too Large";
+        case 503:
+            return "Service Unavailable";
+        case 505:
+            return "HTTP Version Not Supported";
+        default:
+            return "Error";
     }
 }
 
@@ -128,14 +135,18 @@ class HttpServer::ConnStream : public httplib::Stream {
             const std::size_t n = std::min(size, buf_.size() - off_);
             std::memcpy(ptr, buf_.data() + off_, n);
             off_ += n;
+            consumed_ += n;
             return static_cast<ssize_t>(n);
         }
         buf_.clear();
         off_ = 0;
         if (!(wait_readable() & (POLLIN | POLLHUP)))
             return -1;
-        if (size >= kReadChunk)
-            return recv_some(ptr, size);
+        if (size >= kReadChunk) {
+            const ssize_t got = recv_some(ptr, size);
+            consumed_ += got > 0 ? static_cast<std::uint64_t>(got) : 0;
+            return got;
+        }
         buf_.resize(kReadChunk);
         const ssize_t got = recv_some(buf_.data(), kReadChunk);
         buf_.resize(got > 0 ? static_cast<std::size_t>(got) : 0);
@@ -186,6 +197,8 @@ class HttpServer::ConnStream : public httplib::Stream {
         buf_.replace(off_ + at, len, with);
     }
     void set_read_deadline(Clock::time_point t) { deadline_ = t; }
+    /// Bytes handed to cpp-httplib by read() so far.
+    std::uint64_t consumed() const { return consumed_; }
     bool timed_out() const { return timed_out_; }
     /// Set when an answer was sent before the whole request was read (close with lingering).
     bool linger = false;
@@ -211,6 +224,7 @@ class HttpServer::ConnStream : public httplib::Stream {
     const ConnectionLimits& limits_;
     std::string buf_;
     std::size_t off_ = 0;
+    std::uint64_t consumed_ = 0;
     Clock::time_point deadline_ = Clock::time_point::max();
     mutable bool timed_out_ = false;
 };
@@ -325,16 +339,24 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
             }
         }
         registry_.set_phase(h, ConnPhase::active);
-        const auto body_time = std::chrono::milliseconds(
-            static_cast<long long>(1000.0 * static_cast<double>(body) /
-                                   static_cast<double>(std::max<std::uint64_t>(
-                                       limits_.min_body_rate, 1))));
+        const auto body_time = std::chrono::milliseconds(static_cast<long long>(
+            1000.0 * static_cast<double>(body) /
+            static_cast<double>(std::max<std::uint64_t>(limits_.min_body_rate, 1))));
         strm.set_read_deadline(Clock::now() + limits_.body_grace + body_time);
         const bool last = served + 1 == limits_.max_requests_per_connection || stopping();
         bool closed = false;
+        const std::uint64_t request_end = strm.consumed() + head.head_bytes + body;
         t_current_sock = strm.socket();
         const bool ok = process_request(strm, last, closed, nullptr);
         t_current_sock = -1;
+        // A handler may answer before it has read the whole body (503 busy on a streamed
+        // binary batch): the rest of the body would then be read as the next request. Such a
+        // connection ends here (its answer said nothing of keep-alive that the client may rely
+        // on: RFC 9112 §9.6 lets a server close after any response). A chunked body's end is
+        // not tracked, so its connection ends too.
+        const bool body_unread = strm.consumed() < request_end || head.chunked;
+        if (body_unread)
+            strm.linger = true;
         strm.set_read_deadline(Clock::time_point::max());
         if (body > 0) {
             body_bytes_.fetch_sub(body);
@@ -343,7 +365,7 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         }
         if (strm.timed_out())
             timeouts_.fetch_add(1);
-        if (!ok || closed || last)
+        if (!ok || closed || last || body_unread)
             return;
     }
 }
@@ -354,10 +376,10 @@ void HttpServer::write_error(ConnStream& strm, int status, const std::string& co
         refused_heads_.fetch_add(1);
     strm.linger = true;
     const std::string body = error_body(ApiError(code, status, message));
-    std::string out = "HTTP/1.1 " + std::to_string(status) + " " + reason_phrase(status) +
-                      "\r\nContent-Type: application/json\r\nContent-Length: " +
-                      std::to_string(body.size()) + "\r\nConnection: close\r\nX-Request-Id: " +
-                      next_request_id() + "\r\n";
+    std::string out =
+        "HTTP/1.1 " + std::to_string(status) + " " + reason_phrase(status) +
+        "\r\nContent-Type: application/json\r\nContent-Length: " + std::to_string(body.size()) +
+        "\r\nConnection: close\r\nX-Request-Id: " + next_request_id() + "\r\n";
     if (retry_after_s > 0)
         out += "Retry-After: " + std::to_string(retry_after_s) + "\r\n";
     out += "\r\n" + body;

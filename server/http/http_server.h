@@ -38,8 +38,8 @@
 namespace raycastd::server {
 
 struct ConnectionLimits {
-    std::size_t max_connections = 512;      ///< connections served at once (a thread each)
-    std::size_t max_idle_per_client = 32;   ///< evictable connections one address may hold
+    std::size_t max_connections = 512;     ///< connections served at once (a thread each)
+    std::size_t max_idle_per_client = 32;  ///< evictable connections one address may hold
     std::chrono::milliseconds header_timeout{10'000};  ///< first byte → end of the head
     std::chrono::milliseconds idle_timeout{5'000};     ///< keep-alive wait for the next request
     std::chrono::milliseconds read_timeout{10'000};    ///< longest pause within a body
@@ -93,9 +93,9 @@ class HttpServer : public httplib::Server {
         std::size_t open_connections = 0;
         std::size_t idle_connections = 0;
         std::uint64_t evictions = 0;
-        std::uint64_t refused_heads = 0;   ///< framing errors answered by this layer
-        std::uint64_t busy_bodies = 0;     ///< bodies refused by the budget
-        std::uint64_t timeouts = 0;        ///< connections dropped at a deadline
+        std::uint64_t refused_heads = 0;  ///< framing errors answered by this layer
+        std::uint64_t busy_bodies = 0;    ///< bodies refused by the budget
+        std::uint64_t timeouts = 0;       ///< connections dropped at a deadline
         std::uint64_t body_bytes_in_flight = 0;
     };
     Stats stats() const;

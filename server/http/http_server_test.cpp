@@ -1,16 +1,16 @@
 #include "server/http/http_server.h"
 
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <chrono>
-#include <string>
-#include <thread>
-#include <vector>
 
 namespace raycastd::server {
 namespace {
@@ -26,9 +26,15 @@ class Served {
             res.set_content("{\"status\":\"ok\"}", "application/json");
         });
         http_.Post("/echo", [](const httplib::Request& req, httplib::Response& res) {
-            res.set_content(std::to_string(req.body.size()) + " " +
-                                req.get_header_value("Content-Type"),
-                            "text/plain");
+            res.set_content(
+                std::to_string(req.body.size()) + " " + req.get_header_value("Content-Type"),
+                "text/plain");
+        });
+        // Answers before reading its body, as a busy streamed batch does.
+        http_.Post("/early", [](const httplib::Request&, httplib::Response& res,
+                                const httplib::ContentReader&) {
+            res.status = 503;
+            res.set_content("{\"error\":{\"code\":\"busy\"}}", "application/json");
         });
         http_.Get("/slow", [this](const httplib::Request&, httplib::Response& res) {
             const ClientProbe probe = HttpServer::current_client();
@@ -238,8 +244,8 @@ TEST(HttpServer, ABodyOverTheLimitIsRefusedBeforeItIsRead) {
 
 TEST(HttpServer, LongUrlsAndHeadsGetTheirStatusesAsJson) {
     Served s(ConnectionLimits{});
-    const std::string url = exchange(
-        s.port(), "GET /" + std::string(100'000, 'a') + " HTTP/1.1\r\nHost: x\r\n\r\n");
+    const std::string url =
+        exchange(s.port(), "GET /" + std::string(100'000, 'a') + " HTTP/1.1\r\nHost: x\r\n\r\n");
     // Over the head limit before the URL limit is seen: either way a JSON too_large.
     EXPECT_TRUE(status_of(url) == 414 || status_of(url) == 431) << url.substr(0, 200);
     EXPECT_NE(url.find("\"too_large\""), std::string::npos);
@@ -297,6 +303,20 @@ TEST(HttpServer, BodiesOverTheBudgetAreBusyWithRetryAfter) {
     for (int i = 0; i < 100 && s.http().stats().body_bytes_in_flight != 0; ++i)
         std::this_thread::sleep_for(10ms);
     EXPECT_EQ(s.http().stats().body_bytes_in_flight, 0u);
+}
+
+TEST(HttpServer, AnAnswerBeforeTheBodyIsReadEndsTheConnection) {
+    // Without it, the unread body is parsed as the next request on the connection.
+    Served s(ConnectionLimits{});
+    const int c = connect_to(s.port());
+    send_all(c, "POST /early HTTP/1.1\r\nHost: x\r\nContent-Length: 40000\r\n\r\n" +
+                    std::string(40000, 'G') + "GET /health HTTP/1.1\r\nHost: x\r\n\r\n");
+    const std::string first = read_answer(c);
+    EXPECT_EQ(status_of(first), 503) << first;
+    // The connection is closed rather than reading 'GGGG…' as a request.
+    const std::string rest = read_answer(c, 2000ms);
+    EXPECT_TRUE(rest.empty()) << rest.substr(0, 200);
+    ::close(c);
 }
 
 TEST(HttpServer, AHandlerSeesItsClientGo) {

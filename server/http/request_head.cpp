@@ -123,9 +123,8 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
             return bad("a header name that is not a token");
         const std::string_view value = trim(line.substr(colon + 1));
         if (iequals(name, "Content-Length")) {
-            if (value.empty() || !std::all_of(value.begin(), value.end(), [](char c) {
-                    return c >= '0' && c <= '9';
-                })) {
+            if (value.empty() || !std::all_of(value.begin(), value.end(),
+                                              [](char c) { return c >= '0' && c <= '9'; })) {
                 return bad("Content-Length must be a decimal number of bytes, got \"" +
                            std::string(value.substr(0, 40)) + "\"");
             }

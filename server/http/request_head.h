@@ -30,11 +30,11 @@ struct HeadError {
 
 /// A checked request head.
 struct RequestHead {
-    std::size_t head_bytes = 0;         ///< bytes up to and including the blank line
+    std::size_t head_bytes = 0;  ///< bytes up to and including the blank line
     std::string method;
     std::string target;
-    std::uint64_t content_length = 0;   ///< 0 when absent
-    bool chunked = false;               ///< Transfer-Encoding: chunked
+    std::uint64_t content_length = 0;  ///< 0 when absent
+    bool chunked = false;              ///< Transfer-Encoding: chunked
     /// Where the value of a `Content-Type: application/x-www-form-urlencoded` header stands in
     /// the head (offset, length), so the caller can replace it; nullopt when there is none.
     std::optional<std::pair<std::size_t, std::size_t>> form_content_type;

@@ -88,8 +88,8 @@ TEST(RequestHead, FindsAFormContentTypeToReplace) {
     ASSERT_TRUE(c.head && c.head->form_content_type);
     EXPECT_EQ(h.substr(c.head->form_content_type->first, c.head->form_content_type->second),
               "application/x-www-form-urlencoded");
-    EXPECT_FALSE(check("POST / HTTP/1.1\r\nContent-Type: application/json\r\n\r\n")
-                     .head->form_content_type);
+    EXPECT_FALSE(
+        check("POST / HTTP/1.1\r\nContent-Type: application/json\r\n\r\n").head->form_content_type);
 }
 
 }  // namespace
