@@ -8,7 +8,7 @@
 #include <unistd.h>
 
 #include "engine/query/intersect.h"
-#include "server/app.h"
+#include "server/model_source.h"
 
 namespace raycastd::server {
 namespace {
@@ -26,23 +26,18 @@ struct TempDir {
     ~TempDir() { fs::remove_all(path); }
 };
 
-/// A registry whose builder is the server's own (App::build_scene), counting builds.
+/// A registry whose builder is the server's own (ModelSource::build_scene), counting builds.
 struct Fixture {
     explicit Fixture(const std::string& data_dir, std::size_t budget = 1u << 30)
-        : app(make_config()),
+        : models(Limits{}, "."),
           registry(data_dir, budget, [this](const SceneSource& s, const FileSource& f) {
               ++builds;
-              return app.build_scene(s, f);
+              return models.build_scene(s, f);
           }) {
         std::string error;
         EXPECT_TRUE(registry.open(error)) << error;
     }
-    static Config make_config() {
-        Config c;
-        c.port = 0;
-        return c;
-    }
-    App app;
+    ModelSource models;
     std::atomic<int> builds{0};
     SceneRegistry registry;
 };
