@@ -212,8 +212,15 @@ bool App::answer_http_error(const httplib::Request& req, httplib::Response& res)
                    ApiError(ErrorCode::too_large, "request body is over the configured limit"));
     } else if (res.status == 400) {
         send_error(res, ApiError(ErrorCode::invalid_request, "malformed HTTP request"));
+    } else if (res.status == 414) {
+        // The contract's one exception to the table: a URL over the limit is too_large with
+        // the status that names a URL (cpp-httplib refuses request lines over 8,192 bytes).
+        send_json(res,
+                  error_body(ApiError(ErrorCode::too_large,
+                                      "the request line is over the limit of 8,192 bytes")),
+                  414);
     } else {
-        // httplib's own status (414 URI too long, 416 bad range, ...) is kept.
+        // httplib's own status (416 bad range, ...) is kept.
         send_json(res, error_body(ApiError(ErrorCode::internal, "HTTP error")), res.status);
     }
     return true;

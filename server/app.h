@@ -48,9 +48,11 @@ class App {
     /// through req.matches), limited to literal text and `([A-Za-z0-9_]+)` for an id, which is
     /// all our paths need and all allowed_methods() reads. GET routes answer HEAD too.
     void on_get(const std::string& pattern, httplib::Server::Handler handler);
+    /// A POST route; cpp-httplib has read the body into req.body (up to --max-body-mb).
     void on_post(const std::string& pattern, httplib::Server::Handler handler);
     /// A POST route that reads its body itself (streamed into pooled buffers).
     void on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler);
+    /// A DELETE route.
     void on_delete(const std::string& pattern, httplib::Server::Handler handler);
     /// The methods the routes serve for `path`, as an Allow header lists them ("GET, HEAD");
     /// empty when no route matches the path.
@@ -70,7 +72,9 @@ class App {
     std::size_t max_concurrent() const { return max_concurrent_; }
     int worker_threads() const { return threads_; }
 
+    /// The registered scenes (the only shared mutable state; it owns its lock).
     SceneRegistry& registry() { return *registry_; }
+    /// Builds scenes within the limits: the registry's builder, and the stateless calls'.
     const ModelSource& models() const { return models_; }
     /// The registered scene, or scene_not_found.
     std::shared_ptr<const engine::QueryEngine> scene_or_404(const std::string& id);

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -99,6 +100,26 @@ TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
     Fixture h(dir.path.string());
     EXPECT_EQ(h.registry.size(), 1u);
     EXPECT_FALSE(fs::exists(dir.path / "tmp" / "sc_half.123.0"));
+}
+
+// A scene that cannot be saved is not acknowledged: the error names what failed, and the
+// registry stays as it was.
+TEST(SceneRegistry, ASceneThatCannotBeSavedIsNotRegistered) {
+    TempDir dir;
+    Fixture f(dir.path.string());
+    fs::remove_all(dir.path / "tmp");
+    {
+        std::ofstream blocker(dir.path / "tmp");  // a file where the staging directory goes
+    }
+    try {
+        f.registry.add({"application/json", kSpheres}, no_files());
+        ADD_FAILURE() << "registered without saving";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code, ErrorCode::internal);
+        EXPECT_NE(std::string(e.what()).find("cannot save the scene"), std::string::npos);
+    }
+    EXPECT_EQ(f.registry.size(), 0u);
+    EXPECT_TRUE(fs::is_empty(dir.path / "scenes"));
 }
 
 TEST(SceneRegistry, DeleteRemovesSavedCopy) {

@@ -17,14 +17,11 @@ struct Outcome {
 Outcome dom(const std::string& body) {
     Outcome o;
     try {
-        o.req = parse_intersect_request(Json::parse(body), "", 4);
+        o.req = parse_intersect_request(parse_json(body), "", 4);
     } catch (const ApiError& e) {
         o.threw = true;
         o.code = std::string(to_string(e.code));
         o.path = e.path;
-    } catch (const Json::exception&) {
-        o.threw = true;
-        o.code = "bad_json";
     }
     return o;
 }

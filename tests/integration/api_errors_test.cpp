@@ -162,6 +162,13 @@ TEST_F(ApiErrors, MethodNotAllowedListsTheAllowedMethods) {
     EXPECT_EQ(res->status, 200);
 }
 
+TEST_F(ApiErrors, UrlOverTheLimitIs414TooLarge) {
+    auto res = server_->client()->Get("/v1/" + std::string(9000, 'a'));
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 414);
+    EXPECT_EQ(Json::parse(res->body).at("error").at("code"), "too_large") << res->body;
+}
+
 TEST_F(ApiErrors, UnknownEndpoint) {
     auto res = server_->client()->Get("/v1/nothing-here");
     ASSERT_TRUE(res);
