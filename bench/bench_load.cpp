@@ -22,7 +22,7 @@
 #include "bench/workloads.h"
 #include "engine/load/model_loader.h"
 #include "engine/query/intersect.h"
-#include "server/scene_registry.h"
+#include "server/content_hash.h"
 
 namespace fs = std::filesystem;
 using namespace raycastd;

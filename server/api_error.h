@@ -1,34 +1,53 @@
 #pragma once
-// ApiError: the one table of error codes of the HTTP API (API.md, "Errors"). Every code is
-// defined here once, maps to one HTTP status, and is documented in docs/api.md.
+// ApiError: the one table of error codes of the HTTP API (docs/api.md, "Errors"). Every code is
+// an ErrorCode, defined here once, with one HTTP status and one stable name; a misspelt code is
+// a compile error, not a 500.
 
+#include <iosfwd>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "engine/status.h"
 
 namespace raycastd::server {
 
-struct ApiError : std::runtime_error {
-    std::string code;  ///< stable machine code: "bad_json", "invalid_scene", ...
-    int http_status;
-    std::string path;  ///< JSON pointer into the request body, empty when not applicable
-
-    ApiError(std::string code_, int status, std::string message, std::string path_ = {})
-        : std::runtime_error(std::move(message)),
-          code(std::move(code_)),
-          http_status(status),
-          path(std::move(path_)) {}
+/// The API's stable machine codes, in the order of the table in api_error.cpp.
+enum class ErrorCode {
+    bad_json,            ///< 400: the body is not JSON (or holds a number a double cannot carry)
+    invalid_scene,       ///< 400: a scene document breaks a rule
+    invalid_ray,         ///< 400: a ray is unusable; names the ray index
+    invalid_request,     ///< 400: an unusable option, a missing member, malformed HTTP
+    unsupported_format,  ///< 400: a format raycastd does not read or write
+    scene_not_found,     ///< 404: no registered scene has that id
+    not_found,           ///< 404: no such endpoint
+    job_not_found,       ///< 404: no render job has that id
+    method_not_allowed,  ///< 405: a known path with another method (Allow lists the right ones)
+    too_large,           ///< 413: over a configured limit, or out of memory
+    model_load_failed,   ///< 422: the file parsed but is not a usable model
+    busy,                ///< 503: over the concurrent-work limit
+    internal,            ///< 500: a bug
 };
 
-/// The HTTP status of a code from the table; 500 for an unknown code (a bug).
-int http_status_of(const std::string& code);
+/// The code's stable name as it appears in responses ("bad_json").
+std::string_view to_string(ErrorCode code);
+/// The HTTP status the table gives the code.
+int http_status_of(ErrorCode code);
+/// Writes to_string(code) (for test messages).
+std::ostream& operator<<(std::ostream& os, ErrorCode code);
 
-/// An ApiError with the status the table gives the code.
-ApiError api_error(const std::string& code, std::string message, std::string path = {});
+struct ApiError : std::runtime_error {
+    ErrorCode code;
+    std::string path;  ///< JSON pointer into the request body, empty when not applicable
 
-/// Maps an engine Status (not ok) to the API's code and status; `path_prefix` is prepended to
-/// the Status path (e.g. "/scene" for the stateless calls).
+    ApiError(ErrorCode code_, std::string message, std::string path_ = {})
+        : std::runtime_error(std::move(message)), code(code_), path(std::move(path_)) {}
+
+    int http_status() const { return http_status_of(code); }
+};
+
+/// Maps an engine Status (not ok) to the API's code; `path_prefix` is prepended to the Status
+/// path (e.g. "/scene" for the stateless calls). The only mapping from engine::Code.
 ApiError from_status(const engine::Status& st, const std::string& path_prefix = {});
 
 /// {"error": {"code": ..., "message": ..., "path": ...}} (path only when set).

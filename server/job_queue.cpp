@@ -106,10 +106,10 @@ void JobQueue::run() {
         } catch (const ApiError& e) {
             error = e;
         } catch (const std::bad_alloc&) {
-            error = api_error("too_large", "out of memory while rendering");
+            error = ApiError(ErrorCode::too_large, "out of memory while rendering");
         } catch (const std::exception& e) {
             std::fprintf(stderr, "raycastd: job %s failed: %s\n", job->id.c_str(), e.what());
-            error = api_error("internal", "internal error in job " + job->id);
+            error = ApiError(ErrorCode::internal, "internal error in job " + job->id);
         }
         std::lock_guard<std::mutex> lock(mu_);
         job->finished = Clock::now();

@@ -118,12 +118,13 @@ TEST(JobQueue, FullQueueIsBusy) {
 
 TEST(JobQueue, FailedJobKeepsItsError) {
     JobQueue q(2, 8);
-    auto id = q.submit(
-        [](engine::RenderProgress&) -> JobOutput { throw api_error("too_large", "no room"); });
+    auto id = q.submit([](engine::RenderProgress&) -> JobOutput {
+        throw ApiError(ErrorCode::too_large, "no room");
+    });
     const JobInfo info = wait_finished(q, *id);
     EXPECT_EQ(info.state, JobState::failed);
     ASSERT_TRUE(info.error);
-    EXPECT_EQ(info.error->code, "too_large");
+    EXPECT_EQ(info.error->code, ErrorCode::too_large);
 }
 
 TEST(JobQueue, OldFinishedJobsAreDropped) {

@@ -11,34 +11,30 @@ namespace raycastd::server {
 
 namespace {
 
-using engine::Code;
-
+/// A failed read or load, reported at `path` (the object's pointer, not the Status's own).
 ApiError load_error(const engine::Status& st, const std::string& path) {
-    if (st.code == Code::model_load_failed)
-        return api_error("model_load_failed", st.message, path);
-    if (st.code == Code::unsupported_format)
-        return api_error("unsupported_format", st.message, path);
-    if (st.code == Code::too_large)
-        return api_error("too_large", st.message, path);
-    return api_error("invalid_scene", st.message, path);
+    ApiError e = from_status(st);
+    e.path = path;
+    return e;
 }
 
 engine::Transform parse_transform(const Json& j, const std::string& path) {
-    require_object(j, path, "invalid_scene");
+    require_object(j, path, ErrorCode::invalid_scene);
     engine::Vec3d translate{0, 0, 0}, rotate{0, 0, 0}, scale{1, 1, 1};
     if (const Json* t = member(j, "translate"))
-        translate = read_vec3(*t, path + "/translate", "invalid_scene");
+        translate = read_vec3(*t, path + "/translate", ErrorCode::invalid_scene);
     if (const Json* r = member(j, "rotate_deg"))
-        rotate = read_vec3(*r, path + "/rotate_deg", "invalid_scene");
+        rotate = read_vec3(*r, path + "/rotate_deg", ErrorCode::invalid_scene);
     if (const Json* s = member(j, "scale")) {
         if (s->is_number()) {
-            const double k = read_number(*s, path + "/scale", "invalid_scene");
+            const double k = read_number(*s, path + "/scale", ErrorCode::invalid_scene);
             scale = {k, k, k};
         } else {
-            scale = read_vec3(*s, path + "/scale", "invalid_scene");
+            scale = read_vec3(*s, path + "/scale", ErrorCode::invalid_scene);
         }
         if (scale.x == 0 || scale.y == 0 || scale.z == 0) {
-            throw api_error("invalid_scene", path + "/scale must not be zero", path + "/scale");
+            throw ApiError(ErrorCode::invalid_scene, path + "/scale must not be zero",
+                           path + "/scale");
         }
     }
     return engine::Transform::from_translate_rotate_scale(translate, rotate, scale);
@@ -114,26 +110,26 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         const Json* data = member(obj, "data_base64");
         const Json* fmt = member(obj, "format");
         if ((uri != nullptr) == (data != nullptr)) {
-            throw api_error("invalid_scene",
-                            path + ": a mesh needs exactly one of uri and data_base64", path);
+            throw ApiError(ErrorCode::invalid_scene,
+                           path + ": a mesh needs exactly one of uri and data_base64", path);
         }
         std::optional<engine::ModelFormat> format;
         if (fmt) {
-            const std::string f = read_string(*fmt, path + "/format", "invalid_scene");
+            const std::string f = read_string(*fmt, path + "/format", ErrorCode::invalid_scene);
             format = engine::format_from_name(f);
             if (!format) {
-                throw api_error("unsupported_format",
-                                "format \"" + f + "\" is not one of gltf, glb, obj, ply, stl, off",
-                                path + "/format");
+                throw ApiError(ErrorCode::unsupported_format,
+                               "format \"" + f + "\" is not one of gltf, glb, obj, ply, stl, off",
+                               path + "/format");
             }
         }
         std::string bytes, display, dir;
         engine::ResourceReader resources = engine::no_resources();
         if (uri) {
-            const std::string u = read_string(*uri, path + "/uri", "invalid_scene");
+            const std::string u = read_string(*uri, path + "/uri", ErrorCode::invalid_scene);
             auto norm = normalize_relative(u);
             if (!norm.ok())
-                throw api_error("invalid_scene", norm.status().message, path + "/uri");
+                throw ApiError(ErrorCode::invalid_scene, norm.status().message, path + "/uri");
             auto content = files(*norm);
             if (!content.ok())
                 throw load_error(content.status(), path + "/uri");
@@ -151,17 +147,17 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             };
         } else {
             if (!format) {
-                throw api_error("invalid_scene", path + "/format is required with data_base64",
-                                path + "/format");
+                throw ApiError(ErrorCode::invalid_scene,
+                               path + "/format is required with data_base64", path + "/format");
             }
             if (!data->is_string()) {
-                throw api_error("invalid_scene", path + "/data_base64 must be a string",
-                                path + "/data_base64");
+                throw ApiError(ErrorCode::invalid_scene, path + "/data_base64 must be a string",
+                               path + "/data_base64");
             }
             auto decoded = decode_base64(data->get_ref<const std::string&>());
             if (!decoded) {
-                throw api_error("invalid_scene", path + "/data_base64 is not valid base64",
-                                path + "/data_base64");
+                throw ApiError(ErrorCode::invalid_scene, path + "/data_base64 is not valid base64",
+                               path + "/data_base64");
             }
             bytes = std::move(*decoded);
             display = "inline model";
@@ -169,9 +165,9 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         if (!format)
             format = engine::sniff_format(bytes);
         if (!format) {
-            throw api_error("unsupported_format",
-                            path + ": cannot tell the model format; set \"format\"",
-                            path + "/format");
+            throw ApiError(ErrorCode::unsupported_format,
+                           path + ": cannot tell the model format; set \"format\"",
+                           path + "/format");
         }
         if (const Json* n = member(obj, "name"); n && n->is_string())
             display = n->get<std::string>();
@@ -292,6 +288,100 @@ std::optional<std::string> decode_base64(std::string_view text) {
     if (padding > 2 || bits >= 6)
         return std::nullopt;
     return out;
+}
+
+namespace {
+
+std::shared_ptr<const engine::QueryEngine> prepare(engine::Scene scene, const Limits& limits,
+                                                   const std::string& prefix) {
+    if (scene.triangle_count() > limits.max_triangles) {
+        throw ApiError(ErrorCode::too_large,
+                       "the scene has " + std::to_string(scene.triangle_count()) +
+                           " triangles, over the limit of " + std::to_string(limits.max_triangles),
+                       prefix);
+    }
+    auto built = engine::QueryEngine::build(std::make_shared<engine::Scene>(std::move(scene)));
+    if (!built.ok())
+        throw from_status(built.status(), prefix);
+    return *built;
+}
+
+}  // namespace
+
+ModelSource::ModelSource(const Limits& limits, std::string scene_root)
+    : limits_(limits), scene_root_(std::move(scene_root)) {}
+
+FileSource ModelSource::scene_root_files() const {
+    return
+        [this](const std::string& path) { return scene_root_.read(path, limits_.max_body_bytes); };
+}
+
+std::shared_ptr<const engine::QueryEngine> ModelSource::build_stateless_scene(
+    const Json& body) const {
+    require_object(body, "", ErrorCode::invalid_request);
+    const Json* doc = member(body, "scene");
+    if (!doc)
+        throw ApiError(ErrorCode::invalid_request, "/scene is required", "/scene");
+    return stateless_cache_.get_or_build(*doc, [&] {
+        return prepare(scene_from_document(*doc, "/scene", scene_root_files(), limits_), limits_,
+                       "/scene");
+    });
+}
+
+std::shared_ptr<const engine::QueryEngine> ModelSource::build_scene(const SceneSource& src,
+                                                                    const FileSource& files) const {
+    if (src.content_type == "application/json") {
+        return prepare(scene_from_document(parse_json(src.body), "", files, limits_), limits_, "");
+    }
+    auto format = format_from_content_type(src.content_type);
+    if (!format)
+        throw ApiError(ErrorCode::unsupported_format, "cannot load " + src.content_type);
+    return prepare(scene_from_model(src.body, *format, "model", limits_), limits_, "");
+}
+
+std::string classify_scene_body(std::string_view body, const std::string& content_type) {
+    if (body.empty())
+        return "application/json";
+    const std::string ct = content_type.substr(0, content_type.find(';'));
+    if (ct == "application/json")
+        return ct;
+    if (format_from_content_type(ct))
+        return ct;
+    if (!ct.empty() && ct != "application/octet-stream" &&
+        ct != "application/x-www-form-urlencoded" && ct != "text/plain") {
+        throw ApiError(ErrorCode::unsupported_format,
+                       "Content-Type " + ct +
+                           " is not a scene document (application/json) or a model type "
+                           "(model/gltf-binary, model/gltf+json, model/obj, application/sla, "
+                           "application/x-ply, model/off)");
+    }
+    // No usable type (curl -d sends form-urlencoded): tell by the bytes.
+    if (auto f = engine::sniff_format(body)) {
+        switch (*f) {
+            case engine::ModelFormat::glb:
+                return "model/gltf-binary";
+            case engine::ModelFormat::ply:
+                return "application/x-ply";
+            case engine::ModelFormat::stl:
+                return "application/sla";
+            case engine::ModelFormat::off:
+                return "model/off";
+            case engine::ModelFormat::obj:
+                return "model/obj";
+            case engine::ModelFormat::gltf:
+                break;  // JSON: a glTF or a scene document
+        }
+    }
+    const auto first = body.find_first_not_of(" \t\r\n");
+    if (first != std::string_view::npos && body[first] == '{') {
+        // A glTF document has an "asset" object; a scene document has "objects". A body that
+        // is not JSON is a scene document whose error parse_json reports.
+        const Json j = Json::parse(body, nullptr, /*allow_exceptions=*/false);
+        if (j.is_object() && j.contains("asset") && !j.contains("objects"))
+            return "model/gltf+json";
+        return "application/json";
+    }
+    throw ApiError(ErrorCode::unsupported_format, "cannot tell what the body is; set Content-Type");
 }
 
 }  // namespace raycastd::server

@@ -4,8 +4,7 @@
 #include <sstream>
 #include <thread>
 
-#include <embree3/rtcore_config.h>
-
+#include "engine/backend.h"
 #include "server/app.h"
 #include "server/openapi.h"
 #include "server/schema/json_writer.h"
@@ -26,16 +25,16 @@ std::size_t resident_bytes() {
 }  // namespace
 
 void install_meta_routes(App& app) {
-    app.http().Get("/v1/health", [&app](const httplib::Request& req, httplib::Response& res) {
-        app.handle(req, res, false, [&] { send_json(res, R"({"status":"ok"})"); });
+    app.on_get("/v1/health", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] { send_json(res, R"({"status":"ok"})"); });
     });
-    app.http().Get("/v1/info", [&app](const httplib::Request& req, httplib::Response& res) {
-        app.handle(req, res, false, [&] {
+    app.on_get("/v1/info", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] {
             const Config& c = app.config();
             Json info = {
                 {"name", "raycastd"},
                 {"version", RAYCASTD_VERSION},
-                {"embree_version", RTC_VERSION_STRING},
+                {"embree_version", engine::backend_version()},
                 {"hardware_threads", std::thread::hardware_concurrency()},
                 {"worker_threads", app.worker_threads()},
                 {"limits",
@@ -52,8 +51,8 @@ void install_meta_routes(App& app) {
             send_json(res, info.dump());
         });
     });
-    app.http().Get("/v1/openapi.json", [&app](const httplib::Request& req, httplib::Response& res) {
-        app.handle(req, res, false, [&] { send_json(res, openapi_document()); });
+    app.on_get("/v1/openapi.json", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] { send_json(res, openapi_document()); });
     });
 }
 

@@ -64,7 +64,7 @@ std::string job_body(const JobInfo& j) {
         }
     }
     if (j.error) {
-        w.raw(",\"error\":{\"code\":").string(j.error->code);
+        w.raw(",\"error\":{\"code\":").string(to_string(j.error->code));
         w.raw(",\"message\":").string(j.error->what()).ch('}');
     }
     w.ch('}');
@@ -72,7 +72,7 @@ std::string job_body(const JobInfo& j) {
 }
 
 ApiError job_not_found(const std::string& id) {
-    return api_error("not_found", "no job with id " + id);
+    return ApiError(ErrorCode::job_not_found, "no job with id " + id);
 }
 
 }  // namespace
@@ -81,13 +81,12 @@ void install_render_routes(App& app) {
     // The queue lives as long as the routes that use it (the App's server); its destructor
     // cancels what is still running and joins its worker.
     auto jobs = std::make_shared<JobQueue>(app.max_concurrent(), kJobsKept);
-    auto& http = app.http();
 
-    http.Post(R"(/v1/scenes/([A-Za-z0-9_]+)/render)", [&app, jobs](const httplib::Request& req,
-                                                                   httplib::Response& res) {
-        app.handle(req, res, true, [&] {
+    app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/render)", [&app, jobs](const httplib::Request& req,
+                                                                     httplib::Response& res) {
+        app.handle(req, res, Work::heavy, [&] {
             auto engine = app.scene_or_404(req.matches[1]);
-            const Json body = req.body.empty() ? Json() : App::parse_json_body(req);
+            const Json body = req.body.empty() ? Json() : parse_json(req.body);
             const RenderRequest r = parse_render_request(body, app.config().limits.max_pixels);
             if (!r.async) {
                 send_output(res, render_output(*engine, r, nullptr));
@@ -97,53 +96,54 @@ void install_render_routes(App& app) {
                 return render_output(*engine, r, &progress);
             });
             if (!id) {
-                throw api_error("busy",
-                                "too many render jobs queued or running; "
-                                "retry shortly");
+                throw ApiError(ErrorCode::busy,
+                               "too many render jobs queued or running; "
+                               "retry shortly");
             }
             res.set_header("Location", "/v1/jobs/" + *id);
             send_json(res, "{\"job\":\"" + *id + "\",\"state\":\"queued\"}", 202);
         });
     });
 
-    http.Get(R"(/v1/jobs/([A-Za-z0-9_]+))",
-             [&app, jobs](const httplib::Request& req, httplib::Response& res) {
-                 app.handle(req, res, false, [&] {
-                     auto info = jobs->info(req.matches[1]);
-                     if (!info)
-                         throw job_not_found(req.matches[1]);
-                     send_json(res, job_body(*info));
-                 });
-             });
+    app.on_get(R"(/v1/jobs/([A-Za-z0-9_]+))",
+               [&app, jobs](const httplib::Request& req, httplib::Response& res) {
+                   app.handle(req, res, Work::light, [&] {
+                       auto info = jobs->info(req.matches[1]);
+                       if (!info)
+                           throw job_not_found(req.matches[1]);
+                       send_json(res, job_body(*info));
+                   });
+               });
 
-    http.Get(R"(/v1/jobs/([A-Za-z0-9_]+)/image)",
-             [&app, jobs](const httplib::Request& req, httplib::Response& res) {
-                 app.handle(req, res, false, [&] {
-                     const std::string id = req.matches[1];
-                     auto info = jobs->info(id);
-                     if (!info)
-                         throw job_not_found(id);
-                     switch (info->state) {
-                         case JobState::done:
-                             send_output(res, *info->output);
-                             return;
-                         case JobState::failed:
-                             throw *info->error;
-                         case JobState::cancelled:
-                             throw api_error("not_found", "job " + id + " was cancelled");
-                         case JobState::queued:
-                         case JobState::running:
-                             // Not yet: the job's status, as 202, with a hint when to ask again.
-                             res.set_header("Retry-After", "1");
-                             send_json(res, job_body(*info), 202);
-                             return;
-                     }
-                 });
-             });
+    app.on_get(R"(/v1/jobs/([A-Za-z0-9_]+)/image)",
+               [&app, jobs](const httplib::Request& req, httplib::Response& res) {
+                   app.handle(req, res, Work::light, [&] {
+                       const std::string id = req.matches[1];
+                       auto info = jobs->info(id);
+                       if (!info)
+                           throw job_not_found(id);
+                       switch (info->state) {
+                           case JobState::done:
+                               send_output(res, *info->output);
+                               return;
+                           case JobState::failed:
+                               throw *info->error;
+                           case JobState::cancelled:
+                               throw ApiError(ErrorCode::job_not_found,
+                                              "job " + id + " was cancelled: it has no image");
+                           case JobState::queued:
+                           case JobState::running:
+                               // Not yet: the job's status, as 202, with a hint when to ask again.
+                               res.set_header("Retry-After", "1");
+                               send_json(res, job_body(*info), 202);
+                               return;
+                       }
+                   });
+               });
 
-    http.Delete(R"(/v1/jobs/([A-Za-z0-9_]+))", [&app, jobs](const httplib::Request& req,
-                                                            httplib::Response& res) {
-        app.handle(req, res, false, [&] {
+    app.on_delete(R"(/v1/jobs/([A-Za-z0-9_]+))", [&app, jobs](const httplib::Request& req,
+                                                              httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] {
             const std::string id = req.matches[1];
             auto before = jobs->info(id);
             auto after = jobs->cancel_or_remove(id);

@@ -1,19 +1,10 @@
 #include "server/scene_cache.h"
 
-#include "server/scene_registry.h"
+#include "server/content_hash.h"
 
 namespace raycastd::server {
 
 namespace {
-
-void numbers_as_doubles(Json& j) {
-    if (j.is_number()) {
-        j = j.get<double>();
-    } else if (j.is_structured()) {
-        for (auto& child : j)
-            numbers_as_doubles(child);
-    }
-}
 
 bool names_files(const Json& doc) {
     const Json* objects = member(doc, "objects");
@@ -27,12 +18,6 @@ bool names_files(const Json& doc) {
 }
 
 }  // namespace
-
-std::string canonical_json(const Json& doc) {
-    Json j = doc;
-    numbers_as_doubles(j);
-    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
-}
 
 std::string SceneCache::cache_key(const Json& doc) {
     if (!doc.is_object() || names_files(doc))

@@ -58,7 +58,4 @@ class SceneCache {
     std::size_t hits_ = 0;
 };
 
-/// The document with sorted keys and every number as a double ("2", "2.0" and "2e0" agree).
-std::string canonical_json(const Json& doc);
-
 }  // namespace raycastd::server

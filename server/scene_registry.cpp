@@ -2,15 +2,12 @@
 
 #include <atomic>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
-#include <fcntl.h>
-#include <openssl/evp.h>
 #include <unistd.h>
 
 #include "server/api_error.h"
-#include "server/scene_cache.h"
+#include "server/content_hash.h"
+#include "server/durable_file.h"
 #include "server/schema/json_read.h"
 
 namespace raycastd::server {
@@ -18,54 +15,6 @@ namespace raycastd::server {
 namespace fs = std::filesystem;
 
 namespace {
-
-/// Writes the whole buffer and fsyncs it: the data is on disk before the scene is acknowledged.
-bool write_synced(const fs::path& path, std::string_view bytes) {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0)
-        return false;
-    std::size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n <= 0) {
-            ::close(fd);
-            return false;
-        }
-        done += static_cast<std::size_t>(n);
-    }
-    const bool ok = ::fsync(fd) == 0;
-    return ::close(fd) == 0 && ok;
-}
-
-bool fsync_dir(const fs::path& dir) {
-    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd < 0)
-        return false;
-    const bool ok = ::fsync(fd) == 0;
-    ::close(fd);
-    return ok;
-}
-
-std::optional<std::string> read_all(const fs::path& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f)
-        return std::nullopt;
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-/// The request in canonical form: a document re-serialised (sorted keys, one spelling per
-/// number), a model file as its bytes. Two requests that mean the same scene hash the same.
-std::string canonical_request(const SceneSource& s) {
-    if (s.content_type != "application/json")
-        return s.body;
-    try {
-        return canonical_json(Json::parse(s.body));
-    } catch (const Json::exception&) {
-        return s.body;  // the builder reports the syntax error
-    }
-}
 
 Json info_json(const SceneInfo& i) {
     Json j = {{"id", i.id},
@@ -112,19 +61,6 @@ SceneInfo info_from_json(const Json& j) {
 
 }  // namespace
 
-std::string sha256_hex(std::string_view bytes) {
-    unsigned char md[EVP_MAX_MD_SIZE];
-    unsigned int len = 0;
-    EVP_Digest(bytes.data(), bytes.size(), md, &len, EVP_sha256(), nullptr);
-    static const char kHex[] = "0123456789abcdef";
-    std::string out;
-    for (unsigned int i = 0; i < len; ++i) {
-        out.push_back(kHex[md[i] >> 4]);
-        out.push_back(kHex[md[i] & 15]);
-    }
-    return out;
-}
-
 SceneInfo describe(const engine::QueryEngine& engine) {
     const engine::Scene& s = engine.scene();
     SceneInfo i;
@@ -157,7 +93,7 @@ bool SceneRegistry::open(std::string& error) {
     }
     std::lock_guard<std::mutex> lock(mu_);
     for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "scenes", ec)) {
-        auto meta = read_all(d.path() / "meta.json");
+        auto meta = read_file(d.path() / "meta.json");
         if (!meta)
             continue;
         try {
@@ -178,8 +114,7 @@ bool SceneRegistry::open(std::string& error) {
 }
 
 SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSource& root_files) {
-    const std::string request_key =
-        sha256_hex("raycastd-scene-v1\n" + source.content_type + "\n" + canonical_request(source));
+    const std::string request_key = scene_request_key(source.content_type, source.body);
 
     // Same request as a registered scene, and every file it read still has the same bytes:
     // the same scene, without building anything.
@@ -223,13 +158,10 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
 
     Entry e;
     e.request_key = request_key;
-    std::string id_material = request_key;
-    for (const auto& [path, bytes] : read_files) {
+    for (const auto& [path, bytes] : read_files)
         e.file_sha[path] = sha256_hex(bytes);
-        id_material += "\n" + path + "\n" + e.file_sha[path];
-    }
     e.info = describe(*engine);
-    e.info.id = "sc_" + sha256_hex(id_material).substr(0, 32);
+    e.info.id = scene_id(request_key, e.file_sha);
     e.info.build_ms = build_ms;
     e.lru = lru_.end();
     const std::string id = e.info.id;
@@ -241,7 +173,7 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
     }
     std::string error;
     if (!data_dir_.empty() && !persist(id, source, read_files, e, error)) {
-        throw api_error("internal", "cannot save the scene: " + error);
+        throw ApiError(ErrorCode::internal, "cannot save the scene: " + error);
     }
     std::lock_guard<std::mutex> lock(mu_);
     auto [it, inserted] = entries_.emplace(id, std::move(e));
@@ -271,11 +203,11 @@ bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
     }
     Json file_names = Json::object();
     std::size_t k = 0;
-    bool ok = write_synced(tmp / "body", source.body);
+    bool ok = write_synced(tmp / "body", source.body, error);
     for (const auto& [path, bytes] : files) {
         const std::string name = "file" + std::to_string(k++);
         file_names[path] = name;
-        ok = ok && write_synced(tmp / name, bytes);
+        ok = ok && write_synced(tmp / name, bytes, error);
     }
     const Json meta = {{"format", 1},
                        {"content_type", source.content_type},
@@ -283,26 +215,23 @@ bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
                        {"file_sha", e.file_sha},
                        {"files", file_names},
                        {"info", info_json(e.info)}};
-    ok = ok && write_synced(tmp / "meta.json", meta.dump(1));
-    ok = ok && fsync_dir(tmp);
+    ok = ok && write_synced(tmp / "meta.json", meta.dump(1), error);
+    ok = ok && sync_dir(tmp, error);
     if (ok) {
         fs::remove_all(final_dir, ec);  // a partial directory cannot exist, but be sure
-        fs::rename(tmp, final_dir, ec);
-        ok = !ec && fsync_dir(scenes);
+        ok = rename_synced(tmp, final_dir, error);
     }
-    if (!ok) {
-        error = "write to " + data_dir_ + " failed";
+    if (!ok)
         fs::remove_all(tmp, ec);
-    }
     return ok;
 }
 
 std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::string& id) {
     const fs::path dir = fs::path(data_dir_) / "scenes" / id;
-    auto meta_text = read_all(dir / "meta.json");
-    auto body = read_all(dir / "body");
+    auto meta_text = read_file(dir / "meta.json");
+    auto body = read_file(dir / "body");
     if (!meta_text || !body)
-        throw api_error("internal", "saved copy of " + id + " is missing");
+        throw ApiError(ErrorCode::internal, "saved copy of " + id + " is missing");
     const Json meta = Json::parse(*meta_text);
     const auto names = meta.at("files").get<std::map<std::string, std::string>>();
     // Replay exactly the bytes the scene was built from, not today's files under the root.
@@ -312,7 +241,7 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::str
             return engine::Status::error(engine::Code::invalid_scene,
                                          "\"" + path + "\" was not part of the saved scene");
         }
-        auto bytes = read_all(dir / it->second);
+        auto bytes = read_file(dir / it->second);
         if (!bytes)
             return engine::Status::error(engine::Code::internal, "saved file missing");
         return *bytes;
@@ -422,12 +351,12 @@ bool SceneRegistry::remove(const std::string& id) {
         entries_.erase(it);
     }
     if (!data_dir_.empty()) {
-        // Rename first so a crash mid-delete never leaves a half-deleted scene to reload.
+        // Renamed first so a crash mid-delete never leaves a half-deleted scene to reload.
         std::error_code ec;
+        std::string error;
         const fs::path tmp = fs::path(data_dir_) / "tmp" / (id + ".deleted");
-        fs::rename(fs::path(data_dir_) / "scenes" / id, tmp, ec);
-        fsync_dir(fs::path(data_dir_) / "scenes");
-        fs::remove_all(tmp, ec);
+        if (rename_synced(fs::path(data_dir_) / "scenes" / id, tmp, error))
+            fs::remove_all(tmp, ec);
     }
     return true;
 }

@@ -2,13 +2,15 @@
 // SceneRegistry: the only shared mutable state of the server. Content hash → prepared scene.
 //
 //  * Ids are content hashes of the canonical request (a scene document re-serialised with sorted
-//    keys, or the model bytes) and of every file the scene read while loading, so posting the
-//    same thing twice gives the same id and, the second time, does no build at all.
+//    keys, or the model bytes) and of every file the scene read while loading
+//    (server/content_hash.h), so posting the same thing twice gives the same id and, the second
+//    time, does no build at all.
 //  * A scene is built completely before it is inserted (all-or-nothing): a failed build leaves
 //    the registry as it was, and no request ever sees a half-built scene.
-//  * With a data directory, every acknowledged scene is first written to disk (temp dir, fsync,
-//    rename, fsync of the parent), together with copies of the files it read, so a restarted
-//    server (even after kill -9) answers for it, from exactly the bytes it was built from.
+//  * With a data directory, every acknowledged scene is first written to disk (a temp dir,
+//    published by one rename; server/durable_file.h), together with copies of the files it
+//    read, so a restarted server (even after kill -9) answers for it, from exactly the bytes it
+//    was built from.
 //  * A memory budget evicts the least recently used scenes from memory; they are rebuilt from
 //    their saved copies on next use. Without a data directory nothing is evicted.
 
@@ -26,12 +28,6 @@
 #include "server/model_source.h"
 
 namespace raycastd::server {
-
-/// Everything needed to (re)build a registered scene.
-struct SceneSource {
-    std::string content_type;  ///< "application/json" for scene documents, else a model type
-    std::string body;
-};
 
 /// What the API reports about a registered scene.
 struct SceneInfo {
@@ -106,8 +102,5 @@ class SceneRegistry {
 
 /// A summary of a prepared scene (counts, bounds, features, memory estimate).
 SceneInfo describe(const engine::QueryEngine& engine);
-
-/// Lower-case hex SHA-256 of the bytes.
-std::string sha256_hex(std::string_view bytes);
 
 }  // namespace raycastd::server

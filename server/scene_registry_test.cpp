@@ -2,13 +2,14 @@
 
 #include <atomic>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include "engine/query/intersect.h"
-#include "server/app.h"
+#include "server/model_source.h"
 
 namespace raycastd::server {
 namespace {
@@ -26,23 +27,18 @@ struct TempDir {
     ~TempDir() { fs::remove_all(path); }
 };
 
-/// A registry whose builder is the server's own (App::build_scene), counting builds.
+/// A registry whose builder is the server's own (ModelSource::build_scene), counting builds.
 struct Fixture {
     explicit Fixture(const std::string& data_dir, std::size_t budget = 1u << 30)
-        : app(make_config()),
+        : models(Limits{}, "."),
           registry(data_dir, budget, [this](const SceneSource& s, const FileSource& f) {
               ++builds;
-              return app.build_scene(s, f);
+              return models.build_scene(s, f);
           }) {
         std::string error;
         EXPECT_TRUE(registry.open(error)) << error;
     }
-    static Config make_config() {
-        Config c;
-        c.port = 0;
-        return c;
-    }
-    App app;
+    ModelSource models;
     std::atomic<int> builds{0};
     SceneRegistry registry;
 };
@@ -104,6 +100,26 @@ TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
     Fixture h(dir.path.string());
     EXPECT_EQ(h.registry.size(), 1u);
     EXPECT_FALSE(fs::exists(dir.path / "tmp" / "sc_half.123.0"));
+}
+
+// A scene that cannot be saved is not acknowledged: the error names what failed, and the
+// registry stays as it was.
+TEST(SceneRegistry, ASceneThatCannotBeSavedIsNotRegistered) {
+    TempDir dir;
+    Fixture f(dir.path.string());
+    fs::remove_all(dir.path / "tmp");
+    {
+        std::ofstream blocker(dir.path / "tmp");  // a file where the staging directory goes
+    }
+    try {
+        f.registry.add({"application/json", kSpheres}, no_files());
+        ADD_FAILURE() << "registered without saving";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code, ErrorCode::internal);
+        EXPECT_NE(std::string(e.what()).find("cannot save the scene"), std::string::npos);
+    }
+    EXPECT_EQ(f.registry.size(), 0u);
+    EXPECT_TRUE(fs::is_empty(dir.path / "scenes"));
 }
 
 TEST(SceneRegistry, DeleteRemovesSavedCopy) {

@@ -1,7 +1,7 @@
 #pragma once
 // Reusable buffers for intersect requests. A 1M-ray batch moves 32-64 MB each way and answers
 // into ~72 MB of hits; fresh buffers of that size cost more in page faults than tracing the
-// rays (PERFORMANCE.md: ~2.5 ms per MB). They used to be thread_local, which with one worker
+// rays (measured at ~2.5 ms per MB). They used to be thread_local, which with one worker
 // thread per keep-alive client (app.cpp) would let every worker pin its own few hundred MB.
 // A small pool keeps at most kRetained sets, whichever requests used them last; more sets
 // exist only while more requests are in flight or their answers are still being written to
@@ -17,8 +17,8 @@
 
 namespace raycastd::server {
 
-/// One chunk of a streamed binary batch (server/binary_stream.h): its encoded answer (its rays
-/// are decoded from the body a block at a time as they are traced).
+/// One chunk of a streamed binary batch (server/intersect/binary_stream.h): its encoded answer (its
+/// rays are decoded from the body a block at a time as they are traced).
 struct StreamChunk {
     std::string out;  ///< the chunk's encoded answer
 };

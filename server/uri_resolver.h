@@ -1,5 +1,5 @@
 #pragma once
-// Scene-root confinement for the files a scene refers to (API.md: `uri` resolves inside the
+// Scene-root confinement for the files a scene refers to (docs/api.md: `uri` resolves inside the
 // server's scene root only; absolute paths, `..` escapes and symlinks out of the root are
 // refused). Paths are normalised lexically first ("a/./b/../c" → "a/c"), then resolved with
 // realpath so that a symlink pointing outside the root is caught too.

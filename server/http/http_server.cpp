@@ -302,7 +302,7 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         std::optional<std::size_t> end;
         while (!(end = find_head_end(strm.unread()))) {
             if (strm.unread().size() > limits_.head.max_head_bytes) {
-                write_error(strm, 431, "too_large",
+                write_error(strm, 431, ErrorCode::too_large,
                             "the request line and headers are over " +
                                 std::to_string(limits_.head.max_head_bytes) + " bytes");
                 return;
@@ -330,7 +330,7 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
             if (before > 0 && before + body > limits_.body_budget_bytes) {
                 body_bytes_.fetch_sub(body);
                 busy_bodies_.fetch_add(1);
-                write_error(strm, 503, "busy",
+                write_error(strm, 503, ErrorCode::busy,
                             "request bodies in flight are at the server's limit of " +
                                 std::to_string(limits_.body_budget_bytes >> 20) +
                                 " MiB; retry shortly",
@@ -370,12 +370,12 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
     }
 }
 
-void HttpServer::write_error(ConnStream& strm, int status, const std::string& code,
+void HttpServer::write_error(ConnStream& strm, int status, ErrorCode code,
                              const std::string& message, int retry_after_s) {
     if (status != 503)
         refused_heads_.fetch_add(1);
     strm.linger = true;
-    const std::string body = error_body(ApiError(code, status, message));
+    const std::string body = error_body(ApiError(code, message));
     std::string out =
         "HTTP/1.1 " + std::to_string(status) + " " + reason_phrase(status) +
         "\r\nContent-Type: application/json\r\nContent-Length: " + std::to_string(body.size()) +

@@ -106,8 +106,8 @@ class HttpServer : public httplib::Server {
     /// Serves requests on one connection until it closes; returns when the socket may close.
     void serve(ConnStream& strm, ConnectionRegistry::Handle h);
     /// Answers an error of this layer as JSON with Connection: close.
-    void write_error(ConnStream& strm, int status, const std::string& code,
-                     const std::string& message, int retry_after_s = 0);
+    void write_error(ConnStream& strm, int status, ErrorCode code, const std::string& message,
+                     int retry_after_s = 0);
     bool stopping() const { return svr_sock_ == INVALID_SOCKET; }
 
     ConnectionLimits limits_;

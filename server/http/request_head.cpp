@@ -34,14 +34,14 @@ bool iequals(std::string_view a, std::string_view b) {
            });
 }
 
-HeadCheck refuse(int status, const char* code, std::string message) {
+HeadCheck refuse(int status, ErrorCode code, std::string message) {
     HeadCheck c;
     c.error = HeadError{status, code, std::move(message)};
     return c;
 }
 
 HeadCheck bad(std::string message) {
-    return refuse(400, "invalid_request", "malformed HTTP request: " + std::move(message));
+    return refuse(400, ErrorCode::invalid_request, "malformed HTTP request: " + std::move(message));
 }
 
 }  // namespace
@@ -62,7 +62,7 @@ std::optional<std::size_t> find_head_end(std::string_view bytes) {
 HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
                              const HeadLimits& limits) {
     if (head_bytes > limits.max_head_bytes) {
-        return refuse(431, "too_large",
+        return refuse(431, ErrorCode::too_large,
                       "the request line and headers are over " +
                           std::to_string(limits.max_head_bytes) + " bytes");
     }
@@ -98,14 +98,14 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
     if (!is_token(method))
         return bad("the method is not a token");
     if (target.size() > limits.max_target_bytes) {
-        return refuse(414, "too_large",
+        return refuse(414, ErrorCode::too_large,
                       "the URL is " + std::to_string(target.size()) + " bytes, over the limit of " +
                           std::to_string(limits.max_target_bytes));
     }
     if (target.empty() || target.front() != '/')
         return bad("the request target must start with /");
     if (version != "HTTP/1.1" && version != "HTTP/1.0")
-        return refuse(505, "invalid_request", "only HTTP/1.0 and HTTP/1.1 are served");
+        return refuse(505, ErrorCode::invalid_request, "only HTTP/1.0 and HTTP/1.1 are served");
     head.method = std::string(method);
     head.target = std::string(target);
 
@@ -158,7 +158,7 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
                 n = n * 10 + static_cast<std::uint64_t>(c - '0');
         }
         if (huge || n > limits.max_body_bytes) {
-            return refuse(413, "too_large",
+            return refuse(413, ErrorCode::too_large,
                           "request body of " + std::string(significant.substr(0, 24)) +
                               " bytes is over the limit of " +
                               std::to_string(limits.max_body_bytes));

@@ -12,6 +12,8 @@
 #include <string>
 #include <string_view>
 
+#include "server/api_error.h"
+
 namespace raycastd::server {
 
 /// What the head of a request may be.
@@ -24,7 +26,7 @@ struct HeadLimits {
 /// Why a head is refused: the HTTP status, the API's code and a message (RFC 9112 §6.3).
 struct HeadError {
     int status = 400;
-    std::string code;  ///< "invalid_request" or "too_large"
+    ErrorCode code = ErrorCode::invalid_request;  ///< invalid_request or too_large
     std::string message;
 };
 

@@ -31,7 +31,7 @@ TEST(RequestHead, RefusesLengthsThatAreNotDecimalNumbers) {
         const auto c = check(std::string("POST / HTTP/1.1\r\nContent-Length: ") + v + "\r\n\r\n");
         EXPECT_FALSE(c.head) << v;
         EXPECT_EQ(c.error.status, 400) << v;
-        EXPECT_EQ(c.error.code, "invalid_request") << v;
+        EXPECT_EQ(c.error.code, ErrorCode::invalid_request) << v;
     }
 }
 
@@ -43,7 +43,7 @@ TEST(RequestHead, LengthsOverTheLimitAreTooLargeHoweverManyDigits) {
             check(std::string("POST / HTTP/1.1\r\nContent-Length: ") + v + "\r\n\r\n", limits);
         EXPECT_FALSE(c.head) << v;
         EXPECT_EQ(c.error.status, 413) << v;
-        EXPECT_EQ(c.error.code, "too_large") << v;
+        EXPECT_EQ(c.error.code, ErrorCode::too_large) << v;
     }
     EXPECT_TRUE(check("POST / HTTP/1.1\r\nContent-Length: 100\r\n\r\n", limits).head);
 }
@@ -75,7 +75,7 @@ TEST(RequestHead, LimitsTheUrlAndTheHead) {
     limits.max_target_bytes = 10;
     const auto url = check("GET /" + std::string(20, 'a') + " HTTP/1.1\r\n\r\n", limits);
     EXPECT_EQ(url.error.status, 414);
-    EXPECT_EQ(url.error.code, "too_large");
+    EXPECT_EQ(url.error.code, ErrorCode::too_large);
     limits.max_head_bytes = 30;
     const auto head = check("GET / HTTP/1.1\r\nX-A: " + std::string(40, 'b') + "\r\n\r\n", limits);
     EXPECT_EQ(head.error.status, 431);

@@ -32,14 +32,6 @@ void for_blocks(std::size_t n, F&& f) {
                       [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
 }
 
-/// Lowers `first_bad` to `i` if `i` is lower: blocks checked in parallel report the lowest bad
-/// index, as a serial scan would.
-void lower_to(std::atomic<std::size_t>& first_bad, std::size_t i) {
-    std::size_t cur = first_bad.load();
-    while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
-    }
-}
-
 /// Records [begin, end) of `body` into out[0 .. end-begin), each checked as it is decoded: the
 /// index of the first bad one (decoded, the rest not), or `end`.
 template <class F>
@@ -145,20 +137,21 @@ Dtype parse_dtype(const std::string& s) {
         return Dtype::float32;
     if (s == "float64")
         return Dtype::float64;
-    throw api_error("invalid_request", "dtype must be float32 or float64, got \"" + s + "\"");
+    throw ApiError(ErrorCode::invalid_request,
+                   "dtype must be float32 or float64, got \"" + s + "\"");
 }
 
 std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays) {
     const std::size_t rec = ray_record_bytes(dtype);
     if (bytes % rec != 0) {
-        throw api_error("invalid_ray", "body of " + std::to_string(bytes) +
-                                           " bytes is not a whole number of " +
-                                           std::to_string(rec) + "-byte ray records");
+        throw ApiError(ErrorCode::invalid_ray, "body of " + std::to_string(bytes) +
+                                                   " bytes is not a whole number of " +
+                                                   std::to_string(rec) + "-byte ray records");
     }
     const std::size_t n = bytes / rec;
     if (n > max_rays) {
-        throw api_error("too_large", std::to_string(n) + " rays is over the limit of " +
-                                         std::to_string(max_rays) + " per request");
+        throw ApiError(ErrorCode::too_large, std::to_string(n) + " rays is over the limit of " +
+                                                 std::to_string(max_rays) + " per request");
     }
     return n;
 }
@@ -187,31 +180,15 @@ engine::Ray ray_at(std::string_view body, Dtype dtype, std::size_t index) {
     return ray;
 }
 
-std::size_t intersect_records(const engine::QueryEngine& engine, std::string_view body, Dtype dtype,
-                              const engine::QueryOptions& options, std::size_t begin,
-                              std::size_t end, char* out) {
-    std::atomic<std::size_t> first_bad{end};
-    const auto source = [&](std::size_t b, std::size_t e, engine::Ray* rays) {
-        const std::size_t bad = decode_ray_range(body, dtype, begin + b, begin + e, rays);
-        if (bad < begin + e) {
-            lower_to(first_bad, bad);
-            return false;
-        }
-        // Every block is still checked (the lowest bad index is the answer), but none is
-        // traced once the request is known to be an error.
-        return first_bad.load() == end;
-    };
-    const std::size_t record = answer_record_bytes(options.mode, dtype);
-    const auto sink = [&](std::size_t b, std::size_t e, const engine::Hit* hits) {
-        encode_answers(hits, options.mode, dtype, 0, e - b, out + b * record);
-    };
-    engine.intersect_blocks(end - begin, options, source, sink);
-    return first_bad.load();
+void lower_to(std::atomic<std::size_t>& first_bad, std::size_t i) {
+    std::size_t cur = first_bad.load();
+    while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
+    }
 }
 
 void throw_invalid_ray(const engine::Ray& ray, std::size_t index) {
     const engine::Status st = engine::validate_ray(ray, index);
-    throw api_error("invalid_ray", st.message, "/rays/" + std::to_string(index));
+    throw ApiError(ErrorCode::invalid_ray, st.message, "/rays/" + std::to_string(index));
 }
 
 void decode_rays(std::string_view body, Dtype dtype, std::size_t max_rays,

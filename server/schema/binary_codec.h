@@ -1,5 +1,5 @@
 #pragma once
-// The binary form of intersect (API.md): packed little-endian records, no header, no padding.
+// The binary form of intersect (docs/api.md): packed little-endian records, no header, no padding.
 //   request:  N × {ox oy oz dx dy dz tmin tmax}            (8 floats of dtype)
 //   closest:  N × {t, object u32, primitive u32, u, v, nx, ny, nz}
 //             (floats of dtype; a miss is t = +inf, object = primitive = 0xFFFFFFFF, rest 0)
@@ -8,16 +8,13 @@
 //   all:      per ray, u32 n followed by n closest-records, in ray order
 // Normals are written as zeros when the request asks for fields without them (?fields=...).
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "engine/query/query_types.h"
-
-namespace raycastd::engine {
-class QueryEngine;
-}
 
 namespace raycastd::server {
 
@@ -51,16 +48,9 @@ std::size_t first_bad_ray(std::string_view body, Dtype dtype, std::size_t begin,
 /// Ray `index` of `body`, decoded.
 engine::Ray ray_at(std::string_view body, Dtype dtype, std::size_t index);
 
-/// closest or any for records [begin, end) of `body` (begin a multiple of
-/// QueryEngine::kBlockRays), answered into `out` at (i − begin) × answer_record_bytes, through
-/// QueryEngine::intersect_blocks: records are decoded, checked, traced and encoded a block at a
-/// time, so the batch never exists as engine rays and hits (1M rays: 136 MB less memory traffic
-/// than decode_rays + intersect + encode_results). Returns the lowest index of a bad record, or
-/// `end` if all are good; once one is found, blocks not yet traced are skipped (their answers
-/// are left unwritten: the request is an error).
-std::size_t intersect_records(const engine::QueryEngine& engine, std::string_view body, Dtype dtype,
-                              const engine::QueryOptions& options, std::size_t begin,
-                              std::size_t end, char* out);
+/// Lowers `first_bad` to `i` if `i` is lower: blocks checked in parallel report the lowest bad
+/// index, as a serial scan would.
+void lower_to(std::atomic<std::size_t>& first_bad, std::size_t i);
 
 /// Throws invalid_ray naming ray `index` (a ray decode_ray_range reported) and what is wrong.
 [[noreturn]] void throw_invalid_ray(const engine::Ray& ray, std::size_t index);

@@ -1,5 +1,6 @@
 #pragma once
-// The worked solution of POST /v1/explain as JSON (API.md shape) and as Markdown with LaTeX.
+// The worked solution of POST /v1/explain as JSON (the shape in docs/api.md) and as Markdown with
+// LaTeX.
 
 #include <string>
 

@@ -4,6 +4,31 @@
 
 namespace raycastd::server {
 
+namespace {
+
+/// nlohmann's own DOM builder, except that an error becomes our bad_json with the byte offset:
+/// nlohmann passes it to the SAX handler for every error, but its out_of_range exceptions (a
+/// number overflowing a double, 406) do not carry it.
+class DomBuilder : public nlohmann::detail::json_sax_dom_parser<Json> {
+  public:
+    using json_sax_dom_parser::json_sax_dom_parser;
+
+    template <class Exception>
+    bool parse_error(std::size_t byte, const std::string& /*token*/, const Exception& ex) {
+        throw ApiError(ErrorCode::bad_json,
+                       "body is not valid JSON: byte " + std::to_string(byte) + ": " + ex.what());
+    }
+};
+
+}  // namespace
+
+Json parse_json(std::string_view body) {
+    Json doc;
+    DomBuilder builder(doc);
+    Json::sax_parse(body, &builder);
+    return doc;
+}
+
 std::string child_path(const std::string& path, const std::string& key) {
     std::string out = path + "/";
     for (char c : key) {
@@ -18,27 +43,28 @@ std::string child_path(const std::string& path, const std::string& key) {
     return out;
 }
 
-double read_number(const Json& j, const std::string& path, const char* code) {
+double read_number(const Json& j, const std::string& path, ErrorCode code) {
     if (!j.is_number())
-        throw api_error(code, path + " must be a number", path);
+        throw ApiError(code, path + " must be a number", path);
     const double v = j.get<double>();
     if (!std::isfinite(v)) {
-        throw api_error("bad_json", path + " is out of range (JSON cannot carry infinity)", path);
+        throw ApiError(ErrorCode::bad_json, path + " is out of range (JSON cannot carry infinity)",
+                       path);
     }
     return v;
 }
 
-engine::Vec3d read_vec3(const Json& j, const std::string& path, const char* code) {
+engine::Vec3d read_vec3(const Json& j, const std::string& path, ErrorCode code) {
     if (!j.is_array() || j.size() != 3) {
-        throw api_error(code, path + " must be an array of 3 numbers", path);
+        throw ApiError(code, path + " must be an array of 3 numbers", path);
     }
     return {read_number(j.at(0), path + "/0", code), read_number(j.at(1), path + "/1", code),
             read_number(j.at(2), path + "/2", code)};
 }
 
-std::string read_string(const Json& j, const std::string& path, const char* code) {
+std::string read_string(const Json& j, const std::string& path, ErrorCode code) {
     if (!j.is_string())
-        throw api_error(code, path + " must be a string", path);
+        throw ApiError(code, path + " must be a string", path);
     return j.get<std::string>();
 }
 
@@ -47,10 +73,10 @@ const Json* member(const Json& j, const char* key) {
     return it == j.end() ? nullptr : &*it;
 }
 
-void require_object(const Json& j, const std::string& path, const char* code) {
+void require_object(const Json& j, const std::string& path, ErrorCode code) {
     if (!j.is_object()) {
-        throw api_error(
-            code, (path.empty() ? std::string("the body") : path) + " must be an object", path);
+        throw ApiError(code, (path.empty() ? std::string("the body") : path) + " must be an object",
+                       path);
     }
 }
 

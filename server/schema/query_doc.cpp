@@ -10,22 +10,22 @@ namespace raycastd::server {
 
 namespace {
 
-constexpr const char* kInvalidRay = "invalid_ray";
-constexpr const char* kInvalidRequest = "invalid_request";
+constexpr ErrorCode kInvalidRay = ErrorCode::invalid_ray;
+constexpr ErrorCode kInvalidRequest = ErrorCode::invalid_request;
 
 engine::Ray parse_ray(const Json& j, const std::string& path, std::size_t index) {
     if (!j.is_object())
-        throw api_error(kInvalidRay, "ray " + std::to_string(index) + " must be an object", path);
+        throw ApiError(kInvalidRay, "ray " + std::to_string(index) + " must be an object", path);
     engine::Ray r;
     const Json* o = member(j, "origin");
     if (!o)
-        throw api_error(kInvalidRay, "ray " + std::to_string(index) + ": origin is required",
-                        path + "/origin");
+        throw ApiError(kInvalidRay, "ray " + std::to_string(index) + ": origin is required",
+                       path + "/origin");
     r.origin = read_vec3(*o, path + "/origin", kInvalidRay);
     const Json* d = member(j, "direction");
     if (!d)
-        throw api_error(kInvalidRay, "ray " + std::to_string(index) + ": direction is required",
-                        path + "/direction");
+        throw ApiError(kInvalidRay, "ray " + std::to_string(index) + ": direction is required",
+                       path + "/direction");
     r.direction = read_vec3(*d, path + "/direction", kInvalidRay);
     if (const Json* v = member(j, "tmin"))
         r.tmin = read_number(*v, path + "/tmin", kInvalidRay);
@@ -44,7 +44,7 @@ engine::Ray parse_ray(const Json& j, const std::string& path, std::size_t index)
 
 FieldMask parse_fields(const Json& j, const std::string& path) {
     if (!j.is_array())
-        throw api_error(kInvalidRequest, path + " must be an array of names", path);
+        throw ApiError(kInvalidRequest, path + " must be an array of names", path);
     FieldMask m{false, false, false, false, false, false, false, false, false};
     for (std::size_t i = 0; i < j.size(); ++i) {
         const std::string p = child_path(path, i);
@@ -68,11 +68,11 @@ FieldMask parse_fields(const Json& j, const std::string& path) {
         else if (f == "barycentric")
             m.barycentric = true;
         else {
-            throw api_error(kInvalidRequest,
-                            "unknown field \"" + f +
-                                "\" (expected t, t_err, point, normal, front_face, object, name, "
-                                "primitive, barycentric)",
-                            p);
+            throw ApiError(kInvalidRequest,
+                           "unknown field \"" + f +
+                               "\" (expected t, t_err, point, normal, front_face, object, name, "
+                               "primitive, barycentric)",
+                           p);
         }
     }
     return m;
@@ -115,8 +115,8 @@ engine::Mode parse_mode(const std::string& s, const std::string& path) {
         return engine::Mode::all;
     if (s == "count")
         return engine::Mode::count;
-    throw api_error(kInvalidRequest,
-                    "unknown mode \"" + s + "\" (expected closest, any, all, count)", path);
+    throw ApiError(kInvalidRequest,
+                   "unknown mode \"" + s + "\" (expected closest, any, all, count)", path);
 }
 
 engine::Precision parse_precision(const std::string& s, const std::string& path) {
@@ -126,8 +126,8 @@ engine::Precision parse_precision(const std::string& s, const std::string& path)
         return engine::Precision::refined;
     if (s == "exact")
         return engine::Precision::exact;
-    throw api_error(kInvalidRequest,
-                    "unknown precision \"" + s + "\" (expected fast, refined, exact)", path);
+    throw ApiError(kInvalidRequest,
+                   "unknown precision \"" + s + "\" (expected fast, refined, exact)", path);
 }
 
 IntersectRequest parse_intersect_request(const Json& body, const std::string& prefix,
@@ -149,14 +149,14 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
     const Json* rays = member(body, "rays");
     const std::string rpath = prefix + "/rays";
     if (!rays)
-        throw api_error(kInvalidRequest, rpath + " is required", rpath);
+        throw ApiError(kInvalidRequest, rpath + " is required", rpath);
     if (!rays->is_array())
-        throw api_error(kInvalidRequest, rpath + " must be an array", rpath);
+        throw ApiError(kInvalidRequest, rpath + " must be an array", rpath);
     if (rays->size() > max_rays) {
-        throw api_error("too_large",
-                        std::to_string(rays->size()) + " rays is over the limit of " +
-                            std::to_string(max_rays) + " per request",
-                        rpath);
+        throw ApiError(ErrorCode::too_large,
+                       std::to_string(rays->size()) + " rays is over the limit of " +
+                           std::to_string(max_rays) + " per request",
+                       rpath);
     }
     req.rays.reserve(rays->size());
     for (std::size_t i = 0; i < rays->size(); ++i) {

@@ -1,5 +1,5 @@
 #pragma once
-// Intersect requests and responses (API.md, "POST /v1/scenes/{id}/intersect"), in JSON.
+// Intersect requests and responses (docs/api.md, "POST /v1/scenes/{id}/intersect"), in JSON.
 
 #include <cstdint>
 #include <string>

@@ -14,7 +14,7 @@ ApiError request_error(const std::string& text, std::size_t max_rays = 100) {
         return e;
     }
     ADD_FAILURE() << "no error for " << text;
-    return api_error("internal", "");
+    return ApiError(ErrorCode::internal, "");
 }
 
 TEST(QueryDoc, ParsesRaysAndOptions) {
@@ -37,22 +37,23 @@ TEST(QueryDoc, ParsesRaysAndOptions) {
 TEST(QueryDoc, RayErrorsNameTheIndex) {
     ApiError e = request_error(R"({"rays": [{"origin":[0,0,0],"direction":[0,0,1]},
                                              {"origin":[0,0,0],"direction":[0,0,0]}]})");
-    EXPECT_EQ(e.code, "invalid_ray");
+    EXPECT_EQ(e.code, ErrorCode::invalid_ray);
     EXPECT_EQ(e.path, "/rays/1/direction");
     EXPECT_NE(std::string(e.what()).find("ray 1"), std::string::npos);
     EXPECT_EQ(
         request_error(R"({"rays": [{"origin":[0,0,0],"direction":[0,0,1],"tmin":2,"tmax":1}]})")
             .code,
-        "invalid_ray");
+        ErrorCode::invalid_ray);
     EXPECT_EQ(request_error(R"({"rays": [{"direction":[0,0,1]}]})").path, "/rays/0/origin");
     EXPECT_EQ(request_error(R"({"rays": [], "mode": "first"})").path, "/mode");
-    EXPECT_EQ(request_error(R"({"rays": [], "precision": "double"})").code, "invalid_request");
+    EXPECT_EQ(request_error(R"({"rays": [], "precision": "double"})").code,
+              ErrorCode::invalid_request);
     EXPECT_EQ(request_error(R"({"rays": [], "fields": ["colour"]})").path, "/fields/0");
     EXPECT_EQ(request_error(R"({"rays": [{"origin":[0,0,0],"direction":[0,0,1]},
                                          {"origin":[0,0,0],"direction":[0,0,1]}]})",
                             1)
                   .code,
-              "too_large");
+              ErrorCode::too_large);
 }
 
 TEST(QueryDoc, ResponseShapes) {

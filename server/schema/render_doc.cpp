@@ -10,7 +10,7 @@ namespace raycastd::server {
 
 namespace {
 
-constexpr const char* kInvalid = "invalid_request";
+constexpr ErrorCode kInvalid = ErrorCode::invalid_request;
 constexpr int kMaxSide = 16384;
 constexpr int kMaxSpp = 4096;
 constexpr int kMaxDepth = 32;
@@ -22,10 +22,10 @@ int read_int(const Json& body, const char* key, int fallback, int lo, int hi) {
     const std::string path = std::string("/") + key;
     const double x = read_number(*v, path, kInvalid);
     if (x != std::floor(x) || x < lo || x > hi) {
-        throw api_error(kInvalid,
-                        path + " must be an integer in [" + std::to_string(lo) + ", " +
-                            std::to_string(hi) + "]",
-                        path);
+        throw ApiError(kInvalid,
+                       path + " must be an integer in [" + std::to_string(lo) + ", " +
+                           std::to_string(hi) + "]",
+                       path);
     }
     return static_cast<int>(x);
 }
@@ -117,10 +117,10 @@ RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
         const std::string s = read_string(*v, "/shading", kInvalid);
         const auto mode = engine::shading_mode_from_name(s);
         if (!mode) {
-            throw api_error(kInvalid,
-                            "unknown shading \"" + s +
-                                "\" (expected phong, normal, depth, object_id, barycentric)",
-                            "/shading");
+            throw ApiError(kInvalid,
+                           "unknown shading \"" + s +
+                               "\" (expected phong, normal, depth, object_id, barycentric)",
+                           "/shading");
         }
         o.shading = *mode;
     }
@@ -128,23 +128,24 @@ RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
         const std::string s = read_string(*v, "/format", kInvalid);
         const auto f = engine::image_format_from_name(s);
         if (!f) {
-            throw api_error("unsupported_format",
-                            "unknown image format \"" + s + "\" (expected png, ppm, pfm, exr)",
-                            "/format");
+            throw ApiError(ErrorCode::unsupported_format,
+                           "unknown image format \"" + s + "\" (expected png, ppm, pfm, exr)",
+                           "/format");
         }
         r.format = *f;
     }
     if (const Json* v = member(body, "async")) {
         if (!v->is_boolean())
-            throw api_error(kInvalid, "/async must be a boolean", "/async");
+            throw ApiError(kInvalid, "/async must be a boolean", "/async");
         r.async = v->get<bool>();
     }
     const std::size_t samples = static_cast<std::size_t>(o.width) *
                                 static_cast<std::size_t>(o.height) *
                                 static_cast<std::size_t>(o.spp);
     if (samples > max_pixels) {
-        throw api_error("too_large", "width × height × spp = " + std::to_string(samples) +
-                                         " is over the limit of " + std::to_string(max_pixels));
+        throw ApiError(ErrorCode::too_large, "width × height × spp = " + std::to_string(samples) +
+                                                 " is over the limit of " +
+                                                 std::to_string(max_pixels));
     }
     return r;
 }
@@ -152,28 +153,29 @@ RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
 engine::Ray parse_single_ray(const Json& body, const std::string& path) {
     const Json* r = member(body, "ray");
     if (!r)
-        throw api_error(kInvalid, path + " is required", path);
+        throw ApiError(kInvalid, path + " is required", path);
     if (!r->is_object())
-        throw api_error("invalid_ray", path + " must be an object", path);
+        throw ApiError(ErrorCode::invalid_ray, path + " must be an object", path);
     engine::Ray ray;
     const Json* o = member(*r, "origin");
     const Json* d = member(*r, "direction");
     if (!o)
-        throw api_error("invalid_ray", path + "/origin is required", path + "/origin");
+        throw ApiError(ErrorCode::invalid_ray, path + "/origin is required", path + "/origin");
     if (!d)
-        throw api_error("invalid_ray", path + "/direction is required", path + "/direction");
-    ray.origin = read_vec3(*o, path + "/origin", "invalid_ray");
-    ray.direction = read_vec3(*d, path + "/direction", "invalid_ray");
+        throw ApiError(ErrorCode::invalid_ray, path + "/direction is required",
+                       path + "/direction");
+    ray.origin = read_vec3(*o, path + "/origin", ErrorCode::invalid_ray);
+    ray.direction = read_vec3(*d, path + "/direction", ErrorCode::invalid_ray);
     if (const Json* v = member(*r, "tmin"))
-        ray.tmin = read_number(*v, path + "/tmin", "invalid_ray");
+        ray.tmin = read_number(*v, path + "/tmin", ErrorCode::invalid_ray);
     if (const Json* v = member(*r, "tmax"))
-        ray.tmax = read_number(*v, path + "/tmax", "invalid_ray");
+        ray.tmax = read_number(*v, path + "/tmax", ErrorCode::invalid_ray);
     engine::Status st = engine::validate_ray(ray, 0);
     if (!st.ok()) {
         const auto slash = st.path.find('/', std::string("/rays/0").size());
-        throw api_error("invalid_ray",
-                        "the ray is invalid: " + st.message.substr(st.message.find(": ") + 2),
-                        path + (slash == std::string::npos ? "" : st.path.substr(slash)));
+        throw ApiError(ErrorCode::invalid_ray,
+                       "the ray is invalid: " + st.message.substr(st.message.find(": ") + 2),
+                       path + (slash == std::string::npos ? "" : st.path.substr(slash)));
     }
     return ray;
 }

@@ -1,6 +1,7 @@
 #pragma once
-// Render and trace requests and responses (API.md, "POST /v1/scenes/{id}/render" and
-// "POST /v1/scenes/{id}/trace"), and the single ray of trace and explain.
+// Render and trace requests and responses (docs/api.md and docs/rendering.md, "POST
+// /v1/scenes/{id}/render" and "POST /v1/scenes/{id}/trace"), and the single ray of trace and
+// explain.
 
 #include <string>
 

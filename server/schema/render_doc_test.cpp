@@ -18,7 +18,7 @@ ApiError error_of(const std::function<void()>& f) {
         return e;
     }
     ADD_FAILURE() << "no ApiError thrown";
-    return api_error("internal", "none");
+    return ApiError(ErrorCode::internal, "none");
 }
 
 TEST(RenderDoc, DefaultsFromAnEmptyBody) {
@@ -60,26 +60,26 @@ TEST(RenderDoc, ErrorsNameTheField) {
         return error_of([&] { parse_render_request(Json::parse(text), kMaxPixels); });
     };
     EXPECT_EQ(parse(R"({"width": 0})").path, "/width");
-    EXPECT_EQ(parse(R"({"width": 1.5})").code, "invalid_request");
+    EXPECT_EQ(parse(R"({"width": 1.5})").code, ErrorCode::invalid_request);
     EXPECT_EQ(parse(R"({"spp": "4"})").path, "/spp");
     EXPECT_EQ(parse(R"({"max_depth": 0})").path, "/max_depth");
     EXPECT_EQ(parse(R"({"shading": "toon"})").path, "/shading");
     const ApiError f = parse(R"({"format": "jpeg"})");
-    EXPECT_EQ(f.code, "unsupported_format");
-    EXPECT_EQ(f.http_status, 400);
+    EXPECT_EQ(f.code, ErrorCode::unsupported_format);
+    EXPECT_EQ(f.http_status(), 400);
     EXPECT_EQ(parse(R"({"camera": {"position": [0,0,0], "look_at": [0,0,0]}})").path,
               "/camera/look_at");
     EXPECT_EQ(parse(R"({"camera": {"up": [0,0,1]}})").path, "/camera/up");
     EXPECT_EQ(parse(R"({"async": 1})").path, "/async");
-    EXPECT_EQ(parse(R"([1])").code, "invalid_request");
+    EXPECT_EQ(parse(R"([1])").code, ErrorCode::invalid_request);
 }
 
 TEST(RenderDoc, PixelLimitCountsSamples) {
     const Json body = Json::parse(R"({"width": 100, "height": 100, "spp": 4})");
     EXPECT_NO_THROW(parse_render_request(body, 40000));
     const ApiError e = error_of([&] { parse_render_request(body, 39999); });
-    EXPECT_EQ(e.code, "too_large");
-    EXPECT_EQ(e.http_status, 413);
+    EXPECT_EQ(e.code, ErrorCode::too_large);
+    EXPECT_EQ(e.http_status(), 413);
 }
 
 TEST(RenderDoc, TraceRequestAndRayErrors) {
@@ -87,11 +87,12 @@ TEST(RenderDoc, TraceRequestAndRayErrors) {
         Json::parse(R"({"ray": {"origin": [0,0,0], "direction": [0,0,1]}, "max_depth": 2})"));
     EXPECT_EQ(t.ray.direction, engine::Vec3d(0, 0, 1));
     EXPECT_EQ(t.options.max_depth, 2);
-    EXPECT_EQ(error_of([] { parse_trace_request(Json::parse("{}")); }).code, "invalid_request");
+    EXPECT_EQ(error_of([] { parse_trace_request(Json::parse("{}")); }).code,
+              ErrorCode::invalid_request);
     const ApiError zero = error_of([] {
         parse_trace_request(Json::parse(R"({"ray": {"origin": [0,0,0], "direction": [0,0,0]}})"));
     });
-    EXPECT_EQ(zero.code, "invalid_ray");
+    EXPECT_EQ(zero.code, ErrorCode::invalid_ray);
     EXPECT_EQ(zero.path, "/ray/direction");
 }
 

@@ -13,7 +13,7 @@ namespace {
 
 using engine::Scene;
 using engine::Vec3d;
-constexpr const char* kInvalid = "invalid_scene";
+constexpr ErrorCode kInvalid = ErrorCode::invalid_scene;
 
 void warn_unknown_keys(const Json& j, const std::string& path,
                        std::initializer_list<const char*> known, Scene& scene) {
@@ -33,7 +33,7 @@ double read_in_range(const Json& obj, const char* key, const std::string& path, 
     const std::string p = child_path(path, key);
     const double x = read_number(*v, p, kInvalid);
     if (x < lo || x > hi)
-        throw api_error(kInvalid, p + " must be " + what, p);
+        throw ApiError(kInvalid, p + " must be " + what, p);
     return x;
 }
 
@@ -44,7 +44,7 @@ Vec3d read_color(const Json& obj, const char* key, const std::string& path, cons
     const std::string p = child_path(path, key);
     const Vec3d c = read_vec3(*v, p, kInvalid);
     if (c.x < 0 || c.y < 0 || c.z < 0)
-        throw api_error(kInvalid, p + " must be ≥ 0", p);
+        throw ApiError(kInvalid, p + " must be ≥ 0", p);
     return c;
 }
 
@@ -88,7 +88,7 @@ engine::Light parse_light(const Json& j, const std::string& path, Scene& scene) 
     warn_unknown_keys(j, path, {"type", "position", "direction", "intensity", "name"}, scene);
     const Json* type = member(j, "type");
     if (!type)
-        throw api_error(kInvalid, path + "/type is required", path + "/type");
+        throw ApiError(kInvalid, path + "/type is required", path + "/type");
     const std::string t = read_string(*type, path + "/type", kInvalid);
     engine::Light l;
     l.intensity = read_color(j, "intensity", path, l.intensity);
@@ -98,21 +98,21 @@ engine::Light parse_light(const Json& j, const std::string& path, Scene& scene) 
         l.type = engine::LightType::point;
         const Json* pos = member(j, "position");
         if (!pos)
-            throw api_error(kInvalid, path + "/position is required", path + "/position");
+            throw ApiError(kInvalid, path + "/position is required", path + "/position");
         l.position = read_vec3(*pos, path + "/position", kInvalid);
     } else if (t == "directional") {
         l.type = engine::LightType::directional;
         const Json* dir = member(j, "direction");
         if (!dir)
-            throw api_error(kInvalid, path + "/direction is required", path + "/direction");
+            throw ApiError(kInvalid, path + "/direction is required", path + "/direction");
         l.direction = read_vec3(*dir, path + "/direction", kInvalid);
         if (l.direction == Vec3d{0, 0, 0}) {
-            throw api_error(kInvalid, path + "/direction must not be zero", path + "/direction");
+            throw ApiError(kInvalid, path + "/direction must not be zero", path + "/direction");
         }
     } else {
-        throw api_error(kInvalid,
-                        "unknown light type \"" + t + "\" (expected ambient, point, directional)",
-                        path + "/type");
+        throw ApiError(kInvalid,
+                       "unknown light type \"" + t + "\" (expected ambient, point, directional)",
+                       path + "/type");
     }
     return l;
 }
@@ -123,7 +123,7 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
     require_object(j, path, kInvalid);
     const Json* type = member(j, "type");
     if (!type)
-        throw api_error(kInvalid, path + "/type is required", path + "/type");
+        throw ApiError(kInvalid, path + "/type is required", path + "/type");
     const std::string t = read_string(*type, path + "/type", kInvalid);
     engine::Object o;
     if (t == "sphere") {
@@ -131,17 +131,17 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
         o.kind = engine::ObjectKind::sphere;
         const Json* c = member(j, "center");
         if (!c)
-            throw api_error(kInvalid, path + "/center is required", path + "/center");
+            throw ApiError(kInvalid, path + "/center is required", path + "/center");
         o.sphere.center = read_vec3(*c, path + "/center", kInvalid);
         const Json* r = member(j, "radius");
         if (!r)
-            throw api_error(kInvalid, path + "/radius is required", path + "/radius");
+            throw ApiError(kInvalid, path + "/radius is required", path + "/radius");
         o.sphere.radius = read_number(*r, path + "/radius", kInvalid);
         if (!(o.sphere.radius > 0)) {
-            throw api_error(kInvalid,
-                            "objects[" + std::to_string(index) + "].radius must be > 0, got " +
-                                engine::format_shortest(o.sphere.radius),
-                            path + "/radius");
+            throw ApiError(kInvalid,
+                           "objects[" + std::to_string(index) + "].radius must be > 0, got " +
+                               engine::format_shortest(o.sphere.radius),
+                           path + "/radius");
         }
     } else if (t == "triangle") {
         warn_unknown_keys(j, path, {"type", "name", "material", "vertices"}, scene);
@@ -149,7 +149,7 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
         const Json* v = member(j, "vertices");
         const std::string vp = path + "/vertices";
         if (!v || !v->is_array() || v->size() != 3) {
-            throw api_error(kInvalid, vp + " must be an array of 3 points", vp);
+            throw ApiError(kInvalid, vp + " must be an array of 3 points", vp);
         }
         auto mesh = std::make_shared<engine::TriangleMesh>();
         for (std::size_t k = 0; k < 3; ++k) {
@@ -162,14 +162,14 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
                           {"type", "name", "material", "uri", "data_base64", "format", "transform"},
                           scene);
         if (!load_mesh) {
-            throw api_error(kInvalid, "mesh objects cannot be loaded here", path + "/type");
+            throw ApiError(kInvalid, "mesh objects cannot be loaded here", path + "/type");
         }
         o.kind = engine::ObjectKind::mesh;
         o.mesh = load_mesh(j, path, scene);
     } else {
-        throw api_error(kInvalid,
-                        "unknown object type \"" + t + "\" (expected sphere, triangle, mesh)",
-                        path + "/type");
+        throw ApiError(kInvalid,
+                       "unknown object type \"" + t + "\" (expected sphere, triangle, mesh)",
+                       path + "/type");
     }
     o.name = (t == "mesh" ? std::string("mesh") : t) + " " + std::to_string(index + 1);
     if (const Json* n = member(j, "name"))
@@ -178,8 +178,8 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
         const std::string name = read_string(*m, path + "/material", kInvalid);
         auto it = materials.find(name);
         if (it == materials.end()) {
-            throw api_error(kInvalid, "material \"" + name + "\" is not defined in /materials",
-                            path + "/material");
+            throw ApiError(kInvalid, "material \"" + name + "\" is not defined in /materials",
+                           path + "/material");
         }
         o.material = it->second;
     }
@@ -188,7 +188,7 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
 
 }  // namespace
 
-engine::Camera parse_camera(const Json& j, const std::string& path, const char* code) {
+engine::Camera parse_camera(const Json& j, const std::string& path, ErrorCode code) {
     require_object(j, path, code);
     engine::Camera c;
     if (const Json* v = member(j, "position"))
@@ -200,15 +200,14 @@ engine::Camera parse_camera(const Json& j, const std::string& path, const char* 
     if (const Json* v = member(j, "fov_y_deg")) {
         c.fov_y_deg = read_number(*v, path + "/fov_y_deg", code);
         if (!(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0)) {
-            throw api_error(code, path + "/fov_y_deg must be in (0, 180)", path + "/fov_y_deg");
+            throw ApiError(code, path + "/fov_y_deg must be in (0, 180)", path + "/fov_y_deg");
         }
     }
     if (c.look_at == c.position) {
-        throw api_error(code, path + "/look_at must differ from position", path + "/look_at");
+        throw ApiError(code, path + "/look_at must differ from position", path + "/look_at");
     }
     if (length(cross(c.look_at - c.position, c.up)) == 0.0) {
-        throw api_error(code, path + "/up must not be parallel to the view direction",
-                        path + "/up");
+        throw ApiError(code, path + "/up must not be parallel to the view direction", path + "/up");
     }
     return c;
 }
@@ -224,9 +223,9 @@ engine::Scene parse_scene_doc(const Json& doc, const std::string& prefix,
     const Json* objects = member(doc, "objects");
     const std::string opath = prefix + "/objects";
     if (!objects)
-        throw api_error(kInvalid, opath + " is required", opath);
+        throw ApiError(kInvalid, opath + " is required", opath);
     if (!objects->is_array())
-        throw api_error(kInvalid, opath + " must be an array", opath);
+        throw ApiError(kInvalid, opath + " must be an array", opath);
     for (std::size_t i = 0; i < objects->size(); ++i) {
         scene.objects.push_back(
             parse_object(objects->at(i), child_path(opath, i), i, scene, materials, load_mesh));
@@ -234,7 +233,7 @@ engine::Scene parse_scene_doc(const Json& doc, const std::string& prefix,
     if (const Json* lights = member(doc, "lights")) {
         const std::string lpath = prefix + "/lights";
         if (!lights->is_array())
-            throw api_error(kInvalid, lpath + " must be an array", lpath);
+            throw ApiError(kInvalid, lpath + " must be an array", lpath);
         for (std::size_t i = 0; i < lights->size(); ++i) {
             scene.lights.push_back(parse_light(lights->at(i), child_path(lpath, i), scene));
         }

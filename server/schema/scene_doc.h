@@ -1,5 +1,5 @@
 #pragma once
-// The scene document of API.md ("Scene document") → engine::Scene. Every error is an ApiError
+// The scene document of docs/api.md ("Scene document") → engine::Scene. Every error is an ApiError
 // whose path is the JSON pointer of the offending field (prefixed, e.g. "/scene" in the
 // stateless calls). Unknown keys are not errors (clients may carry their own metadata) but are
 // listed in the scene's warnings, so a typo such as "difuse" does not pass unnoticed.
@@ -20,7 +20,7 @@ using MeshObjectLoader = std::function<std::shared_ptr<const engine::TriangleMes
 
 /// A camera object {position, look_at, up, fov_y_deg} (defaults for what is missing); errors
 /// are `code` (invalid_scene in documents, invalid_request in render requests) with pointers.
-engine::Camera parse_camera(const Json& j, const std::string& path, const char* code);
+engine::Camera parse_camera(const Json& j, const std::string& path, ErrorCode code);
 
 /// Parses and validates a scene document. `load_mesh` may be empty, in which case `mesh`
 /// objects are rejected with invalid_scene.

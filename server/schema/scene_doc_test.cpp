@@ -14,7 +14,7 @@ ApiError parse_error(const std::string& text, const std::string& prefix = "") {
         return e;
     }
     ADD_FAILURE() << "no error for " << text;
-    return api_error("internal", "");
+    return ApiError(ErrorCode::internal, "");
 }
 
 TEST(SceneDoc, TutorialSceneWithDefaults) {
@@ -48,8 +48,8 @@ TEST(SceneDoc, ErrorsCarryJsonPointers) {
     ApiError e = parse_error(R"({"objects": [{"type":"sphere","center":[0,0,0],"radius":1},
         {"type":"sphere","center":[0,0,0],"radius":1},{"type":"sphere","center":[0,0,0],"radius":-1}]})",
                              "/scene");
-    EXPECT_EQ(e.code, "invalid_scene");
-    EXPECT_EQ(e.http_status, 400);
+    EXPECT_EQ(e.code, ErrorCode::invalid_scene);
+    EXPECT_EQ(e.http_status(), 400);
     EXPECT_EQ(e.path, "/scene/objects/2/radius");
     EXPECT_STREQ(e.what(), "objects[2].radius must be > 0, got -1");
 
@@ -70,7 +70,7 @@ TEST(SceneDoc, ErrorsCarryJsonPointers) {
     EXPECT_EQ(parse_error(R"({"objects": [], "materials": {"a/b": {"ior": 0}}})").path,
               "/materials/a~1b/ior");
     EXPECT_EQ(parse_error(R"({"objects": {}})").path, "/objects");
-    EXPECT_EQ(parse_error(R"([1,2])").code, "invalid_scene");
+    EXPECT_EQ(parse_error(R"([1,2])").code, ErrorCode::invalid_scene);
     EXPECT_EQ(
         parse_error(R"({"objects": [{"type":"triangle","vertices":[[0,0,0],[1,0,0]]}]})").path,
         "/objects/0/vertices");
@@ -79,7 +79,7 @@ TEST(SceneDoc, ErrorsCarryJsonPointers) {
         "/camera/look_at");
 }
 
-// nlohmann's parser refuses 1e400 itself (App::parse_json_body maps that to bad_json); a
+// nlohmann's parser refuses 1e400 itself (parse_json maps that to bad_json); a
 // document built in code can still hold infinity, and that is refused here.
 TEST(SceneDoc, InfiniteNumberIsBadJson) {
     Json doc = Json::parse(R"({"objects": [{"type":"sphere","center":[0,0,0],"radius":1}]})");
@@ -88,7 +88,7 @@ TEST(SceneDoc, InfiniteNumberIsBadJson) {
         parse_scene_doc(doc, "", {});
         ADD_FAILURE() << "infinity accepted";
     } catch (const ApiError& e) {
-        EXPECT_EQ(e.code, "bad_json");
+        EXPECT_EQ(e.code, ErrorCode::bad_json);
         EXPECT_EQ(e.path, "/objects/0/center/2");
     }
 }
@@ -104,7 +104,8 @@ TEST(SceneDoc, UnknownKeysAreWarnings) {
 }
 
 TEST(SceneDoc, MeshRejectedWithoutLoader) {
-    EXPECT_EQ(parse_error(R"({"objects": [{"type":"mesh","uri":"x.obj"}]})").code, "invalid_scene");
+    EXPECT_EQ(parse_error(R"({"objects": [{"type":"mesh","uri":"x.obj"}]})").code,
+              ErrorCode::invalid_scene);
 }
 
 }  // namespace

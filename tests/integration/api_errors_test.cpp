@@ -1,5 +1,5 @@
-// API.md's error table against the real binary: status, code and path for each bad input, and
-// the server still answering afterwards.
+// The error table of docs/api.md against the real binary: status, code and path for each bad
+// input, and the server still answering afterwards.
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -96,6 +96,77 @@ TEST_F(ApiErrors, TooLarge) {
     rays += "]";
     expect_error("/v1/intersect", intersect(kScene, rays), 413, "too_large", "/rays");
     expect_error("/v1/intersect", std::string(2u << 20, ' '), 413, "too_large");
+}
+
+// One reader for every JSON body: the same bad body gets the same code and message (with its
+// byte offset) from every endpoint that takes JSON, whichever path reads it there.
+TEST_F(ApiErrors, TheSameBadJsonGetsTheSameErrorEverywhere) {
+    auto added = server_->client()->Post("/v1/scenes", kScene, "application/json");
+    ASSERT_TRUE(added);
+    ASSERT_LT(added->status, 300) << added->body;
+    const std::string id = Json::parse(added->body).at("id");
+    const std::vector<std::string> endpoints = {
+        "/v1/intersect", "/v1/scenes/" + id + "/intersect", "/v1/scenes",
+        "/v1/explain",   "/v1/scenes/" + id + "/trace",     "/v1/scenes/" + id + "/render"};
+    for (const std::string& body :
+         {std::string(R"({"rays": [{"origin": [0, 0, 0], "direction": [0, 0,)"),
+          std::string(R"({"rays": [{"origin": [0, 0, 0], "direction": [1e999, 0, 1]}]})"),
+          std::string(R"({"rays": [{"origin": [0, 0, 0], "direction": [NaN, 0, 1]}]})"),
+          std::string("")}) {
+        std::string first;
+        for (const std::string& target : endpoints) {
+            if (body.empty() && target.find("/render") != std::string::npos)
+                continue;  // an empty render body asks for every default
+            auto res = server_->client()->Post(target, body, "application/json");
+            ASSERT_TRUE(res) << target;
+            EXPECT_EQ(res->status, 400) << target << ": " << res->body;
+            const Json err = Json::parse(res->body).at("error");
+            EXPECT_EQ(err.at("code"), "bad_json") << target;
+            EXPECT_FALSE(err.contains("path")) << target;
+            const std::string message = err.at("message");
+            EXPECT_EQ(message.rfind("body is not valid JSON: byte ", 0), 0u) << message;
+            if (first.empty())
+                first = message;
+            EXPECT_EQ(message, first) << target << " for body " << body;
+        }
+    }
+}
+
+// A known path asked with a method it does not have: 405 with the methods it has in Allow.
+TEST_F(ApiErrors, MethodNotAllowedListsTheAllowedMethods) {
+    const auto expect_405 = [](const httplib::Result& res, const std::string& allow) {
+        ASSERT_TRUE(res);
+        EXPECT_EQ(res->status, 405) << res->body;
+        EXPECT_EQ(res->get_header_value("Allow"), allow);
+        EXPECT_EQ(res->get_header_value("Content-Type"), "application/json");
+        const Json err = Json::parse(res->body).at("error");
+        EXPECT_EQ(err.at("code"), "method_not_allowed") << res->body;
+        EXPECT_FALSE(err.at("message").get<std::string>().empty());
+    };
+    auto c = server_->client();
+    expect_405(c->Get("/v1/intersect"), "POST");
+    expect_405(c->Delete("/v1/health"), "GET, HEAD");
+    expect_405(c->Put("/v1/scenes", kScene, "application/json"), "GET, HEAD, POST");
+    expect_405(c->Patch("/v1/scenes/sc_0000", "{}", "application/json"), "GET, HEAD, DELETE");
+    expect_405(c->Get("/v1/scenes/sc_0000/intersect"), "POST");
+    expect_405(c->Post("/v1/info", "{}", "application/json"), "GET, HEAD");
+    expect_405(c->Delete("/v1/jobs/jb_0000/image"), "GET, HEAD");
+    // A path of no route stays 404 not_found, whatever the method.
+    auto res = c->Delete("/v1/nothing-here");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 404);
+    EXPECT_EQ(Json::parse(res->body).at("error").at("code"), "not_found");
+    // And the methods a path has still work.
+    res = c->Get("/v1/health");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 200);
+}
+
+TEST_F(ApiErrors, UrlOverTheLimitIs414TooLarge) {
+    auto res = server_->client()->Get("/v1/" + std::string(9000, 'a'));
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 414);
+    EXPECT_EQ(Json::parse(res->body).at("error").at("code"), "too_large") << res->body;
 }
 
 TEST_F(ApiErrors, UnknownEndpoint) {

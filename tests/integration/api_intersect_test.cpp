@@ -215,8 +215,9 @@ std::string many_float_rays(std::size_t n, std::uint64_t seed) {
 
 TEST_F(Intersect, LargeBinaryBatchesAnswerAsSmallOnes) {
     // 153,600 rays: a large body is traced in 65,536-ray chunks while it arrives and answered
-    // chunk by chunk (server/binary_stream.h); 15 requests of 10,240 rays take the whole-batch
-    // path. Both cut at multiples of the engine's 1024-ray blocks, so the bytes must agree.
+    // chunk by chunk (server/intersect/binary_stream.h); 15 requests of 10,240 rays take the
+    // whole-batch path. Both cut at multiples of the engine's 1024-ray blocks, so the bytes must
+    // agree.
     constexpr std::size_t kSmall = 10240, kCount = 15, n = kSmall * kCount;
     const std::string body = many_float_rays(n, 7);
     for (const char* query : {"mode=closest&precision=fast", "mode=closest&precision=refined",

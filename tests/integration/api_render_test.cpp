@@ -170,9 +170,16 @@ TEST_F(RenderApi, Errors) {
     EXPECT_EQ(Json::parse(mode->body).at("error").at("path"), "/shading");
     auto bad = server_->client()->Post("/v1/scenes/" + id + "/render", "{", "application/json");
     EXPECT_EQ(Json::parse(bad->body).at("error").at("code"), "bad_json");
+    // An unknown job is job_not_found (docs/api.md), not the not_found of an unknown endpoint.
     auto job = server_->client()->Get("/v1/jobs/jb_0000000000000000");
     EXPECT_EQ(job->status, 404);
-    EXPECT_EQ(Json::parse(job->body).at("error").at("code"), "not_found");
+    EXPECT_EQ(Json::parse(job->body).at("error").at("code"), "job_not_found");
+    auto image = server_->client()->Get("/v1/jobs/jb_0000000000000000/image");
+    EXPECT_EQ(image->status, 404);
+    EXPECT_EQ(Json::parse(image->body).at("error").at("code"), "job_not_found");
+    auto cancel = server_->client()->Delete("/v1/jobs/jb_0000000000000000");
+    EXPECT_EQ(cancel->status, 404);
+    EXPECT_EQ(Json::parse(cancel->body).at("error").at("code"), "job_not_found");
 }
 
 TEST_F(RenderApi, AsyncJobGivesTheSameImage) {
@@ -238,6 +245,7 @@ TEST_F(RenderApi, DeleteCancelsARunningJob) {
     EXPECT_LT(status.at("progress").get<double>(), 1.0);
     auto img = c->Get("/v1/jobs/" + job + "/image");
     EXPECT_EQ(img->status, 404);
+    EXPECT_EQ(Json::parse(img->body).at("error").at("code"), "job_not_found");
 }
 
 TEST(RenderApiBusy, JobQueueOverTheLimitIs503) {

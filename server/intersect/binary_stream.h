@@ -16,10 +16,11 @@
 //     traces later chunks nobody has begun (TBB has one worker thread on two cores, so waiting
 //     would leave a core idle), and it writes each chunk as soon as it is traced.
 // Chunks start at multiples of QueryEngine::kBlockRays, so the answers are exactly those of the
-// whole-batch path (both trace through intersect_records); a bad ray anywhere still makes the
-// whole request invalid_ray naming the lowest bad index, before any answer is sent. A chunk's
-// encoded answer is sized when its bytes have arrived (from buffers the scratch keeps between
-// requests), so memory follows what the client has sent, not what its Content-Length promises.
+// whole-batch path (binary_batch.h; both trace through intersect_records); a bad ray anywhere still
+// makes the whole request invalid_ray naming the lowest bad index, before any answer is sent. A
+// chunk's encoded answer is sized when its bytes have arrived (from buffers the scratch keeps
+// between requests), so memory follows what the client has sent, not what its Content-Length
+// promises.
 
 #include <algorithm>
 #include <atomic>
@@ -34,6 +35,10 @@
 #include "engine/query/intersect.h"
 #include "server/schema/binary_codec.h"
 #include "server/scratch.h"
+
+namespace httplib {
+struct Response;
+}
 
 namespace raycastd::server {
 
@@ -127,5 +132,11 @@ class StreamedBatch {
     std::condition_variable changed_;
     tbb::task_group tasks_;
 };
+
+/// Sends the answer of a batch after its finish(): chunks are written as they are traced. The
+/// response keeps the batch (and its scratch) and `slot` (App::extend_work_slot) until the
+/// answer has been written.
+void send_streamed_answer(std::shared_ptr<StreamedBatch> batch, std::shared_ptr<void> slot,
+                          httplib::Response& res);
 
 }  // namespace raycastd::server

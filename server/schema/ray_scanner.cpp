@@ -1,4 +1,4 @@
-#include "server/schema/ray_sax.h"
+#include "server/schema/ray_scanner.h"
 
 #include <charconv>
 #include <cmath>
@@ -253,8 +253,7 @@ class Scanner {
 
 }  // namespace
 
-bool parse_intersect_request_fast(std::string_view body, std::size_t max_rays,
-                                  IntersectRequest& out) {
+bool scan_intersect_request(std::string_view body, std::size_t max_rays, IntersectRequest& out) {
     out.rays.clear();
     Scanner s(body, max_rays, out);
     if (!s.document() || !s.has_rays)

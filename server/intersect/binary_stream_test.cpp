@@ -2,7 +2,7 @@
 // whole-batch path answers, names the lowest bad ray, and cleans up after a client that goes
 // away at any point.
 
-#include "server/binary_stream.h"
+#include "server/intersect/binary_stream.h"
 
 #include <cmath>
 #include <cstring>
@@ -12,6 +12,7 @@
 
 #include "engine/testing/scenes.h"
 #include "server/api_error.h"
+#include "server/intersect/binary_batch.h"
 
 namespace raycastd::server {
 namespace {
@@ -134,7 +135,7 @@ std::string finish_error(StreamedBatch& b) {
     try {
         b.finish();
     } catch (const ApiError& e) {
-        return e.code + " " + e.path;
+        return std::string(to_string(e.code)) + " " + e.path;
     }
     return "";
 }

@@ -1,8 +1,9 @@
-#include "server/binary_stream.h"
+#include "server/intersect/binary_stream.h"
 
 #include <string_view>
 
 #include "server/api_error.h"
+#include "server/intersect/binary_batch.h"
 
 namespace raycastd::server {
 
@@ -126,9 +127,10 @@ void StreamedBatch::trace(std::size_t c) {
 void StreamedBatch::finish() {
     const std::size_t got = scratch_->body.size();
     if (overrun_ || got != bytes_) {
-        throw api_error("invalid_request", "body of " + std::string(overrun_ ? "more than " : "") +
-                                               std::to_string(got) + " bytes, " +
-                                               std::to_string(bytes_) + " announced");
+        throw ApiError(ErrorCode::invalid_request, "body of " +
+                                                       std::string(overrun_ ? "more than " : "") +
+                                                       std::to_string(got) + " bytes, " +
+                                                       std::to_string(bytes_) + " announced");
     }
     // Every ray has been checked as it arrived (append), so the answer may start: its status is
     // 200. The partial last chunk is prepared here and traced by the writer.
@@ -154,6 +156,21 @@ bool StreamedBatch::answer_chunk(std::size_t c) {
     std::unique_lock<std::mutex> lock(mutex_);
     changed_.wait(lock, [this, c] { return state_[c].load() >= kTraced; });
     return state_[c].load() == kTraced;
+}
+
+void send_streamed_answer(std::shared_ptr<StreamedBatch> batch, std::shared_ptr<void> slot,
+                          httplib::Response& res) {
+    const engine::Precision precision = batch->precision();
+    const engine::Mode mode = batch->mode();
+    const std::size_t bytes = batch->answer_bytes();
+    // A chunk is handed over as soon as it is traced.
+    send_records(res, precision, mode, bytes,
+                 [batch = std::move(batch), slot = std::move(slot)](
+                     std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                     return batch->write_answer(offset, length, [&](const char* p, std::size_t n) {
+                         return sink.write(p, n);
+                     });
+                 });
 }
 
 }  // namespace raycastd::server

@@ -1,0 +1,93 @@
+#include "server/intersect/binary_batch.h"
+
+#include <atomic>
+#include <string>
+
+#include "server/schema/query_doc.h"
+
+namespace raycastd::server {
+
+bool is_binary(const httplib::Request& req) {
+    const std::string ct = req.get_header_value("Content-Type");
+    return ct.rfind("application/octet-stream", 0) == 0;
+}
+
+BinaryQuery parse_binary_query(const httplib::Request& req) {
+    BinaryQuery q;
+    engine::QueryOptions& opt = q.options;
+    const auto param = [&](const char* k) {
+        return req.has_param(k) ? req.get_param_value(k) : std::string();
+    };
+    if (req.has_param("mode"))
+        opt.mode = parse_mode(param("mode"), "mode");
+    if (req.has_param("precision"))
+        opt.precision = parse_precision(param("precision"), "precision");
+    q.dtype = parse_dtype(param("dtype"));
+    opt.want_normal = true;
+    if (req.has_param("fields")) {
+        // ?fields=t,object: normals are left out (zeros) unless asked for.
+        const std::string f = param("fields");
+        opt.want_normal = f.find("normal") != std::string::npos;
+    }
+    return q;
+}
+
+std::size_t intersect_records(const engine::QueryEngine& engine, std::string_view body, Dtype dtype,
+                              const engine::QueryOptions& options, std::size_t begin,
+                              std::size_t end, char* out) {
+    std::atomic<std::size_t> first_bad{end};
+    const auto source = [&](std::size_t b, std::size_t e, engine::Ray* rays) {
+        const std::size_t bad = decode_ray_range(body, dtype, begin + b, begin + e, rays);
+        if (bad < begin + e) {
+            lower_to(first_bad, bad);
+            return false;
+        }
+        // Every block is still checked (the lowest bad index is the answer), but none is
+        // traced once the request is known to be an error.
+        return first_bad.load() == end;
+    };
+    const std::size_t record = answer_record_bytes(options.mode, dtype);
+    const auto sink = [&](std::size_t b, std::size_t e, const engine::Hit* hits) {
+        encode_answers(hits, options.mode, dtype, 0, e - b, out + b * record);
+    };
+    engine.intersect_blocks(end - begin, options, source, sink);
+    return first_bad.load();
+}
+
+void send_records(httplib::Response& res, engine::Precision precision, engine::Mode mode,
+                  std::size_t bytes, httplib::ContentProvider provider) {
+    res.status = 200;
+    res.set_header("X-Precision", engine::to_string(precision));
+    res.set_header("X-Mode", engine::to_string(mode));
+    res.set_content_provider(bytes, "application/octet-stream", std::move(provider));
+}
+
+void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q,
+                         std::shared_ptr<Scratch> scratch, std::size_t max_rays,
+                         httplib::Response& res) {
+    Scratch& s = *scratch;
+    const engine::Mode mode = q.options.mode;
+    if (mode == engine::Mode::closest || mode == engine::Mode::any) {
+        // Records in, records out, a block at a time (intersect_records).
+        const std::size_t n = ray_count(s.body.size(), q.dtype, max_rays);
+        s.out.resize(n * answer_record_bytes(mode, q.dtype));
+        if (const std::size_t bad =
+                intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
+            bad < n) {
+            throw_invalid_ray(ray_at(s.body, q.dtype, bad), bad);
+        }
+    } else {
+        decode_rays(s.body, q.dtype, max_rays, s.rays);
+        engine.intersect(s.rays, q.options, s.result);
+        encode_results(s.result, mode, q.dtype, s.rays.size(), s.out);
+    }
+    const std::size_t bytes = s.out.size();
+    // The provider keeps the scratch (and so `out`) until the response has been written.
+    send_records(res, engine.effective_precision(q.options.precision), mode, bytes,
+                 [scratch = std::move(scratch)](std::size_t offset, std::size_t length,
+                                                httplib::DataSink& sink) {
+                     return sink.write(scratch->out.data() + offset, length);
+                 });
+}
+
+}  // namespace raycastd::server

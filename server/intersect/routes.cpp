@@ -1,0 +1,152 @@
+// The intersect request, both routes: POST /v1/intersect (stateless: JSON with an inline scene)
+// and POST /v1/scenes/{id}/intersect (a registered scene: JSON, or binary records).
+//
+// A registered scene's request takes one of four paths, chosen in this order:
+//   1. binary closest/any of at least one chunk with a Content-Length: traced while it arrives
+//      and answered chunk by chunk (binary_stream.h);
+//   2. other binary requests: the whole batch once the body is in (binary_batch.h);
+//   3. JSON in the usual shape: the ray scanner (schema/ray_scanner.h), no DOM;
+//   4. any other JSON: parse_json and the DOM reader, whose answers and errors are the reference.
+
+#include <charconv>
+
+#include "server/app.h"
+#include "server/intersect/binary_batch.h"
+#include "server/intersect/binary_stream.h"
+#include "server/schema/query_doc.h"
+#include "server/schema/ray_scanner.h"
+#include "server/scratch.h"
+
+namespace raycastd::server {
+
+namespace {
+
+/// Answers a parsed JSON request, the engine answering into `result`.
+void answer_json(const engine::QueryEngine& engine, const IntersectRequest& req,
+                 engine::QueryResult& result, httplib::Response& res) {
+    engine.intersect(req.rays, req.options, result);
+    send_json(res, write_intersect_response(engine.scene(), req, result));
+}
+
+/// Reads `body` with the DOM reader and answers it over `engine` into `result`.
+void answer_json_document(const engine::QueryEngine& engine, const Json& body, std::size_t max_rays,
+                          engine::QueryResult& result, httplib::Response& res) {
+    answer_json(engine, parse_intersect_request(body, "", max_rays), result, res);
+}
+
+/// A StreamedBatch for a binary closest/any request on a registered scene that announces a
+/// valid batch of at least one chunk within the limits; nullptr otherwise: that request reads
+/// its whole body first, and reports whatever is wrong with it (an unknown scene, a bad
+/// parameter, a bad length) after reading it.
+std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& req,
+                                             const std::shared_ptr<Scratch>& scratch) {
+    // The announced length must be the body's: not chunked, not compressed (cpp-httplib
+    // inflates gzip/deflate/br bodies, whose Content-Length is then the compressed size).
+    if (!is_binary(req) || !req.has_header("Content-Length") ||
+        req.has_header("Transfer-Encoding") || req.has_header("Content-Encoding")) {
+        return nullptr;
+    }
+    const std::string cl = req.get_header_value("Content-Length");
+    std::size_t bytes = 0;
+    const auto [end, ec] = std::from_chars(cl.data(), cl.data() + cl.size(), bytes);
+    if (ec != std::errc() || end != cl.data() + cl.size())
+        return nullptr;
+    if (bytes > app.config().limits.max_body_bytes)
+        return nullptr;
+    try {
+        const BinaryQuery q = parse_binary_query(req);
+        if (q.options.mode != engine::Mode::closest && q.options.mode != engine::Mode::any)
+            return nullptr;
+        const std::size_t rays = ray_count(bytes, q.dtype, app.config().limits.max_rays);
+        if (rays < StreamedBatch::kChunkRays)
+            return nullptr;
+        auto engine = app.registry().get(req.matches[1]);
+        if (!engine)
+            return nullptr;
+        return std::make_shared<StreamedBatch>(std::move(engine), q.options, q.dtype, rays,
+                                               scratch);
+    } catch (const ApiError&) {
+        return nullptr;
+    }
+}
+
+/// Reads the body into `stream` when there is one, else appends it to `body` (too_large past
+/// the body limit).
+void read_body(const httplib::ContentReader& read, std::size_t limit, std::string& body,
+               StreamedBatch* stream) {
+    bool over = false;
+    read([&](const char* data, std::size_t len) {
+        if (stream)
+            return stream->append(data, len);
+        if (body.size() + len > limit) {
+            over = true;
+            return false;
+        }
+        body.append(data, len);
+        return true;
+    });
+    if (over)
+        throw ApiError(ErrorCode::too_large, "request body is over the configured limit");
+}
+
+/// POST /v1/scenes/{id}/intersect, on one of the four paths of the file comment.
+void answer_registered(App& app, const httplib::Request& req, httplib::Response& res,
+                       const httplib::ContentReader& read) {
+    const Limits& limits = app.config().limits;
+    // The body is streamed into a pooled buffer and binary answers are written from another
+    // (server/scratch.h): a 1M-ray batch moves 32-64 MB each way, and fresh buffers of that
+    // size cost more in page faults than tracing the rays (~2.5 ms per MB).
+    auto scratch = acquire_scratch();
+    scratch->body.clear();
+    auto stream = plan_streamed(app, req, scratch);
+    read_body(read, limits.max_body_bytes, scratch->body, stream.get());
+    if (stream) {
+        stream->finish();
+        send_streamed_answer(std::move(stream), app.extend_work_slot(), res);
+        return;
+    }
+    auto engine = app.scene_or_404(req.matches[1]);
+    if (is_binary(req)) {
+        answer_binary_batch(*engine, parse_binary_query(req), std::move(scratch), limits.max_rays,
+                            res);
+        return;
+    }
+    IntersectRequest& scanned = scratch->parsed;
+    scanned.rays.clear();  // keeps its capacity for the next request
+    scanned.options = {};
+    scanned.fields = {};
+    if (scan_intersect_request(scratch->body, limits.max_rays, scanned)) {
+        answer_json(*engine, scanned, scratch->result, res);
+        return;
+    }
+    answer_json_document(*engine, parse_json(scratch->body), limits.max_rays, scratch->result, res);
+}
+
+/// POST /v1/intersect: JSON only, the scene inline (built or taken from the stateless cache).
+void answer_stateless(App& app, const httplib::Request& req, httplib::Response& res) {
+    if (is_binary(req)) {
+        throw ApiError(ErrorCode::unsupported_format,
+                       "binary rays need a registered scene: POST /v1/scenes, then "
+                       "/v1/scenes/{id}/intersect");
+    }
+    const Json body = parse_json(req.body);
+    auto engine = app.models().build_stateless_scene(body);
+    const auto scratch = acquire_scratch();
+    answer_json_document(*engine, body, app.config().limits.max_rays, scratch->result, res);
+}
+
+}  // namespace
+
+void install_intersect_routes(App& app) {
+    app.on_post("/v1/intersect", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::heavy, [&] { answer_stateless(app, req, res); });
+    });
+    app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/intersect)",
+                [&app](const httplib::Request& req, httplib::Response& res,
+                       const httplib::ContentReader& read) {
+                    app.handle(req, res, Work::heavy,
+                               [&] { answer_registered(app, req, res, read); });
+                });
+}
+
+}  // namespace raycastd::server
