@@ -13,23 +13,30 @@ namespace raycastd::server {
 
 namespace {
 
-int pick_worker_threads(const Config& c) {
-    if (c.threads > 0)
-        return c.threads;
-    // cpp-httplib serves a keep-alive connection on one worker thread until the client goes
-    // quiet for the keep-alive timeout, so the worker count is the number of clients served at
-    // once: with 4 workers a fifth keep-alive client waited 30 s (measured). Idle workers
-    // cost a stack each; the work itself is bounded by --max-concurrent and runs on TBB.
-    return std::max(64, 8 * static_cast<int>(std::thread::hardware_concurrency()));
+/// Connections served at once: each holds a thread while it is being served, and a
+/// connection between requests gives its thread up to a new one (server/http/connections.h),
+/// so this bounds threads, not clients.
+int pick_connections(const Config& c) {
+    return c.threads > 0 ? c.threads : 512;
 }
 
-/// Work requests in flight before 503 busy: by default one per worker, so that no client is
-/// turned away while a worker is free to serve it (each request runs on every core through
-/// TBB, so more of them share the cores rather than queue). Operators bound memory with it.
-std::size_t pick_max_concurrent(const Config& c, int threads) {
+/// Work requests in flight before 503 busy. Each request runs on every core through TBB, so
+/// more of them share the cores rather than queue; operators bound memory with it.
+std::size_t pick_max_concurrent(const Config& c) {
     if (c.limits.max_concurrent)
         return c.limits.max_concurrent;
-    return static_cast<std::size_t>(threads);
+    return static_cast<std::size_t>(
+        std::max(64, 8 * static_cast<int>(std::thread::hardware_concurrency())));
+}
+
+ConnectionLimits connection_limits(const Config& c) {
+    ConnectionLimits l;
+    l.max_connections = static_cast<std::size_t>(pick_connections(c));
+    l.header_timeout = std::chrono::seconds(c.limits.header_timeout_s);
+    l.idle_timeout = std::chrono::seconds(c.limits.idle_timeout_s);
+    l.body_budget_bytes = c.limits.body_budget_bytes;
+    l.head.max_body_bytes = c.limits.max_body_bytes;
+    return l;
 }
 
 /// Holds one concurrent-work slot for the life of a request.
@@ -52,6 +59,9 @@ class WorkSlot {
 };
 
 void send_error(httplib::Response& res, const ApiError& e) {
+    // A busy server is over a momentary limit: a second is what a request takes here.
+    if (e.code == ErrorCode::busy)
+        res.set_header("Retry-After", "1");
     send_json(res, error_body(e), e.http_status());
 }
 
@@ -132,23 +142,20 @@ void send_json(httplib::Response& res, std::string body, int status) {
     res.set_content(std::move(body), "application/json");
 }
 
-App::App(Config config) : config_(std::move(config)), models_(config_.limits, config_.scene_root) {
+App::App(Config config)
+    : config_(std::move(config)),
+      http_(connection_limits(config_)),
+      models_(config_.limits, config_.scene_root) {
     registry_ =
         std::make_unique<SceneRegistry>(config_.data_dir, config_.limits.memory_budget_bytes,
                                         [this](const SceneSource& src, const FileSource& files) {
                                             return models_.build_scene(src, files);
                                         });
-    const int threads = threads_ = pick_worker_threads(config_);
-    max_concurrent_ = pick_max_concurrent(config_, threads);
-    http_.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
-    // Without TCP_NODELAY every small response waits for the delayed ACK (~40 ms): 530 instead
-    // of 36,000 small requests/s, measured on the 2-core build machine.
-    http_.set_tcp_nodelay(true);
-    http_.set_keep_alive_max_count(100000);
-    http_.set_keep_alive_timeout(30);
+    threads_ = pick_connections(config_);
+    max_concurrent_ = pick_max_concurrent(config_);
+    // Connections, deadlines, keep-alive and framing are HttpServer's (server/http/); the
+    // library still checks the body length against the limit for chunked bodies.
     http_.set_payload_max_length(config_.limits.max_body_bytes);
-    http_.set_read_timeout(60, 0);
-    http_.set_write_timeout(60, 0);
     install_handlers();
     install_routes();
 }
@@ -159,7 +166,7 @@ App::~App() {
 
 void App::install_handlers() {
     http_.set_pre_routing_handler([this](const httplib::Request&, httplib::Response& res) {
-        res.set_header("X-Request-Id", "rq_" + std::to_string(next_request_id_.fetch_add(1)));
+        res.set_header("X-Request-Id", http_.next_request_id());
         return httplib::Server::HandlerResponse::Unhandled;
     });
     // Errors raised by httplib itself (no route, body over the limit, ...) get the same JSON
@@ -279,9 +286,7 @@ std::string App::allowed_methods(const std::string& path) const {
 }
 
 int App::bind() {
-    if (config_.port == 0)
-        return http_.bind_to_any_port(config_.host);
-    return http_.bind_to_port(config_.host, config_.port) ? config_.port : -1;
+    return http_.bind(config_.host, config_.port);
 }
 
 bool App::listen_after_bind() {

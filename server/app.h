@@ -14,6 +14,7 @@
 
 #include "server/api_error.h"
 #include "server/config.h"
+#include "server/http/http_server.h"
 #include "server/model_source.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_read.h"
@@ -96,11 +97,10 @@ class App {
     bool answer_http_error(const httplib::Request& req, httplib::Response& res) const;
 
     Config config_;
-    httplib::Server http_;
+    HttpServer http_;
     int threads_ = 0;
     std::size_t max_concurrent_ = 0;
     std::atomic<std::size_t> in_flight_{0};
-    std::atomic<std::uint64_t> next_request_id_{1};
     ModelSource models_;
     std::unique_ptr<SceneRegistry> registry_;
     std::vector<Route> routes_;  ///< written while installing, read-only once serving

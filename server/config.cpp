@@ -12,8 +12,8 @@ usage: raycastd [options]
 
   --host ADDR             address to listen on (default 127.0.0.1)
   --port N                port (default 8080; 0 picks a free port and prints it)
-  --threads N             HTTP worker threads = keep-alive clients served at once
-                          (default: 8 per hardware thread, at least 64)
+  --max-connections N     connections served at once, a thread each (default 512); idle
+                          ones give their thread up to new clients (--threads: the same)
   --scene-root DIR        mesh "uri"s resolve inside DIR only (default .)
   --data-dir DIR          persist registered scenes in DIR (default: memory only)
   --demo FILE             register the scene document FILE at start-up (repeatable)
@@ -21,8 +21,12 @@ usage: raycastd [options]
   --max-rays N            most rays per intersect request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
-  --max-concurrent N      work requests in flight before 503 busy (default: --threads)
+  --max-concurrent N      work requests in flight before 503 busy (default: 8 per hardware
+                          thread, at least 64)
   --memory-budget-mb N    resident scene memory before least-recently-used eviction (default 4096)
+  --body-budget-mb N      request bodies being received at once before 503 busy (default 2048)
+  --header-timeout-s N    a request's line and headers must arrive within N s (default 10)
+  --idle-timeout-s N      a keep-alive connection may wait N s for its next request (default 5)
   --access-log            log every request to stderr
   --help                  this text
 )";
@@ -75,9 +79,10 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             if (n > 65535)
                 return fail("--port must be at most 65535");
             c.port = static_cast<int>(n);
-        } else if (a == "--threads") {
-            if (n > 1024)
-                return fail("--threads must be at most 1024");
+        } else if (a == "--threads" || a == "--max-connections") {
+            // cpp-httplib refuses descriptors past FD_SETSIZE (1024) with a 500.
+            if (n > 900)
+                return fail(a + " must be at most 900");
             c.threads = static_cast<int>(n);
         } else if (a == "--max-body-mb") {
             c.limits.max_body_bytes = n << 20;
@@ -91,6 +96,12 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             c.limits.max_concurrent = n;
         } else if (a == "--memory-budget-mb") {
             c.limits.memory_budget_bytes = n << 20;
+        } else if (a == "--body-budget-mb") {
+            c.limits.body_budget_bytes = n << 20;
+        } else if (a == "--header-timeout-s" || a == "--idle-timeout-s") {
+            if (n == 0 || n > 3600)
+                return fail(a + " must be from 1 to 3600");
+            (a == "--header-timeout-s" ? c.limits.header_timeout_s : c.limits.idle_timeout_s) = n;
         } else {
             return fail("unknown option " + a);
         }

@@ -16,12 +16,17 @@ struct Limits {
     std::size_t max_triangles = 50'000'000;        ///< triangles per scene
     std::size_t max_concurrent = 0;                ///< work requests in flight (0: 2 × threads)
     std::size_t memory_budget_bytes = 4ull << 30;  ///< resident scenes before LRU eviction
+    std::size_t body_budget_bytes = 2ull << 30;    ///< request bodies in flight (503 busy above)
+    std::size_t header_timeout_s = 10;             ///< a request head must arrive within this
+    std::size_t idle_timeout_s = 5;  ///< a keep-alive connection's wait for its next request
 };
 
 struct Config {
     std::string host = "127.0.0.1";
     int port = 8080;
-    int threads = 0;                ///< HTTP worker threads (0: hardware concurrency, at least 4)
+    /// Connections served at once, a thread each (0: 512). Connections waiting between
+    /// requests give their thread up to new ones (server/http/connections.h).
+    int threads = 0;
     std::string scene_root = ".";   ///< mesh `uri`s resolve inside this directory only
     std::string data_dir;           ///< registered scenes persist here ("" = memory only)
     std::vector<std::string> demo;  ///< scene documents registered at start-up

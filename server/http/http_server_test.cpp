@@ -46,6 +46,9 @@ class Served {
         });
         port_ = http_.bind("127.0.0.1", 0);
         thread_ = std::thread([this] { http_.listen_after_bind(); });
+        // cpp-httplib's stop() does nothing before the listen loop has started.
+        while (!http_.is_running())
+            std::this_thread::sleep_for(1ms);
     }
     ~Served() {
         http_.stop();
