@@ -40,8 +40,8 @@ std::string canonical_json(const Json& doc) {
 std::string scene_request_key(std::string_view content_type, std::string_view body) {
     std::string canonical;
     if (content_type == "application/json") {
-        const Json doc = Json::parse(body, nullptr, /*allow_exceptions=*/false);
-        canonical = doc.is_discarded() ? std::string(body) : canonical_json(doc);
+        const std::optional<Json> doc = try_parse_json(body);
+        canonical = doc ? canonical_json(*doc) : std::string(body);
     } else {
         canonical = std::string(body);
     }

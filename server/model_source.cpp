@@ -376,8 +376,8 @@ std::string classify_scene_body(std::string_view body, const std::string& conten
     if (first != std::string_view::npos && body[first] == '{') {
         // A glTF document has an "asset" object; a scene document has "objects". A body that
         // is not JSON is a scene document whose error parse_json reports.
-        const Json j = Json::parse(body, nullptr, /*allow_exceptions=*/false);
-        if (j.is_object() && j.contains("asset") && !j.contains("objects"))
+        const std::optional<Json> j = try_parse_json(body);
+        if (j && j->is_object() && j->contains("asset") && !j->contains("objects"))
             return "model/gltf+json";
         return "application/json";
     }

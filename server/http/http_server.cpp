@@ -302,9 +302,8 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         std::optional<std::size_t> end;
         while (!(end = find_head_end(strm.unread()))) {
             if (strm.unread().size() > limits_.head.max_head_bytes) {
-                write_error(strm, 431, ErrorCode::too_large,
-                            "the request line and headers are over " +
-                                std::to_string(limits_.head.max_head_bytes) + " bytes");
+                const HeadError e = oversized_head(strm.unread(), limits_.head);
+                write_error(strm, e.status, e.code, e.message);
                 return;
             }
             if (!strm.fill(head_deadline)) {

@@ -59,12 +59,26 @@ std::optional<std::size_t> find_head_end(std::string_view bytes) {
     return std::nullopt;
 }
 
+HeadError oversized_head(std::string_view bytes, const HeadLimits& limits) {
+    // A request line is METHOD SP TARGET SP HTTP/1.1: a few dozen bytes besides the target.
+    constexpr std::size_t kLineOverhead = 64;
+    const std::size_t line = std::min(bytes.find('\n'), bytes.size());
+    if (line > limits.max_target_bytes + kLineOverhead) {
+        return HeadError{
+            414, ErrorCode::too_large,
+            "the URL is over the limit of " + std::to_string(limits.max_target_bytes) + " bytes"};
+    }
+    return HeadError{431, ErrorCode::too_large,
+                     "the request line and headers are over " +
+                         std::to_string(limits.max_head_bytes) + " bytes"};
+}
+
 HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
                              const HeadLimits& limits) {
     if (head_bytes > limits.max_head_bytes) {
-        return refuse(431, ErrorCode::too_large,
-                      "the request line and headers are over " +
-                          std::to_string(limits.max_head_bytes) + " bytes");
+        HeadCheck c;
+        c.error = oversized_head(bytes, limits);
+        return c;
     }
     RequestHead head;
     head.head_bytes = head_bytes;

@@ -46,6 +46,10 @@ struct RequestHead {
 /// it is not complete yet. Accepts bare LF line ends as RFC 9112 §2.2 allows.
 std::optional<std::size_t> find_head_end(std::string_view bytes);
 
+/// Why a head of more than limits.max_head_bytes is refused: 414 when its request line alone
+/// (complete or not) is longer than a request line with the longest target allowed, else 431.
+HeadError oversized_head(std::string_view bytes, const HeadLimits& limits);
+
 /// Checks a complete head (`bytes` starts with it; its length is find_head_end's). Either the
 /// RequestHead or the HeadError to answer.
 struct HeadCheck {

@@ -18,6 +18,29 @@ class DomBuilder : public nlohmann::detail::json_sax_dom_parser<Json> {
         throw ApiError(ErrorCode::bad_json,
                        "body is not valid JSON: byte " + std::to_string(byte) + ": " + ex.what());
     }
+    // Hides the base's (sax_parse is a template over this type): the depth is counted as the
+    // document is built, and a body is refused at the first level past the limit.
+    bool start_object(std::size_t n) { return deeper() && json_sax_dom_parser::start_object(n); }
+    bool start_array(std::size_t n) { return deeper() && json_sax_dom_parser::start_array(n); }
+    bool end_object() {
+        --depth_;
+        return json_sax_dom_parser::end_object();
+    }
+    bool end_array() {
+        --depth_;
+        return json_sax_dom_parser::end_array();
+    }
+
+  private:
+    bool deeper() {
+        if (++depth_ > kMaxJsonDepth) {
+            throw ApiError(ErrorCode::invalid_request,
+                           "the body nests arrays and objects deeper than " +
+                               std::to_string(kMaxJsonDepth) + " levels");
+        }
+        return true;
+    }
+    std::size_t depth_ = 0;
 };
 
 }  // namespace
@@ -27,6 +50,14 @@ Json parse_json(std::string_view body) {
     DomBuilder builder(doc);
     Json::sax_parse(body, &builder);
     return doc;
+}
+
+std::optional<Json> try_parse_json(std::string_view body) {
+    try {
+        return parse_json(body);
+    } catch (const ApiError&) {
+        return std::nullopt;
+    }
 }
 
 std::string child_path(const std::string& path, const std::string& key) {

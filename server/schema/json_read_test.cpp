@@ -42,5 +42,20 @@ TEST(ParseJson, TheOffsetIsWhereTheErrorIs) {
     EXPECT_NE(overflow.find("1e999"), std::string::npos) << overflow;
 }
 
+TEST(ParseJson, NestingIsLimitedBeforeTheDeepPartIsBuilt) {
+    const auto nested = [](std::size_t depth) {
+        return "{\"objects\": [], \"meta\": " + std::string(depth - 1, '[') +
+               std::string(depth - 1, ']') + "}";
+    };
+    EXPECT_NO_THROW(parse_json(nested(kMaxJsonDepth)));
+    const ApiError e = parse_error(nested(kMaxJsonDepth + 1));
+    EXPECT_EQ(e.code, ErrorCode::invalid_request) << e.what();
+    EXPECT_NE(std::string(e.what()).find("deeper than 256 levels"), std::string::npos);
+    // 100,000 levels overflowed the stack when the document was copied or destroyed.
+    EXPECT_EQ(parse_error(nested(100'000)).code, ErrorCode::invalid_request);
+    EXPECT_FALSE(try_parse_json(nested(100'000)).has_value());
+    EXPECT_TRUE(try_parse_json(nested(3)).has_value());
+}
+
 }  // namespace
 }  // namespace raycastd::server
