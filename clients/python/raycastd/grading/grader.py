@@ -15,10 +15,15 @@ import json
 import math
 import pathlib
 import subprocess
+import sys
 import tempfile
 import threading
 import time
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: python3-tomli (Debian, Ubuntu) is the same parser
+    import tomli as tomllib  # type: ignore[no-redef]
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +36,7 @@ from raycastd.png import Image, PngError, read_png, write_png
 from raycastd.tables import TableError, read_table
 
 MISSING = object()  # no answer given for a question
+GRACE_S = 1.0
 
 
 @dataclass
@@ -139,11 +145,15 @@ class Grader:
 
         thread = threading.Thread(target=run, name=f"grade-{q.id}", daemon=True)
         thread.start()
-        thread.join(q.timeout_s)
+        # A grace second past the limit, so that a student program stopped at timeout_s is
+        # reported as such; the question as a whole never runs longer than this.
+        thread.join(q.timeout_s + GRACE_S)
         if box:
             result = box[0]
         elif thread.is_alive():
-            result = QuestionResult(q, 0.0, f"grading stopped: took longer than {q.timeout_s:g} s")
+            result = QuestionResult(
+                q, 0.0, f"grading stopped: took longer than {q.timeout_s + GRACE_S:g} s"
+            )
         else:
             exc = failure[0] if failure else RuntimeError("no result")
             result = QuestionResult(q, 0.0, f"could not be graded: {exc}")
@@ -224,6 +234,7 @@ class Grader:
             "width": str(img.width if img else 0),
             "height": str(img.height if img else 0),
             "question": q.id,
+            "python": sys.executable,
         }
         try:
             cmd = [part.format(**fields) for part in q.program or []]

@@ -22,7 +22,11 @@ from __future__ import annotations
 
 import json
 import pathlib
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: python3-tomli (Debian, Ubuntu) is the same parser
+    import tomli as tomllib  # type: ignore[no-redef]
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
