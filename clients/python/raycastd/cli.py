@@ -68,7 +68,7 @@ def size_arg(text: str) -> tuple[int, int]:
     return int(m.group(1)), int(m.group(2))
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument(
         "--server",
@@ -87,7 +87,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     p = argparse.ArgumentParser(
-        prog=PROG,
+        prog=prog,
         parents=[common],
         description="Ray queries, renders, ray trees, worked solutions and grading with raycastd.",
         epilog="Exit status: 0 ok, 1 API error (its code is printed), 2 usage.",
@@ -203,12 +203,15 @@ class Output:
 
 
 def main(
-    argv: Sequence[str] | None = None, out: TextIO | None = None, err: TextIO | None = None
+    argv: Sequence[str] | None = None,
+    out: TextIO | None = None,
+    err: TextIO | None = None,
+    prog: str = PROG,
 ) -> int:
     """Runs the command line; returns the exit status."""
     out = out or sys.stdout
     err = err or sys.stderr
-    parser = build_parser()
+    parser = build_parser(prog)
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             args = parser.parse_args(argv)
@@ -227,13 +230,13 @@ def main(
         ) as client:
             return COMMANDS[args.command](client, args, io)
     except UsageError as exc:
-        err.write(f"{PROG}: usage: {exc}\n")
+        err.write(f"{prog}: usage: {exc}\n")
         return 2
     except RaycastdError as exc:
-        err.write(f"{PROG}: error: {exc}\n")
+        err.write(f"{prog}: error: {exc}\n")
         return 1
     except KeyboardInterrupt:
-        err.write(f"{PROG}: interrupted\n")
+        err.write(f"{prog}: interrupted\n")
         return 130
 
 
@@ -631,5 +634,6 @@ def _json_default(value: Any) -> Any:
     raise TypeError(f"{type(value).__name__} is not JSON serializable")
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def console_main() -> None:
+    """The `rcd` console script."""
+    sys.exit(main(prog="rcd"))
