@@ -11,6 +11,7 @@ import shutil
 import subprocess
 import tempfile
 import unittest
+import zipfile
 from unittest import mock
 
 from support import GRADING, PACKAGE_ROOT, TUTORIAL, TUTORIAL7, ServerTestCase
@@ -292,22 +293,52 @@ class TutorialExampleTest(ServerTestCase):
 class GradingScriptsTest(ServerTestCase):
     """run_autograder and the PrairieLearn run.sh in the folder layouts those platforms use."""
 
-    def test_gradescope_run_autograder(self) -> None:
+    def test_gradescope_autograder_zip_and_run_autograder(self) -> None:
         with tempfile.TemporaryDirectory() as tmp:
             root = pathlib.Path(tmp)
-            (root / "source" / "bin").mkdir(parents=True)
-            (root / "source" / "python").symlink_to(PACKAGE_ROOT)
-            (root / "source" / "questions").symlink_to(TUTORIAL7)
-            shutil.copytree(WRONG, root / "submission")
-            (root / "submission" / "answers.json").rename(root / "submission" / "answers.toml")
             env = {
                 **os.environ,
                 "AUTOGRADER_ROOT": str(root),
                 "RAYCASTD_SERVER": str(self.server.binary),
             }
             env.pop("RAYCASTD_URL", None)
+            made = subprocess.run(
+                [
+                    str(GRADING / "gradescope" / "make_autograder.sh"),
+                    str(TUTORIAL7),
+                    str(root / "ag.zip"),
+                ],
+                env=env,
+                capture_output=True,
+                text=True,
+                timeout=120,
+            )
+            self.assertEqual(made.returncode, 0, made.stderr)
+            with zipfile.ZipFile(root / "ag.zip") as z:  # as Gradescope unpacks it, modes kept
+                names = set(z.namelist())
+                for info in z.infolist():
+                    z.extract(info, root / "source")
+                    mode = info.external_attr >> 16
+                    if mode and not info.is_dir():
+                        os.chmod(root / "source" / info.filename, mode & 0o777)
+            self.assertLessEqual(
+                {
+                    "setup.sh",
+                    "run_autograder",
+                    "bin/raycastd",
+                    "python/raycastd/cli.py",
+                    "questions/questions.toml",
+                },
+                names,
+            )
+            self.assertFalse(any(n.startswith("questions/submissions") for n in names))
+            shutil.copytree(WRONG, root / "submission")
+            (root / "submission" / "answers.json").rename(
+                root / "submission" / "answers.toml"
+            )  # JSON is read too
+            env.pop("RAYCASTD_SERVER")  # the zip's bin/raycastd is used
             run = subprocess.run(
-                [str(GRADING / "gradescope" / "run_autograder")],
+                [str(root / "source" / "run_autograder")],
                 env=env,
                 capture_output=True,
                 text=True,
@@ -315,6 +346,7 @@ class GradingScriptsTest(ServerTestCase):
             )
             self.assertEqual(run.returncode, 0, run.stderr)
             doc = json.loads((root / "results" / "results.json").read_text())
+            self.assertTrue((root / "results" / "tracer_image-difference.png").is_file())
         check_gradescope(self, doc)
         self.assertTrue(0 < doc["score"] < MAX_POINTS)
         self.assertIn("total:", run.stdout)
