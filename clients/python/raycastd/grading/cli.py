@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import os
 import pathlib
-import sys
 from typing import Any
 
 from raycastd.grading import results

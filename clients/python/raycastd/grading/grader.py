@@ -32,7 +32,7 @@ from raycastd.errors import RaycastdError
 from raycastd.grading import compare as cmp
 from raycastd.grading.images import compare_images
 from raycastd.grading.questions import POINT_ASKS, TREE_ASKS, Question, QuestionSet
-from raycastd.png import Image, PngError, read_png, write_png
+from raycastd.png import PngError, read_png, write_png
 from raycastd.tables import TableError, read_table
 
 MISSING = object()  # no answer given for a question
