@@ -3,8 +3,9 @@
 The server binary is found, in this order: the `binary` argument; `$RAYCASTD_SERVER`;
 `$RAYCASTD_BINARY` (what ctest passes); `raycastd` on `PATH` when it is a native executable (a
 Python console script of that name is skipped, so an installed client can never start itself);
-then the build trees next to the package when it runs from a checkout
-(`build/release/server/raycastd`, `build/asan/server/raycastd`).
+then next to the package: `bin/raycastd` beside the package's folder or one level up (the
+layout of the Gradescope zip, `python/raycastd` + `bin/raycastd`), and the build trees when it
+runs from a checkout (`build/{release,asan,debug}/server/raycastd`).
 """
 
 from __future__ import annotations
@@ -47,9 +48,12 @@ def find_server(binary: str | os.PathLike[str] | None = None) -> pathlib.Path:
     if on_path and _is_native(pathlib.Path(on_path)):
         return pathlib.Path(on_path)
     tried.append(f"PATH ({on_path + ': a script, not the server' if on_path else 'none'})")
-    root = pathlib.Path(__file__).resolve().parents[3]
-    for preset in ("release", "asan", "debug"):
-        path = root / "build" / preset / "server" / "raycastd"
+    here = pathlib.Path(__file__).resolve()
+    beside = [here.parents[1] / "bin" / "raycastd", here.parents[2] / "bin" / "raycastd"]
+    builds = [
+        here.parents[3] / "build" / p / "server" / "raycastd" for p in ("release", "asan", "debug")
+    ]
+    for path in beside + builds:
         if _is_native(path):
             return path
         tried.append(str(path))

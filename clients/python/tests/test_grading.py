@@ -461,3 +461,27 @@ class QuestionFileTest(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class FindServerTest(unittest.TestCase):
+    def test_a_script_named_raycastd_on_path_is_never_the_server(self) -> None:
+        from raycastd.server import ServerNotFound, find_server
+
+        with tempfile.TemporaryDirectory() as tmp:
+            script = pathlib.Path(tmp) / "raycastd"
+            script.write_text('#!/bin/sh\nexec python3 -m raycastd "$@"\n')
+            script.chmod(0o755)
+            env = {"PATH": tmp}
+            with mock.patch.dict(os.environ, env, clear=True):
+                try:
+                    found = find_server()
+                except ServerNotFound as exc:
+                    self.assertIn("a script, not the server", str(exc))
+                else:
+                    self.assertNotEqual(found, script)
+            binary = os.environ.get("RAYCASTD_BINARY")
+            if binary:
+                with mock.patch.dict(
+                    os.environ, {"PATH": tmp, "RAYCASTD_SERVER": binary}, clear=True
+                ):
+                    self.assertEqual(str(find_server()), binary)
