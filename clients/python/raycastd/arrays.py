@@ -8,8 +8,8 @@ Every call sends its rays (or points) through the binary form of API.md ("Binary
 little-endian records, in chunks of `Client.chunk_rays` over the client's one keep-alive
 connection. With NumPy the calls take array-likes and return arrays shaped like the input; without
 NumPy (or with `Client(arrays="list")`) they take nested lists and return nested lists of the same
-shape. The wire precision follows the input: float64 arrays travel as float64, every other float
-dtype as float32 (`dtype=` overrides it); lists travel as float64.
+shape. The wire precision follows the input: float16 and float32 arrays travel as float32,
+float64 and integer arrays as float64 (`dtype=` overrides it); lists travel as float64.
 """
 
 from __future__ import annotations
@@ -277,7 +277,7 @@ class ArrayQueries:
                 o, d = np.broadcast_arrays(o, d)
                 if o.ndim < 1 or o.shape[-1] != 3:
                     raise ValueError(f"origins/directions must have shape (..., 3), not {o.shape}")
-            wire = dtype or ("float64" if src == np.float64 else "float32")
+            wire = dtype or _wire_dtype(src)
             shape = o.shape[:-1]
             rec = np.empty(shape + (8,), dtype="<f8" if wire == "float64" else "<f4")
             rec[..., 0:3] = o
@@ -305,7 +305,7 @@ class ArrayQueries:
             p = np.asarray(points)
             if p.ndim < 1 or p.shape[-1] != 3:
                 raise ValueError(f"points must have shape (..., 3), not {p.shape}")
-            wire = dtype or ("float64" if p.dtype == np.float64 else "float32")
+            wire = dtype or _wire_dtype(p.dtype)
             flat = np.ascontiguousarray(
                 p.reshape(-1, 3), dtype="<f8" if wire == "float64" else "<f4"
             )
@@ -349,6 +349,12 @@ class ArrayQueries:
                 raise
             parts.append(res.body)
         return parts
+
+
+def _wire_dtype(src: Any) -> str:
+    """float32 for float dtypes of at most 4 bytes (float16, float32), float64 for the rest
+    (float64, and integers, which float64 holds exactly)."""
+    return "float32" if src.kind == "f" and src.itemsize <= 4 else "float64"
 
 
 class _Batch:

@@ -21,6 +21,7 @@ from typing import Any
 from raycastd.grading.grader import Report
 
 GRADESCOPE_VISIBILITY = "visible"
+PRAIRIELEARN_MAX_BYTES = 900_000
 
 
 def gradescope(report: Report, images_dir: pathlib.Path | None = None) -> dict[str, Any]:
@@ -70,7 +71,7 @@ def prairielearn(report: Report) -> dict[str, Any]:
         if r.images:
             test["images"] = [{"label": label, "url": data_url(png)} for label, png in r.images]
         tests.append(test)
-    return {
+    doc: dict[str, Any] = {
         "gradable": True,
         "score": round(report.score / report.max_score, 6) if report.max_score else 0.0,
         "message": _summary(report),
@@ -78,6 +79,11 @@ def prairielearn(report: Report) -> dict[str, Any]:
         "images": [],
         "tests": tests,
     }
+    if len(json.dumps(doc)) > PRAIRIELEARN_MAX_BYTES:  # PrairieLearn refuses results over 1 MB
+        for test in tests:
+            test.pop("images", None)
+        doc["message"] += "; images left out (results over 1 MB)"
+    return doc
 
 
 def text_report(report: Report) -> str:
