@@ -115,6 +115,8 @@ class NumpyPathTest(ServerTestCase):
             self.assertTrue(np.isinf(ans["t_hit"][1, 0]) and np.isinf(ans["t_hit"][1, 1]))
             self.assertEqual(ans["geometry_ids"][1, 0], MISS_ID)
             self.assertAlmostEqual(float(ans["t_hit"][0, 1]), T3, places=5)
+        ints = np.array([[0, 0, 0, 0, 0, 1]], dtype=np.int32)  # integers travel as float64
+        self.assertEqual(self.np.cast_rays(TUTORIAL, ints)["t_hit"].dtype, np.float64)
         exact = self.np.cast_rays(TUTORIAL, self.rays(np.float64), precision="exact")
         self.assertEqual(exact["t_hit"][0, 1], T3)
 
