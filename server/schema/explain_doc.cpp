@@ -174,7 +174,10 @@ std::optional<std::string> tex_equation(const std::string& step) {
                 while (j < step.size() && std::isdigit(static_cast<unsigned char>(step[j])))
                     ++j;
             }
-            out += tex_num(std::strtod(step.substr(i, j - i).c_str(), nullptr));
+            const std::string num = tex_num(std::strtod(step.substr(i, j - i).c_str(), nullptr));
+            // "10^{-6}^2" is a double superscript (KaTeX refuses it): bracket such a base.
+            const bool raised = j < step.size() && step[j] == '^';
+            out += raised && num.find_first_of("^ ") != std::string::npos ? "(" + num + ")" : num;
             i = j;
             continue;
         }

@@ -126,6 +126,12 @@ TEST(ExplainMarkdown, NoExactFormForIrregularInputsAndEscapedNames) {
     EXPECT_EQ(words_in_math(md), (std::vector<std::string>{})) << md;
     EXPECT_FALSE(contains(md, "exactly")) << md;
     EXPECT_TRUE(contains(md, "10^{-5}")) << md;
+
+    // A tiny radius squared: (10^{-6})^2, not the double superscript 10^{-6}^2.
+    s.objects[0].sphere = {{0, 0, 40}, 1e-6};
+    const std::string tiny = markdown(s, {{0, 0, 0}, {0, 0, 1}});
+    EXPECT_TRUE(contains(tiny, "= (10^{-6})^2$$")) << tiny;
+    EXPECT_FALSE(contains(tiny, "}^2")) << tiny;
     EXPECT_TRUE(contains(md, "cost \\$5 \\*bold\\*")) << md;
 
     engine::Scene decimals;

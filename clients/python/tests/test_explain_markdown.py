@@ -43,9 +43,12 @@ class ExplainMarkdownTest(ServerTestCase):
         self.assertEqual(words_in_math(md), [], md)
         self.assertEqual(md.count("$$") % 2, 0, md)
         for m in MATH.finditer(md):
-            inline = m.group(2)
-            if inline is not None:
-                self.assertNotIn("\\\\", inline, "row breaks only in display math: " + inline)
+            tex = m.group(1) or m.group(2)
+            if m.group(2) is not None:
+                self.assertNotIn("\\\\", tex, "row breaks only in display math: " + tex)
+            self.assertEqual(tex.count("{"), tex.count("}"), tex)
+            # KaTeX refuses a double superscript such as 10^{-6}^2.
+            self.assertIsNone(re.search(r"\^(\{[^{}]*\}|\w)\^", tex), tex)
         return md
 
     def test_tutorial_question_1(self) -> None:
@@ -73,6 +76,8 @@ class ExplainMarkdownTest(ServerTestCase):
         self.markdown(q2, {"origin": [0, 0, 0], "direction": [0, 0, 1]})
         self.markdown(TUTORIAL, {"origin": [0, 0, 0], "direction": [0, 0, -1], "tmax": 5})
         self.markdown(TUTORIAL, {"origin": [0.1, 0.25, -3.5], "direction": [0.01, 0.02, 1]})
+        tiny = {"objects": [{"type": "sphere", "center": [0.123456789, 0, 40], "radius": 1e-6}]}
+        self.markdown(tiny, {"origin": [0.123456789, 0, 0], "direction": [0, 0, 1]})
         obj = "v 0 0 5\nv 2 0 5\nv 0 2 5\nv 2 2 5\nf 1 2 3\nf 2 4 3\n"
         mesh = {
             "objects": [
