@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages raycastd needs, and nothing else. Idempotent and quick when
 # they are present: apt is only touched when a package is missing.
-#   scripts/setup.sh          build + test dependencies
+#   scripts/setup.sh          build + test dependencies (Python: the client's tests, black)
 #   scripts/setup.sh --bench  also the benchmark peers (Open3D, NumPy, POV-Ray, matplotlib)
 set -euo pipefail
 
@@ -10,9 +10,10 @@ packages=(
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
     nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
     clang-format
+    python3 python3-numpy python3-pip python3-setuptools black
 )
 if [[ "${1:-}" == "--bench" ]]; then
-    packages+=(python3 python3-numpy python3-open3d python3-matplotlib povray)
+    packages+=(python3-open3d python3-matplotlib povray)
 fi
 
 missing=()

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The tutorial's Question 1 as a grading script would ask it: which sphere does the ray hit first?
 
-Usage: which_sphere_first.py [http://127.0.0.1:8080]
+Usage: which_sphere_first.py [http://127.0.0.1:8080]   (default: $RAYCASTD_URL, then 127.0.0.1:8080)
 """
 
 import os
@@ -21,8 +21,8 @@ SCENE = {
 }
 RAY = {"origin": [0, 0, 0], "direction": [0, 0, 1]}
 
-with Client(sys.argv[1] if len(sys.argv) > 1 else "http://127.0.0.1:8080") as client:
-    hit = client.intersect(SCENE, [RAY])["hits"][0]          # the closest hit, exact path
-    print(f"first hit: {hit['name']} at t = {hit['t']}")     # sphere 3 at t = 9 - sqrt(3)
-    for obj in client.explain(SCENE, RAY)["objects"]:         # the worked solution, per object
+with Client(sys.argv[1] if len(sys.argv) > 1 else None) as client:  # None: $RAYCASTD_URL
+    hit = client.intersect(SCENE, [RAY])["hits"][0]  # the closest hit, exact path
+    print(f"first hit: {hit['name']} at t = {hit['t']}")  # sphere 3 at t = 9 - sqrt(3)
+    for obj in client.explain(SCENE, RAY)["objects"]:  # the worked solution, per object
         print(f"  {obj['name']}: roots {obj['roots']}")

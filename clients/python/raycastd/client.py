@@ -1,7 +1,9 @@
-"""raycastd client: one method per endpoint, JSON in and out, binary batches without numpy.
+"""The raycastd client: one method per endpoint of the HTTP API (docs/api.md), JSON in and out.
 
-Errors come back as RaycastdError carrying the API's stable `code`, the HTTP status, the message
-and the JSON pointer of the offending input (docs/api.md, "Errors").
+`Client` keeps one HTTP/1.1 connection alive across calls (the server serves a keep-alive client
+on one worker thread), so a grading script or a batch of binary chunks pays the TCP handshake
+once. Errors are the typed exceptions of `raycastd.errors`. The array queries (`cast_rays`,
+`compute_distance`, ...) come from `raycastd.arrays.ArrayQueries` and use the binary forms.
 """
 
 from __future__ import annotations
@@ -9,52 +11,91 @@ from __future__ import annotations
 import http.client
 import json
 import math
-import struct
+import os
+import pathlib
+import socket
+import time
 import urllib.parse
-from dataclasses import dataclass
-from typing import Any, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence, Union
 
-Vec3 = Sequence[float]
+from raycastd.arrays import ArrayQueries
+from raycastd.errors import ConnectionFailed, ClientTimeout, RaycastdError, error_from_response
+
+DEFAULT_URL = "http://127.0.0.1:8080"
+
+#: A scene as the methods accept it: a registered id (`"sc_…"`), a scene document (dict), or a
+#: file (`pathlib.Path`: a `.json` document or a model file, registered on first use).
+SceneRef = Union[str, Mapping[str, Any], pathlib.Path]
+
+#: A ray: `{"origin", "direction", "tmin"?, "tmax"?}`, `(origin, direction[, tmin, tmax])`, or six
+#: numbers `ox, oy, oz, dx, dy, dz`.
+RayLike = Union[Mapping[str, Any], Sequence[Any]]
+
+#: Called with (progress in [0, 1], the job's status document) while a render job runs.
+ProgressCallback = Callable[[float, dict], None]
+
+MODEL_TYPES = {
+    ".json": "application/json",
+    ".glb": "model/gltf-binary",
+    ".gltf": "model/gltf+json",
+    ".obj": "model/obj",
+    ".stl": "model/stl",
+    ".ply": "application/x-ply",
+    ".off": "model/off",
+}
 
 
-class RaycastdError(Exception):
-    """An error answer of the API."""
+class Response:
+    """One HTTP answer: status, lower-case headers and the body bytes."""
 
-    def __init__(self, status: int, code: str, message: str, path: str | None) -> None:
-        super().__init__(f"{status} {code}: {message}" + (f" (at {path})" if path else ""))
+    def __init__(self, status: int, headers: dict[str, str], body: bytes) -> None:
         self.status = status
-        self.code = code
-        self.message = message
-        self.path = path
+        self.headers = headers
+        self.body = body
+
+    def json(self) -> Any:
+        return json.loads(self.body)
 
 
-@dataclass
-class BinaryHit:
-    """One record of the binary `closest` answer; `hit` is False on a miss."""
+class Client(ArrayQueries):
+    """A keep-alive connection to one raycastd server; use it as a context manager.
 
-    t: float
-    object: int
-    primitive: int
-    u: float
-    v: float
-    normal: tuple[float, float, float]
+    `url` defaults to `$RAYCASTD_URL`, then `http://127.0.0.1:8080`. `timeout` (seconds) bounds
+    each socket operation. `token` is sent as `Authorization: Bearer …` (needed for writes when
+    the server runs with `--token`). `chunk_rays` is how many rays or points one binary request
+    carries. `arrays` picks what the array queries return: `"numpy"`, `"list"`, or `"auto"`
+    (NumPy when it is installed).
+    """
 
-    @property
-    def hit(self) -> bool:
-        return not math.isinf(self.t)
-
-
-class Client:
-    """A keep-alive connection to one raycastd server."""
-
-    def __init__(self, base_url: str = "http://127.0.0.1:8080", timeout: float = 120.0) -> None:
-        parsed = urllib.parse.urlparse(base_url)
-        self._host = parsed.hostname or "127.0.0.1"
-        self._port = parsed.port or 80
-        self._timeout = timeout
+    def __init__(
+        self,
+        url: str | None = None,
+        timeout: float = 60.0,
+        token: str | None = None,
+        *,
+        chunk_rays: int = 1 << 18,
+        arrays: str = "auto",
+    ) -> None:
+        self.url = (url or os.environ.get("RAYCASTD_URL") or DEFAULT_URL).rstrip("/")
+        parsed = urllib.parse.urlparse(self.url)
+        if parsed.scheme not in ("http", "https") or not parsed.hostname:
+            raise ValueError(f"not an http(s) URL: {self.url!r}")
+        self._https = parsed.scheme == "https"
+        self._host = parsed.hostname
+        self._port = parsed.port or (443 if self._https else 80)
+        self._prefix = parsed.path.rstrip("/")
+        self.timeout = timeout
+        self.token = token
+        self.chunk_rays = chunk_rays
+        super().__init__(arrays)
         self._conn: http.client.HTTPConnection | None = None
+        self._used = False  # whether the open connection has carried a request already
+        self._scene_ids: dict[str, str] = {}  # registered documents and files, by content
+
+    # -- lifecycle ---------------------------------------------------------------------------
 
     def close(self) -> None:
+        """Closes the connection (the next call opens a new one)."""
         if self._conn is not None:
             self._conn.close()
             self._conn = None
@@ -65,95 +106,299 @@ class Client:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
+    def __repr__(self) -> str:
+        return f"Client({self.url!r})"
+
     # -- transport ---------------------------------------------------------------------------
 
-    def _request(
-        self, method: str, path: str, body: bytes | None = None, content_type: str | None = None
-    ) -> tuple[int, dict[str, str], bytes]:
+    def _connect(self) -> http.client.HTTPConnection:
+        if self._conn is None:
+            cls = http.client.HTTPSConnection if self._https else http.client.HTTPConnection
+            self._conn = cls(self._host, self._port, timeout=self.timeout)
+            self._used = False
+        return self._conn
+
+    def request(
+        self,
+        method: str,
+        path: str,
+        body: bytes | None = None,
+        content_type: str | None = None,
+        *,
+        query: Mapping[str, Any] | None = None,
+    ) -> Response:
+        """Sends one request and returns the answer; raises the typed error on a 4xx/5xx."""
+        target = self._prefix + path
+        if query:
+            target += "?" + urllib.parse.urlencode(
+                {k: v for k, v in query.items() if v is not None}
+            )
         headers = {"Content-Type": content_type} if content_type else {}
-        for attempt in (0, 1):  # one retry when a kept-alive connection was closed meanwhile
-            if self._conn is None:
-                self._conn = http.client.HTTPConnection(self._host, self._port, timeout=self._timeout)
+        if self.token:
+            headers["Authorization"] = f"Bearer {self.token}"
+        url = self.url + path
+        for attempt in (0, 1):
+            conn = self._connect()
+            reused = self._used
             try:
-                self._conn.request(method, path, body=body, headers=headers)
-                res = self._conn.getresponse()
+                conn.request(method, target, body=body, headers=headers)
+                self._used = True
+                res = conn.getresponse()
                 data = res.read()
-                return res.status, {k.lower(): v for k, v in res.getheaders()}, data
-            except (ConnectionError, http.client.HTTPException):
+            except socket.timeout as exc:
                 self.close()
-                if attempt:
-                    raise
+                raise ClientTimeout(
+                    f"no answer from {url} within {self.timeout} s", code="timeout", url=url
+                ) from exc
+            except (ConnectionError, http.client.HTTPException, OSError) as exc:
+                self.close()
+                # A kept-alive connection the server closed meanwhile (its idle timeout) fails
+                # on first use; that request never reached it, so it is sent once more.
+                stale = isinstance(
+                    exc, (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError)
+                )
+                if attempt == 0 and reused and stale:
+                    continue
+                raise ConnectionFailed(
+                    f"cannot reach raycastd at {self.url} ({method} {path}): {exc}",
+                    code="connection_failed",
+                    url=url,
+                ) from exc
+            hdrs = {k.lower(): v for k, v in res.getheaders()}
+            if res.will_close:
+                self.close()
+            if res.status >= 400:
+                raise error_from_response(res.status, hdrs, data, url)
+            return Response(res.status, hdrs, data)
         raise AssertionError("unreachable")
 
-    def _json(self, method: str, path: str, payload: Any = None, content_type: str = "application/json") -> Any:
-        body = None
-        if payload is not None:
-            body = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
-        status, headers, data = self._request(method, path, body, content_type if body is not None else None)
-        if status >= 400:
-            raise _error(status, data)
-        if headers.get("content-type", "").startswith("application/json"):
-            return json.loads(data)
-        return data.decode()
+    def _json(
+        self, method: str, path: str, payload: Any = None, *, query: Mapping[str, Any] | None = None
+    ) -> Any:
+        body = None if payload is None else dumps(payload)
+        res = self.request(method, path, body, "application/json" if body else None, query=query)
+        if res.headers.get("content-type", "").startswith("application/json"):
+            return res.json()
+        return res.body.decode()
 
-    # -- endpoints ---------------------------------------------------------------------------
+    # -- scenes ------------------------------------------------------------------------------
+
+    def add_scene(
+        self, scene: Mapping[str, Any] | bytes | pathlib.Path, content_type: str | None = None
+    ) -> dict:
+        """Registers a scene document (dict), a file (Path: `.json` document or model) or model
+        bytes (give `content_type`, else the server tells by the bytes). Returns the summary
+        (`id`, `objects`, `bounds`, `warnings`, …); the same content gives the same id."""
+        if isinstance(scene, pathlib.Path):
+            content_type = content_type or MODEL_TYPES.get(scene.suffix.lower())
+            body = scene.read_bytes()
+        elif isinstance(scene, (bytes, bytearray)):
+            body = bytes(scene)
+        else:
+            body = dumps(scene)
+            content_type = content_type or "application/json"
+        res = self.request("POST", "/v1/scenes", body, content_type or "application/octet-stream")
+        return res.json()
+
+    def list_scenes(self) -> list[dict]:
+        """Summaries of every registered scene."""
+        return self._json("GET", "/v1/scenes")["scenes"]
+
+    def get_scene(self, scene_id: str) -> dict:
+        """The summary of one scene; NotFound (`scene_not_found`) when there is none."""
+        return self._json("GET", f"/v1/scenes/{_quote(scene_id)}")
+
+    def delete_scene(self, scene_id: str) -> dict:
+        """Deletes a scene: `{"id", "deleted": true}`."""
+        self._scene_ids = {k: v for k, v in self._scene_ids.items() if v != scene_id}
+        return self._json("DELETE", f"/v1/scenes/{_quote(scene_id)}")
+
+    def scene_id(self, scene: SceneRef) -> str:
+        """The id of `scene`, registering a document or file the first time it is seen."""
+        if isinstance(scene, str):
+            return scene
+        if isinstance(scene, pathlib.Path):
+            key = "file:" + str(scene.resolve()) + ":" + str(scene.stat().st_mtime_ns)
+        else:
+            key = "doc:" + json.dumps(scene, sort_keys=True)
+        if key not in self._scene_ids:
+            self._scene_ids[key] = self.add_scene(scene)["id"]  # type: ignore[arg-type]
+        return self._scene_ids[key]
+
+    # -- queries -----------------------------------------------------------------------------
+
+    def intersect(
+        self,
+        scene: SceneRef,
+        rays: Iterable[RayLike],
+        mode: str | None = None,
+        precision: str | None = None,
+        fields: Sequence[str] | None = None,
+    ) -> dict:
+        """JSON intersect: `{"precision", "mode", "hits": [one per ray]}`. A scene document is
+        sent inline (stateless `/v1/intersect`); an id or file queries the registered scene."""
+        body: dict[str, Any] = {"rays": [ray_json(r) for r in rays]}
+        _put(body, mode=mode, precision=precision, fields=list(fields) if fields else None)
+        if isinstance(scene, Mapping):
+            return self._json("POST", "/v1/intersect", {"scene": dict(scene), **body})
+        return self._json("POST", f"/v1/scenes/{_quote(self.scene_id(scene))}/intersect", body)
+
+    def points(
+        self,
+        scene: SceneRef,
+        points: Iterable[Sequence[float]],
+        query: str = "closest",
+        max_distance: float | None = None,
+    ) -> dict:
+        """Closest points, distances or inside/outside of points (API.md `points`):
+        `{"query", "results": [one per point]}`."""
+        body: dict[str, Any] = {"points": [list(map(float, p)) for p in points], "query": query}
+        _put(body, max_distance=max_distance)
+        if isinstance(scene, Mapping):
+            return self._json("POST", "/v1/points", {"scene": dict(scene), **body})
+        return self._json("POST", f"/v1/scenes/{_quote(self.scene_id(scene))}/points", body)
+
+    def trace(
+        self,
+        scene: SceneRef,
+        ray: RayLike,
+        max_depth: int | None = None,
+        precision: str | None = None,
+    ) -> dict:
+        """The Whitted ray tree of one ray: `{"tree": node or null, "summary", ...}`."""
+        body: dict[str, Any] = {"ray": ray_json(ray)}
+        _put(body, max_depth=max_depth, precision=precision)
+        return self._json("POST", f"/v1/scenes/{_quote(self.scene_id(scene))}/trace", body)
+
+    def explain(
+        self, scene: Mapping[str, Any] | pathlib.Path, ray: RayLike, markdown: bool = False
+    ) -> Any:
+        """The worked solution for one ray: a dict, or Markdown with LaTeX (a str)."""
+        doc = json.loads(scene.read_text()) if isinstance(scene, pathlib.Path) else dict(scene)
+        query = {"format": "markdown"} if markdown else None
+        return self._json("POST", "/v1/explain", {"scene": doc, "ray": ray_json(ray)}, query=query)
+
+    # -- rendering and jobs ------------------------------------------------------------------
+
+    def render(
+        self,
+        scene: SceneRef,
+        width: int | None = None,
+        height: int | None = None,
+        spp: int | None = None,
+        *,
+        progress: bool | ProgressCallback = False,
+        poll_s: float = 0.25,
+        **options: Any,
+    ) -> bytes:
+        """Renders an image and returns its bytes (PNG unless `format=` says otherwise).
+
+        `options` are the other body fields (`camera`, `shading`, `max_depth`, `precision`,
+        `background`, `format`). With `progress` (True, or a callback taking
+        `(fraction, job_status)`) the render runs as an async job that is polled every
+        `poll_s` seconds, and cancelled if the wait is interrupted."""
+        body: dict[str, Any] = {}
+        _put(body, width=width, height=height, spp=spp, **options)
+        path = f"/v1/scenes/{_quote(self.scene_id(scene))}/render"
+        if not progress:
+            return self.request("POST", path, dumps(body), "application/json").body
+        callback = progress if callable(progress) else None
+        job = self._json("POST", path, {**body, "async": True})["job"]
+        try:
+            self.wait_job(job, callback, poll_s)
+        except BaseException:
+            try:
+                self.cancel_job(job)
+            except RaycastdError:
+                pass
+            raise
+        return self.job_image(job)
+
+    def job(self, job_id: str) -> dict:
+        """A job's status: `state`, `progress` (0..1), `eta_s`, `elapsed_s`, …"""
+        return self._json("GET", f"/v1/jobs/{_quote(job_id)}")
+
+    def job_image(self, job_id: str) -> bytes:
+        """The image of a finished job (raises while it is not done)."""
+        res = self.request("GET", f"/v1/jobs/{_quote(job_id)}/image")
+        if res.status == 202:
+            raise RaycastdError(f"job {job_id} is not done yet", code="job_not_done", status=202)
+        return res.body
+
+    def cancel_job(self, job_id: str) -> dict:
+        """Cancels a queued or running job, or forgets a finished one."""
+        return self._json("DELETE", f"/v1/jobs/{_quote(job_id)}")
+
+    def wait_job(
+        self, job_id: str, progress: ProgressCallback | None = None, poll_s: float = 0.25
+    ) -> dict:
+        """Polls a job until it is done; raises RaycastdError when it failed or was cancelled."""
+        while True:
+            status = self.job(job_id)
+            if progress is not None:
+                progress(float(status.get("progress") or 0.0), status)
+            state = status.get("state")
+            if state == "done":
+                return status
+            if state in ("failed", "cancelled"):
+                err = status.get("error") or {}
+                raise RaycastdError(
+                    err.get("message", f"job {job_id} {state}")
+                    if isinstance(err, dict)
+                    else str(err),
+                    code=err.get("code", f"job_{state}")
+                    if isinstance(err, dict)
+                    else f"job_{state}",
+                )
+            time.sleep(poll_s)
+
+    # -- server ------------------------------------------------------------------------------
 
     def health(self) -> dict:
+        """`{"status": "ok"}`."""
         return self._json("GET", "/v1/health")
 
     def info(self) -> dict:
+        """Version, Embree version, threads, limits, scenes and memory."""
         return self._json("GET", "/v1/info")
 
-    def intersect(self, scene: dict, rays: Iterable[dict], **options: Any) -> dict:
-        """Stateless query: `scene` is a scene document, `options` mode/precision/fields."""
-        return self._json("POST", "/v1/intersect", {"scene": scene, "rays": list(rays), **options})
 
-    def explain(self, scene: dict, ray: dict, markdown: bool = False) -> Any:
-        path = "/v1/explain" + ("?format=markdown" if markdown else "")
-        return self._json("POST", path, {"scene": scene, "ray": ray})
-
-    def register(self, scene: dict | bytes, content_type: str = "application/json") -> dict:
-        """Registers a scene document (dict) or a model file (bytes with its content type)."""
-        return self._json("POST", "/v1/scenes", scene, content_type)
-
-    def scenes(self) -> list[dict]:
-        return self._json("GET", "/v1/scenes")["scenes"]
-
-    def scene(self, scene_id: str) -> dict:
-        return self._json("GET", f"/v1/scenes/{scene_id}")
-
-    def delete(self, scene_id: str) -> dict:
-        return self._json("DELETE", f"/v1/scenes/{scene_id}")
-
-    def query(self, scene_id: str, rays: Iterable[dict], **options: Any) -> dict:
-        return self._json("POST", f"/v1/scenes/{scene_id}/intersect", {"rays": list(rays), **options})
-
-    def query_binary(
-        self,
-        scene_id: str,
-        rays: Sequence[tuple[Vec3, Vec3, float, float]],
-        precision: str = "refined",
-        dtype: str = "float64",
-    ) -> list[BinaryHit]:
-        """Closest hits of (origin, direction, tmin, tmax) tuples through the binary form."""
-        fmt = "<8d" if dtype == "float64" else "<8f"
-        body = b"".join(struct.pack(fmt, *o, *d, tmin, tmax) for o, d, tmin, tmax in rays)
-        query = urllib.parse.urlencode({"mode": "closest", "precision": precision, "dtype": dtype})
-        status, _, data = self._request(
-            "POST", f"/v1/scenes/{scene_id}/intersect?{query}", body, "application/octet-stream"
-        )
-        if status >= 400:
-            raise _error(status, data)
-        rec = struct.Struct("<dII5d" if dtype == "float64" else "<fII5f")
-        hits = []
-        for t, obj, prim, u, v, nx, ny, nz in rec.iter_unpack(data):
-            hits.append(BinaryHit(t, obj, prim, u, v, (nx, ny, nz)))
-        return hits
+def ray_json(ray: RayLike) -> dict:
+    """A ray in the JSON form of the API from any `RayLike`."""
+    if isinstance(ray, Mapping):
+        return dict(ray)
+    items = list(ray)
+    if len(items) in (6, 8) and all(isinstance(v, (int, float)) for v in items):
+        out: dict[str, Any] = {"origin": items[0:3], "direction": items[3:6]}
+        if len(items) == 8:
+            out["tmin"], out["tmax"] = items[6], items[7]
+    elif len(items) in (2, 3, 4):
+        out = {"origin": list(items[0]), "direction": list(items[1])}
+        if len(items) >= 3:
+            out["tmin"] = items[2]
+        if len(items) == 4:
+            out["tmax"] = items[3]
+    else:
+        raise ValueError(f"not a ray: {ray!r}")
+    if out.get("tmax") == math.inf:  # JSON cannot carry inf; the server's default is +inf
+        del out["tmax"]
+    return out
 
 
-def _error(status: int, data: bytes) -> RaycastdError:
-    try:
-        err = json.loads(data)["error"]
-        return RaycastdError(status, err.get("code", "?"), err.get("message", ""), err.get("path"))
-    except (ValueError, KeyError, TypeError):
-        return RaycastdError(status, "?", data[:200].decode(errors="replace"), None)
+def dumps(value: Any) -> bytes:
+    """JSON bytes of `value`; NumPy arrays and scalars are written as lists and numbers."""
+    return json.dumps(value, default=_plain).encode()
+
+
+def _plain(value: Any) -> Any:
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not JSON serializable")
+
+
+def _put(body: dict[str, Any], **fields: Any) -> None:
+    body.update({k: v for k, v in fields.items() if v is not None})
+
+
+def _quote(part: str) -> str:
+    return urllib.parse.quote(part, safe="")

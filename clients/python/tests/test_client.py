@@ -1,74 +1,243 @@
-"""The Python client against a real raycastd binary (RAYCASTD_BINARY), on a free loopback port."""
+"""The JSON client against a real raycastd: every endpoint, the typed errors, $RAYCASTD_URL."""
 
+from __future__ import annotations
+
+import http.server
+import json
 import os
-import subprocess
-import sys
+import pathlib
+import socket
+import tempfile
+import threading
 import unittest
+from unittest import mock
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+from support import RAY, TRIANGLE, TUTORIAL, ServerTestCase
 
-from raycastd import Client, RaycastdError  # noqa: E402
+import raycastd
+from raycastd import (
+    BadRequest,
+    Client,
+    ClientError,
+    ConnectionFailed,
+    NotFound,
+    RaycastdError,
+)
+from raycastd.png import read_png
 
-TUTORIAL = {
-    "objects": [
-        {"type": "sphere", "center": [0, 0, 10], "radius": 2},
-        {"type": "sphere", "center": [0, 3, 8], "radius": 2},
-        {"type": "sphere", "center": [0, 1, 9], "radius": 2},
-    ]
-}
-RAY = {"origin": [0, 0, 0], "direction": [0, 0, 1]}
 
+class EndpointsTest(ServerTestCase):
+    def test_health_and_info(self) -> None:
+        self.assertEqual(self.client.health(), {"status": "ok"})
+        info = self.client.info()
+        self.assertEqual(info["name"], "raycastd")
+        self.assertIn("max_rays", info["limits"])
 
-class ClientTest(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls) -> None:
-        binary = os.environ.get("RAYCASTD_BINARY", "build/release/server/raycastd")
-        cls.proc = subprocess.Popen([binary, "--port", "0"], stdout=subprocess.PIPE, text=True)
-        port = int(cls.proc.stdout.readline().rsplit(":", 1)[1])
-        cls.client = Client(f"http://127.0.0.1:{port}")
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.client.close()
-        cls.proc.kill()
-        cls.proc.wait()
-
-    def test_tutorial_question_1(self) -> None:
-        hit = self.client.intersect(TUTORIAL, [RAY])["hits"][0]
+    def test_stateless_intersect_question_1(self) -> None:
+        ans = self.client.intersect(TUTORIAL, [RAY])
+        hit = ans["hits"][0]
         self.assertEqual(hit["name"], "sphere 3")
         self.assertEqual(hit["t"], 7.267949192431123)
+        # Rays as tuples and as six numbers are the same rays.
+        again = self.client.intersect(TUTORIAL, [((0, 0, 0), (0, 0, 1)), [0, 0, 0, 0, 0, 1]])
+        self.assertEqual([h["t"] for h in again["hits"]], [hit["t"]] * 2)
 
-    def test_explain(self) -> None:
+    def test_modes_precision_and_fields(self) -> None:
+        rays = [RAY, {"origin": [0, 0, 0], "direction": [0, 0, -1]}]
+        every = self.client.intersect(TUTORIAL, rays, mode="all")["hits"]
+        self.assertEqual(every[0]["count"], 4)
+        self.assertEqual([h["name"] for h in every[0]["hits"]][:2], ["sphere 3", "sphere 1"])
+        self.assertEqual(every[1], {"count": 0, "hits": []})
+        self.assertEqual(
+            [h["count"] for h in self.client.intersect(TUTORIAL, rays, mode="count")["hits"]],
+            [4, 0],
+        )
+        self.assertEqual(
+            self.client.intersect(TUTORIAL, rays, mode="any")["hits"],
+            [{"hit": True}, {"hit": False}],
+        )
+        only_t = self.client.intersect(TUTORIAL, [RAY], precision="exact", fields=["t"])
+        self.assertEqual(set(only_t["hits"][0]) - {"hit"}, {"t"})
+        # tmax = inf is the default (JSON cannot carry it): the client leaves it out.
+        self.assertTrue(
+            self.client.intersect(TUTORIAL, [((0, 0, 0), (0, 0, 1), 0, float("inf"))])["hits"][0][
+                "hit"
+            ]
+        )
+
+    def test_scene_lifecycle_by_id_and_by_file(self) -> None:
+        summary = self.client.add_scene(TRIANGLE)
+        sid = summary["id"]
+        self.assertEqual(summary["triangles"], 1)
+        self.assertEqual(self.client.add_scene(TRIANGLE)["id"], sid)  # content-addressed
+        self.assertEqual(self.client.get_scene(sid)["id"], sid)
+        self.assertIn(sid, [s["id"] for s in self.client.list_scenes()])
+        hit = self.client.intersect(sid, [{"origin": [0.5, 0.5, 0], "direction": [0, 0, 1]}])[
+            "hits"
+        ][0]
+        self.assertEqual((hit["name"], hit["t"], hit["barycentric"]), ("abc", 5, [0.25, 0.25]))
+        with tempfile.TemporaryDirectory() as tmp:
+            path = pathlib.Path(tmp) / "triangle.json"
+            path.write_text(json.dumps(TRIANGLE))
+            self.assertEqual(self.client.scene_id(path), sid)
+            obj = pathlib.Path(tmp) / "tri.obj"
+            obj.write_text("v 0 0 5\nv 2 0 5\nv 0 2 5\nf 1 2 3\n")
+            model = self.client.add_scene(obj)
+            self.assertEqual(model["triangles"], 1)
+        self.assertEqual(self.client.delete_scene(sid), {"id": sid, "deleted": True})
+        with self.assertRaises(NotFound) as cm:
+            self.client.get_scene(sid)
+        self.assertEqual(cm.exception.code, "scene_not_found")
+        self.assertEqual(cm.exception.status, 404)
+
+    def test_trace_question_2(self) -> None:
+        scene = json.loads(
+            (pathlib.Path(__file__).parents[3] / "tests/golden/scenes/tutorial_q2.json").read_text()
+        )
+        ans = self.client.trace(scene, RAY, max_depth=5)
+        self.assertEqual(
+            ans["summary"],
+            {"points": 5, "full_phong": ["I1", "I2", "I3"], "ambient_only": ["I4", "I5"]},
+        )
+        self.assertEqual(ans["tree"]["refracted"]["label"], "I4")
+        miss = self.client.trace(scene, {"origin": [0, 0, 0], "direction": [1, 0, 0]})
+        self.assertIsNone(miss["tree"])
+
+    def test_explain_json_and_markdown(self) -> None:
         ex = self.client.explain(TUTORIAL, RAY)
         self.assertEqual(ex["objects"][0]["roots"], [8, 12])
+        self.assertEqual(ex["first_hit"]["name"], "sphere 3")
         md = self.client.explain(TUTORIAL, RAY, markdown=True)
+        self.assertIsInstance(md, str)
         self.assertIn("**sphere 3**", md)
 
-    def test_register_query_binary_delete(self) -> None:
-        info = self.client.register(TUTORIAL)
-        self.assertEqual(info["spheres"], 3)
-        self.assertEqual(self.client.register(TUTORIAL)["id"], info["id"])
-        hit = self.client.query(info["id"], [RAY])["hits"][0]
-        self.assertEqual(hit["object"], 2)
-        binary = self.client.query_binary(info["id"], [((0, 0, 0), (0, 0, 1), 0.0, 1e30),
-                                                       ((0, 0, 0), (0, 0, -1), 0.0, 1e30)])
-        self.assertTrue(binary[0].hit)
-        self.assertEqual(binary[0].t, hit["t"])
-        self.assertEqual(binary[0].object, 2)
-        self.assertFalse(binary[1].hit)
-        self.assertIn(info["id"], [s["id"] for s in self.client.scenes()])
-        self.client.delete(info["id"])
-        with self.assertRaises(RaycastdError) as cm:
-            self.client.scene(info["id"])
+    def test_render_sync_and_with_progress(self) -> None:
+        png = self.client.render(TUTORIAL, 32, 24, 1, shading="normal")
+        self.assertEqual((read_png(png).width, read_png(png).height), (32, 24))
+        seen: list[tuple[float, str]] = []
+        png2 = self.client.render(
+            TUTORIAL,
+            32,
+            24,
+            1,
+            shading="normal",
+            progress=lambda p, s: seen.append((p, s["state"])),
+            poll_s=0.02,
+        )
+        self.assertEqual(png2, png)  # deterministic renders: the job's image is the same
+        self.assertEqual(seen[-1], (1.0, "done"))
+        self.assertTrue(all(0.0 <= p <= 1.0 for p, _ in seen))
+
+    def test_jobs(self) -> None:
+        sid = self.client.scene_id(TUTORIAL)
+        job = self.client._json(
+            "POST", f"/v1/scenes/{sid}/render", {"width": 16, "height": 16, "async": True}
+        )["job"]
+        status = self.client.wait_job(job, poll_s=0.02)
+        self.assertEqual(status["state"], "done")
+        self.assertEqual(self.client.job(job)["progress"], 1)
+        self.assertTrue(self.client.job_image(job).startswith(b"\x89PNG"))
+        self.assertTrue(self.client.cancel_job(job)["deleted"])
+        with self.assertRaises(NotFound):
+            self.client.job(job)
+
+    def test_points_json(self) -> None:
+        self.skip_without_points()
+        ans = self.client.points(TUTORIAL, [[0, 0, 0], [0, 0, 10]], query="closest")
+        self.assertEqual(ans["query"], "closest")
+        self.assertTrue(ans["results"][0]["found"])
+        inside = self.client.points(TUTORIAL, [[0, 0, 10], [0, 0, -5]], query="occupancy")[
+            "results"
+        ]
+        self.assertEqual([r["inside"] for r in inside], [True, False])
+
+
+class ErrorsTest(ServerTestCase):
+    def test_error_carries_code_message_path_status_request_id(self) -> None:
+        bad = {"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": -1}]}
+        with self.assertRaises(BadRequest) as cm:
+            self.client.intersect(bad, [RAY])
+        err = cm.exception
+        self.assertIsInstance(err, ClientError)
+        self.assertIsInstance(err, RaycastdError)
+        self.assertEqual(
+            (err.status, err.code, err.path), (400, "invalid_scene", "/scene/objects/0/radius")
+        )
+        self.assertTrue(err.request_id and err.request_id.startswith("rq_"))
+        self.assertIn("radius", err.message)
+        self.assertIn("invalid_scene", str(err))
+
+    def test_invalid_ray_and_unknown_route(self) -> None:
+        with self.assertRaises(BadRequest) as cm:
+            self.client.intersect(TUTORIAL, [{"origin": [0, 0, 0], "direction": [0, 0, 0]}])
+        self.assertEqual(cm.exception.code, "invalid_ray")
+        with self.assertRaises(NotFound) as cm:
+            self.client.request("GET", "/v1/nothing-here")
+        self.assertEqual(cm.exception.code, "not_found")
+        with self.assertRaises(NotFound) as cm:
+            self.client.trace("sc_00000000000000000000000000000000", RAY)
         self.assertEqual(cm.exception.code, "scene_not_found")
 
-    def test_errors_carry_code_and_path(self) -> None:
-        bad = {"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": -1}]}
-        with self.assertRaises(RaycastdError) as cm:
-            self.client.intersect(bad, [RAY])
-        self.assertEqual(cm.exception.status, 400)
-        self.assertEqual(cm.exception.code, "invalid_scene")
-        self.assertEqual(cm.exception.path, "/scene/objects/0/radius")
+    def test_connection_failure_names_the_url(self) -> None:
+        with socket.socket() as s:  # a port nothing listens on
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        url = f"http://127.0.0.1:{port}"
+        with Client(url, timeout=2) as c:
+            with self.assertRaises(ConnectionFailed) as cm:
+                c.health()
+        self.assertIn(url, str(cm.exception))
+        self.assertEqual(cm.exception.url, url + "/v1/health")
+        self.assertIsNone(cm.exception.status)
+
+    def test_keep_alive_survives_a_closed_connection(self) -> None:
+        with Client(self.server.url) as c:
+            c.health()
+            assert c._conn is not None and c._conn.sock is not None
+            c._conn.sock.shutdown(socket.SHUT_RDWR)  # as if the server had timed it out
+            self.assertEqual(c.health(), {"status": "ok"})
+
+
+class UrlAndTokenTest(unittest.TestCase):
+    def test_url_defaults(self) -> None:
+        with mock.patch.dict(os.environ, {"RAYCASTD_URL": "http://example.invalid:9"}):
+            self.assertEqual(Client().url, "http://example.invalid:9")
+            self.assertEqual(Client("http://127.0.0.1:1/").url, "http://127.0.0.1:1")
+        with mock.patch.dict(os.environ, {}, clear=True):
+            self.assertEqual(Client().url, raycastd.DEFAULT_URL)
+        with self.assertRaises(ValueError):
+            Client("ftp://x")
+
+    def test_token_is_sent_as_bearer(self) -> None:
+        seen: list[str | None] = []
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def do_POST(self) -> None:  # noqa: N802 (http.server's name)
+                seen.append(self.headers.get("Authorization"))
+                self.rfile.read(int(self.headers.get("Content-Length", 0)))
+                body = b'{"error":{"code":"unauthorized","message":"bearer token required"}}'
+                self.send_response(401)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(body)))
+                self.send_header("X-Request-Id", "rq_7")
+                self.end_headers()
+                self.wfile.write(body)
+
+            def log_message(self, *args: object) -> None:
+                pass
+
+        httpd = http.server.HTTPServer(("127.0.0.1", 0), Handler)
+        thread = threading.Thread(target=httpd.serve_forever, daemon=True)
+        thread.start()
+        try:
+            with Client(f"http://127.0.0.1:{httpd.server_address[1]}", token="s3cret") as c:
+                with self.assertRaises(raycastd.Unauthorized) as cm:
+                    c.add_scene(TUTORIAL)
+        finally:
+            httpd.shutdown()
+            httpd.server_close()
+        self.assertEqual(seen, ["Bearer s3cret"])
+        self.assertEqual((cm.exception.code, cm.exception.request_id), ("unauthorized", "rq_7"))
 
 
 if __name__ == "__main__":

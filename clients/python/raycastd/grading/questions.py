@@ -1,0 +1,338 @@
+"""Question files: TOML written by course staff (clients/grading/README.md has the reference).
+
+    [grading]
+    title = "Tutorial 7"
+    tolerance = { rtol = 1e-2 }          # or { sigfigs = 3 } or { decimals = 2 }; per question too
+
+    [scenes.spheres]                     # a named scene: inline, or { file = "scene.json" }
+    objects = [{ type = "sphere", center = [0, 0, 10], radius = 2 }]
+
+    [[question]]
+    id = "q1"
+    points = 2
+    scene = "spheres"                    # a [scenes] name, a file, or an inline table
+    ray = { origin = [0, 0, 0], direction = [0, 0, 1] }
+    ask = "first_hit"
+
+Parsing checks everything a grading run needs up front, so a mistake in the file is reported
+with the question's id and key before any student is graded.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: python3-tomli (Debian, Ubuntu) is the same parser
+    import tomli as tomllib  # type: ignore[no-redef]
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+from raycastd.grading.tolerance import Tolerance
+
+#: What a question can ask, and what it is asked about.
+RAY_ASKS = {"first_hit", "t", "hit_point", "normal", "hits", "triangle_hit"}
+TREE_ASKS = {"ambient_only", "full_phong", "ray_tree_points"}
+POINT_ASKS = {"closest_point", "inside"}
+IMAGE_ASKS = {"image"}
+ASKS = RAY_ASKS | TREE_ASKS | POINT_ASKS | IMAGE_ASKS
+
+QUESTION_KEYS = {
+    "id",
+    "points",
+    "ask",
+    "scene",
+    "ray",
+    "rays",
+    "point",
+    "points_at",
+    "prompt",
+    "visible",
+    "tolerance",
+    "timeout_s",
+    "index_base",
+    "object",
+    "max_depth",
+    "precision",
+    "answer_file",
+    "program",
+    "expected",
+    "normal_sign",
+    "camera",
+    "width",
+    "height",
+    "spp",
+    "shading",
+    "pixel_tolerance",
+    "max_bad_fraction",
+    "partial_credit",
+    "name",
+}
+GRADING_KEYS = {"title", "tolerance", "timeout_s", "index_base", "program", "visible", "answers"}
+
+
+class QuestionFileError(ValueError):
+    """The question file is wrong; the message names the question and the key."""
+
+
+@dataclass
+class ImageSpec:
+    """What an `image` question renders and how closely the student's picture must match."""
+
+    width: int = 160
+    height: int = 120
+    spp: int = 1
+    shading: str = "normal"
+    camera: dict | None = None
+    max_depth: int | None = None
+    pixel_tolerance: int = 8  # per channel, out of 255
+    max_bad_fraction: float = 0.01  # share of pixels allowed to differ by more
+    partial_credit: bool = True  # linear from max_bad_fraction (full) to everything (0)
+
+
+@dataclass
+class Question:
+    """One question, with every default filled in."""
+
+    id: str
+    points: float
+    ask: str
+    scene: dict
+    scene_label: str
+    prompt: str = ""
+    rays: list[dict] = field(default_factory=list)
+    query_points: list[list[float]] = field(default_factory=list)
+    many: bool = False  # `rays`/`points_at` (answer is a list, one per item) vs `ray`/`point`
+    visible: bool = True
+    tolerance: Tolerance = field(default_factory=Tolerance)
+    timeout_s: float = 30.0
+    index_base: int = 0
+    object: str | int | None = None
+    max_depth: int | None = None
+    precision: str | None = None
+    answer_file: str | None = None
+    program: list[str] | None = None
+    expected: Any = None
+    normal_sign: str = "exact"
+    image: ImageSpec | None = None
+
+    @property
+    def title(self) -> str:
+        return f"{self.id}: {self.prompt}" if self.prompt else self.id
+
+
+@dataclass
+class QuestionSet:
+    """A parsed question file."""
+
+    title: str
+    questions: list[Question]
+    base_dir: pathlib.Path
+    answers: str | None = None  # default student answer file name inside a submission
+
+
+def load_questions(path: str | pathlib.Path) -> QuestionSet:
+    """Parses and checks a question file; raises QuestionFileError."""
+    path = pathlib.Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise QuestionFileError(f"{path}: {exc}") from None
+    return parse_questions(data, path.parent, str(path))
+
+
+def parse_questions(
+    data: Mapping[str, Any], base_dir: pathlib.Path, name: str = "<questions>"
+) -> QuestionSet:
+    g = dict(data.get("grading", {}))
+    _no_unknown(g, GRADING_KEYS, f"{name} [grading]")
+    try:
+        tol = Tolerance.parse(g.get("tolerance"))
+    except ValueError as exc:
+        raise QuestionFileError(f"{name} [grading] tolerance: {exc}") from None
+    scenes = {
+        k: _scene(v, base_dir, f"{name} [scenes.{k}]") for k, v in data.get("scenes", {}).items()
+    }
+    qs = data.get("question", [])
+    if not isinstance(qs, list) or not qs:
+        raise QuestionFileError(f"{name}: no [[question]] tables")
+    out: list[Question] = []
+    seen: set[str] = set()
+    for i, q in enumerate(qs):
+        where = f"{name} question {i + 1}" + (
+            f" ({q.get('id')})" if isinstance(q, dict) and q.get("id") else ""
+        )
+        try:
+            question = _question(q, g, tol, scenes, base_dir)
+        except (ValueError, TypeError, KeyError) as exc:
+            raise QuestionFileError(f"{where}: {exc}") from None
+        if question.id in seen:
+            raise QuestionFileError(f"{where}: duplicate id {question.id!r}")
+        seen.add(question.id)
+        out.append(question)
+    return QuestionSet(str(g.get("title", "")), out, base_dir, g.get("answers"))
+
+
+def _question(
+    q: Mapping[str, Any],
+    g: Mapping[str, Any],
+    tol: Tolerance,
+    scenes: dict[str, tuple[dict, str]],
+    base_dir: pathlib.Path,
+) -> Question:
+    if not isinstance(q, Mapping):
+        raise TypeError("a question must be a table")
+    _no_unknown(q, QUESTION_KEYS, "question")
+    qid = q.get("id")
+    if not isinstance(qid, str) or not qid.strip():
+        raise ValueError("id must be a non-empty string")
+    ask = q.get("ask")
+    if ask not in ASKS:
+        raise ValueError(f"ask must be one of {', '.join(sorted(ASKS))}, not {ask!r}")
+    points = q.get("points", 1)
+    if not isinstance(points, (int, float)) or isinstance(points, bool) or points < 0:
+        raise ValueError(f"points must be a number ≥ 0, not {points!r}")
+    if "scene" not in q:
+        raise ValueError("scene is required (a [scenes] name, a file, or an inline table)")
+    spec = q["scene"]
+    if isinstance(spec, str) and spec in scenes:
+        scene, label = scenes[spec]
+    else:
+        scene, label = _scene(spec, base_dir, "scene")
+    question = Question(
+        id=qid,
+        points=float(points),
+        ask=ask,
+        scene=scene,
+        scene_label=label,
+        prompt=str(q.get("prompt", q.get("name", ""))),
+        visible=bool(q.get("visible", g.get("visible", True))),
+        tolerance=Tolerance.parse(q.get("tolerance"), tol),
+        timeout_s=float(q.get("timeout_s", g.get("timeout_s", 30.0))),
+        index_base=int(q.get("index_base", g.get("index_base", 0))),
+        object=q.get("object"),
+        max_depth=q.get("max_depth"),
+        precision=q.get("precision"),
+        answer_file=q.get("answer_file"),
+        program=_program(q.get("program", g.get("program"))),
+        expected=q.get("expected"),
+        normal_sign=str(q.get("normal_sign", "exact")),
+    )
+    if question.normal_sign not in ("exact", "either"):
+        raise ValueError("normal_sign must be 'exact' or 'either'")
+    if question.index_base not in (0, 1):
+        raise ValueError("index_base must be 0 or 1")
+    if ask in RAY_ASKS | TREE_ASKS:
+        question.rays, question.many = _items(q, "ray", "rays", _ray)
+    elif ask in POINT_ASKS:
+        question.query_points, question.many = _items(q, "point", "points_at", _vec3)
+    else:
+        question.image = _image(q)
+        if not question.answer_file and not question.program:
+            raise ValueError(
+                "an image question needs answer_file (a PNG in the submission) or program"
+            )
+    if question.program and not question.answer_file:
+        question.answer_file = f"{qid}.png" if ask == "image" else f"{qid}.csv"
+    if question.answer_file and ask not in ("t", "image", "hits", "triangle_hit", "inside"):
+        raise ValueError(
+            f"answer_file (program output) is read for t, hits, triangle_hit, inside and image, not {ask}"
+        )
+    return question
+
+
+def _items(q: Mapping[str, Any], one: str, many: str, convert: Any) -> tuple[list, bool]:
+    if (one in q) == (many in q):
+        raise ValueError(f"give exactly one of {one} and {many}")
+    if one in q:
+        return [convert(q[one], one)], False
+    items = q[many]
+    if isinstance(items, str):
+        raise ValueError(f"{many} must be a list")
+    if not items:
+        raise ValueError(f"{many} is empty")
+    return [convert(v, f"{many}[{i}]") for i, v in enumerate(items)], True
+
+
+def _ray(v: Any, where: str) -> dict:
+    if isinstance(v, Mapping):
+        ray = {
+            "origin": _vec3(v.get("origin"), where + ".origin"),
+            "direction": _vec3(v.get("direction"), where + ".direction"),
+        }
+        for k in ("tmin", "tmax"):
+            if k in v:
+                ray[k] = float(v[k])
+        return ray
+    if isinstance(v, list) and len(v) == 6:
+        return {"origin": _vec3(v[:3], where), "direction": _vec3(v[3:], where)}
+    raise ValueError(f"{where} must be {{origin = [..], direction = [..]}} or 6 numbers")
+
+
+def _vec3(v: Any, where: str) -> list[float]:
+    if (
+        not isinstance(v, list)
+        or len(v) != 3
+        or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+    ):
+        raise ValueError(f"{where} must be 3 numbers, not {v!r}")
+    return [float(x) for x in v]
+
+
+def _program(v: Any) -> list[str] | None:
+    if v is None:
+        return None
+    if isinstance(v, str):
+        return v.split()
+    if isinstance(v, list) and all(isinstance(x, str) for x in v) and v:
+        return list(v)
+    raise ValueError("program must be a command line (a string, or a list of strings)")
+
+
+def _image(q: Mapping[str, Any]) -> ImageSpec:
+    spec = ImageSpec()
+    for key in ("width", "height", "spp", "pixel_tolerance", "max_depth"):
+        if key in q:
+            if not isinstance(q[key], int) or q[key] < 0:
+                raise ValueError(f"{key} must be an integer")
+            setattr(spec, key, q[key])
+    if "shading" in q:
+        spec.shading = str(q["shading"])
+    if "camera" in q:
+        if not isinstance(q["camera"], Mapping):
+            raise ValueError("camera must be a table {position, look_at, up, fov_y_deg}")
+        spec.camera = dict(q["camera"])
+    if "max_bad_fraction" in q:
+        spec.max_bad_fraction = float(q["max_bad_fraction"])
+        if not 0 <= spec.max_bad_fraction <= 1:
+            raise ValueError("max_bad_fraction must be in [0, 1]")
+    spec.partial_credit = bool(q.get("partial_credit", True))
+    return spec
+
+
+def _scene(spec: Any, base_dir: pathlib.Path, where: str) -> tuple[dict, str]:
+    """(scene document, label) from an inline table, `{file = …}` or a file name."""
+    if isinstance(spec, Mapping) and set(spec) == {"file"}:
+        spec = spec["file"]
+    if isinstance(spec, str):
+        path = (base_dir / spec).resolve()
+        try:
+            doc = json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            raise QuestionFileError(f"{where}: cannot read scene file {spec}: {exc}") from None
+        if not isinstance(doc, dict):
+            raise QuestionFileError(f"{where}: {spec} is not a scene document")
+        return doc, spec
+    if isinstance(spec, Mapping):
+        if "objects" not in spec:
+            raise QuestionFileError(f"{where}: an inline scene needs objects")
+        return dict(spec), "inline scene"
+    raise QuestionFileError(f"{where}: a scene is a [scenes] name, a file, or a table")
+
+
+def _no_unknown(table: Mapping[str, Any], allowed: set[str], where: str) -> None:
+    unknown = set(table) - allowed
+    if unknown:
+        raise QuestionFileError(f"{where}: unknown keys {', '.join(sorted(unknown))} (a typo?)")

@@ -1,0 +1,300 @@
+"""The command line against a real raycastd: every command, --json, exit codes 0/1/2."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import unittest
+from unittest import mock
+
+from support import EXAMPLES, PACKAGE_ROOT, REPO, TUTORIAL, ServerTestCase, numpy
+
+from raycastd.cli import main
+from raycastd.png import read_png
+from raycastd.tables import npy_bytes, read_table
+
+
+class CliTest(ServerTestCase):
+    def setUp(self) -> None:
+        self.tmp = tempfile.TemporaryDirectory()
+        self.dir = pathlib.Path(self.tmp.name)
+        self.scene_file = self.dir / "spheres.json"
+        self.scene_file.write_text(json.dumps(TUTORIAL))
+
+    def tearDown(self) -> None:
+        self.tmp.cleanup()
+
+    def run_cli(self, *args: str, server: bool = True) -> tuple[int, str, str]:
+        out, err = io.StringIO(), io.StringIO()
+        argv = list(args) + (["--server", self.server.url] if server else [])
+        code = main(argv, out, err)
+        return code, out.getvalue(), err.getvalue()
+
+    def ok(self, *args: str) -> str:
+        code, out, err = self.run_cli(*args)
+        self.assertEqual(code, 0, f"{args}: {err}")
+        return out
+
+    def test_health_info(self) -> None:
+        self.assertIn(": ok", self.ok("health"))
+        self.assertEqual(json.loads(self.ok("info", "--json"))["name"], "raycastd")
+
+    def test_scene_add_list_show_rm(self) -> None:
+        out = json.loads(self.ok("scene", "add", str(self.scene_file), "--json"))
+        sid = out["id"]
+        self.assertEqual(out["file"], str(self.scene_file))
+        text = self.ok(
+            "scene", "add", str(self.scene_file), str(EXAMPLES / "tutorial-spheres.json")
+        )
+        self.assertEqual(len(text.strip().splitlines()), 2)
+        self.assertIn(sid, self.ok("scene", "list"))
+        self.assertIn(sid, [s["id"] for s in json.loads(self.ok("scene", "list", "--json"))])
+        self.assertEqual(json.loads(self.ok("scene", "show", sid))["spheres"], 3)
+        self.assertIn(f"deleted {sid}", self.ok("scene", "rm", sid))
+        code, out, err = self.run_cli("scene", "show", sid)
+        self.assertEqual((code, out), (1, ""))
+        self.assertIn("scene_not_found", err)
+
+    def test_intersect_rays_on_the_command_line(self) -> None:
+        out = self.ok(
+            "intersect", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--ray", "0,0,0:0,0,-1"
+        )
+        lines = out.splitlines()
+        self.assertIn("sphere 3 (object 2, primitive 0)", lines[0])
+        self.assertIn("t = 7.267949192431123", lines[0])
+        self.assertEqual(lines[1], "ray 1: miss")
+        data = json.loads(
+            self.ok("intersect", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--json")
+        )
+        self.assertEqual(data["hits"][0]["name"], "sphere 3")
+        self.assertIn(
+            "4 hits",
+            self.ok("intersect", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--mode", "all"),
+        )
+        self.assertIn(
+            "4 crossings",
+            self.ok("intersect", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--mode", "count"),
+        )
+        self.assertIn(
+            "ray 0: hit",
+            self.ok("intersect", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--mode", "any"),
+        )
+        # tmin past the first sphere's entry: the next hit.
+        self.assertIn(
+            "t = 8",
+            self.ok(
+                "intersect",
+                str(self.scene_file),
+                "--ray",
+                "0,0,0:0,0,1:7.5",
+                "--precision",
+                "exact",
+            ),
+        )
+        only = json.loads(
+            self.ok(
+                "intersect", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--fields", "t", "--json"
+            )
+        )
+        self.assertEqual(set(only["hits"][0]), {"hit", "t"})
+
+    def test_intersect_rays_from_csv_and_npy(self) -> None:
+        csv = self.dir / "rays.csv"
+        csv.write_text("ox,oy,oz,dx,dy,dz\n0,0,0,0,0,1\n0,0,0,0,0,-1\n")
+        out = self.ok(
+            "intersect", str(self.scene_file), "--rays", str(csv), "-o", str(self.dir / "out.csv")
+        )
+        self.assertIn("miss", out)
+        rows = read_table(self.dir / "out.csv")
+        self.assertEqual(rows[0], [7.267949192431123, 2.0, 0.0])
+        self.assertEqual(rows[1][1:], [-1.0, -1.0])
+        npy = self.dir / "rays.npy"
+        npy.write_bytes(npy_bytes([[0, 0, 0, 0, 0, 1, 0, 7.0]]))  # tmax 7: before every sphere
+        data = json.loads(
+            self.ok(
+                "intersect",
+                str(self.scene_file),
+                "--rays",
+                str(npy),
+                "--ray",
+                "0,0,0:0,0,1",
+                "--json",
+            )
+        )
+        self.assertEqual(data["t"], [7.267949192431123, None])  # --ray first, then the file
+        every = json.loads(
+            self.ok(
+                "intersect", str(self.scene_file), "--rays", str(csv), "--mode", "all", "--json"
+            )
+        )
+        self.assertEqual(every["count"], [4, 0])
+        self.assertEqual(len(every["t"][0]), 4)
+        counts = json.loads(
+            self.ok(
+                "intersect", str(self.scene_file), "--rays", str(csv), "--mode", "count", "--json"
+            )
+        )
+        self.assertEqual(counts["count"], [4, 0])
+        self.assertEqual(
+            json.loads(
+                self.ok(
+                    "intersect", str(self.scene_file), "--rays", str(csv), "--mode", "any", "--json"
+                )
+            )["hit"],
+            [1, 0],
+        )
+        self.ok(
+            "intersect", str(self.scene_file), "--rays", str(csv), "-o", str(self.dir / "out.npy")
+        )
+        if numpy is not None:
+            self.assertEqual(numpy.load(self.dir / "out.npy").shape, (2, 3))
+
+    def test_render_writes_a_png(self) -> None:
+        out_png = self.dir / "out.png"
+        code, out, err = self.run_cli(
+            "render", str(self.scene_file), "-o", str(out_png), "--size", "40x30", "--spp", "2"
+        )
+        self.assertEqual(code, 0, err)
+        self.assertEqual(out, "")  # messages go to stderr
+        self.assertIn("wrote", err)
+        img = read_png(out_png.read_bytes())
+        self.assertEqual((img.width, img.height), (40, 30))
+        # --progress always draws the bar (a job) even when stderr is not a terminal.
+        code, _, err = self.run_cli(
+            "render",
+            str(self.scene_file),
+            "-o",
+            str(out_png),
+            "--size",
+            "20x10",
+            "--progress",
+            "always",
+            "--shading",
+            "normal",
+        )
+        self.assertEqual(code, 0, err)
+        self.assertIn("100%", err)
+        self.assertNotIn(
+            "[",
+            self.run_cli("render", str(self.scene_file), "-o", str(out_png), "--size", "8x8")[2],
+        )
+
+    def test_trace_and_explain(self) -> None:
+        q2 = REPO / "tests" / "golden" / "scenes" / "tutorial_q2.json"
+        out = self.ok("trace", str(q2), "--ray", "0,0,0:0,0,1")
+        self.assertIn("I1: glass at t = 8", out)
+        self.assertIn("5 points; full Phong: I1 I2 I3; ambient only: I4 I5", out)
+        self.assertEqual(
+            json.loads(self.ok("trace", str(q2), "--ray", "0,0,0:0,0,1", "--json"))["summary"][
+                "points"
+            ],
+            5,
+        )
+        text = self.ok("explain", str(self.scene_file), "--ray", "0,0,0:0,0,1")
+        self.assertIn("first hit: sphere 3 at t = 7.267949192431123", text)
+        md = self.ok("explain", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--markdown")
+        self.assertTrue(md.startswith("# "))
+        self.assertEqual(
+            json.loads(self.ok("explain", str(self.scene_file), "--ray", "0,0,0:0,0,1", "--json"))[
+                "objects"
+            ][0]["roots"],
+            [8, 12],
+        )
+
+    def test_points(self) -> None:
+        self.skip_without_points()
+        out = self.ok("points", str(self.scene_file), "--point", "0,0,0", "--query", "closest")
+        self.assertIn("closest", out)
+        data = json.loads(
+            self.ok(
+                "points",
+                str(self.scene_file),
+                "--point",
+                "0,0,10",
+                "--query",
+                "occupancy",
+                "--json",
+            )
+        )
+        self.assertTrue(data["results"][0]["inside"])
+
+    def test_points_route_missing_is_an_api_error(self) -> None:
+        code, out, err = self.run_cli("points", str(self.scene_file), "--point", "0,0,0")
+        if code == 0:
+            self.skipTest("the server has a points endpoint")
+        self.assertEqual(code, 1)
+        self.assertIn("not_found", err)
+
+    def test_usage_errors_exit_2(self) -> None:
+        for args in (
+            ["intersect", str(self.scene_file)],  # no rays
+            ["intersect", str(self.scene_file), "--ray", "0,0:0,0,1"],
+            ["intersect", "no-such-file.json", "--ray", "0,0,0:0,0,1"],
+            ["render", str(self.scene_file), "-o", "x.png", "--size", "big"],
+            ["explain", str(self.dir / "missing.json"), "--ray", "0,0,0:0,0,1"],
+            ["frobnicate"],
+            [],
+        ):
+            code, _, err = self.run_cli(*args)
+            self.assertEqual(code, 2, f"{args}: {err}")
+            self.assertTrue(err)
+
+    def test_api_error_exit_1_prints_the_code(self) -> None:
+        bad = self.dir / "bad.json"
+        bad.write_text('{"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": -1}]}')
+        code, out, err = self.run_cli("intersect", str(bad), "--ray", "0,0,0:0,0,1")
+        self.assertEqual((code, out), (1, ""))
+        self.assertIn("400 invalid_scene", err)
+        self.assertIn("/objects/0/radius", err)
+        code, _, err = self.run_cli("intersect", str(self.scene_file), "--ray", "0,0,0:0,0,0")
+        self.assertEqual(code, 1)
+        self.assertIn("invalid_ray", err)
+
+    def test_raycastd_url_and_connection_failure(self) -> None:
+        with mock.patch.dict(os.environ, {"RAYCASTD_URL": self.server.url}):
+            code, out, _ = self.run_cli("health", server=False)
+        self.assertEqual(code, 0)
+        self.assertIn(self.server.url, out)
+        with mock.patch.dict(os.environ, {"RAYCASTD_URL": "http://127.0.0.1:9"}):
+            code, _, err = self.run_cli("health", server=False)
+        self.assertEqual(code, 1)
+        self.assertIn("http://127.0.0.1:9", err)
+        self.assertIn("connection_failed", err)
+
+    def test_python_dash_m_entry_point(self) -> None:
+        env = {**os.environ, "PYTHONPATH": str(PACKAGE_ROOT), "RAYCASTD_URL": self.server.url}
+        run = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "raycastd",
+                "intersect",
+                str(self.scene_file),
+                "--ray",
+                "0,0,0:0,0,1",
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=60,
+        )
+        self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertEqual(json.loads(run.stdout)["hits"][0]["object"], 2)
+        usage = subprocess.run(
+            [sys.executable, "-m", "raycastd", "--nope"],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=60,
+        )
+        self.assertEqual(usage.returncode, 2)
+
+
+if __name__ == "__main__":
+    unittest.main()
