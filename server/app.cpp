@@ -6,6 +6,7 @@
 #include <sstream>
 #include <thread>
 
+#include "server/routes_web.h"
 #include "server/schema/scene_doc.h"
 
 namespace raycastd::server {
@@ -134,6 +135,7 @@ void App::install_routes() {
     install_trace_routes(*this);
     install_scene_routes(*this);
     install_render_routes(*this);
+    install_web_routes(*this);
 }
 
 int App::bind() {
