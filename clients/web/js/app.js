@@ -243,6 +243,7 @@ async function openScene(id, { camera = null, label = null } = {}) {
     ui.sceneSelect.value = id;
     ui.empty.hidden = true;
     ui.stage.hidden = false;
+    for (const b of ['reset-camera', 'download', 'copy-camera', 'copy-curl']) $(b).disabled = false;
     document.title = `${scene.label ?? id} — raycastd preview`;
     fitStage();
     saveUrl(true);
@@ -265,6 +266,8 @@ async function upload(files) {
         summary = await api.registerScene(prepared.body, prepared.contentType);
     } catch (err) {
         ui.viewport.dataset.state = 'upload failed';
+        ui.toast.classList.remove('show');
+        err.message = `${prepared.name}: ${err.message}`;
         showError(err, 'upload');
         return;
     }
@@ -402,7 +405,7 @@ async function downloadPng() {
 function wire() {
     fillSelect('shading', vs.SHADINGS);
     fillSelect('lighting', vs.LIGHTINGS);
-    fillSelect('precision', vs.PRECISIONS, { auto: 'auto (server default)' });
+    fillSelect('precision', vs.PRECISIONS, { auto: 'auto' });
     fillSelect('size', vs.SIZES, Object.fromEntries(vs.SIZES.map((s) => [s, s.replace('x', ' × ')])));
     writeForm();
     ui.settings.addEventListener('change', () => {

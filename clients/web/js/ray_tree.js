@@ -10,8 +10,9 @@
 
 import { definitions, h, num, s, srgb, vec } from './dom.js';
 
-const kCol = 132; // horizontal room per leaf
-const kRow = 104; // vertical room per level
+const kCol = 120; // horizontal room per leaf
+const kCaption = 34; // the two caption lines under a node
+const kRow = 122; // vertical room per level
 const kR = 19; // node radius
 const kTop = 34;
 
@@ -36,16 +37,37 @@ export function layout(root) {
 const termsShort = (terms) =>
     (terms ?? []).length === 1 && terms[0] === 'ambient' ? 'ambient only' : 'ambient + diffuse + specular';
 
-/** One sentence, as the tutorial answers: which points take all three Phong terms. */
-export function summarySentence(summary) {
+/** The nodes of a tree in depth-first order. */
+function nodes(root) {
+    const out = [];
+    const walk = (n) => {
+        if (!n) return;
+        out.push(n);
+        walk(n.reflected);
+        walk(n.refracted);
+    };
+    walk(root);
+    return out;
+}
+
+/** One sentence, as the tutorial answers: which points take all three Phong terms, and why
+ *  the others take the ambient term only. */
+export function summarySentence(summary, root) {
     if (!summary || summary.points === 0) return 'The ray hits nothing: no point needs its intensity computed.';
-    const list = (a) => (a.length ? a.join(', ') : 'none');
-    let text =
-        `${summary.points} point${summary.points === 1 ? '' : 's'} need light intensity. ` +
-        `All three Phong terms at ${list(summary.full_phong)}`;
-    if (summary.ambient_only.length)
-        text += `; the ambient term only at ${list(summary.ambient_only)} (no light reaches them)`;
-    return `${text}.`;
+    const list = (a) => a.join(', ');
+    const parts = [`${summary.points} point${summary.points === 1 ? ' needs its' : 's need their'} light intensity computed`];
+    if (summary.full_phong.length) parts.push(`all three Phong terms at ${list(summary.full_phong)}`);
+    if (summary.ambient_only.length) {
+        const ambient = nodes(root).filter((n) => summary.ambient_only.includes(n.label));
+        const blocked = ambient.some((n) => (n.shadow_rays ?? []).some((r) => r.blocked_by !== null));
+        const why = blocked
+            ? 'their shadow rays are blocked'
+            : ambient.some((n) => n.shadow_rays?.length)
+              ? 'no light is in front of them'
+              : 'the scene has no point or directional light';
+        parts.push(`the ambient term only at ${list(summary.ambient_only)} (${why})`);
+    }
+    return `${parts.join('; ')}.`;
 }
 
 function nodeDetails(node) {
@@ -66,7 +88,7 @@ function nodeDetails(node) {
         ),
     );
     return definitions([
-        ['point', `${node.label}: ${node.name} (object ${node.object})`],
+        ['node', `${node.label}: ${node.name} (object ${node.object})`],
         ['t', num(node.t, 8), String(node.t)],
         ['position', vec(node.point), JSON.stringify(node.point)],
         ['normal', vec(node.normal), JSON.stringify(node.normal)],
@@ -82,11 +104,11 @@ function nodeDetails(node) {
 export function renderRayTree(container, trace) {
     container.replaceChildren();
     const root = trace?.tree ?? null;
-    container.append(h('p', { class: 'tree-summary' }, summarySentence(trace?.summary)));
+    container.append(h('h3', {}, 'Ray tree'), h('p', { class: 'tree-summary' }, summarySentence(trace?.summary, root)));
     if (!root) return;
     const { items, leaves } = layout(root);
     const depth = Math.max(...items.map((i) => i.depth));
-    const width = Math.max(leaves * kCol, 260);
+    const width = Math.max(leaves * kCol + 90, 260);
     const height = kTop + depth * kRow + 24;
     const X = (item) => width / 2 + (item.x - (leaves - 1) / 2) * kCol;
     const Y = (d) => kTop + d * kRow - kRow / 2;
@@ -96,7 +118,7 @@ export function renderRayTree(container, trace) {
         width,
         height,
         role: 'group',
-        'aria-label': `Ray tree: ${summarySentence(trace.summary)}`,
+        'aria-label': `Ray tree: ${summarySentence(trace.summary, root)}`,
     });
     const defs = s(
         'defs',
@@ -128,17 +150,18 @@ export function renderRayTree(container, trace) {
         const x = X(item);
         const y = Y(item.depth);
         if (item.parent) {
+            // From under the parent's caption to the child's disc.
             const px = X(item.parent);
-            const py = Y(item.parent.depth);
+            const py = Y(item.parent.depth) + kR + kCaption;
             const len = Math.hypot(x - px, y - py);
             const ux = (x - px) / len;
             const uy = (y - py) / len;
             svg.append(
                 s('line', {
-                    x1: px + ux * kR, y1: py + uy * kR, x2: x - ux * (kR + 2), y2: y - uy * (kR + 2),
+                    x1: px, y1: py, x2: x - ux * (kR + 2), y2: y - uy * (kR + 2),
                     class: `edge ${item.kind}`, 'marker-end': 'url(#arrow)',
                 }),
-                s('text', { x: (px + x) / 2 + (x < px ? -6 : 6), y: (py + y) / 2, class: `edge-label ${item.kind}`, 'text-anchor': x < px ? 'end' : 'start' },
+                s('text', { x: px + (x - px) * 0.5 + (x < px ? -7 : x > px ? 7 : 6), y: py + (y - py) * 0.5, class: `edge-label ${item.kind}`, 'text-anchor': x < px ? 'end' : 'start' },
                     item.kind),
             );
         }
@@ -149,17 +172,21 @@ export function renderRayTree(container, trace) {
             'data-label': node.label,
             'aria-label': `${node.label}: ${node.name}, ${termsShort(node.terms)}`,
         });
-        // Shadow rays fan out to the upper right, one per point or directional light.
+        // Shadow rays leave sideways, one per point or directional light, on the side away
+        // from the ray that arrived (a left child's parent is to its upper right).
+        const side = item.parent && X(item.parent) > x ? -1 : 1;
         (node.shadow_rays ?? []).forEach((r, k) => {
-            const a = (-60 + 28 * k) * (Math.PI / 180);
+            const deg = -22 + 30 * k;
+            const a = (side > 0 ? deg : 180 - deg) * (Math.PI / 180);
             const x1 = x + Math.cos(a) * kR;
             const y1 = y + Math.sin(a) * kR;
             const x2 = x + Math.cos(a) * (kR + 30);
             const y2 = y + Math.sin(a) * (kR + 30);
             const state = r.facing === false ? 'away' : r.blocked_by === null ? 'free' : 'blocked';
             g.append(s('line', { x1, y1, x2, y2, class: `shadow ${state}` }));
-            const mark = state === 'free' ? `L${r.light}` : state === 'away' ? `L${r.light} ·` : `L${r.light} ✕`;
-            g.append(s('text', { x: x2 + 3, y: y2 + 4, class: `shadow-label ${state}` }, mark));
+            const blocker = String(r.blocked_by ?? '');
+            const mark = state === 'free' ? `L${r.light}` : state === 'away' ? `L${r.light} ·` : `L${r.light} ✕ ${blocker.length > 10 ? `${blocker.slice(0, 9)}…` : blocker}`;
+            g.append(s('text', { x: x2 + 3 * side, y: y2 + 4, 'text-anchor': side > 0 ? 'start' : 'end', class: `shadow-label ${state}` }, mark));
             if (state === 'blocked')
                 g.append(s('title', {}, `shadow ray to light ${r.light} blocked by ${r.blocked_by}`));
         });
