@@ -11,10 +11,11 @@
 //   4. click a pixel on the model: the hit panel names the object, the tree shows I1
 //   5. reload the shared URL: the same view comes back
 //   6. download PNG, copy camera JSON, copy as curl (the command is run and makes a PNG)
-//   7. the tutorial's spheres (clients/examples/tutorial-spheres.json): the centre pixel is
-//      sphere 3, as in the tutorial; its ray tree
+//   7. the tutorial's spheres (clients/examples/tutorial-spheres.json), dropped on the page:
+//      the centre pixel is sphere 3, as in the tutorial; its ray tree
 //   8. a broken GLB shows "422 model_load_failed" and the loader's message
-//   9. a narrow window (420 px): no sideways scrolling
+//   9. a link to a scene the server does not have shows "404 scene_not_found"
+//  10. a narrow window (420 px): no sideways scrolling
 // Exit 0: passed; 77: skipped (no browser on this machine); 1: failed.
 
 import { execFileSync, spawn } from 'node:child_process';
@@ -282,8 +283,19 @@ try {
     // is (almost) the tutorial's ray, and the first sphere it hits is sphere 3.
     {
         await page.selectOption('#settings select[name=shading]', 'phong');
-        const before = await upload(path.join(sourceDir, 'clients/examples/tutorial-spheres.json'));
+        // This time by dropping the file on the page.
+        const before = await frames();
+        const spheres = fs.readFileSync(path.join(sourceDir, 'clients/examples/tutorial-spheres.json'), 'utf8');
+        const dataTransfer = await page.evaluateHandle((text) => {
+            const dt = new DataTransfer();
+            dt.items.add(new File([text], 'tutorial-spheres.json', { type: 'application/json' }));
+            return dt;
+        }, spheres);
+        await page.dispatchEvent('#viewport', 'dragenter', { dataTransfer });
+        check(await page.isVisible('#drop'), 'dragging a file over the page shows the drop target');
+        await page.dispatchEvent('#viewport', 'drop', { dataTransfer });
         await waitFull(before);
+        check(!(await page.isVisible('#drop')), 'dropping it uploads it');
         const cam = urlCamera();
         check(JSON.stringify(cam.position) === '[0,0,0]' && JSON.stringify(cam.look_at) === '[0,0,1]', `the document's camera frames the view (${JSON.stringify(cam)})`);
         await clickPixel(320, 240);
@@ -317,6 +329,14 @@ try {
         await screenshot('broken-glb');
     }
 
+    // A link to a scene the server does not have.
+    {
+        await page.goto(`${server.url}/?scene=sc_0000000000000000`);
+        await page.waitForSelector('body[data-ready="true"]');
+        const code = await page.textContent('#error-code');
+        check(code === '404 scene_not_found' && (await page.isVisible('#error')), `a stale scene id shows ${code}`);
+    }
+
     // A narrow window: everything is reachable without sideways scrolling.
     {
         await page.setViewportSize({ width: 420, height: 860 });
@@ -326,8 +346,9 @@ try {
         await screenshot('narrow');
     }
 
-    // The only console errors allowed are the broken upload's 422 (the browser logs it).
-    const unexpected = consoleErrors.filter((e) => !/status of 422/.test(e));
+    // The only console errors allowed are the 422 of the broken upload and the 404 of the stale
+    // link (the browser logs failed requests).
+    const unexpected = consoleErrors.filter((e) => !/status of (422|404)/.test(e));
     check(unexpected.length === 0, `no unexpected console errors${unexpected.length ? `: ${unexpected.join(' | ')}` : ''}`);
 } catch (err) {
     failures += 1;
