@@ -406,7 +406,7 @@ function wire() {
     fillSelect('shading', vs.SHADINGS);
     fillSelect('lighting', vs.LIGHTINGS);
     fillSelect('precision', vs.PRECISIONS, { auto: 'auto' });
-    fillSelect('size', vs.SIZES, Object.fromEntries(vs.SIZES.map((s) => [s, s.replace('x', ' × ')])));
+    fillSelect('size', vs.SIZES, Object.fromEntries(vs.SIZES.map((s) => [s, s.replace('x', '×')])));
     writeForm();
     ui.settings.addEventListener('change', () => {
         readForm();
@@ -418,7 +418,7 @@ function wire() {
         if (ui.sceneSelect.value) openScene(ui.sceneSelect.value);
     });
     $('refresh-scenes').addEventListener('click', loadSceneList);
-    $('open-file').addEventListener('click', () => ui.fileInput.click());
+    for (const b of ['open-file', 'open-file-2']) $(b).addEventListener('click', () => ui.fileInput.click());
     ui.fileInput.addEventListener('change', () => {
         if (ui.fileInput.files.length) upload(ui.fileInput.files);
         ui.fileInput.value = '';

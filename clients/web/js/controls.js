@@ -33,7 +33,6 @@ export function attachControls(el, o) {
         if (!o.camera() || drag) return;
         if (e.button !== 0 && e.button !== 2) return;
         el.setPointerCapture(e.pointerId);
-        el.focus({ preventScroll: true });
         drag = {
             id: e.pointerId,
             mode: e.button === 2 || e.shiftKey ? 'pan' : 'orbit',
@@ -46,7 +45,6 @@ export function attachControls(el, o) {
             camera: o.camera(),
         };
         el.classList.add(drag.mode === 'pan' ? 'panning' : 'orbiting');
-        e.preventDefault();
     });
 
     el.addEventListener('pointermove', (e) => {
