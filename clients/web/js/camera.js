@@ -132,17 +132,20 @@ export function zoom(camera, factor, minDistance = 1e-9) {
     return { ...camera, position: add(camera.look_at, scale(offset, next / dist)) };
 }
 
-/** The camera with every number to 9 significant digits: short enough for a URL, and what
- *  the page renders and casts with, so a shared link reproduces the same pixels. */
+/** The camera with every number to 9 significant digits, and coordinates below 1e-12 of the
+ *  camera's distance to look_at written as 0 (an orbit's 8.3e-17): short enough for a URL,
+ *  and what the page renders and casts with, so a shared link reproduces the same pixels. */
 export function roundCamera(camera) {
     const r = (x) => {
         const v = Number(x.toPrecision(9));
         return Object.is(v, -0) ? 0 : v;
     };
+    const tiny = 1e-12 * length(sub(camera.position, camera.look_at));
+    const point = (p) => p.map((x) => (Math.abs(x) < tiny ? 0 : r(x)));
     return {
-        position: camera.position.map(r),
-        look_at: camera.look_at.map(r),
-        up: camera.up.map(r),
+        position: point(camera.position),
+        look_at: point(camera.look_at),
+        up: camera.up.map((x) => (Math.abs(x) < 1e-12 * length(camera.up) ? 0 : r(x))),
         fov_y_deg: r(camera.fov_y_deg),
     };
 }

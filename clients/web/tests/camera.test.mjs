@@ -78,6 +78,7 @@ test('zoom scales the distance to look_at and never reaches it', () => {
 test('rounded cameras are short and usable; bad ones are refused', () => {
     const r = roundCamera({ position: [1 / 3, -0, 2], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 });
     assert.deepEqual(r.position, [0.333333333, 0, 2]);
+    assert.deepEqual(roundCamera({ ...tutorial, position: [8.3e-17, 0, -3] }).position, [0, 0, -3]);
     assert.equal(checkCamera({ position: [0, 0, 0], look_at: [0, 0, 0] }), null);
     assert.equal(checkCamera({ look_at: [0, 5, 0], up: [0, 1, 0] }), null);
     assert.equal(checkCamera({ fov_y_deg: 180 }), null);
