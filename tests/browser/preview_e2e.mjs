@@ -230,6 +230,7 @@ try {
         await page.mouse.move(cx + 160, cy + 30, { steps: 16 });
         await page.mouse.up();
         await waitFull(n);
+        log(`     (${await page.$eval('#viewport', (v) => v.dataset.aborted)} stale passes aborted so far)`);
         await page.waitForFunction((c) => new URL(location.href).searchParams.get('camera') !== c, JSON.stringify(camBefore));
         const orbited = await decode();
         const camAfter = urlCamera();

@@ -164,7 +164,7 @@ const preview = new Preview({
             // A server without the `lighting` option: say so, and go on with the default.
             showError(
                 new api.ApiError(err.status, err.code, `${err.message} — this server does not take lighting "${v.lighting}"; using auto`, err.path),
-                'render',
+                'settings',
             );
             view.lighting = 'auto';
             writeForm();
