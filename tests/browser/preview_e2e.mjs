@@ -7,7 +7,8 @@
 //   1. the empty page at 1280×800, no console errors
 //   2. upload Duck.glb by the file input: the preview appears (decoded: non-background pixels in
 //      the model's region, more than one colour); normal shading gives many colours
-//   3. orbit by dragging: the image and the URL's camera change; the keyboard orbits too
+//   3. orbit by dragging: the image and the URL's camera change; a render over the pixel limit
+//      shows "413 too_large"; a newer view aborts the render in flight; the keyboard orbits too
 //   4. click a pixel on the model: the hit panel names the object, the tree shows I1
 //   5. reload the shared URL: the same view comes back
 //   6. download PNG, copy camera JSON, copy as curl (the command is run and makes a PNG)
@@ -104,6 +105,11 @@ page.on('console', (m) => {
     if (m.type() === 'error') consoleErrors.push(m.text());
 });
 page.on('pageerror', (e) => consoleErrors.push(`page error: ${e.message}`));
+// Render requests the page cancelled (AbortController → the browser reports net::ERR_ABORTED).
+let abortedRenders = 0;
+page.on('requestfailed', (r) => {
+    if (r.url().endsWith('/render') && /ABORT/i.test(r.failure()?.errorText ?? '')) abortedRenders += 1;
+});
 
 // ------------------------------------------------------------------------------------------
 // Helpers
@@ -135,7 +141,7 @@ async function waitFull(after, timeout = 20000) {
         { timeout },
     );
     const stage = await page.$eval('#viewport', (v) => v.dataset.stage);
-    if (stage === 'error') throw new Error(`render failed: ${await page.textContent('#error')}`);
+    if (stage === 'error') throw new Error(`render failed: ${await page.textContent('#error-code')} ${await page.textContent('#error-message')}`);
 }
 /** Decodes the picture on screen: pixel statistics and a 32×24 grey thumbnail. */
 const decode = () =>
@@ -230,7 +236,7 @@ try {
         await page.mouse.move(cx + 160, cy + 30, { steps: 16 });
         await page.mouse.up();
         await waitFull(n);
-        log(`     (${await page.$eval('#viewport', (v) => v.dataset.aborted)} stale passes aborted so far)`);
+        log(`     (${await page.$eval('#viewport', (v) => v.dataset.aborted)} stale passes ended, ${abortedRenders} render requests aborted in flight)`);
         await page.waitForFunction((c) => new URL(location.href).searchParams.get('camera') !== c, JSON.stringify(camBefore));
         const orbited = await decode();
         const camAfter = urlCamera();
@@ -238,6 +244,29 @@ try {
         check(JSON.stringify(camAfter.look_at) === JSON.stringify(camBefore.look_at), 'orbiting keeps look_at');
         check(thumbDiff(normal, orbited) > 2, `the picture changed (mean thumbnail difference ${thumbDiff(normal, orbited).toFixed(1)} grey levels)`);
         await screenshot('duck-orbited');
+
+        // A render the server refuses is on the page with its code, over the dimmed last frame.
+        const spp = page.locator('#settings input[name=spp]');
+        await spp.fill('64');
+        await spp.dispatchEvent('change');
+        await page.waitForSelector('#error:not([hidden])');
+        const tooLarge = await page.textContent('#error-code');
+        check(tooLarge === '413 too_large' && (await page.isVisible('#frame.stale')), `640×480 at spp 64 shows ${tooLarge} over the dimmed last frame`);
+        await screenshot('render-refused');
+
+        // A newer view cancels the request in flight: ask for spp 32, and change back to 4
+        // while that full frame is being rendered.
+        const abortedBefore = abortedRenders;
+        await spp.fill('32');
+        await spp.dispatchEvent('change');
+        await page.waitForFunction(() => document.getElementById('viewport').dataset.state === 'rendering full');
+        n = await frames();
+        await spp.fill('4');
+        await spp.dispatchEvent('change');
+        await waitFull(n);
+        for (let i = 0; i < 40 && abortedRenders === abortedBefore; i++) await page.waitForTimeout(50);
+        check(abortedRenders > abortedBefore, `the stale spp-32 render was aborted in flight (${abortedRenders - abortedBefore} request(s) net::ERR_ABORTED)`);
+        check(!(await page.isVisible('#error')), 'the next good frame clears the render error');
 
         n = await frames();
         await page.focus('#viewport');
@@ -347,9 +376,9 @@ try {
         await screenshot('narrow');
     }
 
-    // The only console errors allowed are the 422 of the broken upload and the 404 of the stale
-    // link (the browser logs failed requests).
-    const unexpected = consoleErrors.filter((e) => !/status of (422|404)/.test(e));
+    // The only console errors allowed are the 413 of the refused render, the 422 of the broken
+    // upload and the 404 of the stale link (the browser logs failed requests).
+    const unexpected = consoleErrors.filter((e) => !/status of (413|422|404)/.test(e));
     check(unexpected.length === 0, `no unexpected console errors${unexpected.length ? `: ${unexpected.join(' | ')}` : ''}`);
 } catch (err) {
     failures += 1;

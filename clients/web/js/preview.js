@@ -2,8 +2,9 @@
 // then — once the camera has been still for `settleMs` — a 1/2-size frame, then the full frame
 // with the chosen spp (the progressive display of <model-viewer> and the glTF Sample Viewer,
 // done by the server). Starting a pass aborts the request of the pass before it
-// (AbortController), so the server stops work nobody will look at and an old frame can never
-// replace a newer one.
+// (AbortController): the browser drops the connection and an old frame can never replace a
+// newer one. (raycastd 0.1.0 still finishes a render whose client has gone; once it notices
+// the closed connection, the abort also saves the server the work.)
 
 import { isAbort } from './api.js';
 
