@@ -11,7 +11,8 @@
 //      shows "413 too_large"; a newer view aborts the render in flight; the keyboard orbits too
 //   4. click a pixel on the model: the hit panel names the object, the tree shows I1
 //   5. reload the shared URL: the same view comes back
-//   6. download PNG, copy camera JSON, copy as curl (the command is run and makes a PNG)
+//   6. download PNG, copy camera JSON, copy as curl (the command is run and makes a PNG);
+//      Duck.gltf picked with its .bin and .png uploads as one model
 //   7. the tutorial's spheres (clients/examples/tutorial-spheres.json), dropped on the page:
 //      the centre pixel is sphere 3, as in the tutorial; its ray tree
 //   8. a broken GLB shows "422 model_load_failed" and the loader's message
@@ -307,6 +308,15 @@ try {
         const curlPng = fs.readFileSync(path.join(curlDir, 'render.png'));
         check(curlPng.subarray(1, 4).toString() === 'PNG', `the copied curl command renders a PNG (${curlPng.length} bytes)`);
         fs.rmSync(curlDir, { recursive: true, force: true });
+    }
+
+    // A .gltf with its .bin and texture picked together: the page embeds them.
+    if (haveModels) {
+        const dir = path.join(models, 'Duck/glTF');
+        const before = await upload(['Duck.gltf', 'Duck0.bin', 'DuckCM.png'].map((f) => path.join(dir, f)));
+        await waitFull(before);
+        const info = await page.textContent('#scene-info');
+        check(info.includes('Duck.gltf') && info.includes('4212'), 'Duck.gltf with Duck0.bin and DuckCM.png uploads as one model');
     }
 
     // The tutorial's spheres: the eye at the origin looking along +z; the centre pixel's ray
