@@ -58,6 +58,7 @@ if (!fs.existsSync(binary)) {
 const haveModels = fs.existsSync(path.join(models, 'Duck/glTF-Binary/Duck.glb'));
 if (!haveModels) console.log(`NOTE: models not found at ${models}: the Duck steps are skipped, the broken GLB is made here`);
 fs.mkdirSync(artifacts, { recursive: true });
+for (const f of fs.readdirSync(artifacts)) if (f.endsWith('.png')) fs.rmSync(path.join(artifacts, f));
 
 // ------------------------------------------------------------------------------------------
 // The server and the browser
