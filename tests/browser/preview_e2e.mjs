@@ -85,8 +85,9 @@ const userDataDir = fs.mkdtempSync(path.join(os.tmpdir(), 'raycastd-chromium-'))
 const context = await chromium.launchPersistentContext(userDataDir, {
     executablePath: chromiumPath,
     headless: true,
-    // As root chromium needs --no-sandbox; the next five keep it off the (closed) network, and
-    // --disable-dev-shm-usage copes with a container's small /dev/shm.
+    // As root chromium needs --no-sandbox; there is no GPU; background networking, component
+    // updates, sync, the first-run page and QUIC would only knock on this machine's closed
+    // network; --disable-dev-shm-usage copes with a container's small /dev/shm.
     args: ['--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run', '--disable-quic', '--disable-dev-shm-usage'],
     viewport: { width: 1280, height: 800 },
     acceptDownloads: true,
