@@ -14,7 +14,8 @@
 //   6. download PNG, copy camera JSON, copy as curl (the command is run and makes a PNG);
 //      Duck.gltf picked with its .bin and .png uploads as one model
 //   7. the tutorial's spheres (clients/examples/tutorial-spheres.json), dropped on the page:
-//      the centre pixel is sphere 3, as in the tutorial; its ray tree
+//      the centre pixel is sphere 3, as in the tutorial; its ray tree; and every pixel's ray,
+//      computed by the page, hits the object the server's object_id render shows there
 //   8. a broken GLB shows "422 model_load_failed" and the loader's message
 //   9. a link to a scene the server does not have shows "404 scene_not_found"
 //  10. a narrow window (420 px): no sideways scrolling
@@ -348,6 +349,35 @@ try {
         const t = await page.$eval('#hit dd[title]', (dd) => Number(dd.title)).catch(() => NaN);
         check(Math.abs(t - 7.27) < 0.01, `its t is the tutorial's 7.27 (${t})`);
         check((await page.locator('#tree g.node[data-label="I1"]').getAttribute('aria-label'))?.includes('sphere 3'), 'the ray tree shows I1 on sphere 3');
+        // The page's pixel rays are the server's: every pixel of an object_id render at spp 1
+        // has the colour of the object that the page's ray for that pixel hits (intersect).
+        const agreement = await page.evaluate(async () => {
+            const { pixelRay } = await import('./web/js/camera.js');
+            const q = new URL(location.href).searchParams;
+            const scene = q.get('scene');
+            const camera = JSON.parse(q.get('camera'));
+            const [W, H] = [160, 120];
+            const post = (route, body) =>
+                fetch(`v1/scenes/${scene}/${route}`, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+            const png = await (await post('render', { camera, width: W, height: H, spp: 1, shading: 'object_id' })).blob();
+            const bitmap = await createImageBitmap(png);
+            const c = new OffscreenCanvas(W, H).getContext('2d');
+            c.drawImage(bitmap, 0, 0);
+            const d = c.getImageData(0, 0, W, H).data;
+            const rays = [];
+            for (let j = 0; j < H; j++) for (let i = 0; i < W; i++) rays.push(pixelRay(camera, W, H, i, j));
+            const { hits } = await (await post('intersect', { rays, precision: 'fast', fields: ['object'] })).json();
+            const colourOf = new Map();
+            let mismatches = 0;
+            hits.forEach((h, k) => {
+                const rgb = (d[4 * k] << 16) | (d[4 * k + 1] << 8) | d[4 * k + 2];
+                const key = h.hit ? h.object : 'miss';
+                if (!colourOf.has(key)) colourOf.set(key, rgb);
+                if (colourOf.get(key) !== rgb) mismatches += 1;
+            });
+            return { pixels: hits.length, objects: colourOf.size, mismatches };
+        });
+        check(agreement.objects === 4 && agreement.mismatches === 0, `the page's pixel rays hit what the server's render shows (${agreement.pixels} pixels, ${agreement.objects - 1} spheres and the background, ${agreement.mismatches} disagree)`);
         await screenshot('spheres-hit');
     }
 
