@@ -75,7 +75,7 @@ function startServer() {
             const m = /listening on (http:\/\/[^\s]+)/.exec(out);
             if (m) resolve({ proc, url: m[1] });
         });
-        proc.stderr.on('data', (d) => process.stderr.write(`raycastd: ${d}`));
+        proc.stderr.on('data', (d) => process.stderr.write(`[server] ${d}`));
         proc.on('exit', (code) => reject(new Error(`raycastd exited (${code}) before listening: ${out}`)));
     });
 }
