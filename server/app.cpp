@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "server/routes_web.h"
 namespace raycastd::server {
 
 namespace {
@@ -239,6 +240,7 @@ void App::install_routes() {
     install_trace_routes(*this);
     install_scene_routes(*this);
     install_render_routes(*this);
+    install_web_routes(*this);
 }
 
 void App::remember(const std::string& pattern, const char* method) {

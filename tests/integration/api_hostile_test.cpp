@@ -1,13 +1,12 @@
 // What a hostile or careless client sends, against the real binary: each case once killed the
 // server, held a connection, or got the wrong answer (issue 13), and each is answered now.
 
-#include <gtest/gtest.h>
-
 #include <chrono>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "tests/support/raw_http.h"
@@ -86,12 +85,13 @@ TEST(Hostile, LyingLengthsAndLongUrlsAreAnsweredAtOnce) {
         "POST /v1/scenes HTTP/1.1\r\nHost: x\r\nContent-Length: 12345678901234567890123\r\n\r\n");
     EXPECT_EQ(status_of(digits), 413) << digits;
     EXPECT_EQ(error_code(digits), "too_large");
-    const std::string twice = exchange(server.port(),
-                                       "POST /v1/scenes HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\n"
-                                       "Content-Length: 3\r\n\r\n{}x");
+    const std::string twice =
+        exchange(server.port(),
+                 "POST /v1/scenes HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\n"
+                 "Content-Length: 3\r\n\r\n{}x");
     EXPECT_EQ(status_of(twice), 400) << twice;
-    const std::string url = exchange(
-        server.port(), "GET /v1/scenes/" + std::string(100'000, 'a') + " HTTP/1.1\r\nHost: x\r\n\r\n");
+    const std::string url = exchange(server.port(), "GET /v1/scenes/" + std::string(100'000, 'a') +
+                                                        " HTTP/1.1\r\nHost: x\r\n\r\n");
     EXPECT_EQ(status_of(url), 414) << url.substr(0, 300);
     EXPECT_EQ(error_code(url), "too_large");
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 3s);

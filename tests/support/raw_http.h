@@ -3,15 +3,15 @@
 // sends (a lying Content-Length, a head that never ends, a half-closed connection) and read
 // exactly what the server answers.
 
+#include <chrono>
+#include <cstdint>
+#include <string>
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <chrono>
-#include <cstdint>
-#include <string>
 
 namespace raycastd::testing {
 

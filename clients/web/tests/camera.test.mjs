@@ -1,0 +1,87 @@
+// The page's camera math (clients/web/js/camera.js): the server's pinhole rays, the default
+// framing, and the orbit / pan / zoom moves. Run: node --test clients/web/tests/
+import assert from 'node:assert/strict';
+import test from 'node:test';
+
+import {
+    cameraRay, checkCamera, cross, defaultCamera, dot, length, normalize, orbit, pan, pixelRay, roundCamera, sub, zoom,
+} from '../js/camera.js';
+
+const tutorial = { position: [0, 0, 0], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 };
+const close = (a, b, eps = 1e-12) => a.every((x, i) => Math.abs(x - b[i]) <= eps);
+
+test('the centre of the image is the view direction', () => {
+    const r = cameraRay(tutorial, 640, 480, 320, 240);
+    assert.deepEqual(r.origin, [0, 0, 0]);
+    assert.deepEqual(r.direction, [0, 0, 1]);
+});
+
+test('the top-left corner: up and to the picture\'s left, which is +x (docs/rendering.md)', () => {
+    const r = cameraRay(tutorial, 640, 480, 0, 0);
+    const t = Math.tan((22.5 * Math.PI) / 180);
+    assert.ok(close(r.direction, normalize([t * (640 / 480), t, 1])));
+});
+
+test('pixel (i, j) is cast through its centre, as a render with spp = 1 samples it', () => {
+    assert.deepEqual(pixelRay(tutorial, 640, 480, 319, 239), cameraRay(tutorial, 640, 480, 319.5, 239.5));
+    const d = pixelRay(tutorial, 640, 480, 320, 240).direction;
+    // The tutorial's first hit for that pixel (sphere 3, t ≈ 7.2716) is the server's answer in
+    // tests/browser/preview_e2e.mjs; here the ray's direction is half a pixel off the axis.
+    const halfPixel = Math.tan((22.5 * Math.PI) / 180) / 480;
+    assert.ok(close(d, normalize([-halfPixel, -halfPixel, 1]), 1e-15));
+});
+
+test('default framing: the bounds\' centre seen from -z, the bounding sphere filling the height', () => {
+    const cam = defaultCamera({ min: [-2, -2, 6], max: [2, 5, 12] });
+    const radius = 0.5 * Math.sqrt(16 + 49 + 36);
+    assert.deepEqual(cam.look_at, [0, 1.5, 9]);
+    assert.ok(close(cam.position, [0, 1.5, 9 - radius / Math.sin((22.5 * Math.PI) / 180)]));
+    assert.deepEqual(defaultCamera({ min: [1, 1, 1], max: [0, 0, 0] }).position, [0, 0, 0]);
+});
+
+test('orbit keeps look_at, the distance and up; a full turn comes back', () => {
+    const cam = defaultCamera({ min: [-1, -1, -1], max: [1, 1, 1] });
+    const d0 = length(sub(cam.position, cam.look_at));
+    const moved = orbit(cam, 0.7, 0.3);
+    assert.deepEqual(moved.look_at, cam.look_at);
+    assert.ok(Math.abs(length(sub(moved.position, moved.look_at)) - d0) < 1e-12);
+    let back = cam;
+    for (let i = 0; i < 8; i++) back = orbit(back, Math.PI / 4, 0);
+    assert.ok(close(back.position, cam.position, 1e-12));
+});
+
+test('dragging right turns the camera to its left; pitch rises and stops short of the pole', () => {
+    const right = normalize(cross(normalize(sub(tutorial.look_at, tutorial.position)), tutorial.up));
+    const moved = orbit(tutorial, -0.1, 0);
+    assert.ok(dot(sub(moved.position, tutorial.position), right) < 0);
+    const up = orbit(tutorial, 0, 0.2);
+    assert.ok(up.position[1] > 0);
+    const top = orbit(tutorial, 0, 10);
+    assert.ok(checkCamera(top), 'never parallel to up');
+});
+
+test('pan moves position and look_at together, across the view', () => {
+    const moved = pan(tutorial, 10, -5, 480);
+    const delta = sub(moved.position, tutorial.position);
+    assert.ok(close(delta, sub(moved.look_at, tutorial.look_at)));
+    assert.ok(Math.abs(dot(delta, [0, 0, 1])) < 1e-15);
+    // The look_at plane follows the cursor: 480 pixels is the picture's height there.
+    const full = pan(tutorial, 0, 480, 480);
+    assert.ok(Math.abs(full.position[1] - 2 * Math.tan((22.5 * Math.PI) / 180)) < 1e-12);
+});
+
+test('zoom scales the distance to look_at and never reaches it', () => {
+    assert.ok(close(zoom(tutorial, 2).position, [0, 0, -1]));
+    assert.ok(length(sub(zoom(tutorial, 0).position, tutorial.look_at)) > 0);
+});
+
+test('rounded cameras are short and usable; bad ones are refused', () => {
+    const r = roundCamera({ position: [1 / 3, -0, 2], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 });
+    assert.deepEqual(r.position, [0.333333333, 0, 2]);
+    assert.deepEqual(roundCamera({ ...tutorial, position: [8.3e-17, 0, -3] }).position, [0, 0, -3]);
+    assert.equal(checkCamera({ position: [0, 0, 0], look_at: [0, 0, 0] }), null);
+    assert.equal(checkCamera({ look_at: [0, 5, 0], up: [0, 1, 0] }), null);
+    assert.equal(checkCamera({ fov_y_deg: 180 }), null);
+    assert.equal(checkCamera({ position: [0, 'x', 0] }), null);
+    assert.deepEqual(checkCamera({}), tutorial);
+});
