@@ -74,8 +74,10 @@ void send_internal(const httplib::Request& req, httplib::Response& res, const ch
     send_error(res, ApiError(ErrorCode::internal, "internal error (request " + id + ")"));
 }
 
-/// The id group of our route patterns, the only regex in them.
+/// The id group of our route patterns, and the rest-of-the-path group (static files): the only
+/// regexes in them.
 constexpr std::string_view kIdGroup = "([A-Za-z0-9_]+)";
+constexpr std::string_view kRestGroup = "(.*)";
 
 bool is_id_char(char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
@@ -87,6 +89,8 @@ bool is_id_char(char c) {
 /// followed by '/' or the end.
 bool matches_route(std::string_view pattern, std::string_view path) {
     while (!pattern.empty()) {
+        if (pattern == kRestGroup)
+            return true;
         if (pattern.substr(0, kIdGroup.size()) == kIdGroup) {
             pattern.remove_prefix(kIdGroup.size());
             std::size_t n = 0;
@@ -110,6 +114,8 @@ bool matches_route(std::string_view pattern, std::string_view path) {
 [[maybe_unused]] bool is_plain_route(std::string_view pattern) {
     constexpr std::string_view kRegexChars = "()[]{}*+?|^$\\";
     while (!pattern.empty()) {
+        if (pattern == kRestGroup)
+            return true;
         if (pattern.substr(0, kIdGroup.size()) == kIdGroup) {
             pattern.remove_prefix(kIdGroup.size());
         } else if (kRegexChars.find(pattern.front()) != std::string_view::npos) {

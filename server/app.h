@@ -46,8 +46,9 @@ class App {
     const Config& config() const { return config_; }
 
     /// Installs a route. The pattern is cpp-httplib's (a regex over the path, groups read
-    /// through req.matches), limited to literal text and `([A-Za-z0-9_]+)` for an id, which is
-    /// all our paths need and all allowed_methods() reads. GET routes answer HEAD too.
+    /// through req.matches), limited to literal text, `([A-Za-z0-9_]+)` for an id and a final
+    /// `(.*)`, which is all our paths need and all allowed_methods() reads. GET routes answer HEAD
+    /// too.
     void on_get(const std::string& pattern, httplib::Server::Handler handler);
     /// A POST route; cpp-httplib has read the body into req.body (up to --max-body-mb).
     void on_post(const std::string& pattern, httplib::Server::Handler handler);

@@ -22,8 +22,9 @@ void serve(const StaticFiles& files, const std::string& relative, const httplib:
            httplib::Response& res) {
     StaticResult r = files.read(relative);
     if (!r.file) {
-        throw api_error(r.error == StaticError::refused ? "invalid_request" : "not_found",
-                        r.message);
+        throw ApiError(
+            r.error == StaticError::refused ? ErrorCode::invalid_request : ErrorCode::not_found,
+            r.message);
     }
     // Development-friendly caching: always revalidate (no-cache), answered by a 304 while the
     // file is unchanged, so an edited page shows on the next reload.
@@ -51,13 +52,12 @@ std::string web_root() {
 
 void install_web_routes(App& app) {
     auto files = std::make_shared<const StaticFiles>(web_root());
-    app.http().Get("/", [&app, files](const httplib::Request& req, httplib::Response& res) {
-        app.handle(req, res, false, [&] { serve(*files, "index.html", req, res); });
+    app.on_get("/", [&app, files](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] { serve(*files, "index.html", req, res); });
     });
-    app.http().Get(
-        R"(/web/(.*))", [&app, files](const httplib::Request& req, httplib::Response& res) {
-            app.handle(req, res, false, [&] { serve(*files, req.matches[1].str(), req, res); });
-        });
+    app.on_get("/web/(.*)", [&app, files](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] { serve(*files, req.matches[1].str(), req, res); });
+    });
 }
 
 }  // namespace raycastd::server
