@@ -24,7 +24,7 @@
 #include <optional>
 #include <vector>
 
-#include "engine/query/query_types.h"
+#include "engine/query_types.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
 

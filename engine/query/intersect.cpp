@@ -79,32 +79,6 @@ void for_each_block(std::size_t n, F&& f) {
 
 }  // namespace
 
-const char* to_string(Mode m) {
-    switch (m) {
-        case Mode::closest:
-            return "closest";
-        case Mode::any:
-            return "any";
-        case Mode::all:
-            return "all";
-        case Mode::count:
-            return "count";
-    }
-    return "closest";
-}
-
-const char* to_string(Precision p) {
-    switch (p) {
-        case Precision::fast:
-            return "fast";
-        case Precision::refined:
-            return "refined";
-        case Precision::exact:
-            return "exact";
-    }
-    return "exact";
-}
-
 Status validate_ray(const Ray& ray, std::size_t index) {
     // The common case first, without building any message: a server validates every ray of a
     // 1M-ray batch, and two strings per ray cost more than the test (measured: 4% of a binary
@@ -292,7 +266,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
             out.offsets[0] = 0;
             for (std::size_t i = 0; i < n; ++i)
                 out.offsets[i + 1] = out.offsets[i] + out.counts[i];
-            out.counts.clear();  // all answers with offsets (query_types.h)
+            out.counts.clear();  // all answers with offsets (query_result.h)
             out.hits.reserve(out.offsets[n]);
             for (auto& v : block_hits)
                 out.hits.insert(out.hits.end(), v.begin(), v.end());

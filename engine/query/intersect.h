@@ -9,7 +9,7 @@
 #include <memory>
 #include <vector>
 
-#include "engine/query/query_types.h"
+#include "engine/query/query_result.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
 
