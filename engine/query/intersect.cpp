@@ -113,6 +113,15 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
+std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal) {
+    return linear_closest(scene, ray, want_normal);
+}
+
+std::optional<Hit> closest_in_object_by_brute_force(const Scene& scene, std::uint32_t object,
+                                                    const Ray& ray, bool want_normal) {
+    return linear_closest_in_object(scene, object, ray, want_normal);
+}
+
 QueryEngine::QueryEngine(std::shared_ptr<const Scene> scene) : scene_(std::move(scene)) {}
 QueryEngine::~QueryEngine() = default;
 
@@ -136,6 +145,33 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
 
 Precision QueryEngine::effective_precision(Precision asked) const {
     return accel_ ? asked : Precision::exact;
+}
+
+std::optional<Hit> QueryEngine::closest(const Ray& ray, Precision precision,
+                                        bool want_normal) const {
+    if (!accel_)
+        return linear_closest(*scene_, ray, want_normal);
+    return accel_->closest(ray, precision, want_normal);
+}
+
+bool QueryEngine::occluded(const Ray& ray, Precision precision) const {
+    if (!accel_)
+        return linear_any(*scene_, ray);
+    return accel_->any(ray, precision == Precision::refined ? Precision::exact : precision);
+}
+
+FloatFrame QueryEngine::float_frame(Precision precision) const {
+    if (effective_precision(precision) == Precision::exact)
+        return FloatFrame{};
+    return accel_->float_frame();
+}
+
+std::unique_ptr<EmbreeAccel> QueryEngine::bvh_for_many_rays(Precision precision) const {
+    if (accel_ || precision == Precision::exact || scene_->objects.empty())
+        return nullptr;
+    auto built = EmbreeAccel::build(*scene_);
+    // Without it the brute-force path still gives the right (exact) answers, only slower.
+    return built.ok() ? std::move(*built) : nullptr;
 }
 
 std::size_t QueryEngine::memory_bytes() const {
