@@ -167,7 +167,8 @@ FloatFrame QueryEngine::float_frame(Precision precision) const {
 }
 
 std::unique_ptr<EmbreeAccel> QueryEngine::bvh_for_many_rays(Precision precision) const {
-    if (accel_ || precision == Precision::exact || scene_->objects.empty())
+    // A scene wider than float is brute force for a reason a ray count does not change.
+    if (accel_ || precision == Precision::exact || scene_->objects.empty() || !fits_float(*scene_))
         return nullptr;
     auto built = EmbreeAccel::build(*scene_);
     // Without it the brute-force path still gives the right (exact) answers, only slower.

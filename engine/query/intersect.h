@@ -91,7 +91,8 @@ class QueryEngine {
     /// A BVH of its own for a caller about to trace many rays at `precision` through a scene
     /// this engine answers by brute force only because it is small (a render: brute force is the
     /// cheapest for a few rays, not for millions); nullptr where the engine's own path stays
-    /// (it has a BVH, exact is asked for, the scene is empty, or the build failed).
+    /// (it has a BVH, exact is asked for, the scene is empty or wider than float, or the build
+    /// failed).
     std::unique_ptr<EmbreeAccel> bvh_for_many_rays(Precision precision) const;
     std::size_t scene_memory_bytes() const;
     std::shared_ptr<const Scene> scene_;

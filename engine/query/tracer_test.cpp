@@ -114,6 +114,30 @@ TEST(Tracer, ManyRaysGiveATinySceneABvhOfItsOwn) {
     EXPECT_EQ(exact.float_frame().scale, 0.0);
 }
 
+// A scene of four triangles wider than float can hold (±1e39) stays on brute force in double
+// for many rays too: a BVH of its own would see infinities (EmbreeAccel drops them) and miss.
+TEST(Tracer, ManyRaysKeepATinySceneWiderThanFloatInDouble) {
+    Scene s;
+    s.materials.push_back(Material{});
+    for (int i = 0; i < 4; ++i) {
+        const double x = i % 2 ? 1e39 : -1e39;
+        const double z = 10.0 + i;
+        s.objects.push_back(testing::mesh_object(
+            "t" + std::to_string(i), {{x - 1e30, -1e30, z}, {x + 1e30, -1e30, z}, {x, 1e30, z}},
+            {{0, 1, 2}}));
+    }
+    auto engine = build(s);
+    for (Precision p : {Precision::fast, Precision::refined}) {
+        const Tracer tracer(*engine, p, BuildHint::many_rays);
+        EXPECT_EQ(tracer.precision(), Precision::exact) << to_string(p);
+        EXPECT_EQ(tracer.float_frame().scale, 0.0);
+        const std::optional<Hit> h = tracer.closest(Ray{{-1e39, 0, 0}, {0, 0, 1}}, true);
+        ASSERT_TRUE(h) << to_string(p);
+        EXPECT_EQ(h->object, 0u);
+        EXPECT_EQ(h->t, 10.0);
+    }
+}
+
 TEST(Tracer, FloatFrameIsEmbreesOnABvhAndNoneInDouble) {
     const Scene s = testing::random_scene(16, 1e6);
     auto engine = build(s);
