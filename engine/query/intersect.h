@@ -80,7 +80,8 @@ class QueryEngine {
     /// built since by the first exact or fast query (cheap: no walk over the scene).
     std::size_t memory_bytes() const;
 
-    /// True when the scene is small enough that brute force beats a BVH (no BVH is built).
+    /// True when no BVH is built: the scene is small enough that brute force beats one, or wider
+    /// than float can hold (answered in double at every precision).
     bool brute_force() const { return accel_ == nullptr; }
 
     ~QueryEngine();
