@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/query/query_types.h"
+#include "engine/query/query_result.h"
 #include "server/schema/query_doc.h"
 
 namespace raycastd::server {

@@ -19,16 +19,27 @@
 // Embree sees coordinates relative to the scene's centre, and the float ray starts where the
 // double ray enters the (padded) scene bounds, with a unit direction: a scene far from the
 // origin, a far ray origin or an extreme direction length do not cost float precision.
+//
+// The parts, one concept a file, in engine/accel/embree/: device (the shared RTCDevice, errors
+// → Status, RAII handles), impl.h (the BVHs, RayContext, NativeHit), float_ray (clipping, the
+// float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks), packets
+// (16-wide traversal, the one coherence test). embree_accel.cpp holds the builds and, for each
+// query, one function per precision.
 
 #include <memory>
 #include <optional>
 #include <vector>
 
-#include "engine/query/query_types.h"
+#include "engine/math/float_frame.h"
+#include "engine/query_types.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
 
 namespace raycastd::engine {
+
+namespace embree {
+struct Impl;  // engine/accel/embree/impl.h
+}
 
 class EmbreeAccel {
   public:
@@ -56,30 +67,17 @@ class EmbreeAccel {
     /// every candidate decided in double.
     void all(const Ray& ray, Precision precision, bool want_normal, std::vector<Hit>& out) const;
 
+    /// The frame Embree computes in (coordinates relative to the centre of the scene's bounds,
+    /// of magnitude twice its diagonal): what a fast or refined answer's float rounding is
+    /// measured against (math/float_frame.h).
+    FloatFrame float_frame() const;
+
     /// Estimated bytes of the BVHs built so far.
     std::size_t memory_bytes() const;
 
-    struct Impl;
-
   private:
-    /// What Embree's native traversal reported for one ray (geom is RTC_INVALID_GEOMETRY_ID on
-    /// a miss).
-    struct NativeHit {
-        unsigned geom, prim;
-        float tfar, u, v;
-        Vec3d ng;
-    };
-    /// `escalated` (if given) is set when refined had to ask the exact path.
-    std::optional<Hit> finish_native(const Ray& ray, double shift, double len, const NativeHit& nh,
-                                     const std::optional<Hit>& sphere_hit, Precision precision,
-                                     bool want_normal, bool* escalated = nullptr) const;
-    std::optional<Hit> closest_impl(const Ray& ray, Precision precision, bool want_normal,
-                                    bool* escalated) const;
-    /// Whether the ray's segment meets the padded scene bounds.
-    bool enters_bounds(const Ray& ray) const;
-
-    explicit EmbreeAccel(std::unique_ptr<Impl> impl);
-    std::unique_ptr<Impl> impl_;
+    explicit EmbreeAccel(std::unique_ptr<embree::Impl> impl);
+    std::unique_ptr<embree::Impl> impl_;
 };
 
 }  // namespace raycastd::engine

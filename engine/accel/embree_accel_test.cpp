@@ -8,35 +8,12 @@
 #include <gtest/gtest.h>
 
 #include "engine/accel/linear_accel.h"
-#include "engine/query/intersect.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
 namespace {
 
-/// Random spheres, random triangles, and a closed icosphere.
-Scene random_scene(std::uint64_t seed, double offset = 0.0) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> pos(-5, 5), rad(0.05, 1.0);
-    Scene s;
-    s.materials.push_back(Material{});
-    const Vec3d off{offset, offset, offset};
-    for (int i = 0; i < 12; ++i) {
-        Object o;
-        o.kind = ObjectKind::sphere;
-        o.name = "s" + std::to_string(i);
-        o.sphere = {Vec3d{pos(rng), pos(rng), pos(rng)} + off, rad(rng)};
-        s.objects.push_back(o);
-    }
-    for (int i = 0; i < 20; ++i) {
-        const Vec3d a = Vec3d{pos(rng), pos(rng), pos(rng)} + off;
-        const Vec3d b = a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.3;
-        const Vec3d c = a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.3;
-        s.objects.push_back(testing::mesh_object("t" + std::to_string(i), {a, b, c}, {{0, 1, 2}}));
-    }
-    s.objects.push_back(testing::icosphere_object(3, Vec3d{1, -1, 0.5} + off, 2.0));
-    return s;
-}
+using testing::random_scene;
 
 std::vector<Ray> random_rays(std::uint64_t seed, int n, double offset = 0.0) {
     std::mt19937_64 rng(seed);
@@ -346,45 +323,6 @@ TEST(EmbreeAccel, RefinedFindsTrianglesFloatMissesAmongManySpheres) {
     EXPECT_GT(float_misses, 0) << "no ray exercised the confirmation";
     std::printf("[ info ] %d of %d rays just inside the edges missed in float\n", float_misses,
                 rays);
-}
-
-// A scene finite in double but wider than float can hold (±1e39): Embree would see its
-// vertices and boxes as infinities and drop them, so the engine answers it by brute force in
-// double, at every precision.
-TEST(EmbreeAccel, SceneWiderThanFloatIsAnsweredInDouble) {
-    Scene s;
-    s.materials.push_back(Material{});
-    for (int i = 0; i < 20; ++i) {
-        const double x = i % 2 ? 1e39 : -1e39;
-        const double z = 10.0 + i;
-        s.objects.push_back(testing::mesh_object(
-            "t" + std::to_string(i), {{x - 1e30, -1e30, z}, {x + 1e30, -1e30, z}, {x, 1e30, z}},
-            {{0, 1, 2}}));
-    }
-    auto engine = QueryEngine::build(std::make_shared<Scene>(s));
-    ASSERT_TRUE(engine.ok());
-    EXPECT_TRUE((*engine)->brute_force());
-    const std::vector<Ray> rays = {Ray{{-1e39, 0, 0}, {0, 0, 1}}, Ray{{1e39, 0, 100}, {0, 0, -1}}};
-    for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
-        const QueryResult r = (*engine)->intersect(rays, QueryOptions{Mode::closest, p, true});
-        EXPECT_EQ(r.precision, Precision::exact);
-        ASSERT_TRUE(r.hits[0].valid() && r.hits[1].valid()) << to_string(p);
-        EXPECT_EQ(r.hits[0].object, 0u);
-        EXPECT_EQ(r.hits[0].t, 10.0);
-        EXPECT_EQ(r.hits[1].object, 19u);
-        EXPECT_EQ(r.hits[1].t, 71.0);
-    }
-}
-
-TEST(EmbreeAccel, QueryEngineSkipsTheBvhForTinyScenes) {
-    auto tiny = QueryEngine::build(std::make_shared<Scene>(testing::tutorial_spheres()));
-    ASSERT_TRUE(tiny.ok());
-    EXPECT_TRUE((*tiny)->brute_force());
-    EXPECT_EQ((*tiny)->effective_precision(Precision::fast), Precision::exact);
-    auto big = QueryEngine::build(std::make_shared<Scene>(random_scene(3)));
-    ASSERT_TRUE(big.ok());
-    EXPECT_FALSE((*big)->brute_force());
-    EXPECT_EQ((*big)->effective_precision(Precision::fast), Precision::fast);
 }
 
 TEST(EmbreeAccel, RangeIsInclusiveAndRespected) {

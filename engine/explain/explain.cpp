@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "engine/accel/linear_accel.h"
 #include "engine/format.h"
+#include "engine/query/intersect.h"
 
 namespace raycastd::engine {
 
@@ -173,7 +173,7 @@ Explanation explain(const Scene& scene, const Ray& ray) {
             w.triangles = o.mesh->size();
             w.steps.push_back("mesh of " + std::to_string(w.triangles) +
                               " triangles, each tested with the watertight ray/triangle test");
-            if (auto h = linear_closest_in_object(scene, i, ray, false)) {
+            if (auto h = closest_in_object_by_brute_force(scene, i, ray, false)) {
                 w.hit = true;
                 w.t = h->t;
                 w.steps.push_back("closest hit: triangle " + std::to_string(h->primitive) +
@@ -188,7 +188,7 @@ Explanation explain(const Scene& scene, const Ray& ray) {
         w.kind = o.kind;
         ex.objects.push_back(std::move(w));
     }
-    ex.first_hit = linear_closest(scene, ray, true);
+    ex.first_hit = closest_by_brute_force(scene, ray, true);
     if (ex.first_hit)
         ex.first_point = ray.at(ex.first_hit->t);
     return ex;

@@ -1,6 +1,6 @@
 #pragma once
 // The worked solution a student would write for "which object does this ray hit first?",
-// following the CS3241 tutorial (shared/tutorial):
+// following the CS3241 tutorial's method (docs/numerics.md, "The tutorial's method"):
 //   * sphere: substitute l(t) = p + t·v into (x−a)²+(y−b)²+(z−c)² = r², collect the quadratic
 //     A·t² + B·t + C = 0, its discriminant B² − 4AC and its roots;
 //   * triangle: the plane ⟨n,x⟩ = ⟨n,a⟩ with n = ac × ab, t from ⟨n,l(t)⟩ = ⟨n,a⟩, the point d,

@@ -139,7 +139,7 @@ TEST(Triangle, SliverTToAnUlp) {
     const Q n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                     e1[0] * e2[1] - e1[1] * e2[0]};
     Q num = 0, den = 0;
-    for (int k = 0; k < 3; ++k) {
+    for (std::size_t k = 0; k < 3; ++k) {
         num += n[k] * (a[k] - o[k]);
         den += n[k] * d[k];
     }

@@ -21,6 +21,33 @@ constexpr double gamma_float(int n) {
     return (n * kFloatUnitRoundoff) / (1.0 - n * kFloatUnitRoundoff);
 }
 
+/// v as a float, ±infinity beyond float's range: a plain conversion of a finite double above
+/// FLT_MAX is undefined behaviour (C++17 [conv.double]), and a scene can be finite in double and
+/// still span more than float holds. NaN stays NaN.
+inline float to_float(double v) {
+    constexpr double kMax = std::numeric_limits<float>::max();
+    if (v > kMax)
+        return std::numeric_limits<float>::infinity();
+    if (v < -kMax)
+        return -std::numeric_limits<float>::infinity();
+    return static_cast<float>(v);
+}
+
+/// The largest float ≤ v: v rounded to the nearest float, stepped down when rounding went up.
+/// Lower corners of float boxes that must contain the double box. v must lie within float's
+/// range (beyond it the conversion is undefined; use to_float).
+inline float float_down(double v) {
+    const float f = static_cast<float>(v);
+    return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                                      : f;
+}
+/// The smallest float ≥ v (see float_down): upper corners of boxes, upper ends of ray ranges.
+inline float float_up(double v) {
+    const float f = static_cast<float>(v);
+    return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity())
+                                      : f;
+}
+
 /// The next representable double above v (v itself for +inf).
 inline double next_up(double v) {
     return std::nextafter(v, std::numeric_limits<double>::infinity());

@@ -79,32 +79,6 @@ void for_each_block(std::size_t n, F&& f) {
 
 }  // namespace
 
-const char* to_string(Mode m) {
-    switch (m) {
-        case Mode::closest:
-            return "closest";
-        case Mode::any:
-            return "any";
-        case Mode::all:
-            return "all";
-        case Mode::count:
-            return "count";
-    }
-    return "closest";
-}
-
-const char* to_string(Precision p) {
-    switch (p) {
-        case Precision::fast:
-            return "fast";
-        case Precision::refined:
-            return "refined";
-        case Precision::exact:
-            return "exact";
-    }
-    return "exact";
-}
-
 Status validate_ray(const Ray& ray, std::size_t index) {
     // The common case first, without building any message: a server validates every ray of a
     // 1M-ray batch, and two strings per ray cost more than the test (measured: 4% of a binary
@@ -139,6 +113,15 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
+std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal) {
+    return linear_closest(scene, ray, want_normal);
+}
+
+std::optional<Hit> closest_in_object_by_brute_force(const Scene& scene, std::uint32_t object,
+                                                    const Ray& ray, bool want_normal) {
+    return linear_closest_in_object(scene, object, ray, want_normal);
+}
+
 QueryEngine::QueryEngine(std::shared_ptr<const Scene> scene) : scene_(std::move(scene)) {}
 QueryEngine::~QueryEngine() = default;
 
@@ -162,6 +145,34 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
 
 Precision QueryEngine::effective_precision(Precision asked) const {
     return accel_ ? asked : Precision::exact;
+}
+
+std::optional<Hit> QueryEngine::closest(const Ray& ray, Precision precision,
+                                        bool want_normal) const {
+    if (!accel_)
+        return linear_closest(*scene_, ray, want_normal);
+    return accel_->closest(ray, precision, want_normal);
+}
+
+bool QueryEngine::occluded(const Ray& ray, Precision precision) const {
+    if (!accel_)
+        return linear_any(*scene_, ray);
+    return accel_->any(ray, precision == Precision::refined ? Precision::exact : precision);
+}
+
+FloatFrame QueryEngine::float_frame(Precision precision) const {
+    if (effective_precision(precision) == Precision::exact)
+        return FloatFrame{};
+    return accel_->float_frame();
+}
+
+std::unique_ptr<EmbreeAccel> QueryEngine::bvh_for_many_rays(Precision precision) const {
+    // A scene wider than float is brute force for a reason a ray count does not change.
+    if (accel_ || precision == Precision::exact || scene_->objects.empty() || !fits_float(*scene_))
+        return nullptr;
+    auto built = EmbreeAccel::build(*scene_);
+    // Without it the brute-force path still gives the right (exact) answers, only slower.
+    return built.ok() ? std::move(*built) : nullptr;
 }
 
 std::size_t QueryEngine::memory_bytes() const {
@@ -292,7 +303,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
             out.offsets[0] = 0;
             for (std::size_t i = 0; i < n; ++i)
                 out.offsets[i + 1] = out.offsets[i] + out.counts[i];
-            out.counts.clear();  // all answers with offsets (query_types.h)
+            out.counts.clear();  // all answers with offsets (query_result.h)
             out.hits.reserve(out.offsets[n]);
             for (auto& v : block_hits)
                 out.hits.insert(out.hits.end(), v.begin(), v.end());

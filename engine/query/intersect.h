@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
-#include "engine/query/query_types.h"
+#include "engine/math/float_frame.h"
+#include "engine/query/query_result.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
 
@@ -60,17 +62,39 @@ class QueryEngine {
     /// The path a request asking for `asked` is answered by (tiny scenes always take exact).
     Precision effective_precision(Precision asked) const;
 
+    /// The closest hit of one ray in [tmin, tmax] at `precision`, or nullopt: the answer
+    /// intersect() gives a batch of this one ray (mode closest), without a batch around it. The
+    /// ray must be valid.
+    std::optional<Hit> closest(const Ray& ray, Precision precision, bool want_normal) const;
+    /// Whether anything lies along `ray` in [tmin, tmax] (a shadow ray's question) at
+    /// `precision`. refined is answered on the exact path: refined trusts a float hit but
+    /// confirms a float miss on the exact BVH, and most shadow rays reach their light, so the
+    /// exact path is one traversal instead of two for an unblocked ray, with an answer at least
+    /// as good. (A batch of `any` rays keeps refined: intersect().)
+    bool occluded(const Ray& ray, Precision precision) const;
+    /// The float frame of the path that answers `precision` (math/float_frame.h): Embree's for
+    /// fast and refined on a BVH, none (scale 0) where the answer is decided in double.
+    FloatFrame float_frame(Precision precision) const;
+
     /// Estimated bytes held by the scene and its acceleration structures, including the BVHs
     /// built since by the first exact or fast query (cheap: no walk over the scene).
     std::size_t memory_bytes() const;
 
-    /// True when the scene is small enough that brute force beats a BVH (no BVH is built).
+    /// True when no BVH is built: the scene is small enough that brute force beats one, or wider
+    /// than float can hold (answered in double at every precision).
     bool brute_force() const { return accel_ == nullptr; }
 
     ~QueryEngine();
 
   private:
+    friend class Tracer;  // query/tracer.h: BuildHint::many_rays asks for bvh_for_many_rays()
     explicit QueryEngine(std::shared_ptr<const Scene> scene);
+    /// A BVH of its own for a caller about to trace many rays at `precision` through a scene
+    /// this engine answers by brute force only because it is small (a render: brute force is the
+    /// cheapest for a few rays, not for millions); nullptr where the engine's own path stays
+    /// (it has a BVH, exact is asked for, the scene is empty or wider than float, or the build
+    /// failed).
+    std::unique_ptr<EmbreeAccel> bvh_for_many_rays(Precision precision) const;
     std::size_t scene_memory_bytes() const;
     std::shared_ptr<const Scene> scene_;
     std::size_t scene_bytes_ = 0;  ///< scene_memory_bytes(), once
@@ -92,5 +116,13 @@ inline bool is_valid_ray(const Ray& ray) {
 
 /// Checks one ray against the API's rules; the message names the ray index.
 Status validate_ray(const Ray& ray, std::size_t index);
+
+/// The closest hit over `scene` as it is, without a QueryEngine: every primitive tested in
+/// double (the exact path, by brute force), or nullopt. For work on a scene that is not
+/// prepared for queries (the tutorial's worked solution, engine/explain).
+std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal);
+/// The same over the primitives of one object (`object` and `primitive` filled in).
+std::optional<Hit> closest_in_object_by_brute_force(const Scene& scene, std::uint32_t object,
+                                                    const Ray& ray, bool want_normal);
 
 }  // namespace raycastd::engine

@@ -165,5 +165,44 @@ TEST(Query, BatchesOnManyThreadsKeepTheirBlocksApart) {
     EXPECT_EQ(wrong, 0u);
 }
 
+// A scene finite in double but wider than float can hold (±1e39): Embree would see its
+// vertices and boxes as infinities and drop them, so the engine answers it by brute force in
+// double, at every precision.
+TEST(EmbreeAccel, SceneWiderThanFloatIsAnsweredInDouble) {
+    Scene s;
+    s.materials.push_back(Material{});
+    for (int i = 0; i < 20; ++i) {
+        const double x = i % 2 ? 1e39 : -1e39;
+        const double z = 10.0 + i;
+        s.objects.push_back(testing::mesh_object(
+            "t" + std::to_string(i), {{x - 1e30, -1e30, z}, {x + 1e30, -1e30, z}, {x, 1e30, z}},
+            {{0, 1, 2}}));
+    }
+    auto engine = QueryEngine::build(std::make_shared<Scene>(s));
+    ASSERT_TRUE(engine.ok());
+    EXPECT_TRUE((*engine)->brute_force());
+    const std::vector<Ray> rays = {Ray{{-1e39, 0, 0}, {0, 0, 1}}, Ray{{1e39, 0, 100}, {0, 0, -1}}};
+    for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+        const QueryResult r = (*engine)->intersect(rays, QueryOptions{Mode::closest, p, true});
+        EXPECT_EQ(r.precision, Precision::exact);
+        ASSERT_TRUE(r.hits[0].valid() && r.hits[1].valid()) << to_string(p);
+        EXPECT_EQ(r.hits[0].object, 0u);
+        EXPECT_EQ(r.hits[0].t, 10.0);
+        EXPECT_EQ(r.hits[1].object, 19u);
+        EXPECT_EQ(r.hits[1].t, 71.0);
+    }
+}
+
+TEST(EmbreeAccel, QueryEngineSkipsTheBvhForTinyScenes) {
+    auto tiny = QueryEngine::build(std::make_shared<Scene>(testing::tutorial_spheres()));
+    ASSERT_TRUE(tiny.ok());
+    EXPECT_TRUE((*tiny)->brute_force());
+    EXPECT_EQ((*tiny)->effective_precision(Precision::fast), Precision::exact);
+    auto big = QueryEngine::build(std::make_shared<Scene>(testing::random_scene(3)));
+    ASSERT_TRUE(big.ok());
+    EXPECT_FALSE((*big)->brute_force());
+    EXPECT_EQ((*big)->effective_precision(Precision::fast), Precision::fast);
+}
+
 }  // namespace
 }  // namespace raycastd::engine

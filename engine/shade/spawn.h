@@ -11,22 +11,17 @@
 //
 // When the tracer answering the spawned ray decides in single precision (Embree's float
 // traversal in the fast and refined paths), the surface it sees differs from the double one by
-// its own float rounding, so the box must also hold that: SpawnContext carries it.
+// its own float rounding, so the box must also hold that: the tracer's FloatFrame
+// (Tracer::float_frame, math/float_frame.h) says how large it is.
 
+#include "engine/math/float_frame.h"
 #include "engine/math/ray.h"
 
 namespace raycastd::engine {
 
-/// What the tracer adds to a point's error: a float tracer centred on `center` (Embree sees
-/// coordinates relative to the scene's centre) rounds a point at distance r from it by about
-/// γ_f(k)·(r + scale). Zero `float_scale` for a tracer that decides in double.
-struct SpawnContext {
-    Vec3d center;
-    double float_scale = 0.0;  ///< 0: double-precision tracer
-};
-
-/// Per-component bound on |p − p_exact| for p = ray.at(hit.t).
-Vec3d hit_point_error(const Ray& ray, const Hit& hit, const SpawnContext& ctx);
+/// Per-component bound on |p − p_exact| for p = ray.at(hit.t), including the rounding of the
+/// float tracer of `frame` (none when frame.scale is 0: a tracer that decides in double).
+Vec3d hit_point_error(const Ray& ray, const Hit& hit, const FloatFrame& frame);
 
 /// The origin for a ray leaving p (error `p_err`) in direction `w`: p moved along the unit
 /// geometric normal `n`, to the side of `w`, past the error box, rounded away from p.

@@ -9,38 +9,15 @@ namespace raycastd::engine {
 
 namespace {
 
-/// One ray through QueryEngine's batch interface. The buffers are per thread and keep their
-/// capacity, so a render allocates nothing per ray.
-struct SingleRayQuery {
-    std::vector<Ray> rays = std::vector<Ray>(1);
-    QueryResult result;
-
-    const Hit& run(const QueryEngine& engine, const Ray& ray, Mode mode, Precision precision) {
-        rays[0] = ray;
-        QueryOptions opt;
-        opt.mode = mode;
-        opt.precision = precision;
-        opt.want_normal = mode == Mode::closest;
-        engine.intersect(rays, opt, result);
-        return result.hits[0];
-    }
-};
-
-SingleRayQuery& thread_query() {
-    thread_local SingleRayQuery q;
-    return q;
-}
-
 bool is_nonzero(const Vec3d& v) {
     return v.x > 0.0 || v.y > 0.0 || v.z > 0.0;
 }
 
 }  // namespace
 
-ShadingPlan plan_shading(const QueryEngine& engine, bool float_tracer) {
-    const Scene& s = engine.scene();
+ShadingPlan plan_shading(const Scene& s) {
     ShadingPlan plan;
-    // API.md: "no lights = ambient 1.0 only".
+    // The API's default (docs/api.md): "no lights = ambient 1.0 only".
     plan.ambient = s.lights.empty() ? Vec3d{1.0, 1.0, 1.0} : Vec3d{};
     for (std::uint32_t i = 0; i < s.lights.size(); ++i) {
         if (s.lights[i].type == LightType::ambient) {
@@ -54,72 +31,26 @@ ShadingPlan plan_shading(const QueryEngine& engine, bool float_tracer) {
         plan.refraction = plan.refraction || m.transparency > 0.0;
         plan.specular.push_back(is_nonzero(m.specular));
     }
-    // Embree's float traversal sees coordinates relative to the bounds' centre, scaled by twice
-    // the diagonal (engine/accel/embree_accel.cpp).
-    if (float_tracer) {
-        const Bounds3 b = s.bounds();
-        plan.spawn.center = b.center();
-        plan.spawn.float_scale = 2.0 * length(b.diagonal());
-    }
     return plan;
 }
-
-namespace {
-
-std::unique_ptr<EmbreeAccel> small_scene_bvh(const QueryEngine& engine, const WhittedOptions& o) {
-    if (!o.bvh_for_small_scenes || !engine.brute_force() || o.precision == Precision::exact ||
-        engine.scene().objects.empty()) {
-        return nullptr;
-    }
-    auto built = EmbreeAccel::build(engine.scene());
-    // Without it the brute-force path still gives the right (exact) answers, only slower.
-    return built.ok() ? std::move(*built) : nullptr;
-}
-
-}  // namespace
 
 Whitted::Whitted(const QueryEngine& engine, WhittedOptions options)
     : engine_(engine),
       options_(options),
-      small_bvh_(small_scene_bvh(engine, options)),
-      plan_(plan_shading(engine, effective_precision() != Precision::exact)) {}
-
-Precision Whitted::effective_precision() const {
-    return small_bvh_ ? options_.precision : engine_.effective_precision(options_.precision);
-}
+      tracer_(engine, options.precision,
+              options.bvh_for_small_scenes ? BuildHint::many_rays : BuildHint::few_rays),
+      plan_(plan_shading(engine.scene())) {}
 
 std::optional<Hit> Whitted::closest(const Ray& ray) const {
-    if (small_bvh_)
-        return small_bvh_->closest(ray, options_.precision, /*want_normal=*/true);
-    const Hit& h = thread_query().run(engine_, ray, Mode::closest, options_.precision);
-    if (!h.valid())
-        return std::nullopt;
-    return h;
+    return tracer_.closest(ray, /*want_normal=*/true);
 }
 
 void Whitted::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
-    if (small_bvh_) {
-        out.assign(rays.size(), Hit{});
-        small_bvh_->closest_range(rays.data(), rays.size(), options_.precision,
-                                  /*want_normal=*/true, out.data());
-        return;
-    }
-    QueryOptions q;
-    q.precision = options_.precision;
-    QueryResult result;
-    engine_.intersect(rays, q, result);
-    out.swap(result.hits);
+    tracer_.closest_batch(rays, out);
 }
 
 bool Whitted::occluded(const Ray& ray) const {
-    if (small_bvh_)
-        return small_bvh_->any(ray, options_.precision);
-    // refined trusts a float hit but confirms a float miss on the exact BVH, and most shadow
-    // rays reach their light: refined's shadow rays go to the exact path directly, one
-    // traversal instead of two for an unblocked ray, with an answer at least as good.
-    const Precision p =
-        options_.precision == Precision::refined ? Precision::exact : options_.precision;
-    return thread_query().run(engine_, ray, Mode::any, p).valid();
+    return tracer_.occluded(ray);
 }
 
 std::uint32_t Whitted::material_of(const Hit& hit) const {
@@ -194,7 +125,7 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
                      ray.at(hit.t),
                      ng,
                      n,
-                     hit_point_error(ray, hit, plan_.spawn)};
+                     hit_point_error(ray, hit, tracer_.float_frame())};
 
     // Node k of the tree is written before its children so that labels run depth-first; the
     // vector may grow during the recursion, so the node is addressed by index, never by reference.

@@ -19,22 +19,18 @@
 //   without point/directional lights, no reflected/refracted rays where no material reflects or
 //   refracts, no specular power where ks = 0.
 //
-// All tracing goes through QueryEngine (closest for camera and secondary rays, any for shadow
-// rays) at the precision asked for; secondary rays start at robust origins (shade/spawn.h).
-// One exception, for speed: QueryEngine answers scenes of at most 16 primitives by brute force
-// in exact precision, which is the cheapest for a few rays but not for the millions of a render
-// (every ray pays the double-double sphere test on every primitive: 0.6× POV-Ray's speed on the
-// bench's six-primitive scene). When asked to (bvh_for_small_scenes, as renders do) and unless
-// exact is asked for, the tracer then builds its own EmbreeAccel over the scene (microseconds
-// for 16 primitives) and traces at the precision asked.
+// All tracing goes through a Tracer over the QueryEngine (query/tracer.h: closest for camera
+// and secondary rays, occluded for shadow rays) at the precision asked for, which also says how
+// much float rounding spawned origins must clear; secondary rays start at robust origins
+// (shade/spawn.h). Renders ask for a tracer built for many rays (bvh_for_small_scenes), which
+// gives a scene QueryEngine answers by brute force a BVH of its own.
 
 #include <cstdint>
-#include <memory>
 #include <optional>
 #include <vector>
 
-#include "engine/accel/embree_accel.h"
 #include "engine/query/intersect.h"
+#include "engine/query/tracer.h"
 #include "engine/shade/spawn.h"
 
 namespace raycastd::engine {
@@ -43,8 +39,9 @@ struct WhittedOptions {
     int max_depth = 5;  ///< surface points along one path (1: camera hits only)
     Precision precision = Precision::refined;
     Vec3d background{0.0, 0.0, 0.0};  ///< the colour of a ray that hits nothing
-    /// Trace a scene that QueryEngine answers by brute force through a BVH of its own (renders:
-    /// millions of rays). Off for a single ray tree, where exact brute force is the cheapest.
+    /// Trace through a Tracer built for many rays (BuildHint::many_rays): a scene QueryEngine
+    /// answers by brute force gets a BVH of its own (renders: millions of rays). Off for a
+    /// single ray tree, where exact brute force is the cheapest.
     bool bvh_for_small_scenes = false;
 };
 
@@ -65,19 +62,17 @@ struct RayCounts {
     std::uint64_t total() const { return primary + shadow + reflected + refracted; }
 };
 
-/// What shading a scene needs, decided once per scene (and precision).
+/// What shading a scene needs, decided once per scene.
 struct ShadingPlan {
     Vec3d ambient;  ///< Ia: the sum of the ambient lights; 1 when the scene has no lights at all
     std::vector<std::uint32_t> shadow_lights;  ///< indices of the point and directional lights
     bool reflection = false;                   ///< some material reflects
     bool refraction = false;                   ///< some material is transparent
     std::vector<bool> specular;                ///< per material: ks ≠ 0
-    SpawnContext spawn;                        ///< what the tracer adds to spawned-origin errors
 };
 
-/// Decides the plan for `engine`'s scene traced at `precision`; `float_tracer` says whether an
-/// Embree float traversal answers (its rounding is added to spawned-origin errors).
-ShadingPlan plan_shading(const QueryEngine& engine, bool float_tracer);
+/// Decides the plan for `scene`.
+ShadingPlan plan_shading(const Scene& scene);
 
 /// One shadow ray of a tree node.
 struct ShadowRayRecord {
@@ -131,8 +126,8 @@ class Whitted {
     /// The ray tree of one ray, with the blocking object of each shadow ray named.
     RayTree tree(const Ray& ray) const;
 
-    /// The path that answers this tracer's queries (see QueryEngine::effective_precision).
-    Precision effective_precision() const;
+    /// The path that answers this tracer's queries (Tracer::precision).
+    Precision effective_precision() const { return tracer_.precision(); }
 
     /// The material index of a hit (per-triangle material when the mesh has them).
     std::uint32_t material_of(const Hit& hit) const;
@@ -154,7 +149,7 @@ class Whitted {
 
     const QueryEngine& engine_;
     WhittedOptions options_;
-    std::unique_ptr<EmbreeAccel> small_bvh_;  ///< for scenes QueryEngine answers by brute force
+    Tracer tracer_;
     ShadingPlan plan_;
 };
 

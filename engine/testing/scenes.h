@@ -5,6 +5,8 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <random>
+#include <string>
 #include <utility>
 
 #include "engine/scene/scene.h"
@@ -25,6 +27,32 @@ inline Scene tutorial_spheres() {
         s.objects.push_back(o);
     }
     return s;
+}
+
+/// A sphere object.
+inline Object sphere(std::string name, Vec3d c, double r, std::uint32_t material) {
+    Object o;
+    o.kind = ObjectKind::sphere;
+    o.name = std::move(name);
+    o.sphere = {c, r};
+    o.material = material;
+    return o;
+}
+
+/// A white point light of intensity 1 at p.
+inline Light point_light(Vec3d p) {
+    Light l;
+    l.type = LightType::point;
+    l.position = p;
+    return l;
+}
+
+/// A white ambient light of intensity i.
+inline Light ambient_light(double i) {
+    Light l;
+    l.type = LightType::ambient;
+    l.intensity = {i, i, i};
+    return l;
 }
 
 /// A mesh object from positions and triangles.
@@ -96,6 +124,31 @@ inline Object icosphere_object(int level, Vec3d center = {0, 0, 0}, double radiu
     for (auto& v : p)
         v = center + v * radius;
     return mesh_object("icosphere", std::move(p), std::move(t));
+}
+
+/// Random spheres (12), random triangles (20), and a closed icosphere of level 3 at (1, −1, 0.5)
+/// of radius 2, all within ±6.5 of `offset` on each axis; the same scene for the same seed.
+inline Scene random_scene(std::uint64_t seed, double offset = 0.0) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> pos(-5, 5), rad(0.05, 1.0);
+    Scene s;
+    s.materials.push_back(Material{});
+    const Vec3d off{offset, offset, offset};
+    for (int i = 0; i < 12; ++i) {
+        Object o;
+        o.kind = ObjectKind::sphere;
+        o.name = "s" + std::to_string(i);
+        o.sphere = {Vec3d{pos(rng), pos(rng), pos(rng)} + off, rad(rng)};
+        s.objects.push_back(o);
+    }
+    for (int i = 0; i < 20; ++i) {
+        const Vec3d a = Vec3d{pos(rng), pos(rng), pos(rng)} + off;
+        const Vec3d b = a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.3;
+        const Vec3d c = a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.3;
+        s.objects.push_back(mesh_object("t" + std::to_string(i), {a, b, c}, {{0, 1, 2}}));
+    }
+    s.objects.push_back(icosphere_object(3, Vec3d{1, -1, 0.5} + off, 2.0));
+    return s;
 }
 
 }  // namespace raycastd::engine::testing

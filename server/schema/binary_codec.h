@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/query/query_types.h"
+#include "engine/query/query_result.h"
 
 namespace raycastd::server {
 

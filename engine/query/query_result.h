@@ -1,24 +1,13 @@
 #pragma once
-// The vocabulary of a ray query: modes, precisions, options and the shape of a batch's answers.
+// The answers to a batch of rays, as QueryEngine::intersect writes them.
 
 #include <cstdint>
 #include <vector>
 
 #include "engine/math/ray.h"
+#include "engine/query_types.h"
 
 namespace raycastd::engine {
-
-enum class Mode { closest, any, all, count };
-enum class Precision { fast, refined, exact };
-
-const char* to_string(Mode m);
-const char* to_string(Precision p);
-
-struct QueryOptions {
-    Mode mode = Mode::closest;
-    Precision precision = Precision::refined;
-    bool want_normal = true;  ///< compute normal and front_face (skipped when not asked)
-};
 
 /// The answers to a batch of rays.
 ///   closest: hits[i] is ray i's closest hit (!valid() on a miss);

@@ -1,0 +1,43 @@
+#include "engine/accel/embree/device.h"
+
+#include <string>
+
+namespace raycastd::engine::embree {
+
+namespace {
+
+// The last error Embree reported on this thread; a build reads and clears it (take_error).
+thread_local RTCError t_last_error = RTC_ERROR_NONE;
+thread_local std::string t_last_message;
+
+void on_embree_error(void*, RTCError code, const char* message) {
+    t_last_error = code;
+    t_last_message = message ? message : "";
+}
+
+}  // namespace
+
+RTCDevice shared_device() {
+    static RTCDevice device = [] {
+        RTCDevice d = rtcNewDevice("verbose=0");
+        if (d)
+            rtcSetDeviceErrorFunction(d, on_embree_error, nullptr);
+        return d;
+    }();
+    return device;
+}
+
+Status take_error(const char* what) {
+    const RTCError e = t_last_error;
+    const std::string msg = t_last_message;
+    t_last_error = RTC_ERROR_NONE;
+    t_last_message.clear();
+    if (e == RTC_ERROR_NONE)
+        return {};
+    const Code code = e == RTC_ERROR_OUT_OF_MEMORY ? Code::too_large : Code::internal;
+    return Status::error(code, std::string(what) + ": Embree error " +
+                                   std::to_string(static_cast<int>(e)) +
+                                   (msg.empty() ? "" : " (" + msg + ")"));
+}
+
+}  // namespace raycastd::engine::embree

@@ -1,0 +1,71 @@
+#include "engine/accel/embree/float_ray.h"
+
+#include "engine/math/double_double.h"
+
+namespace raycastd::engine::embree {
+
+bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1) {
+    // Slab test in double (Kay & Kajiya 1986) against the padded bounds.
+    t0 = ray.tmin;
+    t1 = ray.tmax;
+    for (std::size_t k = 0; k < 3; ++k) {
+        const double o = ray.origin[k], d = ray.direction[k];
+        const double lo = a.padded_bounds.lo[k], hi = a.padded_bounds.hi[k];
+        if (d == 0.0) {
+            if (o < lo || o > hi)
+                return false;
+            continue;
+        }
+        double ta = (lo - o) / d, tb = (hi - o) / d;
+        if (ta > tb)
+            std::swap(ta, tb);
+        // Widen by a few ulps: the divisions round, and a hit at the slab's edge must survive.
+        t0 = std::max(t0, ta - gamma(3) * std::abs(ta));
+        t1 = std::min(t1, tb + gamma(3) * std::abs(tb));
+    }
+    return t0 <= t1;
+}
+
+bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f) {
+    double t0, t1;
+    if (!clip_to_bounds(a, ray, t0, t1))
+        return false;
+    c.ray = &ray;
+    c.len = length(ray.direction);
+    c.margin = 4.0 * a.pad;
+    c.shift = start == RayStart::backed_off ? t0 - c.margin / c.len : t0;
+    // (o − centre) + s·d rather than (o + s·d) − centre: the first difference is exact or nearly
+    // so when the origin is near the scene (Sterbenz), so the float origin is accurate to the
+    // scene's size even when the scene sits far from the world origin. Its rounding is about
+    // u·(|o − centre| + |s·d|): for an origin far from a small scene that exceeds the exact
+    // BVH's box padding, and the start point is then formed in double-double instead (TwoSum
+    // and TwoProduct are exact, their sum is off by a few u² of the terms: Ogita, Rump & Oishi
+    // 2005), which keeps it within the padding out to ~1e15 scene sizes.
+    const double far = length(ray.origin - a.center) + std::abs(c.shift) * c.len;
+    Vec3d org;
+    if (8.0 * kDoubleUnitRoundoff * far <= 0.25 * a.pad) {
+        org = (ray.origin - a.center) + ray.direction * c.shift;
+        c.origin_err = 8.0 * kDoubleUnitRoundoff * far;
+    } else {
+        for (std::size_t k = 0; k < 3; ++k) {
+            const dd::DD p = dd::add(dd::two_sum(ray.origin[k], -a.center[k]),
+                                     dd::two_prod(ray.direction[k], c.shift));
+            org[k] = p.hi + p.lo;
+        }
+        // The double-double residual, then the rounding of the (near-scene) point to double.
+        c.origin_err = 8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * far +
+                       2.0 * kDoubleUnitRoundoff * length(org);
+    }
+    const Vec3d dir = ray.direction / c.len;
+    f.org_x = to_float(org.x);  // inside the bounds, which may exceed float's range
+    f.org_y = to_float(org.y);
+    f.org_z = to_float(org.z);
+    f.dir_x = static_cast<float>(dir.x);
+    f.dir_y = static_cast<float>(dir.y);
+    f.dir_z = static_cast<float>(dir.z);
+    f.tnear = 0.0f;
+    f.tfar = std::isinf(t1) ? std::numeric_limits<float>::infinity() : tfar_for(c, t1);
+    return true;
+}
+
+}  // namespace raycastd::engine::embree

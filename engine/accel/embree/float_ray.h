@@ -1,0 +1,201 @@
+#pragma once
+// The float ray Embree traces for a double ray, and Embree's float hit read back.
+//
+// Two set-ups (both relative to the scene centre, Impl::center):
+//   prepare_ray       the ray's segment clipped to the padded scene bounds (Kay & Kajiya slabs,
+//                     in double), starting where it enters them, with a unit direction: a far
+//                     origin or an extreme direction length then costs no float precision. The
+//                     start point is formed in double-double when plain double would round it
+//                     beyond the exact BVH's box padding.
+//   prepare_ray_fast  the ray as it is (no clipping, no renormalisation; t in the client's
+//                     units), for fast, where that loses nothing the float kernel had anyway.
+// Either way the 12 fields of Embree's ray are written by one helper, fill_lane, for a single
+// RTCRay or for lane k of an RTCRay16; intersect1 and occluded1 trace a single one.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include <embree3/rtcore.h>
+
+#include "engine/accel/embree/impl.h"
+#include "engine/math/float_bounds.h"
+
+namespace raycastd::engine::embree {
+
+/// A float ray's geometry as Embree takes it: origin relative to the scene centre, direction,
+/// and the range [tnear, tfar] in units of that direction.
+struct FloatRay {
+    float org_x = 0.0f, org_y = 0.0f, org_z = 0.0f;
+    float dir_x = 0.0f, dir_y = 0.0f, dir_z = 0.0f;
+    float tnear = 0.0f, tfar = 0.0f;
+};
+
+/// A single ray's field itself, or lane k of a packet's field: fill_lane and native_hit read and
+/// write an RTCRay(Hit) and lane k of an RTCRay(Hit)16 with the same code.
+template <class T>
+inline T& lane(T& field, std::size_t) {
+    return field;
+}
+template <class T, std::size_t N>
+inline T& lane(T (&field)[N], std::size_t k) {
+    return field[k];
+}
+
+/// Writes the 12 fields of an Embree ray (org, dir, tnear, tfar, time, mask, id, flags): `r` is
+/// an RTCRay (k is ignored) or an RTCRay16 (lane k).
+template <class EmbreeRay>
+inline void fill_lane(EmbreeRay& r, std::size_t k, const FloatRay& f, unsigned id) {
+    lane(r.org_x, k) = f.org_x;
+    lane(r.org_y, k) = f.org_y;
+    lane(r.org_z, k) = f.org_z;
+    lane(r.dir_x, k) = f.dir_x;
+    lane(r.dir_y, k) = f.dir_y;
+    lane(r.dir_z, k) = f.dir_z;
+    lane(r.tnear, k) = f.tnear;
+    lane(r.tfar, k) = f.tfar;
+    lane(r.time, k) = 0.0f;
+    lane(r.mask, k) = 0xFFFFFFFFu;  // Debian's Embree is built with ray masks: 0 would hit nothing
+    lane(r.id, k) = id;
+    lane(r.flags, k) = 0;
+}
+
+/// What Embree reported for an RTCRayHit (k ignored) or lane k of an RTCRayHit16.
+template <class EmbreeRayHit>
+inline NativeHit native_hit(const EmbreeRayHit& rh, std::size_t k) {
+    return NativeHit{lane(rh.hit.geomID, k),
+                     lane(rh.hit.primID, k),
+                     lane(rh.ray.tfar, k),
+                     lane(rh.hit.u, k),
+                     lane(rh.hit.v, k),
+                     Vec3d{lane(rh.hit.Ng_x, k), lane(rh.hit.Ng_y, k), lane(rh.hit.Ng_z, k)}};
+}
+
+/// The part [t0, t1] of the ray's segment [tmin, tmax] inside the padded scene bounds; false
+/// when there is none (nothing can be hit).
+bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1);
+
+/// Whether the ray's segment meets the padded scene bounds.
+inline bool enters_bounds(const Impl& a, const Ray& ray) {
+    double t0, t1;
+    return clip_to_bounds(a, ray, t0, t1);
+}
+
+/// tfar for a candidate at double t: never below it, whatever the float rounding.
+inline float tfar_for(const RayContext& c, double t) {
+    return float_up((t - c.shift) * c.len + c.margin);
+}
+
+/// Where prepare_ray starts the float ray.
+enum class RayStart {
+    at_entry,    ///< where the segment enters the padded bounds (the native BVHs)
+    backed_off,  ///< the padding before it, so that a hit at exactly tmin lies strictly inside
+                 ///< the float segment (the exact BVH; its double test still enforces tmin)
+};
+
+/// Sets up the clipped float ray for `ray` in `f` and its mapping back to the double ray in `c`
+/// (shift, len, margin, origin_err); false, with `f` untouched, when the ray's segment misses
+/// the padded bounds altogether.
+bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f);
+
+/// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org:
+/// tmin ≥ 0, an origin within 4 scene diagonals of the centre (so in float's range: wider
+/// scenes get no Embree BVH, QueryEngine::build), and |d|² in [1e-12, 1e12].
+inline bool fast_ray_applies(const Impl& a, const Ray& ray, const Vec3d& org) {
+    const double d2 = dot(ray.direction, ray.direction);
+    const double scale = a.float_scale;
+    return ray.tmin >= 0.0 && dot(org, org) <= 16.0 * scale * scale && d2 >= 1e-12 && d2 <= 1e12;
+}
+
+/// The unclipped float ray of `ray` (origin relative to the scene centre, direction and range
+/// as given) in `f`; false, with `f` untouched, where fast_ray_applies does not hold.
+inline bool unclipped_float_ray(const Impl& a, const Ray& ray, FloatRay& f) {
+    const Vec3d org = ray.origin - a.center;
+    if (!fast_ray_applies(a, ray, org))
+        return false;
+    // In float's range: see fast_ray_applies.
+    f.org_x = static_cast<float>(org.x);
+    f.org_y = static_cast<float>(org.y);
+    f.org_z = static_cast<float>(org.z);
+    f.dir_x = static_cast<float>(ray.direction.x);
+    f.dir_y = static_cast<float>(ray.direction.y);
+    f.dir_z = static_cast<float>(ray.direction.z);
+    f.tnear = to_float(ray.tmin);
+    f.tfar = to_float(ray.tmax);  // +inf stays +inf
+    return true;
+}
+
+/// The fast path's float ray: the double ray as it is (unclipped_float_ray), with shift 0 and
+/// len 1 in `c`, used when that loses nothing the float kernel had anyway; false where it does
+/// not apply (then prepare_ray).
+inline bool prepare_ray_fast(const Impl& a, const Ray& ray, RayContext& c, FloatRay& f) {
+    if (!unclipped_float_ray(a, ray, f))
+        return false;
+    c.ray = &ray;
+    c.shift = 0.0;
+    c.len = 1.0;
+    c.margin = 0.0;
+    return true;
+}
+
+/// fast's float ray on its BVH: prepare_ray_fast where it applies, else prepare_ray; spheres
+/// are then decided by the plain-double kernel (c.fast). Spheres take the unclipped ray too:
+/// their callback works in the client's t units with shift 0 and len 1, and a sphere culled by
+/// its box within the float rounding of the unclipped ray is within what fast promises.
+/// Measured: clipping and normalising cost 17% of a fast render of spheres.
+inline bool prepare_fast_native_ray(const Impl& a, const Ray& ray, RayContext& c, FloatRay& f) {
+    c.fast = true;
+    return prepare_ray_fast(a, ray, c, f) || prepare_ray(a, ray, RayStart::at_entry, c, f);
+}
+
+/// Whether the float ray prepare_ray set up is within the exact BVH's box padding of the double
+/// ray: its start point's double rounding (c.origin_err, plain or double-double) must stay
+/// well inside the padding. Rays where it does not take the linear scan.
+inline bool exact_ray_within_padding(const Impl& a, const RayContext& c) {
+    return c.origin_err <= 0.25 * a.pad;
+}
+
+/// One float ray traced on `scene` for its closest hit; the callbacks see `c`.
+inline RTCRayHit intersect1(RTCScene scene, RayContext& c, const FloatRay& f) {
+    RTCRayHit rh;
+    fill_lane(rh.ray, 0, f, 0);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene, &c.rtc, &rh);
+    return rh;
+}
+
+/// Whether one float ray finds anything on `scene`; the callbacks see `c`.
+inline bool occluded1(RTCScene scene, RayContext& c, const FloatRay& f) {
+    RTCRay r;
+    fill_lane(r, 0, f, 0);
+    rtcOccluded1(scene, &c.rtc, &r);
+    return occluded_tfar(r.tfar);
+}
+
+/// fast's answer from Embree's float hit `nh` on a triangle of the ray whose float set-up had
+/// `shift` and `len`: t in the client's units (clamped to the range asked for), a float-sized
+/// t_err, and Embree's float normal. Nothing of the double triangle is read: that would cost a
+/// cache miss per ray (~15% of an incoherent batch) for digits fast does not promise.
+inline void fast_hit(const Impl& a, const Ray& ray, double shift, double len, const NativeHit& nh,
+                     bool want_normal, Hit& h) {
+    h.t = std::min(std::max(shift + static_cast<double>(nh.tfar) / len, ray.tmin), ray.tmax);
+    // A float kernel: relative error of a few float ulps of the scene's coordinates.
+    h.t_err =
+        gamma_float(12) *
+        ((a.float_scale + length(ray.origin - a.center)) / length(ray.direction) + std::abs(h.t));
+    h.object = nh.geom;
+    h.primitive = nh.prim;
+    h.u = nh.u;
+    h.v = nh.v;
+    // Embree's Ng = (v2−v0)×(v0−v1) = (b−a)×(c−a) up to rounding: its sign gives the side.
+    h.front_face = dot(ray.direction, nh.ng) < 0.0;
+    h.on_edge = false;
+    if (want_normal) {
+        const double l = length(nh.ng);
+        h.normal = l > 0.0 ? nh.ng / l : Vec3d{};
+    } else {
+        h.normal = Vec3d{};
+    }
+}
+
+}  // namespace raycastd::engine::embree

@@ -1,0 +1,110 @@
+#pragma once
+// EmbreeAccel's internals, shared by embree_accel.cpp and the files of engine/accel/embree/:
+// Impl (the BVHs, and the float frame Embree computes in), RayContext (the per-ray data that
+// travels through Embree to our callbacks), NativeHit (what a float traversal reported).
+// Nothing here leaves engine/accel: the public header forward-declares Impl only.
+
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "engine/accel/embree/device.h"
+#include "engine/accel/embree/user_geometry.h"
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine::embree {
+
+/// The BVHs over one scene and the frame they share.
+struct Impl {
+    const Scene* scene = nullptr;
+    SceneHandle native;  ///< float triangles + sphere user geometry, ROBUST (refined; fast's all)
+    /// The same geometries in a BVH without RTC_SCENE_FLAG_ROBUST, for fast's closest and any
+    /// (see build_fast); built by the first such query.
+    mutable SceneHandle fast;
+    mutable std::atomic<bool> fast_ready{false};
+    mutable std::once_flag fast_once;
+    mutable Status fast_status;
+    mutable SceneHandle exact;  ///< every primitive as user geometry, double tests
+    mutable std::atomic<bool> exact_ready{false};
+    mutable std::once_flag exact_once;
+    mutable Status exact_status;
+    std::vector<GeomData> geoms;  ///< one per object, stable addresses (reserved up front)
+    Bounds3 padded_bounds;
+    /// Embree sees every coordinate relative to this point (the centre of the scene bounds):
+    /// float precision then follows the scene's size, not its distance from the origin.
+    Vec3d center;
+    double pad = 0;          ///< absolute padding of every box, in scene units (see build)
+    double float_scale = 0;  ///< magnitude of scene coordinates, for the fast path's t_err
+    std::size_t triangles = 0, spheres = 0;
+    /// The objects that are triangles or meshes, in order (refined's scan of few triangles).
+    std::vector<std::uint32_t> triangle_objects;
+
+    void build_exact() const;
+    void build_fast() const;
+    /// The scene fast's closest and any trace: the non-robust one, or `native` if it could not
+    /// be built.
+    RTCScene fast_scene() const {
+        std::call_once(fast_once, [this] { build_fast(); });
+        return fast_status.ok() ? fast.get() : native.get();
+    }
+    /// The exact BVH, or nullptr if it could not be built (the caller then scans linearly).
+    RTCScene exact_scene() const {
+        std::call_once(exact_once, [this] { build_exact(); });
+        return exact_status.ok() ? exact.get() : nullptr;
+    }
+};
+
+/// The context handed through Embree to our callbacks (Embree's documented way to pass per-ray
+/// data: a struct that starts with RTCIntersectContext).
+struct RayContext {
+    RTCIntersectContext rtc;
+    const Impl* accel = nullptr;
+    const Ray* ray = nullptr;  ///< the double-precision ray
+    double shift = 0;          ///< the float ray starts at ray.at(shift)
+    double len = 1;            ///< |direction|: float t' (unit direction) ↔ t = shift + t'/len
+    double margin = 0;         ///< slack added to tfar, in unit-direction length
+    double origin_err = 0;     ///< bound on the double rounding of the float ray's start point
+    std::optional<Hit> best;   ///< closest so far (exact path), or the sphere hit (native BVHs)
+    std::vector<Hit>* collect = nullptr;  ///< all/count: every hit goes here
+    bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
+    bool fast = false;   ///< precision fast: spheres by the plain-double kernel
+
+    /// A packet lane's context (never handed to Embree: packets carry no user geometry).
+    RayContext() = default;
+    /// A context for one ray through `a`'s BVHs.
+    explicit RayContext(const Impl& a) : accel(&a) { rtcInitIntersectContext(&rtc); }
+};
+
+/// The RayContext behind the context pointer Embree hands to a callback.
+inline RayContext& ctx_of(RTCIntersectContext* c) {
+    return *reinterpret_cast<RayContext*>(c);
+}
+
+/// What Embree's native traversal reported for one ray (geom is RTC_INVALID_GEOMETRY_ID on a
+/// miss); tfar is in the float ray's units (RayContext::shift and len map it back).
+struct NativeHit {
+    unsigned geom, prim;
+    float tfar, u, v;
+    Vec3d ng;
+};
+
+/// Whether rtcOccluded found something: it sets tfar to −∞ on a hit.
+inline bool occluded_tfar(float tfar) {
+    return tfar == -std::numeric_limits<float>::infinity();
+}
+
+/// An `any` answer as a Hit: valid() says whether the ray hits anything; nothing else is filled
+/// in (query_result.h).
+inline Hit any_answer(bool hit) {
+    Hit h;
+    if (hit)
+        h.object = 0;
+    return h;
+}
+
+}  // namespace raycastd::engine::embree

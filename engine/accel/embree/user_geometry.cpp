@@ -1,0 +1,137 @@
+#include "engine/accel/embree/user_geometry.h"
+
+#include <algorithm>
+
+#include "engine/accel/embree/float_ray.h"
+#include "engine/accel/embree/impl.h"
+
+namespace raycastd::engine::embree {
+
+namespace {
+
+/// Candidates of one primitive decided in double: the sphere roots in range, or the triangle
+/// hit of the watertight test. `emit` returns false to stop.
+template <class F>
+void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t prim, F&& emit) {
+    const Object& o = c.accel->scene->objects[object];
+    const Ray& ray = *c.ray;
+    if (o.kind == ObjectKind::sphere) {
+        Hit hits[2];
+        const int n =
+            c.fast ? sphere_hits_fast(o.sphere, ray, hits) : sphere_hits(o.sphere, ray, hits);
+        for (int k = 0; k < n; ++k) {
+            hits[k].object = object;
+            if (!emit(hits[k]))
+                return;
+        }
+        return;
+    }
+    if (auto h = intersect_triangle(o.mesh->triangle(prim), ray, false)) {
+        h->object = object;
+        h->primitive = prim;
+        emit(*h);
+    }
+}
+
+void user_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    const Object& o = g->accel->scene->objects[g->object];
+    Bounds3 b;
+    if (o.kind == ObjectKind::sphere) {
+        const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
+        b.extend(o.sphere.center - r);
+        b.extend(o.sphere.center + r);
+    } else {
+        const Triangle t = o.mesh->triangle(args->primID);
+        b.extend(t.a);
+        b.extend(t.b);
+        b.extend(t.c);
+    }
+    const double p = g->accel->pad;
+    b.lo -= g->accel->center;
+    b.hi -= g->accel->center;
+    RTCBounds* out = args->bounds_o;
+    out->lower_x = float_down(b.lo.x - p);
+    out->lower_y = float_down(b.lo.y - p);
+    out->lower_z = float_down(b.lo.z - p);
+    out->upper_x = float_up(b.hi.x + p);
+    out->upper_y = float_up(b.hi.y + p);
+    out->upper_z = float_up(b.hi.z + p);
+}
+
+void user_intersect(const RTCIntersectFunctionNArguments* args) {
+    if (!args->valid[0])
+        return;
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    RayContext& c = ctx_of(args->context);
+    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
+    double_candidates(c, g->object, args->primID, [&](const Hit& h) {
+        if (c.collect) {
+            c.collect->push_back(h);
+            return true;
+        }
+        if (c.exact) {
+            if (!c.best || closer(h, *c.best)) {
+                c.best = h;
+                rh->ray.tfar = std::min(rh->ray.tfar, tfar_for(c, h.t));
+                rh->hit.geomID = h.object;
+                rh->hit.primID = h.primitive;
+            }
+            return true;
+        }
+        // The native BVH: a sphere competes with Embree's float triangle hits by float t'.
+        const float tf = to_float((h.t - c.shift) * c.len);
+        if (!(tf <= rh->ray.tfar))
+            return true;
+        rh->ray.tfar = tf;
+        rh->hit.geomID = h.object;
+        rh->hit.primID = h.primitive;
+        rh->hit.u = rh->hit.v = 0.0f;
+        c.best = h;
+        return false;  // the nearer root came first: the far one cannot be closer
+    });
+}
+
+void user_occluded(const RTCOccludedFunctionNArguments* args) {
+    if (!args->valid[0])
+        return;
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    RayContext& c = ctx_of(args->context);
+    auto* ray = reinterpret_cast<RTCRay*>(args->ray);
+    double_candidates(c, g->object, args->primID, [&](const Hit&) {
+        ray->tfar = -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
+        return false;
+    });
+}
+
+}  // namespace
+
+void collect_filter(const RTCFilterFunctionNArguments* args) {
+    RayContext& c = ctx_of(args->context);
+    if (args->N != 1 || !args->valid[0] || !c.collect)
+        return;
+    const auto* hit = reinterpret_cast<const RTCHit*>(args->hit);
+    const auto* ray = reinterpret_cast<const RTCRay*>(args->ray);
+    if (c.accel->scene->objects[hit->geomID].kind == ObjectKind::sphere)
+        return;  // user geom
+    Hit h;
+    h.object = hit->geomID;
+    h.primitive = hit->primID;
+    h.t = c.shift + static_cast<double>(ray->tfar) / c.len;
+    h.u = hit->u;
+    h.v = hit->v;
+    c.collect->push_back(h);
+    args->valid[0] = 0;
+}
+
+GeometryHandle make_user_geometry(RTCDevice device, GeomData* data, unsigned prims) {
+    GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER));
+    rtcSetGeometryUserPrimitiveCount(g.get(), prims);
+    rtcSetGeometryUserData(g.get(), data);
+    rtcSetGeometryBoundsFunction(g.get(), user_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(g.get(), user_intersect);
+    rtcSetGeometryOccludedFunction(g.get(), user_occluded);
+    return g;
+}
+
+}  // namespace raycastd::engine::embree

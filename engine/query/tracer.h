@@ -1,0 +1,60 @@
+#pragma once
+// Tracer: single rays and small batches at one precision over a QueryEngine, for callers that
+// trace ray by ray (the Whitted shader, renders). It answers as QueryEngine does, with one
+// difference the caller asks for by BuildHint::many_rays: QueryEngine answers a scene of at
+// most 16 primitives by brute force in exact precision, the cheapest for a few rays but not for
+// the millions of a render (every ray pays the double-double sphere test on every primitive:
+// 0.6× POV-Ray's speed on the bench's six-primitive scene). A many-rays tracer then builds a
+// BVH of its own over the scene (microseconds for 16 primitives) and traces at the precision
+// asked; it is freed with the tracer.
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "engine/math/float_frame.h"
+#include "engine/query/intersect.h"
+
+namespace raycastd::engine {
+
+/// How many rays a Tracer is about to trace.
+enum class BuildHint {
+    few_rays,   ///< a ray tree, a handful of rays: QueryEngine's own paths are the cheapest
+    many_rays,  ///< a render: worth a BVH even where QueryEngine answers by brute force
+};
+
+/// Closest hits and occlusion of single rays (and closest hits of batches) at one precision;
+/// immutable once made, shared by the threads of a render. Rays must be valid.
+class Tracer {
+  public:
+    /// A tracer over `engine` (which must outlive it) at `precision`.
+    Tracer(const QueryEngine& engine, Precision precision, BuildHint hint);
+    ~Tracer();
+    Tracer(const Tracer&) = delete;
+    Tracer& operator=(const Tracer&) = delete;
+
+    /// The path that answers (QueryEngine::effective_precision, or the precision asked on a
+    /// BVH of the tracer's own).
+    Precision precision() const;
+    /// The float frame of that path: what a spawned ray's origin error must add (shade/spawn.h);
+    /// scale 0 where the answer is decided in double.
+    const FloatFrame& float_frame() const { return frame_; }
+
+    /// The closest hit along `ray`, or nullopt.
+    std::optional<Hit> closest(const Ray& ray, bool want_normal) const;
+    /// Closest hits (normals included) of a batch into out[0..n) (resized; a miss leaves an
+    /// invalid Hit). Runs of 16 coherent rays go through Embree's packets where that is faster.
+    void closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
+    /// Whether anything lies along `ray` within [tmin, tmax]: QueryEngine::occluded (refined on
+    /// the exact path), or on the tracer's own BVH its float traversal at the precision asked
+    /// (refined then confirms a float miss by scanning the scene's at most 16 triangles).
+    bool occluded(const Ray& ray) const;
+
+  private:
+    const QueryEngine& engine_;
+    Precision precision_;
+    std::unique_ptr<EmbreeAccel> own_bvh_;  ///< many_rays over a brute-force scene
+    FloatFrame frame_;
+};
+
+}  // namespace raycastd::engine

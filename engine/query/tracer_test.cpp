@@ -1,0 +1,170 @@
+// Tracer and QueryEngine's single-ray calls: the same answers as a batch of one ray, the shadow
+// rule for refined, and a BVH of its own for many rays over a scene answered by brute force.
+
+#include "engine/query/tracer.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine {
+namespace {
+
+std::shared_ptr<const QueryEngine> build(Scene s) {
+    auto e = QueryEngine::build(std::make_shared<Scene>(std::move(s)));
+    EXPECT_TRUE(e.ok());
+    return *e;
+}
+
+std::vector<Ray> some_rays(std::uint64_t seed, int n) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> pos(-8, 8), dir(-1, 1);
+    std::vector<Ray> rays;
+    for (int i = 0; i < n; ++i) {
+        Ray r;
+        r.origin = {pos(rng), pos(rng), pos(rng)};
+        r.direction = {dir(rng), dir(rng), dir(rng) + 1e-3};
+        rays.push_back(r);
+    }
+    return rays;
+}
+
+/// The same hit, bit for bit where it is compared.
+void expect_same(const Hit& got, const Hit& want) {
+    EXPECT_EQ(got.object, want.object);
+    EXPECT_EQ(got.primitive, want.primitive);
+    EXPECT_EQ(got.t, want.t);
+    EXPECT_EQ(got.normal, want.normal);
+    EXPECT_EQ(got.front_face, want.front_face);
+}
+
+TEST(Tracer, SingleRaysAnswerAsABatchOfOne) {
+    for (const Scene& s : {testing::random_scene(11), testing::tutorial_spheres()}) {
+        auto engine = build(s);
+        for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+            const Tracer tracer(*engine, p, BuildHint::few_rays);
+            EXPECT_EQ(tracer.precision(), engine->effective_precision(p));
+            const std::vector<Ray> rays = some_rays(12, 500);
+            const QueryResult closest = engine->intersect(rays, QueryOptions{Mode::closest, p});
+            std::vector<Hit> batch;
+            tracer.closest_batch(rays, batch);
+            ASSERT_EQ(batch.size(), rays.size());
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const std::optional<Hit> one = engine->closest(rays[i], p, true);
+                ASSERT_EQ(one.has_value(), closest.hits[i].valid()) << i;
+                if (one)
+                    expect_same(*one, closest.hits[i]);
+                const std::optional<Hit> traced = tracer.closest(rays[i], true);
+                ASSERT_EQ(traced.has_value(), one.has_value());
+                if (traced)
+                    expect_same(*traced, *one);
+                expect_same(batch[i], closest.hits[i]);
+            }
+        }
+    }
+}
+
+// refined's shadow rays are answered on the exact path (QueryEngine::occluded).
+TEST(Tracer, RefinedShadowRaysTakeTheExactPath) {
+    auto engine = build(testing::random_scene(13));
+    ASSERT_FALSE(engine->brute_force());
+    const std::vector<Ray> rays = some_rays(14, 2000);
+    const QueryResult exact = engine->intersect(rays, QueryOptions{Mode::any, Precision::exact});
+    const Tracer tracer(*engine, Precision::refined, BuildHint::few_rays);
+    int hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        EXPECT_EQ(engine->occluded(rays[i], Precision::refined), exact.hits[i].valid()) << i;
+        EXPECT_EQ(tracer.occluded(rays[i]), exact.hits[i].valid()) << i;
+        hits += exact.hits[i].valid();
+    }
+    EXPECT_GT(hits, 100);
+}
+
+// A scene of at most 16 primitives is answered by brute force (exact); a tracer for many rays
+// gets a BVH of its own and traces at the precision asked, in Embree's float frame.
+TEST(Tracer, ManyRaysGiveATinySceneABvhOfItsOwn) {
+    const Scene s = testing::tutorial_spheres();
+    auto engine = build(s);
+    ASSERT_TRUE(engine->brute_force());
+    const Bounds3 b = s.bounds();
+    for (Precision p : {Precision::fast, Precision::refined}) {
+        const Tracer few(*engine, p, BuildHint::few_rays);
+        EXPECT_EQ(few.precision(), Precision::exact);
+        EXPECT_EQ(few.float_frame().scale, 0.0);
+        const Tracer many(*engine, p, BuildHint::many_rays);
+        EXPECT_EQ(many.precision(), p);
+        EXPECT_EQ(many.float_frame().center, b.center());
+        EXPECT_GE(many.float_frame().scale, 2.0 * length(b.diagonal()));
+        for (const Ray& ray : some_rays(15, 300)) {
+            const std::optional<Hit> want = few.closest(ray, true);
+            const std::optional<Hit> got = many.closest(ray, true);
+            ASSERT_EQ(got.has_value(), want.has_value());
+            EXPECT_EQ(many.occluded(ray), few.occluded(ray));
+            if (!got)
+                continue;
+            EXPECT_EQ(got->object, want->object);
+            EXPECT_NEAR(got->t, want->t, got->t_err + want->t_err);
+        }
+    }
+    // exact stays on the engine's brute force, many rays or not.
+    const Tracer exact(*engine, Precision::exact, BuildHint::many_rays);
+    EXPECT_EQ(exact.precision(), Precision::exact);
+    EXPECT_EQ(exact.float_frame().scale, 0.0);
+}
+
+// A scene of four triangles wider than float can hold (±1e39) stays on brute force in double
+// for many rays too: a BVH of its own would see infinities (EmbreeAccel drops them) and miss.
+TEST(Tracer, ManyRaysKeepATinySceneWiderThanFloatInDouble) {
+    Scene s;
+    s.materials.push_back(Material{});
+    for (int i = 0; i < 4; ++i) {
+        const double x = i % 2 ? 1e39 : -1e39;
+        const double z = 10.0 + i;
+        s.objects.push_back(testing::mesh_object(
+            "t" + std::to_string(i), {{x - 1e30, -1e30, z}, {x + 1e30, -1e30, z}, {x, 1e30, z}},
+            {{0, 1, 2}}));
+    }
+    auto engine = build(s);
+    for (Precision p : {Precision::fast, Precision::refined}) {
+        const Tracer tracer(*engine, p, BuildHint::many_rays);
+        EXPECT_EQ(tracer.precision(), Precision::exact) << to_string(p);
+        EXPECT_EQ(tracer.float_frame().scale, 0.0);
+        const std::optional<Hit> h = tracer.closest(Ray{{-1e39, 0, 0}, {0, 0, 1}}, true);
+        ASSERT_TRUE(h) << to_string(p);
+        EXPECT_EQ(h->object, 0u);
+        EXPECT_EQ(h->t, 10.0);
+    }
+}
+
+TEST(Tracer, FloatFrameIsEmbreesOnABvhAndNoneInDouble) {
+    const Scene s = testing::random_scene(16, 1e6);
+    auto engine = build(s);
+    ASSERT_FALSE(engine->brute_force());
+    EXPECT_EQ(engine->float_frame(Precision::exact).scale, 0.0);
+    for (Precision p : {Precision::fast, Precision::refined}) {
+        EXPECT_EQ(engine->float_frame(p).center, s.bounds().center());
+        EXPECT_GE(engine->float_frame(p).scale, 2.0 * length(s.bounds().diagonal()));
+    }
+}
+
+TEST(Query, ClosestByBruteForceIsTheExactAnswer) {
+    const Scene s = testing::random_scene(17);
+    auto engine = build(s);
+    for (const Ray& ray : some_rays(18, 500)) {
+        const std::optional<Hit> want = engine->closest(ray, Precision::exact, true);
+        const std::optional<Hit> got = closest_by_brute_force(s, ray, true);
+        ASSERT_EQ(got.has_value(), want.has_value());
+        if (!got)
+            continue;
+        expect_same(*got, *want);
+        const std::optional<Hit> in_object =
+            closest_in_object_by_brute_force(s, got->object, ray, true);
+        ASSERT_TRUE(in_object);
+        expect_same(*in_object, *got);
+    }
+}
+
+}  // namespace
+}  // namespace raycastd::engine
