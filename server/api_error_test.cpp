@@ -15,11 +15,11 @@ namespace raycastd::server {
 namespace {
 
 constexpr ErrorCode kAll[] = {
-    ErrorCode::bad_json,        ErrorCode::invalid_scene,      ErrorCode::invalid_ray,
-    ErrorCode::invalid_request, ErrorCode::unsupported_format, ErrorCode::scene_not_found,
-    ErrorCode::not_found,       ErrorCode::job_not_found,      ErrorCode::method_not_allowed,
-    ErrorCode::too_large,       ErrorCode::model_load_failed,  ErrorCode::busy,
-    ErrorCode::internal,
+    ErrorCode::bad_json,        ErrorCode::invalid_scene,        ErrorCode::invalid_ray,
+    ErrorCode::invalid_request, ErrorCode::unsupported_format,   ErrorCode::scene_not_found,
+    ErrorCode::not_found,       ErrorCode::job_not_found,        ErrorCode::method_not_allowed,
+    ErrorCode::too_large,       ErrorCode::model_load_failed,    ErrorCode::busy,
+    ErrorCode::unauthorized,    ErrorCode::insufficient_storage, ErrorCode::internal,
 };
 
 TEST(ApiError, EachCodeHasOneNameAndTheStatusOfTheContract) {
