@@ -39,8 +39,32 @@ TEST(Config, HelpAndErrors) {
     EXPECT_TRUE(error);
     EXPECT_FALSE(parse({"--bogus", "1"}, msg, error));
     EXPECT_TRUE(error);
+    // An unknown flag is called unknown whatever its value (it was "needs a whole number").
+    EXPECT_FALSE(parse({"--bogus", "x"}, msg, error));
+    EXPECT_NE(msg.find("unknown option --bogus"), std::string::npos) << msg;
+    EXPECT_FALSE(parse({"--token", ""}, msg, error));
+    EXPECT_TRUE(error);
     EXPECT_FALSE(parse({"--port"}, msg, error));
     EXPECT_TRUE(error);
+}
+
+TEST(Config, TokenFromTheFlagOrTheEnvironment) {
+    std::string msg;
+    bool error = false;
+    ::unsetenv("RAYCASTD_TOKEN");
+    EXPECT_EQ(parse({}, msg, error)->token, "");
+    EXPECT_EQ(parse({"--token", "s3cret"}, msg, error)->token, "s3cret");
+    ::setenv("RAYCASTD_TOKEN", "from-env", 1);
+    EXPECT_EQ(parse({}, msg, error)->token, "from-env");
+    EXPECT_EQ(parse({"--token", "flag-wins"}, msg, error)->token, "flag-wins");
+    ::unsetenv("RAYCASTD_TOKEN");
+}
+
+TEST(Config, LoopbackHosts) {
+    for (const char* h : {"127.0.0.1", "127.1.2.3", "localhost", "::1"})
+        EXPECT_TRUE(is_loopback_host(h)) << h;
+    for (const char* h : {"0.0.0.0", "::", "10.0.0.1", "192.168.1.2", "example.org"})
+        EXPECT_FALSE(is_loopback_host(h)) << h;
 }
 
 }  // namespace
