@@ -19,7 +19,6 @@
 #include <thread>
 
 #include <netinet/in.h>
-#include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -143,12 +142,16 @@ std::string exchange(int port, std::string_view request) {
     addr.sin_family = AF_INET;
     addr.sin_port = htons(static_cast<std::uint16_t>(port));
     addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0)
-        fuzz::fail("cannot connect to the App: " + std::string(std::strerror(errno)));
-    // Acknowledge at once: the server writes an answer's head and body separately, and Nagle's
-    // algorithm on its side would hold the body until our delayed ACK (40 ms on Linux).
-    const int one = 1;
-    setsockopt(fd, IPPROTO_TCP, TCP_QUICKACK, &one, sizeof one);
+    // libFuzzer's SIGALRM (its -timeout watch) interrupts system calls: an interrupted
+    // connect goes on by itself and is asked again until it reports it is connected.
+    while (connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
+        if (errno == EISCONN)
+            break;
+        if (errno != EINTR && errno != EALREADY)
+            fuzz::fail("cannot connect to the App: " + std::string(std::strerror(errno)));
+        pollfd p{fd, POLLOUT, 0};
+        poll(&p, 1, 100);
+    }
     const auto deadline = std::chrono::steady_clock::now() + kAnswerTimeout;
     auto ms_left = [&] {
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -174,13 +177,16 @@ std::string exchange(int port, std::string_view request) {
         }
         if (p.revents & (POLLIN | POLLHUP | POLLERR)) {
             const ssize_t n = recv(fd, buf, sizeof buf, 0);
-            if (n > 0) {
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n > 0)
                 answer.append(buf, static_cast<std::size_t>(n));
-                setsockopt(fd, IPPROTO_TCP, TCP_QUICKACK, &one, sizeof one);
-            } else
+            else
                 closed = true;  // end of file, or a reset
         } else if (p.revents & POLLOUT) {
             const ssize_t n = send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
+            if (n < 0 && errno == EINTR)
+                continue;
             if (n > 0)
                 sent += static_cast<std::size_t>(n);
             else
