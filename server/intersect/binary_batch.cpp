@@ -59,6 +59,13 @@ void send_records(httplib::Response& res, engine::Precision precision, engine::M
     res.status = 200;
     res.set_header("X-Precision", engine::to_string(precision));
     res.set_header("X-Mode", engine::to_string(mode));
+    // An empty answer (no rays) is an empty body: cpp-httplib 0.11.4 takes a provider of length
+    // 0 for one without a length, sends no Content-Length, and calls it until it reports done,
+    // which ours never does, so the thread spun forever (found by tests/fuzz/fuzz_http_routes).
+    if (bytes == 0) {
+        res.set_content(std::string(), "application/octet-stream");
+        return;
+    }
     res.set_content_provider(bytes, "application/octet-stream", std::move(provider));
 }
 
