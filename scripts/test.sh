@@ -4,8 +4,8 @@
 #   release   the Release build and every test (unit, integration, stress, golden, Python
 #             client and grading kit, preview page in Chromium, the quick load and fault run)
 #   asan      the same under ASan+UBSan
-#   tsan      the concurrency tests (connections, registry, caches, jobs, batches on many
-#             threads, renders) under ThreadSanitizer
+#   tsan      the server's concurrency tests (connections, registry, caches, jobs) under
+#             ThreadSanitizer (tests/tsan/suppressions.txt: the uninstrumented TBB and Embree)
 #   fuzz      the libFuzzer targets (clang): a short run of each (FUZZ_SECONDS, default 20) and
 #             the committed crashers replayed
 # Flags: --release-only (the first stage alone), --long (the long load and fault run, and
