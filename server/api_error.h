@@ -26,6 +26,7 @@ enum class ErrorCode {
     too_large,           ///< 413: over a configured limit, or out of memory
     model_load_failed,   ///< 422: the file parsed but is not a usable model
     busy,                ///< 503: over the concurrent-work limit
+    timeout,             ///< 503: past --request-timeout-s; the work was cancelled
     internal,            ///< 500: a bug
 };
 

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "server/request_cancel.h"
 #include "server/routes_web.h"
 namespace raycastd::server {
 
@@ -316,6 +317,9 @@ void App::handle(const httplib::Request& req, httplib::Response& res, Work cost,
         }
     } catch (const ApiError& e) {
         send_error(res, e);
+    } catch (const ClientGone&) {
+        // Nobody is there to read an answer (request_cancel.h): none is written.
+        HttpServer::current_client().hang_up();
     } catch (const std::bad_alloc&) {
         send_error(res, ApiError(ErrorCode::too_large, "out of memory while serving the request"));
     } catch (const std::exception& e) {
