@@ -195,7 +195,8 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
 
     RenderResult out;
     out.precision = whitted.effective_precision();
-    out.image = Image(opt.width, opt.height);
+    // Every pixel is written by its tile: the image is not zero-filled first.
+    out.image = Image(opt.width, opt.height, Image::Fill::unset);
     const int tiles_x = (opt.width + opt.tile_size - 1) / opt.tile_size;
     const std::size_t total = tile_count(opt);
     if (progress)
