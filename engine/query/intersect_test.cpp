@@ -134,6 +134,19 @@ TEST(Query, CancelledBatchAnswersCancelledAndAnArmedTokenChangesNothing) {
     EXPECT_FALSE(armed.fired());
 }
 
+// The brute-force pass of the worked solution over one mesh asks its token every 65,536
+// triangles, from the first on: a token past its deadline gives no answer, and says so.
+TEST(Query, BruteForceOverAMeshStopsWhenItsTokenHasFired) {
+    Scene s;
+    s.objects.push_back(testing::icosphere_object(3, {0, 0, 10}, 2.0));
+    const Ray ray{{0, 0, 0}, {0, 0, 1}};
+    ASSERT_TRUE(closest_in_object_by_brute_force(s, 0, ray, false));
+    const CancelToken late = CancelToken::make(CancelToken::Clock::now() - std::chrono::seconds(1));
+    EXPECT_FALSE(closest_in_object_by_brute_force(s, 0, ray, false, late));
+    EXPECT_TRUE(late.fired());
+    EXPECT_FALSE(closest_by_brute_force(s, ray, true, late));
+}
+
 // intersect_blocks hands out the blocks intersect() traces and answers them as intersect() does,
 // whatever the caller's format; a block whose source reports a bad ray is neither traced nor
 // handed to the sink.

@@ -191,7 +191,7 @@ std::string post(const std::string& path, const std::string& content_type,
 
 /// What one disconnect did to the server.
 struct Abandoned {
-    double working_cpu_s;   ///< CPU the server used while the client waited
+    double working_cpu_s;          ///< CPU the server used while the client waited
     std::optional<double> stop_s;  ///< disconnect → CPU stopped growing
     std::size_t rss_before, rss_working, rss_after;
 };
@@ -338,9 +338,10 @@ TEST(Cancel, StreamedAnswerPastTheTimeLimitIsCutShort) {
     const std::size_t announced = records.size();  // 32-byte answers for 32-byte rays
     EXPECT_NE(head.find("Content-Length: " + std::to_string(announced)), std::string::npos);
     const std::size_t got = answer.size() - head_end - 4;
-    std::printf("[ measured ] streamed answer past --request-timeout-s 1: %zu of %zu bytes, "
-                "closed after %.2f s\n",
-                got, announced, took);
+    std::printf(
+        "[ measured ] streamed answer past --request-timeout-s 1: %zu of %zu bytes, "
+        "closed after %.2f s\n",
+        got, announced, took);
     EXPECT_LT(got, announced);
     EXPECT_EQ(got % 32, 0u) << "cut at a chunk's end";
     expect_serving(server);
