@@ -287,6 +287,29 @@ TEST(Cancel, DisconnectStopsAJsonBatch) {
     expect_stopped(server, "JSON batch of 100,000 rays through 2,000 triangles", a);
 }
 
+TEST(Cancel, GoneClientGetsNoAnswerAndItsConnectionCloses) {
+    // A client that shuts down its sending side is taken for gone (as nginx takes it): once
+    // its long render has stopped, the server closes the connection without a byte of answer.
+    ServerProcess server({"--max-pixels", "100000000"});
+    const std::string id = register_scene(server, reflective_spheres());
+    const Json body = {{"width", 4096}, {"height", 4096}, {"spp", 4}};
+    const int s = connect_loopback(server.port());
+    send_all(s, post("/v1/scenes/" + id + "/render", "application/json", body.dump()));
+    std::this_thread::sleep_for(300ms);
+    ::shutdown(s, SHUT_WR);
+    const auto start = Clock::now();
+    const std::string answer = testing::read_answer(s, 10s);
+    const double took = std::chrono::duration<double>(Clock::now() - start).count();
+    ::close(s);
+    std::printf(
+        "[ measured ] half-closed client of a long render: %zu bytes of answer, "
+        "connection closed %.3f s after the shutdown\n",
+        answer.size(), took);
+    EXPECT_EQ(answer, "");
+    EXPECT_LT(took, 1.0) << "the connection should close, not time out";
+    expect_serving(server);
+}
+
 // --- The time limit ---------------------------------------------------------------------------
 
 TEST(Cancel, RenderPastTheTimeLimitIs503TimeoutAndTheServerGoesOn) {
