@@ -16,7 +16,7 @@ struct Entry {
 };
 
 /// The table: every code once, with its HTTP status and its name (docs/api.md, "Errors").
-constexpr std::array<Entry, 15> kTable = {{
+constexpr std::array<Entry, 16> kTable = {{
     {ErrorCode::bad_json, 400, "bad_json"},
     {ErrorCode::invalid_scene, 400, "invalid_scene"},
     {ErrorCode::invalid_ray, 400, "invalid_ray"},
@@ -30,6 +30,7 @@ constexpr std::array<Entry, 15> kTable = {{
     {ErrorCode::too_large, 413, "too_large"},
     {ErrorCode::model_load_failed, 422, "model_load_failed"},
     {ErrorCode::busy, 503, "busy"},
+    {ErrorCode::timeout, 503, "timeout"},
     {ErrorCode::insufficient_storage, 507, "insufficient_storage"},
     {ErrorCode::internal, 500, "internal"},
 }};
@@ -64,6 +65,10 @@ ErrorCode from_engine(engine::Code c) {
         case engine::Code::not_found:
             // A file or resource a document refers to; the API's not_found is an endpoint.
             return ErrorCode::invalid_scene;
+        case engine::Code::cancelled:
+            // Work a request's own token stopped: its client has gone (and reads no answer) or
+            // it ran past the time limit, which the server words itself (request_cancel.h).
+            return ErrorCode::timeout;
         case engine::Code::ok:  // not an error: reporting it is a bug
         case engine::Code::internal:
             return ErrorCode::internal;

@@ -27,6 +27,7 @@ enum class ErrorCode {
     too_large,             ///< 413: over a configured limit, or out of memory
     model_load_failed,     ///< 422: the file parsed but is not a usable model
     busy,                  ///< 503: over the concurrent-work limit
+    timeout,               ///< 503: past --request-timeout-s; the work was cancelled
     insufficient_storage,  ///< 507: the data dir is full or read-only; nothing was changed
     internal,              ///< 500: a bug
 };

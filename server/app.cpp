@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "server/content_hash.h"
+#include "server/request_cancel.h"
 #include "server/routes_web.h"
 namespace raycastd::server {
 
@@ -319,6 +320,9 @@ void App::handle(const httplib::Request& req, httplib::Response& res, Work cost,
         }
     } catch (const ApiError& e) {
         send_error(res, e);
+    } catch (const ClientGone&) {
+        // Nobody is there to read an answer (request_cancel.h): none is written.
+        HttpServer::current_client().hang_up();
     } catch (const std::bad_alloc&) {
         send_error(res, ApiError(ErrorCode::too_large, "out of memory while serving the request"));
     } catch (const std::exception& e) {

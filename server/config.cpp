@@ -31,6 +31,8 @@ usage: raycastd [options]
   --idle-timeout-s N      a keep-alive connection may wait N s for its next request (default 5)
   --token T               writes (POST /v1/scenes, DELETE /v1/scenes/ID) need the header
                           "Authorization: Bearer T" (default: $RAYCASTD_TOKEN; none: open)
+  --request-timeout-s N   stop a render, trace, ray batch or stateless scene build after N s
+                          of work and answer 503 timeout (default 0: no limit)
   --access-log            log every request to stderr
   --help                  this text
 )";
@@ -126,6 +128,10 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             if (n == 0 || n > 3600)
                 return fail(a + " must be from 1 to 3600");
             (a == "--header-timeout-s" ? c.limits.header_timeout_s : c.limits.idle_timeout_s) = n;
+        } else if (a == "--request-timeout-s") {
+            if (n > 86400)
+                return fail("--request-timeout-s must be at most 86400");
+            c.limits.request_timeout_s = n;
         } else {
             return fail("unknown option " + a);
         }

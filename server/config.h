@@ -19,6 +19,9 @@ struct Limits {
     std::size_t body_budget_bytes = 2ull << 30;    ///< request bodies in flight (503 busy above)
     std::size_t header_timeout_s = 10;             ///< a request head must arrive within this
     std::size_t idle_timeout_s = 5;  ///< a keep-alive connection's wait for its next request
+    /// Longest a render, trace, batch or stateless scene build may work before 503 timeout
+    /// (server/request_cancel.h); 0: no limit.
+    std::size_t request_timeout_s = 0;
 };
 
 struct Config {

@@ -67,5 +67,20 @@ TEST(Config, LoopbackHosts) {
         EXPECT_FALSE(is_loopback_host(h)) << h;
 }
 
+TEST(Config, RequestTimeout) {
+    std::string msg;
+    bool error = false;
+    auto none = parse({}, msg, error);
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->limits.request_timeout_s, 0u);  // no limit by default
+    auto c = parse({"--request-timeout-s", "30"}, msg, error);
+    ASSERT_TRUE(c);
+    EXPECT_EQ(c->limits.request_timeout_s, 30u);
+    EXPECT_FALSE(parse({"--request-timeout-s", "-1"}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_FALSE(parse({"--request-timeout-s", "100000"}, msg, error));
+    EXPECT_TRUE(error);
+}
+
 }  // namespace
 }  // namespace raycastd::server
