@@ -13,6 +13,7 @@
 #include "engine/testing/scenes.h"
 #include "server/api_error.h"
 #include "server/intersect/binary_batch.h"
+#include "server/request_cancel.h"
 
 namespace raycastd::server {
 namespace {
@@ -264,7 +265,8 @@ TEST(BinaryBatch, NoRaysIsAnEmptyBodyNotAProvider) {
         auto scratch = acquire_scratch();
         scratch->body.clear();
         httplib::Response res;
-        answer_binary_batch(*e, q, std::move(scratch), 16, res);
+        answer_binary_batch(*e, q, std::move(scratch), 16,
+                            RequestCancel::for_current_request(Limits{}), res);
         EXPECT_EQ(res.status, 200) << engine::to_string(mode);
         EXPECT_TRUE(res.body.empty());
         EXPECT_FALSE(res.content_provider_) << engine::to_string(mode);
