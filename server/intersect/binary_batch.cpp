@@ -50,6 +50,7 @@ std::size_t intersect_records(const engine::QueryEngine& engine, std::string_vie
     const auto sink = [&](std::size_t b, std::size_t e, const engine::Hit* hits) {
         encode_answers(hits, options.mode, dtype, 0, e - b, out + b * record);
     };
+    // Its Status says whether options.cancel fired, which the caller asks the token itself.
     engine.intersect_blocks(end - begin, options, source, sink);
     return first_bad.load();
 }
@@ -71,21 +72,28 @@ void send_records(httplib::Response& res, engine::Precision precision, engine::M
 
 void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q,
                          std::shared_ptr<Scratch> scratch, std::size_t max_rays,
-                         httplib::Response& res) {
+                         const RequestCancel& cancel, httplib::Response& res) {
     Scratch& s = *scratch;
     const engine::Mode mode = q.options.mode;
+    // An abandoned batch frees its buffers rather than pooling them.
+    const auto stopped = [&] {
+        s.discard = true;
+        cancel.stopped();
+    };
     if (mode == engine::Mode::closest || mode == engine::Mode::any) {
         // Records in, records out, a block at a time (intersect_records).
         const std::size_t n = ray_count(s.body.size(), q.dtype, max_rays);
         s.out.resize(n * answer_record_bytes(mode, q.dtype));
-        if (const std::size_t bad =
-                intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
-            bad < n) {
+        const std::size_t bad =
+            intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
+        if (q.options.cancel.fired())
+            stopped();
+        if (bad < n)
             throw_invalid_ray(ray_at(s.body, q.dtype, bad), bad);
-        }
     } else {
         decode_rays(s.body, q.dtype, max_rays, s.rays);
-        engine.intersect(s.rays, q.options, s.result);
+        if (!engine.intersect(s.rays, q.options, s.result).ok())
+            stopped();  // the only Status intersect() returns: its token fired
         encode_results(s.result, mode, q.dtype, s.rays.size(), s.out);
     }
     const std::size_t bytes = s.out.size();
