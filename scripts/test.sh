@@ -37,7 +37,8 @@ for preset in "${presets[@]}"; do
     sed -n "s/^\([0-9]*% tests passed.*\)/${preset}: \1/p" "$summary.log" >>"$summary"
 done
 if ((fuzz)); then
-    # Only the targets and their dependencies are built.
+    # Only the targets and their dependencies are built (6.5 min on two busy cores), and each
+    # target runs for FUZZ_SECONDS (20 s: 141 s for the six, seeding and replays included).
     echo "=== fuzz: configure and build" >&2
     cmake --preset fuzz >/dev/null
     cmake --build --preset fuzz -j"$jobs"

@@ -2,10 +2,10 @@
 // with port 0, a temporary data directory and small limits, serving from a thread; each input
 // is sent over a fresh loopback connection. The first byte picks how (kShapes): 0 sends the
 // rest as a raw request (or several, or none), any other sends it as the body of one POST to a
-// route with a Content-Type. The input fails when an answer is a 5xx other than 503 busy (or
-// 505 for an HTTP version other than 1.0 and 1.1), when
-// the server has not answered and closed within kAnswerTimeout, or when the App's serving
-// thread has ended. A bad request must get a 4xx, never a crash (docs/api.md, "Errors").
+// route with a Content-Type. The input fails when an answer is a 5xx other than 503 (busy,
+// timeout) or 505 (an HTTP version other than 1.0 and 1.1), when the server has not answered
+// and closed within kAnswerTimeout, or when the App's serving thread has ended. A bad request
+// must get a 4xx, never a crash (docs/api.md, "Errors").
 
 #include <algorithm>
 #include <atomic>
@@ -93,6 +93,7 @@ class Server {
         c.limits.body_budget_bytes = 4u << 20;
         c.limits.header_timeout_s = 2;
         c.limits.idle_timeout_s = 1;
+        c.limits.request_timeout_s = 2;  // slow work ends as 503 timeout, within kAnswerTimeout
         app_ = std::make_unique<server::App>(c);
         std::string error;
         if (!app_->start(error))
@@ -132,9 +133,14 @@ class Server {
     std::thread thread_;
 };
 
-/// Sends `request` on a new connection, half-closes it, and returns everything the server
-/// writes until it closes; fails when that takes longer than kAnswerTimeout.
-std::string exchange(int port, std::string_view request) {
+/// How a request ends: a raw request half-closes the connection once it is sent, so that a
+/// server waiting for more bytes sees the end at once (a half-closed client counts as gone, and
+/// long work may then end with no answer); a POST says Connection: close and waits.
+enum class Ending { half_close, wait };
+
+/// Sends `request` on a new connection and returns everything the server writes until it
+/// closes; fails when that takes longer than kAnswerTimeout.
+std::string exchange(int port, std::string_view request, Ending ending) {
     const int fd = socket(AF_INET, SOCK_STREAM, 0);
     if (fd < 0)
         fuzz::fail("socket failed");
@@ -166,7 +172,8 @@ std::string exchange(int port, std::string_view request) {
     bool closed = false, write_done = false;
     while (!closed) {
         if (!write_done && sent == request.size()) {
-            shutdown(fd, SHUT_WR);
+            if (ending == Ending::half_close)
+                shutdown(fd, SHUT_WR);
             write_done = true;
         }
         pollfd p{fd, static_cast<short>(POLLIN | (write_done ? 0 : POLLOUT)), 0};
@@ -283,7 +290,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         return 0;
     const std::string request =
         shape.target ? post(shape, server.scene_id(), rest) : std::string(rest);
-    const std::string answer = exchange(server.port(), request);
+    const std::string answer =
+        exchange(server.port(), request, shape.target ? Ending::wait : Ending::half_close);
     check_statuses(answer);
     if (!server.serving())
         fuzz::fail("the App's serving thread ended during the input");

@@ -6,10 +6,12 @@
 // input must be an ApiError of the API's table other than internal; a scene that builds must
 // pass engine::validate and answer a few rays.
 
+#include <cmath>
 #include <cstring>
 #include <exception>
 #include <map>
 #include <new>
+#include <vector>
 
 #include "engine/query/intersect.h"
 #include "server/api_error.h"

@@ -100,7 +100,7 @@ for spec in "${targets[@]}"; do
 {"target": "$name", "result": "$result", "seconds": $elapsed, "max_total_time": $seconds,
  "execs": $execs, "execs_per_second": $rate, "new_units": $(stat new_units_added "$log"),
  "corpus_size": $(ls "$corpus" | wc -l), "peak_rss_mb": $(stat peak_rss_mb "$log"),
- "crashes": $((rc != 0 ? 1 : 0)), "reproducer": "${reproducer}",
+ "crashes": $((rc != 0 ? 1 : 0)), "reproducer": ${reproducer:+\"}${reproducer:-null}${reproducer:+\"},
  "regressions": $replay_count, "regressions_passed": $($replay_ok && echo true || echo false)}
 JSON
     echo "fuzz $name: $result, $execs execs in ${elapsed}s ($rate/s), corpus $(ls "$corpus" | wc -l), $replay_count regression input(s)" >&2
