@@ -30,6 +30,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/geometry/closest_point.h"
 #include "engine/math/float_frame.h"
 #include "engine/query_types.h"
 #include "engine/scene/scene.h"
@@ -66,6 +67,11 @@ class EmbreeAccel {
     /// recomputed in double and merged with a float-sized edge tolerance; refined and exact:
     /// every candidate decided in double.
     void all(const Ray& ray, Precision precision, bool want_normal, std::vector<Hit>& out) const;
+
+    /// The closest surface point to p within max_distance, decided in double by the kernels of
+    /// engine/geometry/closest_point.h, ties by the API's rule; Embree's point query only culls
+    /// (embree/point_query.cpp). nullopt when nothing is that close.
+    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
 
     /// The frame Embree computes in (coordinates relative to the centre of the scene's bounds,
     /// of magnitude twice its diagonal): what a fast or refined answer's float rounding is
