@@ -62,7 +62,8 @@ void classify_edge(const WeldedTriangles& w, const Entry* b, const Entry* e, std
     const std::size_t n = static_cast<std::size_t>(e - b);
     if (n == 1) {
         ++out.boundary_edges;
-        out.boundary.emplace_back(lo, b[0].hi);
+        const auto& t = w.triangles[b[0].he / 3];
+        out.boundary.emplace_back(t[b[0].he % 3], t[(b[0].he % 3 + 1) % 3]);
         return;
     }
     if (n > 2) {
@@ -107,8 +108,20 @@ EdgeMap build_edge_map(const WeldedTriangles& w) {
     for (std::uint32_t lo = 0; lo < w.vertices; ++lo) {
         Entry* b = entries.data() + off[lo];
         Entry* e = entries.data() + off[lo + 1];
-        // Stable: the half-edges of one edge stay in triangle order.
-        std::stable_sort(b, e, [](const Entry& x, const Entry& y) { return x.hi < y.hi; });
+        // Stable: the half-edges of one edge stay in triangle order. Rows are short (about six
+        // entries): insertion sort, without the buffer std::stable_sort allocates per call (that
+        // allocation was most of this pass on 1M triangles).
+        if (e - b <= 32) {
+            for (Entry* i = b + 1; i < e; ++i) {
+                const Entry x = *i;
+                Entry* j = i;
+                for (; j > b && (j - 1)->hi > x.hi; --j)
+                    *j = *(j - 1);
+                *j = x;
+            }
+        } else {
+            std::stable_sort(b, e, [](const Entry& x, const Entry& y) { return x.hi < y.hi; });
+        }
         for (Entry* g = b; g != e;) {
             Entry* h = g;
             while (h != e && h->hi == g->hi)
@@ -196,6 +209,27 @@ std::size_t count_boundary_components(const WeldedTriangles& w, const EdgeMap& e
     for (std::uint32_t v = 0; v < w.vertices; ++v)
         n += on[v] && sets.find(v) == v;
     return n;
+}
+
+std::optional<std::size_t> count_boundary_loops(const WeldedTriangles& w, const EdgeMap& e) {
+    std::vector<std::uint32_t> next(w.vertices, kNoFace);
+    for (const auto& [from, to] : e.boundary) {
+        if (next[from] != kNoFace)
+            return std::nullopt;
+        next[from] = to;
+    }
+    std::size_t loops = 0;
+    for (const auto& [from, to] : e.boundary) {
+        if (next[from] == kNoFace)
+            continue;  // on a loop already walked
+        ++loops;
+        for (std::uint32_t v = from; next[v] != kNoFace;) {
+            const std::uint32_t n = next[v];
+            next[v] = kNoFace;
+            v = n;
+        }
+    }
+    return loops;
 }
 
 std::uint64_t valence_cost(const WeldedTriangles& w) {

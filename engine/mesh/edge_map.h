@@ -8,6 +8,7 @@
 // contiguous arrays, measured at about a tenth of OpenMesh's add_face loop for the same mesh.
 
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -30,7 +31,7 @@ struct EdgeMap {
     std::vector<std::uint32_t> neighbour;
     /// same_direction[3t + k]: that neighbour runs the shared edge the same way as t.
     std::vector<std::uint8_t> same_direction;
-    /// The boundary edges as (lower, upper) vertex pairs.
+    /// The boundary edges as (from, to) pairs, in the direction their face runs them.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
 };
 
@@ -50,6 +51,13 @@ std::size_t count_components(const WeldedTriangles& w);
 /// boundary loops except where two loops touch at a vertex (counted once here); for the meshes
 /// whose half-edge structure is not built (topology.h).
 std::size_t count_boundary_components(const WeldedTriangles& w, const EdgeMap& e);
+
+/// Boundary loops of a mesh without non-manifold edges or vertices and without flipped faces:
+/// each boundary vertex then has exactly one boundary edge leaving it (in its face's direction),
+/// and the loops are the cycles of that map, as a half-edge structure's boundary half-edges
+/// (OpenMesh's) form them, run the other way. nullopt when some vertex has two (the mesh is not
+/// such a mesh after all).
+std::optional<std::size_t> count_boundary_loops(const WeldedTriangles& w, const EdgeMap& e);
 
 /// Σ over vertices of (faces at the vertex)²: what OpenMesh's add_face loop costs, up to a
 /// constant (it walks a vertex's one-ring for each face added at it).

@@ -1,6 +1,7 @@
 #include "engine/mesh/topology.h"
 
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include <OpenMesh/Core/Mesh/TriConnectivity.hh>
@@ -15,6 +16,9 @@ namespace {
 /// add_face's cost budget (topology.h): Σ valence² per face, plus a constant for small meshes.
 constexpr std::uint64_t kValenceCostPerFace = 32;
 constexpr std::uint64_t kValenceCostBase = 1u << 22;
+/// Clean meshes (no non-manifold edge or vertex, no flipped face) of more faces than this are
+/// counted without OpenMesh's structure (topology.h).
+constexpr std::size_t kHalfEdgeMaxCleanFaces = 1u << 18;
 
 /// OpenMesh reports each refused face on omerr() (std::cerr); the engine never prints, and the
 /// count is in the result instead. Once for the process, before any mesh of ours is built.
@@ -92,7 +96,16 @@ MeshTopology compute_topology(const TriangleMesh& mesh) {
                                static_cast<std::int64_t>(e.faces);
     out.non_manifold_vertices = count_non_manifold_vertices(w, e);
     out.components = count_components(w);
-    if (valence_cost(w) <= kValenceCostPerFace * e.faces + kValenceCostBase) {
+    const bool clean =
+        e.non_manifold_edges == 0 && e.same_direction_edges == 0 && out.non_manifold_vertices == 0;
+    const std::optional<std::size_t> own_loops =
+        clean && e.faces > kHalfEdgeMaxCleanFaces ? count_boundary_loops(w, e) : std::nullopt;
+    if (own_loops) {
+        // A large clean mesh: add_face would take every face, and its boundary cycles are the
+        // edge map's; building the structure would only cost the registration (topology.h).
+        out.half_edge = false;
+        out.boundary_loops = *own_loops;
+    } else if (valence_cost(w) <= kValenceCostPerFace * e.faces + kValenceCostBase) {
         // The orientation walk only where some edge says a triangle is flipped.
         const std::vector<std::uint8_t> flip =
             e.same_direction_edges > 0 ? orientation_flips(w, e) : std::vector<std::uint8_t>{};

@@ -20,11 +20,18 @@
 // cost about 18 per face), the half-edge structure is not built: `half_edge` is false, the
 // boundary loops are then the connected boundaries of the edge map, and nothing is refused.
 //
+// Nor is it built for a *clean* mesh of more than 2¹⁸ faces (no non-manifold edge or vertex, no
+// flipped face): add_face takes every face of such a mesh, and its boundary cycles are the edge
+// map's own (count_boundary_loops; topology_test.cpp checks the two agree), while the structure
+// for 1M triangles is ~55 MB of OpenMesh arrays and ~0.3 s of add_face: measured on 1M triangles
+// (bench_points --registration-only, docs/loading.md), building it more than doubled the CPU time
+// of a registration, against a budget of 30%. `half_edge` is false for those too.
+//
 // Euler characteristic χ = V − E + F over the welded vertices, the edges and the faces (for one
 // closed orientable surface χ = 2 − 2g; for the Stanford bunny, genus 0 with 5 holes, 2 − 5 = −3).
 //
-// Cost, 1M triangles (bench_load's rows with and without it, docs/loading.md): the weld and the
-// edge map are two passes over flat arrays; OpenMesh's add_face loop is most of the time.
+// Cost: bench_points --registration-only times it against the rest of a registration
+// (docs/loading.md).
 
 #include <cstddef>
 #include <cstdint>
@@ -55,7 +62,8 @@ struct MeshTopology {
     bool consistently_oriented = true;     ///< no edge is run the same way by two faces (or three)
     std::size_t degenerate_triangles = 0;  ///< zero area: (b−a)×(c−a) exactly zero
     std::size_t refused_triangles = 0;     ///< triangles OpenMesh's add_face refused
-    bool half_edge = true;  ///< OpenMesh's structure was built (false: over the valence budget)
+    /// OpenMesh's structure was built (false: over the valence budget, or a large clean mesh)
+    bool half_edge = true;
     SignMethod sign = SignMethod::winding;
 };
 

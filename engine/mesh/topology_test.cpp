@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/mesh/edge_map.h"
 #include "engine/mesh/test_models.h"
 #include "engine/testing/point_meshes.h"
 
@@ -134,6 +135,29 @@ TEST(Topology, AHugeFanInRandomOrderDoesNotHang) {
     EXPECT_FALSE(t.half_edge);  // over add_face's valence budget: the edge map's counts only
     EXPECT_EQ(t.boundary_loops, 0u);
     EXPECT_EQ(t.refused_triangles, 0u);
+}
+
+TEST(Topology, LargeCleanMeshesCountTheirLoopsWithoutOpenMesh) {
+    // 327,680 triangles (past 2¹⁸) with three holes far apart.
+    Object o = testing::icosphere_object(7);
+    auto mesh = std::make_shared<TriangleMesh>(*o.mesh);
+    for (std::size_t t : {300000u, 150000u, 7u})
+        mesh->triangles.erase(mesh->triangles.begin() + static_cast<std::ptrdiff_t>(t));
+    const MeshTopology t = compute_topology(*mesh);
+    EXPECT_FALSE(t.half_edge);
+    EXPECT_EQ(t.boundary_edges, 9u);
+    EXPECT_EQ(t.boundary_loops, 3u);
+    EXPECT_EQ(t.euler_characteristic, -1);
+    EXPECT_EQ(t.refused_triangles, 0u);
+    EXPECT_TRUE(t.consistently_oriented);
+    // The same count as OpenMesh's on a smaller cut of the same kind.
+    Object small = testing::icosphere_object(4);
+    auto cut = std::make_shared<TriangleMesh>(*small.mesh);
+    for (std::size_t k : {4000u, 2000u, 7u})
+        cut->triangles.erase(cut->triangles.begin() + static_cast<std::ptrdiff_t>(k));
+    const MeshTopology s = compute_topology(*cut);
+    EXPECT_TRUE(s.half_edge);
+    EXPECT_EQ(s.boundary_loops, 3u);
 }
 
 TEST(Topology, WithoutTheHalfEdgeStructureBoundariesAreStillCounted) {
@@ -275,6 +299,15 @@ TEST(Topology, PublishedModelsMatchAnIndependentCount) {
             static_cast<long long>(t.euler_characteristic), t.consistently_oriented,
             t.degenerate_triangles, t.refused_triangles, to_string(t.sign));
         expect_matches_reference(*o->mesh, t);
+        // Where the mesh is clean, the edge map's own boundary cycles (what large clean meshes
+        // report) are OpenMesh's.
+        const WeldedTriangles w = weld(*o->mesh);
+        const EdgeMap e = build_edge_map(w);
+        if (e.non_manifold_edges == 0 && e.same_direction_edges == 0 &&
+            t.non_manifold_vertices == 0) {
+            EXPECT_TRUE(t.half_edge);
+            EXPECT_EQ(count_boundary_loops(w, e), t.boundary_loops);
+        }
     }
     if (found == 0)
         GTEST_SKIP() << "none of the models found at " << testing::models_dir();

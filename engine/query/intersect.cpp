@@ -5,7 +5,6 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
-#include <tbb/task_group.h>
 
 #include "engine/accel/embree_accel.h"
 #include "engine/accel/linear_accel.h"
@@ -134,11 +133,11 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
         return st;
     std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
     engine->scene_bytes_ = engine->scene_memory_bytes();
-    // The meshes' topology (OpenMesh, for the point queries and the scene's `topology`) is
-    // computed while Embree builds the BVH: the two share nothing, and the registration waits
-    // for the longer of them rather than for both (docs/loading.md measures it).
-    tbb::task_group points;
-    points.run([&] { engine->prepare_points(); });
+    // The meshes' topology (engine/mesh: for the point queries and the scene's `topology`),
+    // before the BVH rather than beside it: on a thread of its own it raced Embree's build for
+    // the cores and cost ~300 ms more CPU on 1M triangles than the two one after the other
+    // (TBB's workers spin while they wait; bench_points --registration-only, docs/loading.md).
+    engine->prepare_points();
     Status accel_status;
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
     if (prims > kBruteForceMaxPrimitives && fits_float(*engine->scene_)) {
@@ -149,7 +148,6 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
             accel_status = accel.status();
         }
     }
-    points.wait();
     if (!accel_status.ok())
         return accel_status;
     return std::shared_ptr<const QueryEngine>(std::move(engine));

@@ -94,8 +94,8 @@ class QueryEngine {
     /// geometry/closest_point.h; Embree's point query culls above 16 primitives), ties by the API's
     /// rule; nullopt when nothing is that close. p must be finite.
     std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
-    /// Each object's topology (engine/mesh/topology.h), computed at build alongside the BVH; the
-    /// entry of a sphere is all zeros.
+    /// Each object's topology (engine/mesh/topology.h), computed at build (objects in parallel,
+    /// before the BVH); the entry of a sphere is all zeros.
     const std::vector<MeshTopology>& topology() const { return topology_; }
     /// The generalized winding number of triangle object `object` at p, by fast winding numbers
     /// (accel/winding_bvh.h); the object's tree is built on its first such query.
@@ -114,7 +114,7 @@ class QueryEngine {
     std::unique_ptr<EmbreeAccel> bvh_for_many_rays(Precision precision) const;
     std::size_t scene_memory_bytes() const;
     /// point_entry.cpp: each object's topology (objects in parallel) and the empty winding-tree
-    /// slots; run by build() while the BVH is built.
+    /// slots; run by build() before the BVH.
     void prepare_points();
     /// Bytes of the winding-number trees built so far.
     std::size_t point_memory_bytes() const;
