@@ -20,46 +20,94 @@ constexpr int kStackDepth = 64;
 }  // namespace
 
 WindingBvh::WindingBvh(const TriangleMesh& mesh) : mesh_(mesh) {
-    std::vector<Vec3d> centroids(mesh.size());
+    std::vector<Item> items;
+    items.reserve(mesh.size());
     for (std::uint32_t t = 0; t < mesh.size(); ++t) {
         const Triangle tri = mesh.triangle(t);
         if (is_degenerate(tri))
             continue;  // no area, no dipole: nothing to add
-        order_.push_back(t);
-        centroids[t] = (tri.a + tri.b + tri.c) / 3.0;
+        items.push_back({(tri.a + tri.b + tri.c) / 3.0, t});
     }
-    if (order_.empty())
+    if (items.empty())
         return;
-    nodes_.reserve(order_.size() / 2 + 2);
+    order_.resize(items.size());
+    nodes_.reserve(items.size() / 2 + 2);
     nodes_.emplace_back();
-    build(0, static_cast<std::uint32_t>(order_.size()), centroids);
+    build(0, static_cast<std::uint32_t>(items.size()), items);
 }
 
-void WindingBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Vec3d>& centroids) {
+void WindingBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items) {
     // Called with the node already appended as the last one. Indices, not references: the
-    // vector grows while the children are built.
+    // vector grows while the children are built. The centroids travel with their triangles
+    // (items), so that each level reads them in order rather than through an index.
     const auto index = static_cast<std::uint32_t>(nodes_.size() - 1);
-    summarise(nodes_[index], begin, end);
     if (end - begin <= kLeafTriangles) {
+        for (std::uint32_t i = begin; i < end; ++i)
+            order_[i] = items[i].triangle;
+        summarise(nodes_[index], begin, end);
         nodes_[index].first = begin;
         nodes_[index].count = end - begin;
         return;
     }
-    Bounds3 b;
-    for (std::uint32_t i = begin; i < end; ++i)
-        b.extend(centroids[order_[i]]);
-    const std::size_t axis = max_abs_dimension(b.diagonal());
+    Vec3d lo = items[begin].centroid, hi = lo;
+    for (std::uint32_t i = begin + 1; i < end; ++i) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], items[i].centroid[k]);
+            hi[k] = std::max(hi[k], items[i].centroid[k]);
+        }
+    }
+    const std::size_t axis = max_abs_dimension(hi - lo);
     const std::uint32_t mid = begin + (end - begin) / 2;
     std::nth_element(
-        order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-        [&](std::uint32_t x, std::uint32_t y) { return centroids[x][axis] < centroids[y][axis]; });
+        items.begin() + begin, items.begin() + mid, items.begin() + end,
+        [axis](const Item& x, const Item& y) { return x.centroid[axis] < y.centroid[axis]; });
     const auto left = static_cast<std::uint32_t>(nodes_.size());
     nodes_[index].first = left;
     nodes_.emplace_back();
-    build(begin, mid, centroids);
+    build(begin, mid, items);
     nodes_.emplace_back();
-    nodes_[index].right = static_cast<std::uint32_t>(nodes_.size() - 1);
-    build(mid, end, centroids);
+    const auto right = static_cast<std::uint32_t>(nodes_.size() - 1);
+    nodes_[index].right = right;
+    build(mid, end, items);
+    merge(nodes_[index], nodes_[left], nodes_[right]);
+}
+
+void WindingBvh::merge(Node& node, const Node& l, const Node& r) {
+    // The children's moments moved to the parent's centre (the parallel-axis shift of each
+    // moment; with δ = p̃_child − p̃): M += M_c + N_c ⊗ δ, and
+    // T_jkl += T_c,jkl + M_c,jk δ_l + δ_k M_c,jl + N_c,j δ_k δ_l. The radius is the distance
+    // from p̃ to the farthest corner of the union of the children's vertex boxes, as in
+    // Barill et al.'s implementation, or r_c + |δ| where that is smaller: both bound the exact
+    // radius from above (r_c + |δ| alone made queries 4x slower than the exact radius).
+    node.surface = l.surface + r.surface;
+    node.centre = node.surface > 0 ? (l.centre * l.surface + r.centre * r.surface) / node.surface
+                                   : (l.centre + r.centre) * 0.5;
+    static constexpr std::size_t kK[6] = {0, 1, 2, 0, 1, 2}, kL[6] = {0, 1, 2, 1, 2, 0};
+    double shifted = 0;  // max(r_c + |δ_c|), the other bound on the radius
+    for (const Node* c : {&l, &r}) {
+        const Vec3d d = c->centre - node.centre;
+        shifted = std::max(shifted, c->radius + length(d));
+        node.area += c->area;
+        for (std::size_t j = 0; j < 3; ++j) {
+            for (std::size_t k = 0; k < 3; ++k)
+                node.m[j][k] += c->m[j][k] + c->area[j] * d[k];
+            for (std::size_t q = 0; q < 6; ++q) {
+                const std::size_t k = kK[q], l2 = kL[q];
+                node.t[j][q] += c->t[j][q] + c->m[j][k] * d[l2] + d[k] * c->m[j][l2] +
+                                c->area[j] * d[k] * d[l2];
+            }
+        }
+    }
+    for (std::size_t k = 0; k < 3; ++k) {
+        node.lo[k] = std::min(l.lo[k], r.lo[k]);
+        node.hi[k] = std::max(l.hi[k], r.hi[k]);
+    }
+    double far2 = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        const double e = std::max(node.centre[k] - node.lo[k], node.hi[k] - node.centre[k]);
+        far2 += e * e;
+    }
+    node.radius = std::min(std::sqrt(far2), shifted);
 }
 
 void WindingBvh::summarise(Node& node, std::uint32_t begin, std::uint32_t end) const {
@@ -73,6 +121,7 @@ void WindingBvh::summarise(Node& node, std::uint32_t begin, std::uint32_t end) c
         weighted += c * a;
         plain += c;
     }
+    node.surface = total;
     node.centre = total > 0 ? weighted / total : plain / static_cast<double>(end - begin);
     for (std::uint32_t i = begin; i < end; ++i) {
         const Triangle t = mesh_.triangle(order_[i]);
@@ -94,8 +143,13 @@ void WindingBvh::summarise(Node& node, std::uint32_t begin, std::uint32_t end) c
             for (int k = 0; k < 6; ++k)
                 node.t[j][k] += an[j] * s[k];
         }
-        for (const Vec3d& v : {t.a, t.b, t.c})
+        for (const Vec3d& v : {t.a, t.b, t.c}) {
             node.radius = std::max(node.radius, length(v - node.centre));
+            for (std::size_t k = 0; k < 3; ++k) {
+                node.lo[k] = std::min(node.lo[k], v[k]);
+                node.hi[k] = std::max(node.hi[k], v[k]);
+            }
+        }
     }
 }
 

@@ -17,20 +17,23 @@
 //   T_jkl = Σ a_i n_ij [(c_i − p̃)_k (c_i − p̃)_l + (1/12) Σ_v (v − c_i)_k (v − c_i)_l]
 // (the triangle's second moment about its centroid is a/12 Σ_v (v − c)(v − c)ᵀ). Nearer nodes
 // are opened; leaves sum their triangles' solid angles exactly. β = 2 as in the paper. Measured
-// against the exact sum (winding_bvh_test.cpp, docs/accuracy.md): first order left errors of
+// against the exact sum (winding_bvh_test.cpp, docs/numerics.md): first order left errors of
 // 6·10⁻² deep inside a sphere (hemisphere-sized nodes at 2r); second order brings the worst
-// error on the icospheres and the Stanford bunny to the figure the test states. Inside/outside
+// error to 3.1·10⁻³ on the icosphere, the open and the flipped cube and the Stanford bunny. Inside/outside
 // (w ≥ ½) can differ from the exact sum only where the exact winding number is within that of
 // ½, i.e. across a hole, never deep inside or outside a surface.
 //
-// Build: median splits on the longest axis of the centroids' box, leaves of at most 8 triangles;
-// O(n log n). Degenerate triangles contribute nothing and are left out.
+// Build: median splits on the longest axis of the centroids' box, leaves of at most 8 triangles
+// whose moments are summed from their triangles, inner nodes' moments shifted up from their
+// children's (O(n log n) for the splits, O(n) for the moments). Degenerate triangles contribute
+// nothing and are left out.
 
 #include <cstdint>
 #include <memory>
 #include <vector>
 
 #include "engine/geometry/mesh.h"
+#include "engine/math/ray.h"
 
 namespace raycastd::engine {
 
@@ -48,8 +51,11 @@ class WindingBvh {
 
   private:
     struct Node {
-        Vec3d centre;         ///< p̃: area-weighted centroid of the node's triangles
-        double radius = 0;    ///< max |vertex − p̃| over the node's triangles
+        Vec3d centre;        ///< p̃: area-weighted centroid of the node's triangles
+        double surface = 0;  ///< Σ a_i: the total area of the node's triangles
+        double radius = 0;   ///< bounds |vertex − p̃| over the node's triangles (leaves: exact)
+        Vec3d lo{kInfinity, kInfinity, kInfinity};  ///< the box of the node's vertices
+        Vec3d hi{-kInfinity, -kInfinity, -kInfinity};
         Vec3d area;           ///< N = Σ a_i n_i
         double m[3][3] = {};  ///< M_jk = Σ a_i n_ij (c_i − p̃)_k
         double t[3][6] =
@@ -58,8 +64,16 @@ class WindingBvh {
         std::uint32_t count = 0;  ///< leaf: number of triangles; 0 for an inner node
         std::uint32_t right = 0;  ///< inner: the right child (built after the left subtree)
     };
-    void build(std::uint32_t begin, std::uint32_t end, std::vector<Vec3d>& centroids);
+    /// A triangle and its centroid, while the tree is built.
+    struct Item {
+        Vec3d centroid;
+        std::uint32_t triangle;
+    };
+    void build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items);
+    /// A leaf's moments from its triangles.
     void summarise(Node& node, std::uint32_t begin, std::uint32_t end) const;
+    /// An inner node's moments from its children's.
+    static void merge(Node& node, const Node& l, const Node& r);
     double far_field(const Node& node, const Vec3d& q) const;
 
     const TriangleMesh& mesh_;
