@@ -23,8 +23,9 @@
 // The parts, one concept a file, in engine/accel/embree/: device (the shared RTCDevice, errors
 // → Status, RAII handles), impl.h (the BVHs, RayContext, NativeHit), float_ray (clipping, the
 // float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks), packets
-// (16-wide traversal, the one coherence test). embree_accel.cpp holds the builds and, for each
-// query, one function per precision.
+// (16-wide traversal, the one coherence test), point_query (closest points through
+// rtcPointQuery). embree_accel.cpp holds the builds and, for each query, one function per
+// precision.
 
 #include <memory>
 #include <optional>

@@ -19,9 +19,9 @@
 // are opened; leaves sum their triangles' solid angles exactly. β = 2 as in the paper. Measured
 // against the exact sum (winding_bvh_test.cpp, docs/numerics.md): first order left errors of
 // 6·10⁻² deep inside a sphere (hemisphere-sized nodes at 2r); second order brings the worst
-// error to 3.1·10⁻³ on the icosphere, the open and the flipped cube and the Stanford bunny. Inside/outside
-// (w ≥ ½) can differ from the exact sum only where the exact winding number is within that of
-// ½, i.e. across a hole, never deep inside or outside a surface.
+// error to 3.1·10⁻³ on the icosphere, the open and the flipped cube and the Stanford bunny.
+// Inside/outside (w ≥ ½) can differ from the exact sum only where the exact winding number is
+// within that of ½, i.e. across a hole, never deep inside or outside a surface.
 //
 // Build: median splits on the longest axis of the centroids' box, leaves of at most 8 triangles
 // whose moments are summed from their triangles, inner nodes' moments shifted up from their
