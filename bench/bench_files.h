@@ -17,7 +17,7 @@ namespace raycastd::bench {
 /// Returns false when the file cannot be written.
 bool write_ply(const std::string& path, const Workload& w);
 
-/// A raycastd scene document (API.md) with one sphere object per sphere of the workload.
+/// A raycastd scene document (docs/api.md) with one sphere object per sphere of the workload.
 bool write_sphere_scene(const std::string& path, const Workload& w);
 
 /// A NumPy .npy file (format 1.0, C order) of float32 values with the given shape.

@@ -190,7 +190,7 @@ std::vector<re::PointAnswer> run(const re::QueryEngine& e, const std::vector<re:
                                  re::PointQuery q, const char* what) {
     std::vector<re::PointAnswer> out;
     const Timed t = timed([&] {
-        re::query_points(e, pts, re::PointOptions{q, re::kInfinity}, out);
+        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}}, out);
     });
     std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s\n",
                 re::to_string(q), what, pts.size(), t.wall, t.cpu, pts.size() / t.wall * 1e-6);

@@ -1,5 +1,6 @@
 #pragma once
-// The benchmark workloads of ../shared/PERFORMANCE.md, generated with fixed seeds so that every
+// The benchmark workloads (A: an 81,920-triangle icosphere; B: 200 icospheres, 1,024,000
+// triangles; C: 1,000 spheres; docs/benchmarks.md), generated with fixed seeds so that every
 // peer (raw Embree, the engine in-process, raycastd over HTTP, Open3D) sees the same geometry and
 // the same rays in the same run:
 //   A  icosphere, subdivision level 6: 81,920 triangles;

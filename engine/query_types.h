@@ -3,6 +3,8 @@
 // every folder of the engine, so that accel/ and query/ (and the server) share it without
 // including one another; the answers of a batch are query/query_result.h.
 
+#include "engine/cancel.h"
+
 namespace raycastd::engine {
 
 /// What a query asks of each ray: its closest hit, whether it hits anything, every hit, or how
@@ -22,6 +24,9 @@ struct QueryOptions {
     Mode mode = Mode::closest;
     Precision precision = Precision::refined;
     bool want_normal = true;  ///< compute normal and front_face (skipped when not asked)
+    /// Checked once per block of QueryEngine::kBlockRays (never per ray): once it fires, blocks
+    /// not yet begun are skipped and the batch answers Code::cancelled.
+    CancelToken cancel{};
 };
 
 }  // namespace raycastd::engine

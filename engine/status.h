@@ -19,6 +19,7 @@ enum class Code {
     unsupported_format,  ///< a model format we do not read
     too_large,           ///< over a configured limit, or out of memory in a backend
     not_found,           ///< a referenced thing does not exist
+    cancelled,           ///< the work was stopped by its CancelToken (engine/cancel.h)
     internal,            ///< a bug or a backend failure we cannot attribute to the input
 };
 

@@ -4,7 +4,8 @@
 # preview page (tests/browser) also needs Debian's chromium, Node.js and npm, and the npm
 # package playwright-core pinned in tests/browser/package-lock.json (`npm ci` there, only when
 # the installed copy differs from the lock).
-#   scripts/setup.sh          build + test dependencies (Python: the client's tests, black)
+#   scripts/setup.sh          build + test dependencies (Python: the client's tests, black;
+#                             clang and its libFuzzer runtime: the fuzz preset, tests/fuzz)
 #   scripts/setup.sh --bench  also the benchmark peers (Open3D, NumPy, POV-Ray, matplotlib)
 set -euo pipefail
 
@@ -13,6 +14,7 @@ packages=(
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
     nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
     clang-format
+    clang libclang-rt-14-dev
     python3 python3-numpy python3-pip python3-setuptools black
     chromium
 )

@@ -1,18 +1,60 @@
 #!/usr/bin/env bash
-# Sets up, builds and runs the whole test suite: the Release build, then the ASan+UBSan build
-# (skip the latter with --release-only). Each ends with ctest's summary line.
+# Sets up, builds and runs the whole test suite, each stage ending with its runner's summary,
+# and the end repeating them together:
+#   release   the Release build and every test (unit, integration, stress, golden, Python
+#             client and grading kit, preview page in Chromium, the quick load and fault run)
+#   asan      the same under ASan+UBSan
+#   tsan      the server's concurrency tests (connections, registry, caches, jobs) under
+#             ThreadSanitizer (tests/tsan/suppressions.txt: the uninstrumented TBB and Embree)
+#   fuzz      the libFuzzer targets (clang): a short run of each (FUZZ_SECONDS, default 20) and
+#             the committed crashers replayed
+# Flags: --release-only (the first stage alone), --long (the long load and fault run, and
+# fuzzing for 10 minutes a target).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 # Formatting first: it takes a second and names the one command that fixes it.
 scripts/check_format.sh
 jobs="$(nproc)"
-presets=(release asan)
-[[ "${1:-}" == "--release-only" ]] && presets=(release)
+presets=(release asan tsan)
+fuzz=1
+long=0
+for arg in "$@"; do
+    case "$arg" in
+        --release-only) presets=(release); fuzz=0 ;;
+        --long) long=1 ;;
+        *) echo "test.sh: unknown option $arg" >&2; exit 2 ;;
+    esac
+done
+summary="$(mktemp)"
+trap 'rm -f "$summary" "$summary.log"' EXIT
 for preset in "${presets[@]}"; do
     echo "=== ${preset}: configure and build" >&2
     cmake --preset "$preset" >/dev/null
     cmake --build --preset "$preset" -j"$jobs"
     echo "=== ${preset}: test" >&2
-    ctest --preset "$preset" -j"$jobs" --timeout 600
+    ctest --preset "$preset" -j"$jobs" --timeout 600 | tee "$summary.log"
+    sed -n "s/^\([0-9]*% tests passed.*\)/${preset}: \1/p" "$summary.log" >>"$summary"
 done
+if ((fuzz)); then
+    # Only the targets and their dependencies are built (6.5 min on two busy cores), and each
+    # target runs for FUZZ_SECONDS (20 s: 141 s for the six, seeding and replays included).
+    echo "=== fuzz: configure and build" >&2
+    cmake --preset fuzz >/dev/null
+    cmake --build --preset fuzz -j"$jobs"
+    echo "=== fuzz: run" >&2
+    seconds="${FUZZ_SECONDS:-20}"
+    ((long)) && seconds=600
+    tests/fuzz/run.sh --seconds "$seconds" | tee "$summary.log"
+    sed -n 's/^\(fuzz: .*\)/\1/p' "$summary.log" >>"$summary"
+    ctest --preset fuzz --timeout 600 | tee "$summary.log"
+    sed -n "s/^\([0-9]*% tests passed.*\)/fuzz: \1/p" "$summary.log" >>"$summary"
+fi
+if ((long)); then
+    echo "=== long load and fault run" >&2
+    /usr/bin/python3 tests/load/run.py --long --server build/release/server/raycastd \
+        --shared "$(cd .. && pwd)/shared" --report docs/reliability.md | tee "$summary.log"
+    sed -n 's/^\(load: .*\)/\1/p' "$summary.log" >>"$summary"
+fi
+echo "=== summary" >&2
+cat "$summary"

@@ -16,12 +16,13 @@ struct Entry {
 };
 
 /// The table: every code once, with its HTTP status and its name (docs/api.md, "Errors").
-constexpr std::array<Entry, 13> kTable = {{
+constexpr std::array<Entry, 16> kTable = {{
     {ErrorCode::bad_json, 400, "bad_json"},
     {ErrorCode::invalid_scene, 400, "invalid_scene"},
     {ErrorCode::invalid_ray, 400, "invalid_ray"},
     {ErrorCode::invalid_request, 400, "invalid_request"},
     {ErrorCode::unsupported_format, 400, "unsupported_format"},
+    {ErrorCode::unauthorized, 401, "unauthorized"},
     {ErrorCode::scene_not_found, 404, "scene_not_found"},
     {ErrorCode::not_found, 404, "not_found"},
     {ErrorCode::job_not_found, 404, "job_not_found"},
@@ -29,6 +30,8 @@ constexpr std::array<Entry, 13> kTable = {{
     {ErrorCode::too_large, 413, "too_large"},
     {ErrorCode::model_load_failed, 422, "model_load_failed"},
     {ErrorCode::busy, 503, "busy"},
+    {ErrorCode::timeout, 503, "timeout"},
+    {ErrorCode::insufficient_storage, 507, "insufficient_storage"},
     {ErrorCode::internal, 500, "internal"},
 }};
 
@@ -62,6 +65,10 @@ ErrorCode from_engine(engine::Code c) {
         case engine::Code::not_found:
             // A file or resource a document refers to; the API's not_found is an endpoint.
             return ErrorCode::invalid_scene;
+        case engine::Code::cancelled:
+            // Work a request's own token stopped: its client has gone (and reads no answer) or
+            // it ran past the time limit, which the server words itself (request_cancel.h).
+            return ErrorCode::timeout;
         case engine::Code::ok:  // not an error: reporting it is a bug
         case engine::Code::internal:
             return ErrorCode::internal;

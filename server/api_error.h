@@ -14,19 +14,22 @@ namespace raycastd::server {
 
 /// The API's stable machine codes, in the order of the table in api_error.cpp.
 enum class ErrorCode {
-    bad_json,            ///< 400: the body is not JSON (or holds a number a double cannot carry)
-    invalid_scene,       ///< 400: a scene document breaks a rule
-    invalid_ray,         ///< 400: a ray is unusable; names the ray index
-    invalid_request,     ///< 400: an unusable option, a missing member, malformed HTTP
-    unsupported_format,  ///< 400: a format raycastd does not read or write
-    scene_not_found,     ///< 404: no registered scene has that id
-    not_found,           ///< 404: no such endpoint
-    job_not_found,       ///< 404: no render job has that id
-    method_not_allowed,  ///< 405: a known path with another method (Allow lists the right ones)
-    too_large,           ///< 413: over a configured limit, or out of memory
-    model_load_failed,   ///< 422: the file parsed but is not a usable model
-    busy,                ///< 503: over the concurrent-work limit
-    internal,            ///< 500: a bug
+    bad_json,              ///< 400: the body is not JSON (or holds a number a double cannot carry)
+    invalid_scene,         ///< 400: a scene document breaks a rule
+    invalid_ray,           ///< 400: a ray is unusable; names the ray index
+    invalid_request,       ///< 400: an unusable option, a missing member, malformed HTTP
+    unsupported_format,    ///< 400: a format raycastd does not read or write
+    unauthorized,          ///< 401: a write without the bearer token the server was started with
+    scene_not_found,       ///< 404: no registered scene has that id
+    not_found,             ///< 404: no such endpoint
+    job_not_found,         ///< 404: no render job has that id
+    method_not_allowed,    ///< 405: a known path with another method (Allow lists the right ones)
+    too_large,             ///< 413: over a configured limit, or out of memory
+    model_load_failed,     ///< 422: the file parsed but is not a usable model
+    busy,                  ///< 503: over the concurrent-work limit
+    timeout,               ///< 503: past --request-timeout-s; the work was cancelled
+    insufficient_storage,  ///< 507: the data dir is full or read-only; nothing was changed
+    internal,              ///< 500: a bug
 };
 
 /// The code's stable name as it appears in responses ("bad_json").

@@ -19,6 +19,7 @@ constexpr ErrorCode kAll[] = {
     ErrorCode::invalid_request, ErrorCode::unsupported_format, ErrorCode::scene_not_found,
     ErrorCode::not_found,       ErrorCode::job_not_found,      ErrorCode::method_not_allowed,
     ErrorCode::too_large,       ErrorCode::model_load_failed,  ErrorCode::busy,
+    ErrorCode::timeout,         ErrorCode::unauthorized,       ErrorCode::insufficient_storage,
     ErrorCode::internal,
 };
 
@@ -36,6 +37,7 @@ TEST(ApiError, EachCodeHasOneNameAndTheStatusOfTheContract) {
     EXPECT_EQ(http_status_of(ErrorCode::too_large), 413);
     EXPECT_EQ(http_status_of(ErrorCode::model_load_failed), 422);
     EXPECT_EQ(http_status_of(ErrorCode::busy), 503);
+    EXPECT_EQ(http_status_of(ErrorCode::timeout), 503);
     EXPECT_EQ(http_status_of(ErrorCode::internal), 500);
     std::ostringstream os;
     os << ErrorCode::model_load_failed;
@@ -73,6 +75,8 @@ TEST(ApiError, EngineCodesMapOnce) {
     // A file a document names that is not there: the document's fault, not a missing endpoint.
     EXPECT_EQ(code_of(Code::not_found), ErrorCode::invalid_scene);
     EXPECT_EQ(code_of(Code::internal), ErrorCode::internal);
+    // Work stopped by a request's own token (its time limit).
+    EXPECT_EQ(code_of(Code::cancelled), ErrorCode::timeout);
     const ApiError e =
         from_status(engine::Status::error(Code::invalid_scene, "m", "/objects/1"), "/scene");
     EXPECT_EQ(e.path, "/scene/objects/1");

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <thread>
 
+#include "server/content_hash.h"
+#include "server/request_cancel.h"
 #include "server/routes_web.h"
 namespace raycastd::server {
 
@@ -60,6 +62,8 @@ class WorkSlot {
 };
 
 void send_error(httplib::Response& res, const ApiError& e) {
+    if (e.code == ErrorCode::unauthorized)
+        res.set_header("WWW-Authenticate", "Bearer");
     // A busy server is over a momentary limit: a second is what a request takes here.
     if (e.code == ErrorCode::busy)
         res.set_header("Retry-After", "1");
@@ -317,6 +321,9 @@ void App::handle(const httplib::Request& req, httplib::Response& res, Work cost,
         }
     } catch (const ApiError& e) {
         send_error(res, e);
+    } catch (const ClientGone&) {
+        // Nobody is there to read an answer (request_cancel.h): none is written.
+        HttpServer::current_client().hang_up();
     } catch (const std::bad_alloc&) {
         send_error(res, ApiError(ErrorCode::too_large, "out of memory while serving the request"));
     } catch (const std::exception& e) {
@@ -327,6 +334,27 @@ void App::handle(const httplib::Request& req, httplib::Response& res, Work cost,
 std::shared_ptr<void> App::extend_work_slot() {
     in_flight_.fetch_add(1);
     return std::shared_ptr<void>(nullptr, [this](void*) { in_flight_.fetch_sub(1); });
+}
+
+void App::require_write_token(const httplib::Request& req) const {
+    if (config_.token.empty())
+        return;
+    const std::string header = req.get_header_value("Authorization");
+    constexpr std::string_view kScheme = "Bearer ";
+    const bool bearer =
+        header.size() > kScheme.size() &&
+        std::equal(kScheme.begin(), kScheme.end(), header.begin(), [](char a, char b) {
+            return std::tolower(static_cast<unsigned char>(a)) ==
+                   std::tolower(static_cast<unsigned char>(b));
+        });
+    // Compared as SHA-256 digests with CRYPTO_memcmp: the time taken says nothing of how much
+    // of the token, or of its length, a guess got right.
+    const std::string given = bearer ? header.substr(kScheme.size()) : std::string();
+    if (!bearer || !same_secret(given, config_.token)) {
+        throw ApiError(ErrorCode::unauthorized,
+                       bearer ? "the bearer token is not this server's"
+                              : "this server takes writes only with Authorization: Bearer <token>");
+    }
 }
 
 ApiError App::scene_not_found(const std::string& id) {

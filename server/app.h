@@ -78,6 +78,9 @@ class App {
     SceneRegistry& registry() { return *registry_; }
     /// Builds scenes within the limits: the registry's builder, and the stateless calls'.
     const ModelSource& models() const { return models_; }
+    /// Throws 401 unauthorized unless the request carries `Authorization: Bearer <token>` for
+    /// the server's --token; does nothing when the server has none.
+    void require_write_token(const httplib::Request& req) const;
     /// The registered scene, or scene_not_found.
     std::shared_ptr<const engine::QueryEngine> scene_or_404(const std::string& id);
     static ApiError scene_not_found(const std::string& id);

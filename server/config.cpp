@@ -1,7 +1,9 @@
 #include "server/config.h"
 
 #include <charconv>
+#include <cstdlib>
 #include <cstring>
+#include <set>
 
 namespace raycastd::server {
 
@@ -28,6 +30,10 @@ usage: raycastd [options]
   --body-budget-mb N      request bodies being received at once before 503 busy (default 2048)
   --header-timeout-s N    a request's line and headers must arrive within N s (default 10)
   --idle-timeout-s N      a keep-alive connection may wait N s for its next request (default 5)
+  --token T               writes (POST /v1/scenes, DELETE /v1/scenes/ID) need the header
+                          "Authorization: Bearer T" (default: $RAYCASTD_TOKEN; none: open)
+  --request-timeout-s N   stop a render, trace, ray batch or stateless scene build after N s
+                          of work and answer 503 timeout (default 0: no limit)
   --access-log            log every request to stderr
   --help                  this text
 )";
@@ -41,7 +47,29 @@ bool to_size(const char* s, std::size_t& out) {
     return r.ec == std::errc() && r.ptr == end;
 }
 
+/// The flags that take a number, so that an unknown flag is called unknown whatever its value.
+const std::set<std::string>& numeric_flags() {
+    static const std::set<std::string> flags = {"--port",
+                                                "--threads",
+                                                "--max-connections",
+                                                "--max-body-mb",
+                                                "--max-rays",
+                                                "--max-pixels",
+                                                "--max-triangles",
+                                                "--max-concurrent",
+                                                "--memory-budget-mb",
+                                                "--body-budget-mb",
+                                                "--header-timeout-s",
+                                                "--idle-timeout-s",
+                                                "--request-timeout-s"};
+    return flags;
+}
+
 }  // namespace
+
+bool is_loopback_host(const std::string& host) {
+    return host == "localhost" || host == "::1" || host == "[::1]" || host.rfind("127.", 0) == 0;
+}
 
 std::optional<Config> parse_args(int argc, char** argv, std::string& message, bool& error) {
     Config c;
@@ -74,6 +102,12 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             c.data_dir = v;
         } else if (a == "--demo") {
             c.demo.emplace_back(v);
+        } else if (a == "--token") {
+            c.token = v;
+            if (c.token.empty())
+                return fail("--token must not be empty");
+        } else if (!numeric_flags().count(a)) {
+            return fail("unknown option " + a);
         } else if (!numeric) {
             return fail(a + " needs a non-negative whole number, got \"" + v + "\"");
         } else if (a == "--port") {
@@ -105,9 +139,17 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             if (n == 0 || n > 3600)
                 return fail(a + " must be from 1 to 3600");
             (a == "--header-timeout-s" ? c.limits.header_timeout_s : c.limits.idle_timeout_s) = n;
+        } else if (a == "--request-timeout-s") {
+            if (n > 86400)
+                return fail("--request-timeout-s must be at most 86400");
+            c.limits.request_timeout_s = n;
         } else {
             return fail("unknown option " + a);
         }
+    }
+    if (c.token.empty()) {
+        if (const char* env = std::getenv("RAYCASTD_TOKEN"))
+            c.token = env;
     }
     return c;
 }

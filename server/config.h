@@ -20,6 +20,9 @@ struct Limits {
     std::size_t body_budget_bytes = 2ull << 30;    ///< request bodies in flight (503 busy above)
     std::size_t header_timeout_s = 10;             ///< a request head must arrive within this
     std::size_t idle_timeout_s = 5;  ///< a keep-alive connection's wait for its next request
+    /// Longest a render, trace, batch or stateless scene build may work before 503 timeout
+    /// (server/request_cancel.h); 0: no limit.
+    std::size_t request_timeout_s = 0;
 };
 
 struct Config {
@@ -32,10 +35,18 @@ struct Config {
     std::string data_dir;           ///< registered scenes persist here ("" = memory only)
     std::vector<std::string> demo;  ///< scene documents registered at start-up
     bool access_log = false;
+    /// Writes (POST /v1/scenes, DELETE /v1/scenes/{id}) need `Authorization: Bearer <token>`
+    /// when set (--token, else $RAYCASTD_TOKEN); empty: writes are open.
+    std::string token;
     Limits limits;
 };
 
-/// Parses argv. Returns nullopt and fills `message` for --help (exit 0) or a usage error
+/// Whether `host` names only this machine (127.0.0.0/8, ::1, localhost): a server bound
+/// elsewhere without a token lets anyone on the network register and delete scenes.
+bool is_loopback_host(const std::string& host);
+
+/// Parses argv (and $RAYCASTD_TOKEN when --token is absent). Returns nullopt and fills `message`
+/// for --help (exit 0) or a usage error
 /// (`error` set, exit 2).
 std::optional<Config> parse_args(int argc, char** argv, std::string& message, bool& error);
 

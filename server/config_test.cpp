@@ -39,7 +39,46 @@ TEST(Config, HelpAndErrors) {
     EXPECT_TRUE(error);
     EXPECT_FALSE(parse({"--bogus", "1"}, msg, error));
     EXPECT_TRUE(error);
+    // An unknown flag is called unknown whatever its value (it was "needs a whole number").
+    EXPECT_FALSE(parse({"--bogus", "x"}, msg, error));
+    EXPECT_NE(msg.find("unknown option --bogus"), std::string::npos) << msg;
+    EXPECT_FALSE(parse({"--token", ""}, msg, error));
+    EXPECT_TRUE(error);
     EXPECT_FALSE(parse({"--port"}, msg, error));
+    EXPECT_TRUE(error);
+}
+
+TEST(Config, TokenFromTheFlagOrTheEnvironment) {
+    std::string msg;
+    bool error = false;
+    ::unsetenv("RAYCASTD_TOKEN");
+    EXPECT_EQ(parse({}, msg, error)->token, "");
+    EXPECT_EQ(parse({"--token", "s3cret"}, msg, error)->token, "s3cret");
+    ::setenv("RAYCASTD_TOKEN", "from-env", 1);
+    EXPECT_EQ(parse({}, msg, error)->token, "from-env");
+    EXPECT_EQ(parse({"--token", "flag-wins"}, msg, error)->token, "flag-wins");
+    ::unsetenv("RAYCASTD_TOKEN");
+}
+
+TEST(Config, LoopbackHosts) {
+    for (const char* h : {"127.0.0.1", "127.1.2.3", "localhost", "::1"})
+        EXPECT_TRUE(is_loopback_host(h)) << h;
+    for (const char* h : {"0.0.0.0", "::", "10.0.0.1", "192.168.1.2", "example.org"})
+        EXPECT_FALSE(is_loopback_host(h)) << h;
+}
+
+TEST(Config, RequestTimeout) {
+    std::string msg;
+    bool error = false;
+    auto none = parse({}, msg, error);
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->limits.request_timeout_s, 0u);  // no limit by default
+    auto c = parse({"--request-timeout-s", "30"}, msg, error);
+    ASSERT_TRUE(c);
+    EXPECT_EQ(c->limits.request_timeout_s, 30u);
+    EXPECT_FALSE(parse({"--request-timeout-s", "-1"}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_FALSE(parse({"--request-timeout-s", "100000"}, msg, error));
     EXPECT_TRUE(error);
 }
 

@@ -1,5 +1,6 @@
 #include "server/content_hash.h"
 
+#include <openssl/crypto.h>
 #include <openssl/evp.h>
 
 namespace raycastd::server {
@@ -16,6 +17,14 @@ void numbers_as_doubles(Json& j) {
 }
 
 }  // namespace
+
+bool same_secret(std::string_view a, std::string_view b) {
+    unsigned char da[EVP_MAX_MD_SIZE], db[EVP_MAX_MD_SIZE];
+    unsigned int la = 0, lb = 0;
+    EVP_Digest(a.data(), a.size(), da, &la, EVP_sha256(), nullptr);
+    EVP_Digest(b.data(), b.size(), db, &lb, EVP_sha256(), nullptr);
+    return la == lb && CRYPTO_memcmp(da, db, la) == 0;
+}
 
 std::string sha256_hex(std::string_view bytes) {
     unsigned char md[EVP_MAX_MD_SIZE];

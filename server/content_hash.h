@@ -14,6 +14,10 @@ namespace raycastd::server {
 /// Lower-case hex SHA-256 (FIPS 180-4) of the bytes: 64 characters.
 std::string sha256_hex(std::string_view bytes);
 
+/// Whether two secrets are equal, in time independent of where they differ and of their
+/// lengths: their SHA-256 digests are compared with OpenSSL's constant-time CRYPTO_memcmp.
+bool same_secret(std::string_view a, std::string_view b);
+
 /// The document with sorted keys and every number as a double, so that "2", "2.0" and "2e0"
 /// (and any key order or whitespace) serialise alike.
 std::string canonical_json(const Json& doc);

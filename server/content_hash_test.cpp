@@ -59,5 +59,13 @@ TEST(ContentHash, SceneIdCoversTheFilesRead) {
     EXPECT_EQ(one, scene_id(key, {{"a.obj", sha256_hex("v 0 0 0")}}));
 }
 
+TEST(ContentHash, SameSecretIsEquality) {
+    EXPECT_TRUE(same_secret("s3cret", "s3cret"));
+    EXPECT_FALSE(same_secret("s3cret", "s3creT"));
+    EXPECT_FALSE(same_secret("s3cret", "s3cret "));
+    EXPECT_FALSE(same_secret("", "x"));
+    EXPECT_TRUE(same_secret("", ""));
+}
+
 }  // namespace
 }  // namespace raycastd::server

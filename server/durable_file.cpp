@@ -14,14 +14,20 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool fail(std::string& error, const std::string& what, const fs::path& path) {
-    error = what + " " + path.string() + ": " + std::strerror(errno);
+bool fail(IoError& error, const std::string& what, const fs::path& path) {
+    error.code = errno;
+    error.message = what + " " + path.string() + ": " + std::strerror(errno);
     return false;
 }
 
 }  // namespace
 
-bool write_synced(const fs::path& path, std::string_view bytes, std::string& error) {
+bool IoError::storage_refused() const {
+    return code == ENOSPC || code == EDQUOT || code == EROFS || code == EACCES || code == EPERM ||
+           code == EFBIG;
+}
+
+bool write_synced(const fs::path& path, std::string_view bytes, IoError& error) {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0)
         return fail(error, "cannot create", path);
@@ -48,7 +54,7 @@ bool write_synced(const fs::path& path, std::string_view bytes, std::string& err
     return true;
 }
 
-bool sync_dir(const fs::path& dir, std::string& error) {
+bool sync_dir(const fs::path& dir, IoError& error) {
     const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd < 0)
         return fail(error, "cannot open directory", dir);
@@ -59,7 +65,7 @@ bool sync_dir(const fs::path& dir, std::string& error) {
     return ok;
 }
 
-bool rename_synced(const fs::path& from, const fs::path& to, std::string& error) {
+bool rename_synced(const fs::path& from, const fs::path& to, IoError& error) {
     if (::rename(from.c_str(), to.c_str()) != 0)
         return fail(error, "cannot rename " + from.string() + " to", to);
     const fs::path to_dir = to.parent_path().empty() ? fs::path(".") : to.parent_path();

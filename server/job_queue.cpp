@@ -13,6 +13,7 @@ struct JobQueue::Job {
     std::string id;
     Work work;
     engine::RenderProgress progress;
+    engine::CancelToken cancel = engine::CancelToken::make();
     JobState state = JobState::queued;  // guarded by JobQueue::mu_
     Clock::time_point started;
     Clock::time_point finished;
@@ -60,7 +61,7 @@ JobQueue::~JobQueue() {
         std::lock_guard<std::mutex> lock(mu_);
         stopping_ = true;
         for (auto& [id, job] : jobs_)
-            job->progress.cancel = true;
+            job->cancel.cancel();
     }
     cv_.notify_all();
     worker_.join();
@@ -102,7 +103,7 @@ void JobQueue::run() {
         std::shared_ptr<const JobOutput> output;
         std::optional<ApiError> error;
         try {
-            output = std::make_shared<const JobOutput>(job->work(job->progress));
+            output = std::make_shared<const JobOutput>(job->work(job->progress, job->cancel));
         } catch (const ApiError& e) {
             error = e;
         } catch (const std::bad_alloc&) {
@@ -113,7 +114,7 @@ void JobQueue::run() {
         }
         std::lock_guard<std::mutex> lock(mu_);
         job->finished = Clock::now();
-        if (job->progress.cancel) {
+        if (job->cancel.fired()) {
             job->state = JobState::cancelled;
         } else if (error) {
             job->state = JobState::failed;
@@ -145,7 +146,7 @@ std::optional<JobInfo> JobQueue::info(const std::string& id) const {
     JobInfo out;
     out.id = j.id;
     // A running job asked to stop reports cancelled at once; it ends at its next tile.
-    out.state = j.state == JobState::running && j.progress.cancel ? JobState::cancelled : j.state;
+    out.state = j.state == JobState::running && j.cancel.fired() ? JobState::cancelled : j.state;
     out.finished = j.state != JobState::queued && j.state != JobState::running;
     out.tiles_done = j.progress.tiles_done.load();
     out.tiles_total = j.progress.tiles_total.load();
@@ -176,7 +177,7 @@ std::optional<JobState> JobQueue::cancel_or_remove(const std::string& id) {
     if (j.state == JobState::queued) {
         // The worker skips it; it counts as finished from now on.
         j.state = JobState::cancelled;
-        j.progress.cancel = true;
+        j.cancel.cancel();
         j.work = nullptr;
         --pending_;
         finished_.push_back(id);
@@ -184,7 +185,7 @@ std::optional<JobState> JobQueue::cancel_or_remove(const std::string& id) {
         return JobState::cancelled;
     }
     if (j.state == JobState::running) {
-        j.progress.cancel = true;  // the worker marks it cancelled when the render returns
+        j.cancel.cancel();  // the worker marks it cancelled when the render returns
         return JobState::cancelled;
     }
     const JobState state = j.state;

@@ -3,7 +3,9 @@
 // order (each render already spreads over every core through TBB, so running two at once only
 // splits the machine); at most `max_pending` jobs may wait or run (more is 503 busy). Finished
 // jobs keep their output until deleted or until more than `max_kept` have finished (the oldest
-// finished goes first). Progress is the render's own count of tiles done.
+// finished goes first). Progress is the render's own count of tiles done. Each job has its own
+// CancelToken (engine/cancel.h), fired by cancel_or_remove (DELETE /v1/jobs/{id}) and by the
+// destructor; a job is not tied to the client that submitted it, and has no time limit.
 
 #include <chrono>
 #include <condition_variable>
@@ -49,9 +51,11 @@ struct JobInfo {
 
 class JobQueue {
   public:
-    /// The work of a job: renders with `progress` (watching progress.cancel) and returns its
-    /// output; throws ApiError (or anything else: internal) to fail.
-    using Work = std::function<JobOutput(engine::RenderProgress& progress)>;
+    /// The work of a job: renders with `progress` and `cancel` (the job's token, to put into the
+    /// render's options) and returns its output; throws ApiError (or anything else: internal)
+    /// to fail. A job whose token has fired ends cancelled, whatever its work returned.
+    using Work = std::function<JobOutput(engine::RenderProgress& progress,
+                                         const engine::CancelToken& cancel)>;
 
     JobQueue(std::size_t max_pending, std::size_t max_kept);
     /// Cancels what is queued or running and waits for the worker.

@@ -26,11 +26,11 @@ JobInfo wait_finished(const JobQueue& q, const std::string& id) {
 /// A work item that "renders" `tiles` tiles, one per `step`, honouring cancel; it waits for
 /// `gate` before starting so tests can look at a queued or running job.
 JobQueue::Work tiles_work(int tiles, std::atomic<bool>* gate, std::chrono::milliseconds step) {
-    return [=](engine::RenderProgress& p) {
+    return [=](engine::RenderProgress& p, const engine::CancelToken& cancel) {
         while (gate && !gate->load())
             std::this_thread::sleep_for(1ms);
         p.tiles_total = static_cast<std::size_t>(tiles);
-        for (int i = 0; i < tiles && !p.cancel; ++i) {
+        for (int i = 0; i < tiles && !cancel.cancelled(); ++i) {
             std::this_thread::sleep_for(step);
             ++p.tiles_done;
         }
@@ -118,7 +118,7 @@ TEST(JobQueue, FullQueueIsBusy) {
 
 TEST(JobQueue, FailedJobKeepsItsError) {
     JobQueue q(2, 8);
-    auto id = q.submit([](engine::RenderProgress&) -> JobOutput {
+    auto id = q.submit([](engine::RenderProgress&, const engine::CancelToken&) -> JobOutput {
         throw ApiError(ErrorCode::too_large, "no room");
     });
     const JobInfo info = wait_finished(q, *id);

@@ -50,6 +50,11 @@ int main(int argc, char** argv) {
             std::this_thread::sleep_for(std::chrono::milliseconds(5));
         }
     });
+    if (!raycastd::server::is_loopback_host(config->host) && config->token.empty()) {
+        std::cerr << "raycastd: WARNING: listening on " << config->host
+                  << " without --token: anyone who can reach this port can register and delete "
+                     "scenes. Set --token or RAYCASTD_TOKEN, or bind to 127.0.0.1.\n";
+    }
     std::printf("raycastd listening on http://%s:%d\n", config->host.c_str(), port);
     std::fflush(stdout);
     const bool ok = app.listen_after_bind();

@@ -293,14 +293,16 @@ std::optional<std::string> decode_base64(std::string_view text) {
 namespace {
 
 std::shared_ptr<const engine::QueryEngine> prepare(engine::Scene scene, const Limits& limits,
-                                                   const std::string& prefix) {
+                                                   const std::string& prefix,
+                                                   const engine::CancelToken& cancel = {}) {
     if (scene.triangle_count() > limits.max_triangles) {
         throw ApiError(ErrorCode::too_large,
                        "the scene has " + std::to_string(scene.triangle_count()) +
                            " triangles, over the limit of " + std::to_string(limits.max_triangles),
                        prefix);
     }
-    auto built = engine::QueryEngine::build(std::make_shared<engine::Scene>(std::move(scene)));
+    auto built =
+        engine::QueryEngine::build(std::make_shared<engine::Scene>(std::move(scene)), cancel);
     if (!built.ok())
         throw from_status(built.status(), prefix);
     return *built;
@@ -317,14 +319,14 @@ FileSource ModelSource::scene_root_files() const {
 }
 
 std::shared_ptr<const engine::QueryEngine> ModelSource::build_stateless_scene(
-    const Json& body) const {
+    const Json& body, const engine::CancelToken& cancel) const {
     require_object(body, "", ErrorCode::invalid_request);
     const Json* doc = member(body, "scene");
     if (!doc)
         throw ApiError(ErrorCode::invalid_request, "/scene is required", "/scene");
     return stateless_cache_.get_or_build(*doc, [&] {
         return prepare(scene_from_document(*doc, "/scene", scene_root_files(), limits_), limits_,
-                       "/scene");
+                       "/scene", cancel);
     });
 }
 

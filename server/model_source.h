@@ -44,8 +44,11 @@ class ModelSource {
                                                            const FileSource& files) const;
     /// The inline "scene" of a stateless call's body (/v1/intersect, /v1/explain), prepared or
     /// reused from the cache: invalid_request when the body is not an object or has no
-    /// "scene"; the scene's own errors as build_scene's, with paths under /scene.
-    std::shared_ptr<const engine::QueryEngine> build_stateless_scene(const Json& body) const;
+    /// "scene"; the scene's own errors as build_scene's, with paths under /scene. Once `cancel`
+    /// fires (asked before and during the BVH build) the build stops and ApiError timeout is
+    /// thrown; the caller asks the token what it means (request_cancel.h).
+    std::shared_ptr<const engine::QueryEngine> build_stateless_scene(
+        const Json& body, const engine::CancelToken& cancel = {}) const;
     /// Stateless calls answered from the cache.
     std::size_t stateless_cache_hits() const { return stateless_cache_.hits(); }
 

@@ -6,6 +6,7 @@
 #include "engine/points/point_queries.h"
 #include "server/app.h"
 #include "server/intersect/binary_batch.h"
+#include "server/request_cancel.h"
 #include "server/schema/points_codec.h"
 #include "server/schema/points_doc.h"
 
@@ -13,11 +14,13 @@ namespace raycastd::server {
 
 namespace {
 
-/// Answers a parsed JSON request over `engine`.
-void answer_json(const engine::QueryEngine& engine, const PointsRequest& req,
+/// Answers a parsed JSON request over `engine`, stopping when `cancel` fires
+/// (server/request_cancel.h).
+void answer_json(const engine::QueryEngine& engine, PointsRequest req, const RequestCancel& cancel,
                  httplib::Response& res) {
     std::vector<engine::PointAnswer> answers;
-    engine::query_points(engine, req.points, req.options, answers);
+    req.options.cancel = cancel.token();
+    cancel.check(engine::query_points(engine, req.points, req.options, answers));
     send_json(res, write_points_response(engine.scene(), req.options.query, answers));
 }
 
@@ -50,12 +53,13 @@ BinaryPointsQuery parse_binary_points_query(const httplib::Request& req) {
 }
 
 void answer_binary(const engine::QueryEngine& engine, const httplib::Request& req,
-                   std::size_t max_points, httplib::Response& res) {
-    const BinaryPointsQuery q = parse_binary_points_query(req);
+                   std::size_t max_points, const RequestCancel& cancel, httplib::Response& res) {
+    BinaryPointsQuery q = parse_binary_points_query(req);
     std::vector<engine::Vec3d> points;
     decode_points(req.body, q.dtype, max_points, points);
     std::vector<engine::PointAnswer> answers;
-    engine::query_points(engine, points, q.options, answers);
+    q.options.cancel = cancel.token();
+    cancel.check(engine::query_points(engine, points, q.options, answers));
     std::string out;
     encode_point_answers(answers, q.options.query, q.dtype, out);
     res.status = 200;
@@ -68,27 +72,31 @@ void answer_binary(const engine::QueryEngine& engine, const httplib::Request& re
 void install_points_routes(App& app) {
     app.on_post("/v1/points", [&app](const httplib::Request& req, httplib::Response& res) {
         app.handle(req, res, Work::heavy, [&] {
+            const RequestCancel cancel = RequestCancel::for_current_request(app.config().limits);
             if (is_binary(req)) {
                 throw ApiError(ErrorCode::unsupported_format,
                                "binary points need a registered scene: POST /v1/scenes, then "
                                "/v1/scenes/{id}/points");
             }
             const Json body = parse_json(req.body);
-            auto engine = app.models().build_stateless_scene(body);
+            auto engine = cancel.guard(
+                [&] { return app.models().build_stateless_scene(body, cancel.token()); });
             answer_json(*engine, parse_points_request(body, "", app.config().limits.max_points),
-                        res);
+                        cancel, res);
         });
     });
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/points)", [&app](const httplib::Request& req,
                                                                httplib::Response& res) {
         app.handle(req, res, Work::heavy, [&] {
+            const RequestCancel cancel = RequestCancel::for_current_request(app.config().limits);
             auto engine = app.scene_or_404(req.matches[1]);
             const std::size_t max_points = app.config().limits.max_points;
             if (is_binary(req)) {
-                answer_binary(*engine, req, max_points, res);
+                answer_binary(*engine, req, max_points, cancel, res);
                 return;
             }
-            answer_json(*engine, parse_points_request(parse_json(req.body), "", max_points), res);
+            answer_json(*engine, parse_points_request(parse_json(req.body), "", max_points), cancel,
+                        res);
         });
     });
 }

@@ -5,6 +5,7 @@
 #include "engine/render/render.h"
 #include "server/app.h"
 #include "server/job_queue.h"
+#include "server/request_cancel.h"
 #include "server/schema/json_writer.h"
 #include "server/schema/render_doc.h"
 
@@ -15,13 +16,18 @@ namespace {
 /// Finished jobs whose images are kept for GET /v1/jobs/{job}/image.
 constexpr std::size_t kJobsKept = 32;
 
-/// Renders and encodes; the response headers say how long it took and which rays it traced.
-JobOutput render_output(const engine::QueryEngine& engine, const RenderRequest& req,
-                        engine::RenderProgress* progress) {
-    const engine::RenderResult r = engine::render(engine, req.options, progress);
+/// Renders (stopping when `cancel` fires: Code::cancelled) and encodes; the response headers
+/// say how long it took and which rays it traced.
+engine::Result<JobOutput> render_output(const engine::QueryEngine& engine, const RenderRequest& req,
+                                        engine::RenderProgress* progress,
+                                        const engine::CancelToken& cancel) {
+    engine::RenderOptions options = req.options;
+    options.cancel = cancel;
+    const auto rendered = engine::render(engine, options, progress);
+    if (!rendered.ok())
+        return rendered.status();
+    const engine::RenderResult& r = *rendered;
     JobOutput out;
-    if (r.cancelled)
-        return out;
     out.body = engine::encode_image(r.image, req.format, engine::is_data_mode(req.options.shading));
     out.content_type = engine::mime_type(req.format);
     char ms[32];
@@ -85,15 +91,22 @@ void install_render_routes(App& app) {
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/render)", [&app, jobs](const httplib::Request& req,
                                                                      httplib::Response& res) {
         app.handle(req, res, Work::heavy, [&] {
+            const auto cancel = RequestCancel::for_current_request(app.config().limits);
             auto engine = app.scene_or_404(req.matches[1]);
             const Json body = req.body.empty() ? Json() : parse_json(req.body);
             const RenderRequest r = parse_render_request(body, app.config().limits.max_pixels);
             if (!r.async) {
-                send_output(res, render_output(*engine, r, nullptr));
+                const auto out = render_output(*engine, r, nullptr, cancel.token());
+                send_output(res, cancel.check(out));
                 return;
             }
-            auto id = jobs->submit([engine, r](engine::RenderProgress& progress) {
-                return render_output(*engine, r, &progress);
+            // Not tied to this request: the job's own token, fired by DELETE /v1/jobs/{job}.
+            auto id = jobs->submit([engine, r](engine::RenderProgress& progress,
+                                               const engine::CancelToken& job_cancel) {
+                auto out = render_output(*engine, r, &progress, job_cancel);
+                if (!out.ok())
+                    throw from_status(out.status());  // the queue sees the token: cancelled
+                return std::move(out).value();
             });
             if (!id) {
                 throw ApiError(ErrorCode::busy,

@@ -45,6 +45,7 @@ std::string info_body(const SceneInfo& i) {
 void install_scene_routes(App& app) {
     app.on_post("/v1/scenes", [&app](const httplib::Request& req, httplib::Response& res) {
         app.handle(req, res, Work::heavy, [&] {
+            app.require_write_token(req);
             SceneSource src{classify_scene_body(req.body, req.get_header_value("Content-Type")),
                             req.body};
             SceneRegistry::Added added = app.registry().add(src, app.models().scene_root_files());
@@ -77,6 +78,7 @@ void install_scene_routes(App& app) {
     app.on_delete(R"(/v1/scenes/([A-Za-z0-9_]+))",
                   [&app](const httplib::Request& req, httplib::Response& res) {
                       app.handle(req, res, Work::light, [&] {
+                          app.require_write_token(req);
                           const std::string id = req.matches[1];
                           if (!app.registry().remove(id))
                               throw App::scene_not_found(id);

@@ -5,6 +5,7 @@
 #include "engine/query/intersect.h"
 #include "engine/shade/whitted.h"
 #include "server/app.h"
+#include "server/request_cancel.h"
 #include "server/schema/explain_doc.h"
 #include "server/schema/render_doc.h"
 
@@ -14,16 +15,18 @@ void install_trace_routes(App& app) {
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/trace)", [&app](const httplib::Request& req,
                                                               httplib::Response& res) {
         app.handle(req, res, Work::heavy, [&] {
+            const auto cancel = RequestCancel::for_current_request(app.config().limits);
             auto engine = app.scene_or_404(req.matches[1]);
             const TraceRequest t = parse_trace_request(parse_json(req.body));
             const engine::Whitted whitted(*engine, t.options);
-            const engine::RayTree tree = whitted.tree(t.ray);
-            send_json(res, write_trace_json(engine->scene(), tree,
+            const auto tree = whitted.tree(t.ray, cancel.token());
+            send_json(res, write_trace_json(engine->scene(), cancel.check(tree),
                                             engine->effective_precision(t.options.precision)));
         });
     });
     app.on_post("/v1/explain", [&app](const httplib::Request& req, httplib::Response& res) {
         app.handle(req, res, Work::heavy, [&] {
+            const auto cancel = RequestCancel::for_current_request(app.config().limits);
             const std::string format =
                 req.has_param("format") ? req.get_param_value("format") : "json";
             if (format != "json" && format != "markdown") {
@@ -31,9 +34,11 @@ void install_trace_routes(App& app) {
                                "format must be json or markdown, got \"" + format + "\"");
             }
             const Json body = parse_json(req.body);
-            auto engine = app.models().build_stateless_scene(body);
+            auto engine = cancel.guard(
+                [&] { return app.models().build_stateless_scene(body, cancel.token()); });
             const engine::Ray ray = parse_single_ray(body, "/ray");
-            const engine::Explanation ex = engine::explain(engine->scene(), ray);
+            const auto explained = engine::explain(engine->scene(), ray, cancel.token());
+            const engine::Explanation& ex = cancel.check(explained);
             if (format == "markdown") {
                 res.status = 200;
                 res.set_content(write_explain_markdown(ex, ray), "text/markdown; charset=utf-8");

@@ -1,5 +1,5 @@
 #pragma once
-// GET / and GET /web/...: the preview page (API.md, "GET /"), served from clients/web/.
+// GET / and GET /web/...: the preview page (docs/api.md, "GET /"), served from clients/web/.
 
 #include <string>
 

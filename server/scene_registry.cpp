@@ -95,6 +95,18 @@ bool SceneRegistry::open(std::string& error) {
     for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "tmp", ec)) {
         fs::remove_all(d.path(), ec);
     }
+    // A data dir that refuses writes (read-only mount, full disk) still serves what it holds;
+    // registering and deleting will answer 507. Said once, loudly, at start-up.
+    IoError probe_error;
+    const fs::path probe = fs::path(data_dir_) / "tmp" / (".probe." + std::to_string(::getpid()));
+    if (!write_synced(probe, "probe", probe_error)) {
+        std::fprintf(stderr,
+                     "raycastd: WARNING: the data directory %s refuses writes (%s): its scenes "
+                     "are served, but registering and deleting scenes will answer 507 "
+                     "insufficient_storage\n",
+                     data_dir_.c_str(), probe_error.message.c_str());
+    }
+    fs::remove(probe, ec);
     std::lock_guard<std::mutex> lock(mu_);
     for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "scenes", ec)) {
         auto meta = read_file(d.path() / "meta.json");
@@ -175,9 +187,13 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
         if (it != entries_.end())
             return {it->second.info, false};
     }
-    std::string error;
+    IoError error;
     if (!data_dir_.empty() && !persist(id, source, read_files, e, error)) {
-        throw ApiError(ErrorCode::internal, "cannot save the scene: " + error);
+        if (error.storage_refused()) {
+            throw ApiError(ErrorCode::insufficient_storage,
+                           "cannot save the scene, so nothing was registered: " + error.message);
+        }
+        throw ApiError(ErrorCode::internal, "cannot save the scene: " + error.message);
     }
     std::lock_guard<std::mutex> lock(mu_);
     auto [it, inserted] = entries_.emplace(id, std::move(e));
@@ -191,7 +207,7 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
 
 bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
                             const std::map<std::string, std::string>& files, const Entry& e,
-                            std::string& error) const {
+                            IoError& error) const {
     static std::atomic<std::uint64_t> counter{0};
     const fs::path scenes = fs::path(data_dir_) / "scenes";
     const fs::path final_dir = scenes / id;
@@ -202,7 +218,8 @@ bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
                          (id + "." + std::to_string(::getpid()) + "." + std::to_string(counter++));
     fs::create_directories(tmp, ec);
     if (ec) {
-        error = ec.message();
+        error.code = ec.value();
+        error.message = "cannot create " + tmp.string() + ": " + ec.message();
         return false;
     }
     Json file_names = Json::object();
@@ -335,11 +352,28 @@ std::vector<SceneInfo> SceneRegistry::list() const {
 }
 
 bool SceneRegistry::remove(const std::string& id) {
+    const fs::path deleted = fs::path(data_dir_) / "tmp" / (id + ".deleted");
     {
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
         if (it == entries_.end())
             return false;
+        // The saved copy goes first (renamed aside, so that a crash mid-delete never leaves a
+        // half-deleted scene to reload), and only then the entry: a data dir that refuses the
+        // rename (read-only) leaves the scene registered, on disk and in memory, and says so.
+        // The rename is under the lock so that a concurrent add of the same content cannot
+        // save its copy between the two steps.
+        if (!data_dir_.empty()) {
+            IoError error;
+            const fs::path saved = fs::path(data_dir_) / "scenes" / id;
+            std::error_code ec;
+            if (fs::exists(saved, ec) && !rename_synced(saved, deleted, error)) {
+                throw ApiError(
+                    error.storage_refused() ? ErrorCode::insufficient_storage : ErrorCode::internal,
+                    "cannot delete the saved copy of " + id +
+                        ", so the scene stays registered: " + error.message);
+            }
+        }
         Entry& e = it->second;
         if (e.engine)
             resident_bytes_ -= e.info.memory_bytes;
@@ -355,12 +389,8 @@ bool SceneRegistry::remove(const std::string& id) {
         entries_.erase(it);
     }
     if (!data_dir_.empty()) {
-        // Renamed first so a crash mid-delete never leaves a half-deleted scene to reload.
         std::error_code ec;
-        std::string error;
-        const fs::path tmp = fs::path(data_dir_) / "tmp" / (id + ".deleted");
-        if (rename_synced(fs::path(data_dir_) / "scenes" / id, tmp, error))
-            fs::remove_all(tmp, ec);
+        fs::remove_all(deleted, ec);  // what stays is removed by the next open()
     }
     return true;
 }

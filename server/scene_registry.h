@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "engine/query/intersect.h"
+#include "server/durable_file.h"
 #include "server/model_source.h"
 #include "server/schema/topology_doc.h"
 
@@ -59,14 +60,17 @@ class SceneRegistry {
         SceneInfo info;
         bool created = false;  ///< false: the same content was already registered
     };
-    /// Registers a scene; `root_files` reads files under the scene root. Throws ApiError.
+    /// Registers a scene; `root_files` reads files under the scene root. Throws ApiError
+    /// (insufficient_storage when the data dir refuses the saved copy: nothing is registered).
     Added add(const SceneSource& source, const FileSource& root_files);
 
     /// The prepared scene, rebuilt from disk if it was evicted; nullptr for an unknown id.
     std::shared_ptr<const engine::QueryEngine> get(const std::string& id);
     std::optional<SceneInfo> info(const std::string& id) const;
     std::vector<SceneInfo> list() const;
-    /// Forgets the scene and deletes its saved copy; false for an unknown id.
+    /// Deletes the scene's saved copy, then forgets the scene; false for an unknown id. Throws
+    /// ApiError insufficient_storage, with the scene still registered, when the data dir
+    /// refuses the deletion (read-only).
     bool remove(const std::string& id);
 
     std::size_t size() const;
@@ -90,7 +94,7 @@ class SceneRegistry {
     void evict_over_budget(const std::string& keep);
     bool persist(const std::string& id, const SceneSource& source,
                  const std::map<std::string, std::string>& files, const Entry& e,
-                 std::string& error) const;
+                 IoError& error) const;
 
     std::string data_dir_;
     std::size_t budget_;

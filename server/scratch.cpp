@@ -32,7 +32,7 @@ std::shared_ptr<Scratch> acquire_scratch() {
         s = std::make_unique<Scratch>();
     return std::shared_ptr<Scratch>(s.release(), [](Scratch* p) {
         std::unique_ptr<Scratch> owned(p);
-        {
+        if (!owned->discard) {
             std::lock_guard<std::mutex> lock(pool().mutex);
             if (pool().free.size() < kRetained)
                 pool().free.push_back(std::move(owned));

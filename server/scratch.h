@@ -32,6 +32,9 @@ struct Scratch {
     /// A streamed batch's chunks, kept for the next one (unique_ptr: a chunk stays where it is
     /// while the list grows under running chunks).
     std::vector<std::unique_ptr<StreamChunk>> chunks;
+    /// Freed, not pooled, when the last pointer goes: set by a request whose work was
+    /// cancelled (request_cancel.h), so that an abandoned batch hands its memory back.
+    bool discard = false;
 };
 
 /// A Scratch from the pool (or a new one); it returns to the pool when the last copy of the

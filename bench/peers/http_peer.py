@@ -6,7 +6,7 @@ keep-alive http.client connection with TCP_NODELAY. Request bodies are encoded b
 starts and responses are read in full but decoded after it stops, so the figures are the
 server's (parse, trace, encode) plus loopback transport, not Python's.
 
-Binary form (API.md): POST /v1/scenes/{id}/intersect?mode=M&precision=P&dtype=float32 with
+Binary form (docs/api.md): POST /v1/scenes/{id}/intersect?mode=M&precision=P&dtype=float32 with
 Content-Type application/octet-stream; body n x 8 float32 (ox oy oz dx dy dz tmin tmax);
 response n x 32 bytes (t, object u32, primitive u32, u, v, nx, ny, nz). A server without the
 binary form (404, 415, ...) is reported as not available, not as a failure.

@@ -7,8 +7,9 @@ bench_points' own answers <W>_distance.npy and <W>_signed.npy (float64), and pri
 object:
 
   {"workload": "A", "open3d": "0.16.1", "n": ..., "mask_shim": true,
-   "closest": {"seconds": ..., "mpoints_s": ..., "max_abs_diff": ...},
-   "signed": {"seconds": ..., "mpoints_s": ..., "max_abs_diff": ..., "sign_agree": ...}}
+   "closest": {"seconds": ..., "cpu_seconds": ..., "mpoints_s": ..., "max_abs_diff": ...},
+   "signed": {"seconds": ..., "cpu_seconds": ..., "mpoints_s": ..., "max_abs_diff": ...,
+              "sign_agree": ...}}
 
 max_abs_diff compares Open3D's float32 distances with raycastd's double ones. The sign comes from
 rays (Open3D counts crossings of one ray per point), so run it with
@@ -34,13 +35,15 @@ def load(data_dir: str, name: str) -> np.ndarray:
 
 
 def timed(f, reps: int) -> tuple:
-    """The median seconds of `reps` calls after a warm-up, and the last result."""
-    times, result = [], None
+    """The median wall seconds of `reps` calls after a warm-up, their median CPU seconds (all
+    threads of the process), and the last result."""
+    times, cpu, result = [], [], None
     for _ in range(reps + 1):
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         result = f()
         times.append(time.perf_counter() - start)
-    return statistics.median(times[1:]), result
+        cpu.append(time.process_time() - start_cpu)
+    return statistics.median(times[1:]), statistics.median(cpu[1:]), result
 
 
 def main() -> int:
@@ -62,10 +65,14 @@ def main() -> int:
     ours_signed = load(args.data_dir, f"{w}_signed.npy")
     n = points.shape[0]
 
-    sec_c, closest = timed(lambda: scene.compute_closest_points(points), args.reps)
+    sec_c, cpu_c, closest = timed(
+        lambda: scene.compute_closest_points(points), args.reps
+    )
     p = closest["points"].numpy().astype(np.float64)
     d = np.linalg.norm(p - points.numpy().astype(np.float64), axis=1)
-    sec_s, signed = timed(lambda: scene.compute_signed_distance(points), args.reps)
+    sec_s, cpu_s, signed = timed(
+        lambda: scene.compute_signed_distance(points), args.reps
+    )
     s = signed.numpy().astype(np.float64)
     out = {
         "workload": w,
@@ -74,11 +81,13 @@ def main() -> int:
         "mask_shim": "embree_mask_shim" in os.environ.get("LD_PRELOAD", ""),
         "closest": {
             "seconds": sec_c,
+            "cpu_seconds": cpu_c,
             "mpoints_s": n / sec_c * 1e-6,
             "max_abs_diff": float(np.max(np.abs(d - ours))),
         },
         "signed": {
             "seconds": sec_s,
+            "cpu_seconds": cpu_s,
             "mpoints_s": n / sec_s * 1e-6,
             "max_abs_diff": float(np.max(np.abs(np.abs(s) - np.abs(ours_signed)))),
             "sign_agree": float(np.mean(np.sign(s) == np.sign(ours_signed))),

@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
                 std::vector<double> ms;
                 engine::RenderResult r;
                 for (int k = 0; k < a.runs; ++k) {
-                    r = engine::render(*engine, o);
+                    r = engine::render(*engine, o).value();
                     ms.push_back(r.render_ms);
                 }
                 const double m = median(ms);

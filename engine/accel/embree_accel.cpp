@@ -453,7 +453,8 @@ void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) 
 EmbreeAccel::EmbreeAccel(std::unique_ptr<embree::Impl> impl) : impl_(std::move(impl)) {}
 EmbreeAccel::~EmbreeAccel() = default;
 
-Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
+Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
+                                                        const CancelToken& cancel) {
     RTCDevice device = embree::shared_device();
     if (!device)
         return Status::error(Code::internal, "cannot create the Embree device");
@@ -499,8 +500,22 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene) {
         rtcCommitGeometry(g.get());
         rtcAttachGeometryByID(impl->native.get(), g.get(), i);  // geomID == object index
     }
+    if (cancel.can_fire()) {
+        // Embree asks this from its build threads as the build goes on; false stops it
+        // (RTC_ERROR_CANCELLED).
+        rtcSetSceneProgressMonitorFunction(
+            impl->native.get(),
+            [](void* token, double) {
+                return !static_cast<const CancelToken*>(token)->cancelled();
+            },
+            const_cast<CancelToken*>(&cancel));
+    }
     rtcCommitScene(impl->native.get());
+    if (cancel.can_fire())  // the token is the caller's: nothing may ask it after the build
+        rtcSetSceneProgressMonitorFunction(impl->native.get(), nullptr, nullptr);
     Status st = embree::take_error("building the BVH");
+    if (cancel.fired())
+        return cancel.status();
     if (!st.ok())
         return st;
     return std::unique_ptr<EmbreeAccel>(new EmbreeAccel(std::move(impl)));

@@ -46,8 +46,10 @@ struct Impl;  // engine/accel/embree/impl.h
 class EmbreeAccel {
   public:
     /// Builds the fast/refined BVH over `scene`, which must outlive the accelerator.
-    /// Embree errors (out of memory → too_large) come back as a Status.
-    static Result<std::unique_ptr<EmbreeAccel>> build(const Scene& scene);
+    /// Embree errors (out of memory → too_large) come back as a Status. `cancel` is asked from
+    /// Embree's build progress callback, which stops the build (Code::cancelled) once it fires.
+    static Result<std::unique_ptr<EmbreeAccel>> build(const Scene& scene,
+                                                      const CancelToken& cancel = {});
     ~EmbreeAccel();
     EmbreeAccel(const EmbreeAccel&) = delete;
     EmbreeAccel& operator=(const EmbreeAccel&) = delete;

@@ -6,7 +6,8 @@
 namespace raycastd::engine {
 
 std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t object,
-                                            const Ray& ray_in, bool want_normal) {
+                                            const Ray& ray_in, bool want_normal,
+                                            const CancelToken* cancel) {
     const Object& o = scene.objects[object];
     std::optional<Hit> best;
     if (o.kind == ObjectKind::sphere) {
@@ -14,13 +15,18 @@ std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t ob
     } else {
         Ray ray = ray_in;
         const TriangleMesh& mesh = *o.mesh;
-        for (std::size_t p = 0; p < mesh.size(); ++p) {
-            auto h = intersect_triangle(mesh.triangle(p), ray, want_normal);
-            // Strictly closer only: an exact tie keeps the lower primitive index.
-            if (h && (!best || h->t < best->t)) {
-                h->primitive = static_cast<std::uint32_t>(p);
-                best = h;
-                ray.tmax = h->t;
+        for (std::size_t b = 0; b < mesh.size(); b += kLinearCancelStride) {
+            if (cancel && cancel->cancelled())
+                return std::nullopt;
+            const std::size_t e = std::min(mesh.size(), b + kLinearCancelStride);
+            for (std::size_t p = b; p < e; ++p) {
+                auto h = intersect_triangle(mesh.triangle(p), ray, want_normal);
+                // Strictly closer only: an exact tie keeps the lower primitive index.
+                if (h && (!best || h->t < best->t)) {
+                    h->primitive = static_cast<std::uint32_t>(p);
+                    best = h;
+                    ray.tmax = h->t;
+                }
             }
         }
     }
@@ -29,11 +35,14 @@ std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t ob
     return best;
 }
 
-std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray_in, bool want_normal) {
+std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray_in, bool want_normal,
+                                  const CancelToken* cancel) {
     Ray ray = ray_in;
     std::optional<Hit> best;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
-        auto h = linear_closest_in_object(scene, i, ray, want_normal);
+        auto h = linear_closest_in_object(scene, i, ray, want_normal, cancel);
+        if (cancel && cancel->fired())
+            return std::nullopt;
         if (h && (!best || closer(*h, *best))) {
             best = h;
             ray.tmax = h->t;  // inclusive, so an exact tie with a later object is still seen

@@ -7,16 +7,24 @@
 #include <optional>
 #include <vector>
 
+#include "engine/cancel.h"
 #include "engine/scene/scene.h"
 
 namespace raycastd::engine {
 
-/// Closest hit of the ray over the whole scene, or nullopt.
-std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray, bool want_normal);
+/// Closest hit of the ray over the whole scene, or nullopt. `cancel`, if given, is asked as
+/// linear_closest_in_object asks it (nullopt once it has fired).
+std::optional<Hit> linear_closest(const Scene& scene, const Ray& ray, bool want_normal,
+                                  const CancelToken* cancel = nullptr);
 
-/// The hit (if any) of one object; `object` and `primitive` are filled in.
+/// The hit (if any) of one object; `object` and `primitive` are filled in. `cancel`, if given,
+/// is asked once per kLinearCancelStride triangles (a single ray through a mesh of millions:
+/// the worked solution), and nullopt is returned once it has fired.
 std::optional<Hit> linear_closest_in_object(const Scene& scene, std::uint32_t object,
-                                            const Ray& ray, bool want_normal);
+                                            const Ray& ray, bool want_normal,
+                                            const CancelToken* cancel = nullptr);
+/// Triangles tested between two checks of a CancelToken: about a millisecond of work.
+constexpr std::size_t kLinearCancelStride = 1u << 16;
 
 /// Whether anything is hit in [tmin, tmax]; stops at the first hit found.
 bool linear_any(const Scene& scene, const Ray& ray);

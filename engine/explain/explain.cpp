@@ -159,9 +159,11 @@ ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
 
 }  // namespace
 
-Explanation explain(const Scene& scene, const Ray& ray) {
+Result<Explanation> explain(const Scene& scene, const Ray& ray, const CancelToken& cancel) {
     Explanation ex;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        if (cancel.cancelled())
+            return cancel.status();
         const Object& o = scene.objects[i];
         ObjectWork w;
         if (o.kind == ObjectKind::sphere) {
@@ -173,7 +175,7 @@ Explanation explain(const Scene& scene, const Ray& ray) {
             w.triangles = o.mesh->size();
             w.steps.push_back("mesh of " + std::to_string(w.triangles) +
                               " triangles, each tested with the watertight ray/triangle test");
-            if (auto h = closest_in_object_by_brute_force(scene, i, ray, false)) {
+            if (auto h = closest_in_object_by_brute_force(scene, i, ray, false, cancel)) {
                 w.hit = true;
                 w.t = h->t;
                 w.steps.push_back("closest hit: triangle " + std::to_string(h->primitive) +
@@ -188,7 +190,9 @@ Explanation explain(const Scene& scene, const Ray& ray) {
         w.kind = o.kind;
         ex.objects.push_back(std::move(w));
     }
-    ex.first_hit = closest_by_brute_force(scene, ray, true);
+    ex.first_hit = closest_by_brute_force(scene, ray, true, cancel);
+    if (cancel.fired())
+        return cancel.status();
     if (ex.first_hit)
         ex.first_point = ray.at(ex.first_hit->t);
     return ex;

@@ -12,8 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "engine/cancel.h"
 #include "engine/math/ray.h"
 #include "engine/scene/scene.h"
+#include "engine/status.h"
 
 namespace raycastd::engine {
 
@@ -52,7 +54,8 @@ struct Explanation {
     Vec3d first_point;             ///< l(first_hit.t)
 };
 
-/// Works the solution for every object of the scene. The ray must be valid.
-Explanation explain(const Scene& scene, const Ray& ray);
+/// Works the solution for every object of the scene. The ray must be valid. Code::cancelled
+/// once `cancel` has fired (asked per object, and per 65,536 triangles of a mesh).
+Result<Explanation> explain(const Scene& scene, const Ray& ray, const CancelToken& cancel = {});
 
 }  // namespace raycastd::engine

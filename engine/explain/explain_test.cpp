@@ -11,7 +11,7 @@ namespace {
 
 // The tutorial's worked solution of Question 1, number for number.
 TEST(Explain, TutorialQuestion1) {
-    Explanation ex = explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}});
+    Explanation ex = explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}}).value();
     ASSERT_EQ(ex.objects.size(), 3u);
 
     const ObjectWork& s1 = ex.objects[0];
@@ -52,7 +52,7 @@ TEST(Explain, TriangleByThePlaneMethod) {
     s.materials.push_back(Material{});
     s.objects.push_back(
         testing::mesh_object("abc", {{0, 0, 5}, {2, 0, 5}, {0, 2, 5}}, {{0, 1, 2}}));
-    Explanation ex = explain(s, Ray{{0.5, 0.5, 0}, {0, 0, 1}});
+    Explanation ex = explain(s, Ray{{0.5, 0.5, 0}, {0, 0, 1}}).value();
     const ObjectWork& w = ex.objects[0];
     ASSERT_TRUE(w.triangle);
     // ac × ab = (0,2,0) × (2,0,0) = (0,0,−4)
@@ -67,14 +67,22 @@ TEST(Explain, TriangleByThePlaneMethod) {
         EXPECT_GT(c.z, 0.0);
     EXPECT_EQ(w.triangle->cross[0], (Vec3d{0, 0, 1}));
 
-    Explanation miss = explain(s, Ray{{1.5, 1.5, 0}, {0, 0, 1}});
+    Explanation miss = explain(s, Ray{{1.5, 1.5, 0}, {0, 0, 1}}).value();
     EXPECT_FALSE(miss.objects[0].triangle->same_direction);
     EXPECT_FALSE(miss.objects[0].hit);
     EXPECT_FALSE(miss.first_hit);
 
-    Explanation parallel = explain(s, Ray{{0, 0, 0}, {1, 0, 0}});
+    Explanation parallel = explain(s, Ray{{0, 0, 0}, {1, 0, 0}}).value();
     EXPECT_FALSE(parallel.objects[0].hit);
     EXPECT_FALSE(parallel.objects[0].triangle->t);
+}
+
+TEST(Explain, StopsWhenItsTokenHasFired) {
+    const CancelToken stopped = CancelToken::make();
+    stopped.cancel();
+    const auto ex = explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}}, stopped);
+    ASSERT_FALSE(ex.ok());
+    EXPECT_EQ(ex.status().code, Code::cancelled);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/geometry/target_clones.h"
 #include "engine/math/double_double.h"
 #include "engine/math/float_bounds.h"
 
@@ -26,8 +27,7 @@ SphereRoots with_roots(SphereRoots out, double t0, double t1) {
 
 }  // namespace
 
-__attribute__((target_clones("fma", "default"))) SphereRoots sphere_roots(const Sphere& s,
-                                                                          const Ray& ray) {
+RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
     SphereRoots out;
     const Vec3d& d = ray.direction;
     {

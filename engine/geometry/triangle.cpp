@@ -5,6 +5,7 @@
 #include <limits>
 #include <utility>
 
+#include "engine/geometry/target_clones.h"
 #include "engine/math/double_double.h"
 #include "engine/math/float_bounds.h"
 
@@ -71,8 +72,7 @@ const Vec3d& anchor_vertex(const Triangle& tri, const Vec3d& origin) {
 ///
 /// Compiled twice, with and without hardware FMA, and chosen when the program loads (GCC's
 /// function multiversioning): without it std::fma is a library call and this costs twice as much.
-__attribute__((target_clones("fma", "default"))) double plane_t(const Triangle& tri,
-                                                                const Ray& ray) {
+RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
     const Vec3d& d = ray.direction;
     const Vec3d& v = anchor_vertex(tri, ray.origin);
     const DD vo[3] = {two_sum(v.x, -ray.origin.x), two_sum(v.y, -ray.origin.y),

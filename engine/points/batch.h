@@ -7,13 +7,19 @@
 
 #include <tbb/parallel_for.h>
 
+#include "engine/cancel.h"
+
 namespace raycastd::engine {
 
-/// Calls f(i) for every i in [0, n), in parallel; each i exactly once, in no particular order.
+/// Calls f(i) for every i in [0, n), in parallel; each i at most once, in no particular order.
+/// `cancel` is asked once per block (engine/cancel.h); once it has fired, blocks not yet begun
+/// are skipped (the caller asks cancel.fired()).
 template <class F>
-void for_each_point(std::size_t n, F&& f) {
+void for_each_point(std::size_t n, const CancelToken& cancel, F&& f) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256),
                       [&](const tbb::blocked_range<std::size_t>& r) {
+                          if (cancel.cancelled())
+                              return;
                           for (std::size_t i = r.begin(); i != r.end(); ++i)
                               f(i);
                       });

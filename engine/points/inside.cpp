@@ -55,11 +55,12 @@ RayVerdict verdict(const Hit* begin, const Hit* end, const std::vector<std::uint
     return v;
 }
 
-/// Casts one ray per listed point (direction dir(i)) on the exact path and returns the verdicts.
+/// Casts one ray per listed point (direction dir(i)) on the exact path and returns the verdicts
+/// (empty once `cancel` has fired).
 template <class Dir>
 std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
                              const std::vector<std::size_t>& which, Dir&& dir,
-                             const std::vector<std::uint8_t>& parity) {
+                             const std::vector<std::uint8_t>& parity, const CancelToken& cancel) {
     std::vector<Ray> rays(which.size());
     for (std::size_t j = 0; j < which.size(); ++j)
         rays[j] = Ray{points[which[j]], dir(which[j]), 0.0, kInfinity};
@@ -67,7 +68,10 @@ std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
     opt.mode = Mode::all;
     opt.precision = Precision::exact;
     opt.want_normal = false;
-    const QueryResult r = engine.intersect(rays, opt);
+    opt.cancel = cancel;
+    QueryResult r;
+    if (!engine.intersect(rays, opt, r).ok())
+        return {};
     std::vector<RayVerdict> out(which.size());
     for (std::size_t j = 0; j < which.size(); ++j) {
         out[j] = verdict(r.hits.data() + r.offsets[j], r.hits.data() + r.offsets[j + 1], parity);
@@ -79,12 +83,14 @@ std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
 /// point, then the retries of the file comment for rays that met an edge.
 void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
                    const std::vector<std::size_t>& which, const std::vector<std::uint8_t>& parity,
-                   Occupancy* out) {
+                   const CancelToken& cancel, Occupancy* out) {
     auto away = [&](std::size_t i) {
         const Vec3d d = normalize(points[i] - nearest[i].point);
         return d == Vec3d{} ? kRetryDirections[0] : d;
     };
-    const std::vector<RayVerdict> first = cast(engine, points, which, away, parity);
+    const std::vector<RayVerdict> first = cast(engine, points, which, away, parity, cancel);
+    if (cancel.fired())
+        return;
     std::vector<std::size_t> again;
     std::vector<int> votes;
     for (std::size_t j = 0; j < which.size(); ++j) {
@@ -103,7 +109,9 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
             return;
         const bool last = &d == &kRetryDirections[1];
         const std::vector<RayVerdict> v = cast(
-            engine, points, again, [&](std::size_t) { return d; }, parity);
+            engine, points, again, [&](std::size_t) { return d; }, parity, cancel);
+        if (cancel.fired())
+            return;
         std::vector<std::size_t> next;
         std::vector<int> next_votes;
         for (std::size_t j = 0; j < again.size(); ++j) {
@@ -127,8 +135,8 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
 
 }  // namespace
 
-void classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
-                     std::size_t n, bool all_objects, Occupancy* out) {
+Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
+                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out) {
     const Scene& s = engine.scene();
     const std::vector<MeshTopology>& topo = engine.topology();
     std::vector<std::uint32_t> spheres, windings;
@@ -148,7 +156,7 @@ void classify_points(const QueryEngine& engine, const Vec3d* points, const Point
     // The winding number is the largest over the objects; with only winding meshes it may be
     // negative (a mesh facing inwards), so it starts at the lowest value an object can give.
     const double no_winding = spheres.empty() && !any_parity ? -kInfinity : 0.0;
-    for_each_point(n, [&](std::size_t i) {
+    for_each_point(n, cancel, [&](std::size_t i) {
         out[i] = Occupancy{false, no_winding};
         if (on_surface(nearest[i])) {
             out[i] = Occupancy{true, 1.0};
@@ -173,9 +181,11 @@ void classify_points(const QueryEngine& engine, const Vec3d* points, const Point
             if (open(i))
                 which.push_back(i);
         }
-        parity_inside(engine, points, nearest, which, parity, out);
+        parity_inside(engine, points, nearest, which, parity, cancel, out);
     }
-    for_each_point(n, [&](std::size_t i) {
+    if (cancel.fired())
+        return cancel.status();
+    for_each_point(n, cancel, [&](std::size_t i) {
         if (!open(i) || windings.empty()) {
             if (out[i].winding == -kInfinity)
                 out[i].winding = 0.0;  // an empty scene winds nothing
@@ -191,6 +201,7 @@ void classify_points(const QueryEngine& engine, const Vec3d* points, const Point
             }
         }
     });
+    return cancel.fired() ? cancel.status() : Status{};
 }
 
 }  // namespace raycastd::engine

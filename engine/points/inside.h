@@ -20,6 +20,7 @@
 
 #include <cstddef>
 
+#include "engine/cancel.h"
 #include "engine/query/intersect.h"
 
 namespace raycastd::engine {
@@ -32,9 +33,10 @@ struct Occupancy {
 
 /// Classifies points[0..n), whose nearest surface points (any distance; !valid() for an empty
 /// scene) are nearest[0..n), into out[0..n). `all_objects = false` (signed distance) stops at
-/// the first object that contains the point (the winding then is not the largest).
-void classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
-                     std::size_t n, bool all_objects, Occupancy* out);
+/// the first object that contains the point (the winding then is not the largest). ok, or
+/// Code::cancelled once `cancel` has fired (asked per block of points and by the parity rays).
+Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
+                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out);
 
 /// Whether `nearest` puts its query point on a surface (within the distance's error bound).
 inline bool on_surface(const PointHit& nearest) {

@@ -30,7 +30,9 @@ std::vector<Occupancy> classify(const QueryEngine& e, const std::vector<Vec3d>& 
             nearest[i] = *h;
     }
     std::vector<Occupancy> out(pts.size());
-    classify_points(e, pts.data(), nearest.data(), pts.size(), all_objects, out.data());
+    EXPECT_TRUE(
+        classify_points(e, pts.data(), nearest.data(), pts.size(), all_objects, {}, out.data())
+            .ok());
     return out;
 }
 

@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/cancel.h"
 #include "engine/query/intersect.h"
 
 namespace raycastd::engine {
@@ -34,6 +35,9 @@ struct PointOptions {
     /// closest and distance: surfaces farther than this are not found (inclusive). The signed
     /// distance and occupancy always look at the whole scene.
     double max_distance = kInfinity;
+    /// Asked once per block of 256 points (and by the parity rays' batch); once it fires, the
+    /// rest is skipped and query_points answers Code::cancelled.
+    CancelToken cancel{};
 };
 
 /// One point's answer; which fields mean something depends on the query.
@@ -51,7 +55,8 @@ struct PointAnswer {
 };
 
 /// Answers every point; points must be finite (the server checks). `out` is resized to match.
-void query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
-                  const PointOptions& options, std::vector<PointAnswer>& out);
+/// ok, or Code::cancelled once options.cancel has fired (`out` then holds partial answers).
+Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
+                    const PointOptions& options, std::vector<PointAnswer>& out);
 
 }  // namespace raycastd::engine

@@ -25,7 +25,7 @@ std::shared_ptr<const QueryEngine> prepare(Scene s) {
 std::vector<PointAnswer> ask(const QueryEngine& e, const std::vector<Vec3d>& pts, PointQuery q,
                              double max_distance = kInfinity) {
     std::vector<PointAnswer> out;
-    query_points(e, pts, PointOptions{q, max_distance}, out);
+    EXPECT_TRUE(query_points(e, pts, PointOptions{q, max_distance, {}}, out).ok());
     return out;
 }
 
@@ -88,6 +88,19 @@ TEST(PointQueries, ClosestRespectsMaxDistance) {
     EXPECT_EQ(d[0].distance, kInfinity);
     // signed_distance ignores max_distance.
     EXPECT_EQ(ask(*e, {{0.5, 0.5, 3}}, PointQuery::signed_distance, 1.0)[0].distance, 2.0);
+}
+
+TEST(PointQueries, AFiredTokenStopsTheBatch) {
+    auto e = prepare(testing::scene_of({testing::icosphere_object(3)}));
+    const auto pts = random_points(e->scene().bounds(), 5000, 3);
+    for (PointQuery q : {PointQuery::closest, PointQuery::signed_distance, PointQuery::occupancy}) {
+        PointOptions opt{q, kInfinity, CancelToken::make()};
+        opt.cancel.cancel();
+        std::vector<PointAnswer> out;
+        const Status st = query_points(*e, pts, opt, out);
+        EXPECT_EQ(st.code, Code::cancelled);
+        EXPECT_EQ(out.size(), pts.size());
+    }
 }
 
 TEST(PointQueries, EmptyScene) {

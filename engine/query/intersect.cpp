@@ -35,17 +35,28 @@ bool fits_float(const Scene& s) {
     return b.empty() || length(b.diagonal()) <= kMaxFloatSceneDiagonal;
 }
 
+/// f(i) for i in [0, n), over TBB's threads for more than kSerialBatch rays. `cancel` is asked
+/// once per kBlockRays rays of each range (a range may be a large part of the batch), and once it
+/// fires the rest of every range is skipped.
 template <class F>
-void for_each_ray(std::size_t n, F&& f) {
+void for_each_ray(std::size_t n, const CancelToken& cancel, F&& f) {
     if (n <= kSerialBatch) {
+        if (cancel.cancelled())
+            return;
         for (std::size_t i = 0; i < n; ++i)
             f(i);
         return;
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kSerialBatch),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i)
-                              f(i);
+                          for (std::size_t b = r.begin(); b < r.end();) {
+                              if (cancel.cancelled())
+                                  return;
+                              const std::size_t e = std::min(r.end(), b + QueryEngine::kBlockRays);
+                              for (std::size_t i = b; i != e; ++i)
+                                  f(i);
+                              b = e;
+                          }
                       });
 }
 
@@ -59,11 +70,13 @@ std::size_t block_index(std::size_t begin) {
 }
 
 /// Like for_each_ray, handing out fixed blocks of 1024 rays (whole packets of 16
-/// where possible, and few enough tasks that scheduling costs nothing per ray).
+/// where possible, and few enough tasks that scheduling costs nothing per ray). `cancel` is
+/// asked before each block; once it fires, blocks not yet begun are skipped.
 template <class F>
-void for_each_block(std::size_t n, F&& f) {
+void for_each_block(std::size_t n, const CancelToken& cancel, F&& f) {
     if (n <= kBlock) {
-        f(std::size_t(0), n);
+        if (!cancel.cancelled())
+            f(std::size_t(0), n);
         return;
     }
     // Always the same blocks, from run to run and whatever the scheduling: refined's
@@ -72,6 +85,8 @@ void for_each_block(std::size_t n, F&& f) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_count(n)),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                              if (cancel.cancelled())
+                                  return;
                               f(b * kBlock, std::min(n, (b + 1) * kBlock));
                           }
                       });
@@ -113,24 +128,30 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
-std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal) {
-    return linear_closest(scene, ray, want_normal);
+std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal,
+                                          const CancelToken& cancel) {
+    return linear_closest(scene, ray, want_normal, cancel.can_fire() ? &cancel : nullptr);
 }
 
 std::optional<Hit> closest_in_object_by_brute_force(const Scene& scene, std::uint32_t object,
-                                                    const Ray& ray, bool want_normal) {
-    return linear_closest_in_object(scene, object, ray, want_normal);
+                                                    const Ray& ray, bool want_normal,
+                                                    const CancelToken& cancel) {
+    return linear_closest_in_object(scene, object, ray, want_normal,
+                                    cancel.can_fire() ? &cancel : nullptr);
 }
 
 QueryEngine::QueryEngine(std::shared_ptr<const Scene> scene) : scene_(std::move(scene)) {}
 QueryEngine::~QueryEngine() = default;
 
-Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<const Scene> scene) {
+Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<const Scene> scene,
+                                                              const CancelToken& cancel) {
     if (!scene)
         return Status::error(Code::internal, "no scene");
     Status st = validate(*scene);
     if (!st.ok())
         return st;
+    if (cancel.cancelled())
+        return cancel.status();
     std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
     engine->scene_bytes_ = engine->scene_memory_bytes();
     // The meshes' topology (engine/mesh: for the point queries and the scene's `topology`),
@@ -138,18 +159,15 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     // the cores and cost ~300 ms more CPU on 1M triangles than the two one after the other
     // (TBB's workers spin while they wait; bench_points --registration-only, docs/loading.md).
     engine->prepare_points();
-    Status accel_status;
+    if (cancel.cancelled())
+        return cancel.status();
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
     if (prims > kBruteForceMaxPrimitives && fits_float(*engine->scene_)) {
-        auto accel = EmbreeAccel::build(*engine->scene_);
-        if (accel.ok()) {
-            engine->accel_ = std::move(*accel);
-        } else {
-            accel_status = accel.status();
-        }
+        auto accel = EmbreeAccel::build(*engine->scene_, cancel);
+        if (!accel.ok())
+            return accel.status();
+        engine->accel_ = std::move(*accel);
     }
-    if (!accel_status.ok())
-        return accel_status;
     return std::shared_ptr<const QueryEngine>(std::move(engine));
 }
 
@@ -206,6 +224,7 @@ std::size_t QueryEngine::scene_memory_bytes() const {
 }
 
 QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt) const {
+    assert(!opt.cancel.can_fire() && "a batch that may be cancelled needs the Status overload");
     QueryResult out;
     intersect(rays, opt, out);
     return out;
@@ -218,24 +237,24 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
     const EmbreeAccel* accel = accel_.get();
     if (opt.mode == Mode::closest) {
         if (accel) {
-            for_each_block(n, [&](std::size_t b, std::size_t e) {
+            for_each_block(n, opt.cancel, [&](std::size_t b, std::size_t e) {
                 accel->closest_range(rays + b, e - b, p, opt.want_normal, hits + b);
             });
             return;
         }
-        for_each_ray(n, [&](std::size_t i) {
+        for_each_ray(n, opt.cancel, [&](std::size_t i) {
             auto h = linear_closest(*scene_, rays[i], opt.want_normal);
             hits[i] = h ? *h : Hit{};
         });
         return;
     }
     if (accel) {
-        for_each_block(n, [&](std::size_t b, std::size_t e) {
+        for_each_block(n, opt.cancel, [&](std::size_t b, std::size_t e) {
             accel->any_range(rays + b, e - b, p, hits + b);
         });
         return;
     }
-    for_each_ray(n, [&](std::size_t i) {
+    for_each_ray(n, opt.cancel, [&](std::size_t i) {
         // `any` never looks for the closest: it stops at the first hit found.
         hits[i] = Hit{};
         if (linear_any(*scene_, rays[i]))
@@ -243,9 +262,9 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
     });
 }
 
-void QueryEngine::intersect_blocks(std::size_t n, const QueryOptions& opt,
-                                   const BlockSource& source, const BlockSink& sink) const {
-    for_each_block(n, [&](std::size_t b, std::size_t e) {
+Status QueryEngine::intersect_blocks(std::size_t n, const QueryOptions& opt,
+                                     const BlockSource& source, const BlockSink& sink) const {
+    for_each_block(n, opt.cancel, [&](std::size_t b, std::size_t e) {
         // Isolated: a brute-force scene traces a block with a parallel loop of its own, and a
         // thread waiting in it must not take up another block of this or any other batch, which
         // would reuse the thread's buffers under the first block's feet (found in review: wrong
@@ -264,10 +283,11 @@ void QueryEngine::intersect_blocks(std::size_t n, const QueryOptions& opt,
             sink(b, e, hits.data());
         });
     });
+    return opt.cancel.status();
 }
 
-void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt,
-                            QueryResult& out) const {
+Status QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt,
+                              QueryResult& out) const {
     // hits is not cleared here: closest and any overwrite every answer of a reused buffer
     // (clearing first would make resize fill it all again); all and count clear it.
     out.offsets.clear();
@@ -293,7 +313,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
             out.hits.clear();
             out.counts.resize(n);
             std::vector<std::vector<Hit>> block_hits(keep ? block_count(n) : 0);
-            for_each_block(n, [&](std::size_t b, std::size_t e) {
+            for_each_block(n, opt.cancel, [&](std::size_t b, std::size_t e) {
                 std::vector<Hit> one;
                 std::vector<Hit>* mine = keep ? &block_hits[block_index(b)] : nullptr;
                 for (std::size_t i = b; i < e; ++i) {
@@ -307,7 +327,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
                         mine->insert(mine->end(), one.begin(), one.end());
                 }
             });
-            if (!keep)
+            if (!keep || opt.cancel.fired())
                 break;
             out.offsets.resize(n + 1);
             out.offsets[0] = 0;
@@ -320,6 +340,7 @@ void QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& op
             break;
         }
     }
+    return opt.cancel.status();
 }
 
 }  // namespace raycastd::engine

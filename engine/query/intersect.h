@@ -25,25 +25,30 @@ struct WindingTrees;  // query/point_entry.cpp
 /// A scene made ready for queries.
 class QueryEngine {
   public:
-    /// Validates the scene and builds what its size calls for. Never throws.
-    static Result<std::shared_ptr<const QueryEngine>> build(std::shared_ptr<const Scene> scene);
+    /// Validates the scene and builds what its size calls for. Never throws. Code::cancelled
+    /// once `cancel` has fired (asked before the BVH build and during it).
+    static Result<std::shared_ptr<const QueryEngine>> build(std::shared_ptr<const Scene> scene,
+                                                            const CancelToken& cancel = {});
 
     const Scene& scene() const { return *scene_; }
     const std::shared_ptr<const Scene>& scene_ptr() const { return scene_; }
 
     /// Answers every ray; rays must already be valid (finite, non-zero direction, tmin ≤ tmax).
+    /// For callers that never cancel: options.cancel must be a default token (asserted).
     QueryResult intersect(const std::vector<Ray>& rays, const QueryOptions& options) const;
     /// The same, into `out`, whose buffers keep their capacity: a server thread that reuses one
-    /// QueryResult does not page-fault fresh megabytes on every large batch.
-    void intersect(const std::vector<Ray>& rays, const QueryOptions& options,
-                   QueryResult& out) const;
+    /// QueryResult does not page-fault fresh megabytes on every large batch. Code::cancelled
+    /// (out then incomplete) once options.cancel has fired; it is asked once per block.
+    Status intersect(const std::vector<Ray>& rays, const QueryOptions& options,
+                     QueryResult& out) const;
 
     /// Rays are traced in fixed blocks of this many, whatever the threads do (see intersect.cpp).
     static constexpr std::size_t kBlockRays = 1024;
     /// closest or any (options.mode must be one of them) for rays[0..n) into hits[0..n); every
     /// element is written. A span that starts at a multiple of kBlockRays of a batch gets the
     /// answers intersect() gives those rays of the whole batch, so a server may trace a batch in
-    /// pieces while the rest of it is still arriving.
+    /// pieces while the rest of it is still arriving. Once options.cancel fires, blocks not yet
+    /// begun are left unwritten (the caller asks options.cancel.fired()).
     void intersect_span(const Ray* rays, std::size_t n, const QueryOptions& options,
                         Hit* hits) const;
 
@@ -58,9 +63,11 @@ class QueryEngine {
     /// but the batch never exists as 64-byte rays and 72-byte hits: the block buffers stay in
     /// cache, and memory traffic is the caller's records alone (bench_intersect's
     /// QueryEngine::intersect_blocks rows against its QueryEngine::intersect rows: 5-15% faster
-    /// on 1M rays). Blocks run isolated (tbb::this_task_arena::isolate).
-    void intersect_blocks(std::size_t n, const QueryOptions& options, const BlockSource& source,
-                          const BlockSink& sink) const;
+    /// on 1M rays). Blocks run isolated (tbb::this_task_arena::isolate). options.cancel is asked
+    /// before each block; once it fires, blocks not yet begun are neither fetched nor handed to
+    /// `sink`, and the call returns Code::cancelled.
+    Status intersect_blocks(std::size_t n, const QueryOptions& options, const BlockSource& source,
+                            const BlockSink& sink) const;
 
     /// The path a request asking for `asked` is answered by (tiny scenes always take exact).
     Precision effective_precision(Precision asked) const;
@@ -144,10 +151,13 @@ Status validate_ray(const Ray& ray, std::size_t index);
 
 /// The closest hit over `scene` as it is, without a QueryEngine: every primitive tested in
 /// double (the exact path, by brute force), or nullopt. For work on a scene that is not
-/// prepared for queries (the tutorial's worked solution, engine/explain).
-std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal);
+/// prepared for queries (the tutorial's worked solution, engine/explain). `cancel` is asked once
+/// per 65,536 triangles; once it has fired the answer is nullopt (the caller asks fired()).
+std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal,
+                                          const CancelToken& cancel = {});
 /// The same over the primitives of one object (`object` and `primitive` filled in).
 std::optional<Hit> closest_in_object_by_brute_force(const Scene& scene, std::uint32_t object,
-                                                    const Ray& ray, bool want_normal);
+                                                    const Ray& ray, bool want_normal,
+                                                    const CancelToken& cancel = {});
 
 }  // namespace raycastd::engine

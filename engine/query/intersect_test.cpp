@@ -81,6 +81,72 @@ TEST(Query, BuildRejectsInvalidScene) {
     EXPECT_EQ(e.status().path, "/objects/1/radius");
 }
 
+// A batch whose token has fired answers Code::cancelled in every mode, on a BVH and by brute
+// force, and intersect_blocks fetches and hands out no block; a token that can fire but does not
+// changes no answer.
+TEST(Query, CancelledBatchAnswersCancelledAndAnArmedTokenChangesNothing) {
+    Scene big = testing::tutorial_spheres();
+    big.objects.push_back(testing::icosphere_object(2, {0, 0, 20}, 3.0));
+    const auto bvh = build(std::move(big));
+    const auto brute = build(testing::tutorial_spheres());
+    ASSERT_FALSE(bvh->brute_force());
+    ASSERT_TRUE(brute->brute_force());
+    std::vector<Ray> rays;
+    for (int i = 0; i < 5 * 1024 + 7; ++i) {
+        rays.push_back(Ray{{0, 0, 0}, {0.002 * (i % 64) - 0.064, 0.002 * (i / 64) - 0.05, 1}});
+    }
+    const CancelToken stopped = CancelToken::make();
+    stopped.cancel();
+    const CancelToken armed =
+        CancelToken::make(CancelToken::Clock::now() + std::chrono::hours(1), [] { return false; });
+    for (const auto* engine : {bvh.get(), brute.get()}) {
+        for (Mode mode : {Mode::closest, Mode::any, Mode::all, Mode::count}) {
+            QueryOptions opt;
+            opt.mode = mode;
+            const QueryResult plain = engine->intersect(rays, opt);
+            QueryResult out;
+            opt.cancel = stopped;
+            EXPECT_EQ(engine->intersect(rays, opt, out).code, Code::cancelled) << to_string(mode);
+            opt.cancel = armed;
+            ASSERT_TRUE(engine->intersect(rays, opt, out).ok());
+            ASSERT_EQ(out.hits.size(), plain.hits.size());
+            for (std::size_t i = 0; i < out.hits.size(); ++i) {
+                ASSERT_EQ(out.hits[i].t, plain.hits[i].t) << i;
+                ASSERT_EQ(out.hits[i].object, plain.hits[i].object) << i;
+            }
+            EXPECT_EQ(out.counts, plain.counts);
+            EXPECT_EQ(out.offsets, plain.offsets);
+        }
+        QueryOptions opt;
+        opt.cancel = stopped;
+        int fetched = 0, sunk = 0;
+        const Status st = engine->intersect_blocks(
+            rays.size(), opt,
+            [&](std::size_t, std::size_t, Ray*) {
+                ++fetched;
+                return true;
+            },
+            [&](std::size_t, std::size_t, const Hit*) { ++sunk; });
+        EXPECT_EQ(st.code, Code::cancelled);
+        EXPECT_EQ(fetched, 0);
+        EXPECT_EQ(sunk, 0);
+    }
+    EXPECT_FALSE(armed.fired());
+}
+
+// The brute-force pass of the worked solution over one mesh asks its token every 65,536
+// triangles, from the first on: a token past its deadline gives no answer, and says so.
+TEST(Query, BruteForceOverAMeshStopsWhenItsTokenHasFired) {
+    Scene s;
+    s.objects.push_back(testing::icosphere_object(3, {0, 0, 10}, 2.0));
+    const Ray ray{{0, 0, 0}, {0, 0, 1}};
+    ASSERT_TRUE(closest_in_object_by_brute_force(s, 0, ray, false));
+    const CancelToken late = CancelToken::make(CancelToken::Clock::now() - std::chrono::seconds(1));
+    EXPECT_FALSE(closest_in_object_by_brute_force(s, 0, ray, false, late));
+    EXPECT_TRUE(late.fired());
+    EXPECT_FALSE(closest_by_brute_force(s, ray, true, late));
+}
+
 // intersect_blocks hands out the blocks intersect() traces and answers them as intersect() does,
 // whatever the caller's format; a block whose source reports a bad ray is neither traced nor
 // handed to the sink.

@@ -173,7 +173,8 @@ std::size_t tile_count(const RenderOptions& o) {
     return tiles(o.width) * tiles(o.height);
 }
 
-RenderResult render(const QueryEngine& engine, const RenderOptions& opt, RenderProgress* progress) {
+Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
+                            RenderProgress* progress) {
     const auto start = std::chrono::steady_clock::now();
     WhittedOptions wo = opt.whitted;
     wo.bvh_for_small_scenes = true;
@@ -194,14 +195,15 @@ RenderResult render(const QueryEngine& engine, const RenderOptions& opt, RenderP
 
     RenderResult out;
     out.precision = whitted.effective_precision();
-    out.image = Image(opt.width, opt.height);
+    // Every pixel is written by its tile: the image is not zero-filled first.
+    out.image = Image(opt.width, opt.height, Image::Fill::unset);
     const int tiles_x = (opt.width + opt.tile_size - 1) / opt.tile_size;
     const std::size_t total = tile_count(opt);
     if (progress)
         progress->tiles_total = total;
     std::mutex counts_mutex;
     tbb::parallel_for(std::size_t{0}, total, [&](std::size_t tile) {
-        if (progress && progress->cancel.load(std::memory_order_relaxed))
+        if (opt.cancel.cancelled())
             return;
         const int x0 = static_cast<int>(tile % static_cast<std::size_t>(tiles_x)) * opt.tile_size;
         const int y0 = static_cast<int>(tile / static_cast<std::size_t>(tiles_x)) * opt.tile_size;
@@ -216,7 +218,8 @@ RenderResult render(const QueryEngine& engine, const RenderOptions& opt, RenderP
         if (progress)
             progress->tiles_done.fetch_add(1, std::memory_order_relaxed);
     });
-    out.cancelled = progress && progress->cancel.load();
+    if (opt.cancel.fired())
+        return opt.cancel.status();  // `out` and its image go here
     out.render_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;

@@ -2,13 +2,14 @@
 // Renders an image of a prepared scene: camera rays through stratified samples in each pixel,
 // shaded by the Whitted tracer (shading "phong") or showing data (normal, depth, object_id,
 // barycentric), in tiles spread over TBB's workers. Progress is the count of tiles done; a
-// render can be cancelled between tiles.
+// render is cancelled between tiles by its options' CancelToken (engine/cancel.h).
 
 #include <atomic>
 #include <cstddef>
 #include <optional>
 #include <string_view>
 
+#include "engine/cancel.h"
 #include "engine/query/intersect.h"
 #include "engine/render/image.h"
 #include "engine/scene/camera.h"
@@ -34,20 +35,21 @@ struct RenderOptions {
     WhittedOptions whitted;        ///< max_depth, precision, background
     std::optional<Camera> camera;  ///< the request's camera (else the scene's, else framing)
     int tile_size = 16;            ///< pixels per tile side
+    /// Asked once per tile (never per ray): once it fires, tiles not yet begun are skipped and
+    /// the render answers Code::cancelled.
+    CancelToken cancel{};
 };
 
-/// How far a render has come, shared with whoever watches it, and the way to stop it.
+/// How far a render has come, shared with whoever watches it (RenderOptions::cancel stops it).
 struct RenderProgress {
     std::atomic<std::size_t> tiles_done{0};
     std::atomic<std::size_t> tiles_total{0};
-    std::atomic<bool> cancel{false};  ///< set to stop at the next tile
 };
 
 struct RenderResult {
     Image image;  ///< linear RGB (phong), or the data of the mode in [0, 1]
     RayCounts counts;
     double render_ms = 0.0;
-    bool cancelled = false;
     Precision precision = Precision::exact;  ///< the path that answered
 };
 
@@ -57,7 +59,8 @@ std::size_t tile_count(const RenderOptions& options);
 /// Renders `engine`'s scene. Options must be valid (width, height, spp ≥ 1; max_depth ≥ 1).
 /// Depth is 1 at the nearest point of the scene's bounding sphere and 0 at its farthest (and on
 /// a miss); object_id gives each object a distinct colour; barycentric shows (1−u−v, u, v).
-RenderResult render(const QueryEngine& engine, const RenderOptions& options,
-                    RenderProgress* progress = nullptr);
+/// Code::cancelled, with the image freed, once options.cancel has fired.
+Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& options,
+                            RenderProgress* progress = nullptr);
 
 }  // namespace raycastd::engine

@@ -61,7 +61,7 @@ TEST(Camera, RequestThenSceneThenFraming) {
 
 TEST(Render, NoLightsTracesNoShadowRays) {
     auto engine = prepare(testing::tutorial_spheres());
-    const RenderResult r = render(*engine, small());
+    const RenderResult r = render(*engine, small()).value();
     EXPECT_EQ(r.counts.primary, 40u * 30u);
     EXPECT_EQ(r.counts.shadow, 0u);
     EXPECT_EQ(r.counts.reflected + r.counts.refracted, 0u);
@@ -71,57 +71,94 @@ TEST(Render, NoLightsTracesNoShadowRays) {
 
 TEST(Render, MatteSceneTracesNoSecondaryRays) {
     auto engine = prepare(lit_spheres(0.0));
-    const RenderResult r = render(*engine, small());
+    const RenderResult r = render(*engine, small()).value();
     EXPECT_GT(r.counts.shadow, 0u);
     EXPECT_EQ(r.counts.reflected, 0u);
     EXPECT_EQ(r.counts.refracted, 0u);
     auto mirror = prepare(lit_spheres(0.5));
-    EXPECT_GT(render(*mirror, small()).counts.reflected, 0u);
+    EXPECT_GT(render(*mirror, small()).value().counts.reflected, 0u);
 }
 
 TEST(Render, SamplesPerPixelMultiplyPrimaryRaysAndAreDeterministic) {
     auto engine = prepare(lit_spheres(0.3));
     RenderOptions o = small();
     o.spp = 5;
-    const RenderResult a = render(*engine, o);
-    const RenderResult b = render(*engine, o);
+    const RenderResult a = render(*engine, o).value();
+    const RenderResult b = render(*engine, o).value();
     EXPECT_EQ(a.counts.primary, 40u * 30u * 5u);
     EXPECT_EQ(a.image.rgb, b.image.rgb);
 }
 
 TEST(Render, DataModes) {
     auto engine = prepare(lit_spheres(0.0));
-    const RenderResult ids = render(*engine, small(ShadingMode::object_id));
+    const RenderResult ids = render(*engine, small(ShadingMode::object_id)).value();
     EXPECT_EQ(ids.image.at(0, 0), Vec3d{});  // a miss is black
     EXPECT_NE(ids.image.at(20, 15), Vec3d{});
     EXPECT_EQ(ids.counts.shadow, 0u);
-    const RenderResult normals = render(*engine, small(ShadingMode::normal));
+    const RenderResult normals = render(*engine, small(ShadingMode::normal)).value();
     // The centre pixel sees sphere 3 at (0,0,7.27): normal (0,−½,−√3/2) → ((1+0)/2, ¼, …).
     EXPECT_NEAR(normals.image.at(20, 15).x, 0.5, 0.05);
     EXPECT_NEAR(normals.image.at(20, 15).y, 0.25, 0.05);
-    const RenderResult depth = render(*engine, small(ShadingMode::depth));
+    const RenderResult depth = render(*engine, small(ShadingMode::depth)).value();
     EXPECT_GT(depth.image.at(20, 15).x, 0.0);
     EXPECT_LE(depth.image.at(20, 15).x, 1.0);
-    const RenderResult bary = render(*engine, small(ShadingMode::barycentric));
+    const RenderResult bary = render(*engine, small(ShadingMode::barycentric)).value();
     EXPECT_EQ(bary.image.at(20, 15), Vec3d(1, 0, 0));  // spheres have u = v = 0
 }
 
-TEST(Render, ProgressCountsTilesAndCancelStops) {
+TEST(Render, ProgressCountsTiles) {
     auto engine = prepare(lit_spheres(0.0));
     RenderOptions o = small();
     o.tile_size = 8;
     RenderProgress progress;
-    const RenderResult r = render(*engine, o, &progress);
+    const auto r = render(*engine, o, &progress);
+    ASSERT_TRUE(r.ok());
     EXPECT_EQ(progress.tiles_total.load(), tile_count(o));
     EXPECT_EQ(tile_count(o), 5u * 4u);
     EXPECT_EQ(progress.tiles_done.load(), progress.tiles_total.load());
-    EXPECT_FALSE(r.cancelled);
+}
+
+TEST(Render, CancelledTokenStopsBeforeTheNextTile) {
+    auto engine = prepare(lit_spheres(0.0));
+    RenderOptions o = small();
+    o.tile_size = 8;
+    o.cancel = CancelToken::make();
+    o.cancel.cancel();
     RenderProgress stopped;
-    stopped.cancel = true;
-    const RenderResult c = render(*engine, o, &stopped);
-    EXPECT_TRUE(c.cancelled);
+    const auto c = render(*engine, o, &stopped);
+    ASSERT_FALSE(c.ok());
+    EXPECT_EQ(c.status().code, Code::cancelled);
     EXPECT_EQ(stopped.tiles_done.load(), 0u);
-    EXPECT_EQ(c.counts.primary, 0u);
+}
+
+TEST(Render, TokenFiredMidwayStopsTheRender) {
+    // A poll callback that says stop once a few tiles are done (it is first asked
+    // kPollInterval after the token is made): the render ends short of its tiles (each thread
+    // finishes the tile it is on) and answers cancelled.
+    auto engine = prepare(lit_spheres(0.3));
+    RenderOptions o = small();
+    o.width = o.height = 1024;
+    o.tile_size = 8;
+    RenderProgress progress;
+    o.cancel = CancelToken::make(std::nullopt, [&] { return progress.tiles_done.load() >= 4; });
+    const auto c = render(*engine, o, &progress);
+    ASSERT_FALSE(c.ok());
+    EXPECT_EQ(c.status().code, Code::cancelled);
+    EXPECT_LT(progress.tiles_done.load(), tile_count(o));
+}
+
+TEST(Render, TokenThatNeverFiresChangesNothing) {
+    // The same bytes with a default token, a token that could fire but does not, and one with
+    // a deadline far away.
+    auto engine = prepare(lit_spheres(0.3));
+    RenderOptions o = small();
+    const RenderResult plain = render(*engine, o).value();
+    o.cancel =
+        CancelToken::make(CancelToken::Clock::now() + std::chrono::hours(1), [] { return false; });
+    const RenderResult armed = render(*engine, o).value();
+    EXPECT_EQ(plain.image.rgb, armed.image.rgb);
+    EXPECT_EQ(plain.counts.total(), armed.counts.total());
+    EXPECT_FALSE(o.cancel.fired());
 }
 
 TEST(Render, SmallSceneBvhAgreesWithExactBruteForce) {
@@ -131,9 +168,9 @@ TEST(Render, SmallSceneBvhAgreesWithExactBruteForce) {
     ASSERT_TRUE(engine->brute_force());
     RenderOptions o = small();
     o.whitted.precision = Precision::refined;
-    const RenderResult bvh = render(*engine, o);
+    const RenderResult bvh = render(*engine, o).value();
     o.whitted.precision = Precision::exact;
-    const RenderResult exact = render(*engine, o);
+    const RenderResult exact = render(*engine, o).value();
     EXPECT_EQ(bvh.precision, Precision::refined);
     EXPECT_EQ(exact.precision, Precision::exact);
     int differ = 0;

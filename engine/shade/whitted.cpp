@@ -82,20 +82,34 @@ Vec3d Whitted::shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) cons
     return shade(ray, hit, 1, counts, nullptr);
 }
 
-RayTree Whitted::tree(const Ray& ray) const {
+/// A ray tree being built, and the token that may stop it.
+struct Whitted::TreeBuild {
+    RayTree& out;
+    const CancelToken& cancel;
+};
+
+Result<RayTree> Whitted::tree(const Ray& ray, const CancelToken& cancel) const {
     RayTree t;
     ++t.counts.primary;
     int root = -1;
-    t.color = trace(ray, 1, t.counts, &t, &root);
+    TreeBuild build{t, cancel};
+    t.color = trace(ray, 1, t.counts, &build, &root);
+    if (cancel.fired())
+        return cancel.status();
     return t;
 }
 
-Vec3d Whitted::trace(const Ray& ray, int depth, RayCounts& counts, RayTree* tree, int* slot) const {
+Vec3d Whitted::trace(const Ray& ray, int depth, RayCounts& counts, TreeBuild* tree,
+                     int* slot) const {
+    // Asked once per node: a tree can branch at every transparent and reflecting surface, up
+    // to 2^max_depth nodes. Once it fires, no more nodes are added.
+    if (tree && tree->cancel.cancelled())
+        return options_.background;
     const std::optional<Hit> hit = closest(ray);
     if (!hit)
         return options_.background;
     if (tree)
-        *slot = static_cast<int>(tree->nodes.size());
+        *slot = static_cast<int>(tree->out.nodes.size());
     return shade(ray, *hit, depth, counts, tree);
 }
 
@@ -111,7 +125,7 @@ struct Whitted::Surface {
 };
 
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
-                     RayTree* tree) const {
+                     TreeBuild* tree) const {
     const std::uint32_t mi = material_of(hit);
     const Vec3d d = normalize(ray.direction);
     const Vec3d ng = face_towards_ray(hit.normal, d);
@@ -129,22 +143,22 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
 
     // Node k of the tree is written before its children so that labels run depth-first; the
     // vector may grow during the recursion, so the node is addressed by index, never by reference.
-    const std::size_t k = tree ? tree->nodes.size() : 0;
+    const std::size_t k = tree ? tree->out.nodes.size() : 0;
     if (tree) {
         TreeNode node;
         node.hit = hit;
         node.point = sp.p;
         node.normal = n;
-        tree->nodes.push_back(std::move(node));
+        tree->out.nodes.push_back(std::move(node));
     }
     bool lit = false;
     // direct() does not recurse, so the node's address is stable while it runs.
-    Vec3d color = direct(sp, counts, tree ? &tree->nodes[k] : nullptr, lit);
+    Vec3d color = direct(sp, counts, tree ? &tree->out.nodes[k] : nullptr, lit);
     if (depth < options_.max_depth)
         color += indirect(sp, depth, counts, tree, k);
     if (tree) {
-        tree->nodes[k].full_phong = lit;
-        tree->nodes[k].color = color;
+        tree->out.nodes[k].full_phong = lit;
+        tree->out.nodes[k].color = color;
     }
     return color;
 }
@@ -186,7 +200,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
     return color;
 }
 
-Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, RayTree* tree,
+Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
                         std::size_t k) const {
     Vec3d color;
     // Leaving a transparent object: its internal reflection is not traced (the tutorial).
@@ -197,7 +211,7 @@ Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, RayTree
         int child = -1;
         color += trace(r, depth + 1, counts, tree, &child) * sp.m.reflectivity;
         if (tree)
-            tree->nodes[k].reflected = child;
+            tree->out.nodes[k].reflected = child;
     }
     if (plan_.refraction && sp.m.transparency > 0.0) {
         const double eta = sp.hit.front_face ? 1.0 / sp.m.ior : sp.m.ior;
@@ -207,9 +221,9 @@ Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, RayTree
             int child = -1;
             color += trace(r, depth + 1, counts, tree, &child) * sp.m.transparency;
             if (tree)
-                tree->nodes[k].refracted = child;
+                tree->out.nodes[k].refracted = child;
         } else if (tree) {
-            tree->nodes[k].total_internal_reflection = true;
+            tree->out.nodes[k].total_internal_reflection = true;
         }
     }
     return color;

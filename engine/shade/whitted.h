@@ -29,6 +29,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/cancel.h"
 #include "engine/query/intersect.h"
 #include "engine/query/tracer.h"
 #include "engine/shade/spawn.h"
@@ -123,8 +124,9 @@ class Whitted {
     Vec3d radiance(const Ray& ray, RayCounts& counts) const;
     /// The same, shading a camera hit already found (counts.primary is the caller's).
     Vec3d shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) const;
-    /// The ray tree of one ray, with the blocking object of each shadow ray named.
-    RayTree tree(const Ray& ray) const;
+    /// The ray tree of one ray, with the blocking object of each shadow ray named;
+    /// Code::cancelled once `cancel` has fired (it is asked once per node).
+    Result<RayTree> tree(const Ray& ray, const CancelToken& cancel = {}) const;
 
     /// The path that answers this tracer's queries (Tracer::precision).
     Precision effective_precision() const { return tracer_.precision(); }
@@ -136,15 +138,17 @@ class Whitted {
     Vec3d shading_normal(const Hit& hit) const;
 
   private:
-    struct Surface;  // a hit made ready for shading (whitted.cpp)
+    struct Surface;    // a hit made ready for shading (whitted.cpp)
+    struct TreeBuild;  // a ray tree being built, and its token (whitted.cpp)
 
-    Vec3d trace(const Ray& ray, int depth, RayCounts& counts, RayTree* tree, int* slot) const;
-    Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts, RayTree* tree) const;
+    Vec3d trace(const Ray& ray, int depth, RayCounts& counts, TreeBuild* tree, int* slot) const;
+    Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
+                TreeBuild* tree) const;
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
     Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit) const;
     /// The weighted reflected and refracted rays (below max_depth); children go into node k.
-    Vec3d indirect(const Surface& sp, int depth, RayCounts& counts, RayTree* tree,
+    Vec3d indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
                    std::size_t k) const;
 
     const QueryEngine& engine_;

@@ -75,7 +75,7 @@ Scene tutorial_q2_scene() {
 TEST(Whitted, TutorialQuestion2Tree) {
     auto engine = prepare(tutorial_q2_scene());
     const Whitted w(*engine, {});
-    const RayTree t = w.tree(Ray{{0, 0, 0}, {0, 0, 1}});
+    const RayTree t = w.tree(Ray{{0, 0, 0}, {0, 0, 1}}).value();
     ASSERT_EQ(t.nodes.size(), 5u);
     const std::uint32_t objects[5] = {0, 1, 2, 0, 3};
     const bool full[5] = {true, true, true, false, false};
@@ -121,7 +121,7 @@ TEST(Whitted, RadianceIsTheTreesColourWithTheSameRays) {
     const Ray ray{{0, 0, 0}, {0, 0, 1}};
     RayCounts counts;
     const Vec3d c = w.radiance(ray, counts);
-    const RayTree t = w.tree(ray);
+    const RayTree t = w.tree(ray).value();
     EXPECT_EQ(c, t.color);
     EXPECT_EQ(counts.total(), t.counts.total());
 }
@@ -130,16 +130,34 @@ TEST(Whitted, MaxDepthCutsTheTree) {
     auto engine = prepare(tutorial_q2_scene());
     WhittedOptions o;
     o.max_depth = 2;
-    EXPECT_EQ(Whitted(*engine, o).tree(Ray{{0, 0, 0}, {0, 0, 1}}).nodes.size(), 3u);  // I1 I2 I4
+    EXPECT_EQ(Whitted(*engine, o).tree(Ray{{0, 0, 0}, {0, 0, 1}}).value().nodes.size(),
+              3u);  // I1 I2 I4
     o.max_depth = 1;
-    EXPECT_EQ(Whitted(*engine, o).tree(Ray{{0, 0, 0}, {0, 0, 1}}).nodes.size(), 1u);
+    EXPECT_EQ(Whitted(*engine, o).tree(Ray{{0, 0, 0}, {0, 0, 1}}).value().nodes.size(), 1u);
+}
+
+TEST(Whitted, TreeStopsWhenItsTokenHasFired) {
+    auto engine = prepare(tutorial_q2_scene());
+    const Whitted w(*engine, {});
+    const Ray ray{{0, 0, 0}, {0, 0, 1}};
+    const CancelToken stopped = CancelToken::make();
+    stopped.cancel();
+    const auto t = w.tree(ray, stopped);
+    ASSERT_FALSE(t.ok());
+    EXPECT_EQ(t.status().code, Code::cancelled);
+    // A token that could fire but does not changes nothing.
+    const CancelToken armed = CancelToken::make(CancelToken::Clock::now() + std::chrono::hours(1));
+    const RayTree a = w.tree(ray, armed).value();
+    const RayTree b = w.tree(ray).value();
+    EXPECT_EQ(a.nodes.size(), b.nodes.size());
+    EXPECT_EQ(a.color, b.color);
 }
 
 TEST(Whitted, MissGivesAnEmptyTreeAndTheBackground) {
     auto engine = prepare(tutorial_q2_scene());
     WhittedOptions o;
     o.background = {0.25, 0.5, 1};
-    const RayTree t = Whitted(*engine, o).tree(Ray{{0, 0, 0}, {1, 0, 0}});
+    const RayTree t = Whitted(*engine, o).tree(Ray{{0, 0, 0}, {1, 0, 0}}).value();
     EXPECT_TRUE(t.nodes.empty());
     EXPECT_EQ(t.color, o.background);
 }
@@ -148,7 +166,7 @@ TEST(Whitted, LightBehindTheShadingNormalIsNotFacingAndTracesNoRay) {
     Scene s = testing::tutorial_spheres();
     s.lights = {point_light({0, 0, 30})};  // behind sphere 3 as seen from the eye
     auto engine = prepare(std::move(s));
-    const RayTree t = Whitted(*engine, {}).tree(Ray{{0, 0, 0}, {0, 0, 1}});
+    const RayTree t = Whitted(*engine, {}).tree(Ray{{0, 0, 0}, {0, 0, 1}}).value();
     ASSERT_EQ(t.nodes.size(), 1u);
     EXPECT_FALSE(t.nodes[0].shadow_rays[0].facing);
     EXPECT_EQ(t.nodes[0].shadow_rays[0].blocked_by, kInvalidId);
@@ -169,7 +187,7 @@ TEST(Whitted, TotalInternalReflectionIsReportedAndTransmitsNothing) {
     // Start inside the cube and meet the z = 1 face at (0.433, 0, 1), 53° from its normal
     // (cos θ = 0.6): past the critical angle asin(1/1.5) = 41.8°.
     const Ray r{{-0.9, 0, 0}, {0.8, 0, 0.6}};
-    const RayTree t = Whitted(*engine, {}).tree(r);
+    const RayTree t = Whitted(*engine, {}).tree(r).value();
     ASSERT_FALSE(t.nodes.empty());
     EXPECT_TRUE(t.nodes[0].total_internal_reflection);
     EXPECT_EQ(t.nodes[0].refracted, -1);

@@ -114,6 +114,11 @@ bool ClientProbe::gone() const {
     return (p.revents & (POLLRDHUP | POLLHUP | POLLERR)) != 0;
 }
 
+void ClientProbe::hang_up() const {
+    if (sock_ >= 0)
+        ::shutdown(sock_, SHUT_RDWR);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 /// The Stream cpp-httplib reads requests from and writes answers to: a buffered socket with

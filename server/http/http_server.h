@@ -64,6 +64,11 @@ class ClientProbe {
     /// end-of-file is taken as gone, as nginx takes it, since TCP cannot tell the two apart).
     /// False for a default-constructed probe.
     bool gone() const;
+    /// Shuts the connection down in both directions, so that the answer of the request being
+    /// served is not written (every write fails) and the connection closes after it: for a
+    /// client that has gone, which would read no answer. The socket itself stays open until
+    /// the connection loop closes it. Nothing for a default-constructed probe.
+    void hang_up() const;
 
   private:
     int sock_ = -1;

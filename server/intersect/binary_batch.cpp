@@ -50,6 +50,7 @@ std::size_t intersect_records(const engine::QueryEngine& engine, std::string_vie
     const auto sink = [&](std::size_t b, std::size_t e, const engine::Hit* hits) {
         encode_answers(hits, options.mode, dtype, 0, e - b, out + b * record);
     };
+    // Its Status says whether options.cancel fired, which the caller asks the token itself.
     engine.intersect_blocks(end - begin, options, source, sink);
     return first_bad.load();
 }
@@ -59,26 +60,40 @@ void send_records(httplib::Response& res, engine::Precision precision, engine::M
     res.status = 200;
     res.set_header("X-Precision", engine::to_string(precision));
     res.set_header("X-Mode", engine::to_string(mode));
+    // An empty answer (no rays) is an empty body: cpp-httplib 0.11.4 takes a provider of length
+    // 0 for one without a length, sends no Content-Length, and calls it until it reports done,
+    // which ours never does, so the thread spun forever (found by tests/fuzz/fuzz_http_routes).
+    if (bytes == 0) {
+        res.set_content(std::string(), "application/octet-stream");
+        return;
+    }
     res.set_content_provider(bytes, "application/octet-stream", std::move(provider));
 }
 
 void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q,
                          std::shared_ptr<Scratch> scratch, std::size_t max_rays,
-                         httplib::Response& res) {
+                         const RequestCancel& cancel, httplib::Response& res) {
     Scratch& s = *scratch;
     const engine::Mode mode = q.options.mode;
+    // An abandoned batch frees its buffers rather than pooling them.
+    const auto stopped = [&] {
+        s.discard = true;
+        cancel.stopped();
+    };
     if (mode == engine::Mode::closest || mode == engine::Mode::any) {
         // Records in, records out, a block at a time (intersect_records).
         const std::size_t n = ray_count(s.body.size(), q.dtype, max_rays);
         s.out.resize(n * answer_record_bytes(mode, q.dtype));
-        if (const std::size_t bad =
-                intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
-            bad < n) {
+        const std::size_t bad =
+            intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
+        if (q.options.cancel.fired())
+            stopped();
+        if (bad < n)
             throw_invalid_ray(ray_at(s.body, q.dtype, bad), bad);
-        }
     } else {
         decode_rays(s.body, q.dtype, max_rays, s.rays);
-        engine.intersect(s.rays, q.options, s.result);
+        if (!engine.intersect(s.rays, q.options, s.result).ok())
+            stopped();  // the only Status intersect() returns: its token fired
         encode_results(s.result, mode, q.dtype, s.rays.size(), s.out);
     }
     const std::size_t bytes = s.out.size();

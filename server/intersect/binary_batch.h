@@ -13,6 +13,7 @@
 #include <httplib.h>
 
 #include "engine/query/intersect.h"
+#include "server/request_cancel.h"
 #include "server/schema/binary_codec.h"
 #include "server/scratch.h"
 
@@ -36,7 +37,8 @@ BinaryQuery parse_binary_query(const httplib::Request& req);
 /// time, so the batch never exists as engine rays and hits (1M rays: 136 MB less memory traffic
 /// than decode_rays + intersect + encode_results). Returns the lowest index of a bad record, or
 /// `end` if all are good; once one is found, blocks not yet traced are skipped (their answers
-/// are left unwritten: the request is an error).
+/// are left unwritten: the request is an error). So are they once options.cancel fires, which
+/// the caller asks (options.cancel.fired()) before it trusts an answer.
 std::size_t intersect_records(const engine::QueryEngine& engine, std::string_view body, Dtype dtype,
                               const engine::QueryOptions& options, std::size_t begin,
                               std::size_t end, char* out);
@@ -48,9 +50,10 @@ void send_records(httplib::Response& res, engine::Precision precision, engine::M
 
 /// Answers the batch in scratch->body (invalid_ray naming the lowest bad ray, too_large over
 /// max_rays); the answer streams from scratch->out, and the response keeps `scratch` until it
-/// has been written.
+/// has been written. q.options.cancel must be `cancel`'s token: once it fires the tracing
+/// stops, the scratch is freed rather than pooled, and what `cancel` says is thrown.
 void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q,
                          std::shared_ptr<Scratch> scratch, std::size_t max_rays,
-                         httplib::Response& res);
+                         const RequestCancel& cancel, httplib::Response& res);
 
 }  // namespace raycastd::server

@@ -46,6 +46,9 @@ StreamedBatch::~StreamedBatch() {
         // The request has failed already or its answer was abandoned; a chunk's own failure
         // adds nothing to that.
     }
+    // A cancelled batch hands its buffers back rather than pooling them.
+    if (options_.cancel.fired())
+        scratch_->discard = true;
 }
 
 void StreamedBatch::prepare(std::size_t c) {
@@ -101,7 +104,7 @@ void StreamedBatch::set_state(std::size_t c, State s) {
 }
 
 void StreamedBatch::trace_if_needed(std::size_t c) {
-    if (abandoned_ || first_bad_.load() < rays_)
+    if (abandoned_ || first_bad_.load() < rays_ || options_.cancel.cancelled())
         return;  // nobody will read the answer, or the request is an error
     if (claim(c, kWaiting, kTracing))
         trace(c);
@@ -115,6 +118,10 @@ void StreamedBatch::trace(std::size_t c) {
         if (intersect_records(*engine_, body, dtype_, options_, chunk_begin(c), chunk_end(c),
                               chunk_[c]->out.data()) < chunk_end(c)) {
             set_state(c, kFailed);  // cannot happen (append() checked them): never send it
+            return;
+        }
+        if (options_.cancel.fired()) {
+            set_state(c, kFailed);  // blocks were skipped: the answer is cut here
             return;
         }
     } catch (...) {

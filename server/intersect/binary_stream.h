@@ -20,7 +20,9 @@
 // makes the whole request invalid_ray naming the lowest bad index, before any answer is sent. A
 // chunk's encoded answer is sized when its bytes have arrived (from buffers the scratch keeps
 // between requests), so memory follows what the client has sent, not what its Content-Length
-// promises.
+// promises. The options' CancelToken (server/request_cancel.h) is asked by each chunk before it
+// is traced, by each of its blocks, and by the writer before each chunk: once it fires, work not
+// begun is skipped and the answer is cut at the next chunk (the connection closes mid-answer).
 
 #include <algorithm>
 #include <atomic>
@@ -82,7 +84,9 @@ class StreamedBatch {
             const std::size_t begin = c * kChunkRays * record_;
             const std::size_t end =
                 std::min({answer_bytes(), begin + kChunkRays * record_, offset + length});
-            if (offset >= end || !answer_chunk(c))
+            // Past the time limit (or with the client gone) the answer is cut before the next
+            // chunk: its 200 status is already on its way.
+            if (offset >= end || options_.cancel.cancelled() || !answer_chunk(c))
                 return false;
             return write(chunk_[c]->out.data() + (offset - begin), end - offset);
         } catch (...) {

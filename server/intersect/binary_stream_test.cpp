@@ -13,6 +13,7 @@
 #include "engine/testing/scenes.h"
 #include "server/api_error.h"
 #include "server/intersect/binary_batch.h"
+#include "server/request_cancel.h"
 
 namespace raycastd::server {
 namespace {
@@ -251,6 +252,26 @@ TEST(IntersectRecords, AnswersAsDecodeIntersectAndEncode) {
     EXPECT_EQ(first_bad_ray(bad, Dtype::float32, 0, 5000), 1100u);
     EXPECT_EQ(first_bad_ray(bad, Dtype::float32, 1101, 5000), 4500u);
     EXPECT_EQ(ray_at(bad, Dtype::float32, 1100).direction, (engine::Vec3d{0, 0, 0}));
+}
+
+// No rays (an empty body) is an empty answer with a length: cpp-httplib loops forever on a
+// content provider of length 0 (regression: tests/fuzz/regressions/http_routes/).
+TEST(BinaryBatch, NoRaysIsAnEmptyBodyNotAProvider) {
+    const auto e = scene(false);
+    for (engine::Mode mode :
+         {engine::Mode::closest, engine::Mode::any, engine::Mode::all, engine::Mode::count}) {
+        BinaryQuery q;
+        q.options.mode = mode;
+        auto scratch = acquire_scratch();
+        scratch->body.clear();
+        httplib::Response res;
+        answer_binary_batch(*e, q, std::move(scratch), 16,
+                            RequestCancel::for_current_request(Limits{}), res);
+        EXPECT_EQ(res.status, 200) << engine::to_string(mode);
+        EXPECT_TRUE(res.body.empty());
+        EXPECT_FALSE(res.content_provider_) << engine::to_string(mode);
+        EXPECT_EQ(res.get_header_value("Content-Type"), "application/octet-stream");
+    }
 }
 
 }  // namespace

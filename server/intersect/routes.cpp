@@ -13,6 +13,7 @@
 #include "server/app.h"
 #include "server/intersect/binary_batch.h"
 #include "server/intersect/binary_stream.h"
+#include "server/request_cancel.h"
 #include "server/schema/query_doc.h"
 #include "server/schema/ray_scanner.h"
 #include "server/scratch.h"
@@ -21,17 +22,28 @@ namespace raycastd::server {
 
 namespace {
 
-/// Answers a parsed JSON request, the engine answering into `result`.
+/// Answers a parsed JSON request, the engine answering into `result` (stopping when `cancel`
+/// fires).
 void answer_json(const engine::QueryEngine& engine, const IntersectRequest& req,
-                 engine::QueryResult& result, httplib::Response& res) {
-    engine.intersect(req.rays, req.options, result);
+                 const RequestCancel& cancel, engine::QueryResult& result, httplib::Response& res) {
+    engine::QueryOptions options = req.options;
+    options.cancel = cancel.token();
+    cancel.check(engine.intersect(req.rays, options, result));
     send_json(res, write_intersect_response(engine.scene(), req, result));
 }
 
 /// Reads `body` with the DOM reader and answers it over `engine` into `result`.
 void answer_json_document(const engine::QueryEngine& engine, const Json& body, std::size_t max_rays,
-                          engine::QueryResult& result, httplib::Response& res) {
-    answer_json(engine, parse_intersect_request(body, "", max_rays), result, res);
+                          const RequestCancel& cancel, engine::QueryResult& result,
+                          httplib::Response& res) {
+    answer_json(engine, parse_intersect_request(body, "", max_rays), cancel, result, res);
+}
+
+/// Frees `scratch` instead of pooling it when the request's work was cancelled: an abandoned
+/// batch hands its hundreds of megabytes back at once.
+void discard_if_cancelled(Scratch& scratch, const RequestCancel& cancel) {
+    if (cancel.token().fired())
+        scratch.discard = true;
 }
 
 /// A StreamedBatch for a binary closest/any request on a registered scene that announces a
@@ -39,7 +51,8 @@ void answer_json_document(const engine::QueryEngine& engine, const Json& body, s
 /// its whole body first, and reports whatever is wrong with it (an unknown scene, a bad
 /// parameter, a bad length) after reading it.
 std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& req,
-                                             const std::shared_ptr<Scratch>& scratch) {
+                                             const std::shared_ptr<Scratch>& scratch,
+                                             const RequestCancel& cancel) {
     // The announced length must be the body's: not chunked, not compressed (cpp-httplib
     // inflates gzip/deflate/br bodies, whose Content-Length is then the compressed size).
     if (!is_binary(req) || !req.has_header("Content-Length") ||
@@ -54,9 +67,10 @@ std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& r
     if (bytes > app.config().limits.max_body_bytes)
         return nullptr;
     try {
-        const BinaryQuery q = parse_binary_query(req);
+        BinaryQuery q = parse_binary_query(req);
         if (q.options.mode != engine::Mode::closest && q.options.mode != engine::Mode::any)
             return nullptr;
+        q.options.cancel = cancel.token();
         const std::size_t rays = ray_count(bytes, q.dtype, app.config().limits.max_rays);
         if (rays < StreamedBatch::kChunkRays)
             return nullptr;
@@ -91,61 +105,86 @@ void read_body(const httplib::ContentReader& read, std::size_t limit, std::strin
 
 /// POST /v1/scenes/{id}/intersect, on one of the four paths of the file comment.
 void answer_registered(App& app, const httplib::Request& req, httplib::Response& res,
-                       const httplib::ContentReader& read) {
+                       const httplib::ContentReader& read, const RequestCancel& cancel) {
     const Limits& limits = app.config().limits;
     // The body is streamed into a pooled buffer and binary answers are written from another
     // (server/scratch.h): a 1M-ray batch moves 32-64 MB each way, and fresh buffers of that
     // size cost more in page faults than tracing the rays (~2.5 ms per MB).
     auto scratch = acquire_scratch();
     scratch->body.clear();
-    auto stream = plan_streamed(app, req, scratch);
+    auto stream = plan_streamed(app, req, scratch, cancel);
     read_body(read, limits.max_body_bytes, scratch->body, stream.get());
     if (stream) {
+        // A client gone mid-upload, or the time limit passed while the body arrived.
+        if (cancel.token().cancelled()) {
+            scratch->discard = true;
+            cancel.stopped();
+        }
         stream->finish();
         send_streamed_answer(std::move(stream), app.extend_work_slot(), res);
         return;
     }
     auto engine = app.scene_or_404(req.matches[1]);
     if (is_binary(req)) {
-        answer_binary_batch(*engine, parse_binary_query(req), std::move(scratch), limits.max_rays,
-                            res);
+        BinaryQuery q = parse_binary_query(req);
+        q.options.cancel = cancel.token();
+        answer_binary_batch(*engine, q, std::move(scratch), limits.max_rays, cancel, res);
         return;
     }
     IntersectRequest& scanned = scratch->parsed;
     scanned.rays.clear();  // keeps its capacity for the next request
     scanned.options = {};
     scanned.fields = {};
-    if (scan_intersect_request(scratch->body, limits.max_rays, scanned)) {
-        answer_json(*engine, scanned, scratch->result, res);
-        return;
+    try {
+        if (scan_intersect_request(scratch->body, limits.max_rays, scanned)) {
+            answer_json(*engine, scanned, cancel, scratch->result, res);
+            return;
+        }
+        answer_json_document(*engine, parse_json(scratch->body), limits.max_rays, cancel,
+                             scratch->result, res);
+    } catch (...) {
+        discard_if_cancelled(*scratch, cancel);
+        throw;
     }
-    answer_json_document(*engine, parse_json(scratch->body), limits.max_rays, scratch->result, res);
 }
 
 /// POST /v1/intersect: JSON only, the scene inline (built or taken from the stateless cache).
-void answer_stateless(App& app, const httplib::Request& req, httplib::Response& res) {
+void answer_stateless(App& app, const httplib::Request& req, httplib::Response& res,
+                      const RequestCancel& cancel) {
     if (is_binary(req)) {
         throw ApiError(ErrorCode::unsupported_format,
                        "binary rays need a registered scene: POST /v1/scenes, then "
                        "/v1/scenes/{id}/intersect");
     }
     const Json body = parse_json(req.body);
-    auto engine = app.models().build_stateless_scene(body);
+    auto engine =
+        cancel.guard([&] { return app.models().build_stateless_scene(body, cancel.token()); });
     const auto scratch = acquire_scratch();
-    answer_json_document(*engine, body, app.config().limits.max_rays, scratch->result, res);
+    try {
+        answer_json_document(*engine, body, app.config().limits.max_rays, cancel, scratch->result,
+                             res);
+    } catch (...) {
+        discard_if_cancelled(*scratch, cancel);
+        throw;
+    }
 }
 
 }  // namespace
 
 void install_intersect_routes(App& app) {
     app.on_post("/v1/intersect", [&app](const httplib::Request& req, httplib::Response& res) {
-        app.handle(req, res, Work::heavy, [&] { answer_stateless(app, req, res); });
+        app.handle(req, res, Work::heavy, [&] {
+            answer_stateless(app, req, res,
+                             RequestCancel::for_current_request(app.config().limits));
+        });
     });
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/intersect)",
                 [&app](const httplib::Request& req, httplib::Response& res,
                        const httplib::ContentReader& read) {
-                    app.handle(req, res, Work::heavy,
-                               [&] { answer_registered(app, req, res, read); });
+                    app.handle(req, res, Work::heavy, [&] {
+                        answer_registered(app, req, res, read,
+                                          RequestCancel::for_current_request(app.config().limits));
+                    });
                 });
 }
 

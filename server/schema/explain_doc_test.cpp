@@ -54,7 +54,7 @@ std::vector<std::string> words_in_math(const std::string& md) {
 }
 
 std::string markdown(const engine::Scene& scene, const engine::Ray& ray) {
-    return write_explain_markdown(engine::explain(scene, ray), ray);
+    return write_explain_markdown(engine::explain(scene, ray).value(), ray);
 }
 
 bool contains(const std::string& text, const std::string& part) {

@@ -103,7 +103,7 @@ TEST(RenderDoc, TraceJsonShape) {
     l.position = {0, 0, -10};
     s.lights = {l};
     auto engine = *engine::QueryEngine::build(std::make_shared<const engine::Scene>(s));
-    const engine::RayTree tree = engine::Whitted(*engine, {}).tree({{0, 0, 0}, {0, 0, 1}});
+    const engine::RayTree tree = engine::Whitted(*engine, {}).tree({{0, 0, 0}, {0, 0, 1}}).value();
     const Json j = Json::parse(write_trace_json(engine->scene(), tree, engine::Precision::exact));
     const Json& n = j.at("tree");
     EXPECT_EQ(n.at("label"), "I1");
@@ -117,7 +117,7 @@ TEST(RenderDoc, TraceJsonShape) {
     EXPECT_EQ(j.at("summary"),
               Json::parse(R"({"points": 1, "full_phong": ["I1"], "ambient_only": []})"));
     EXPECT_EQ(j.at("rays").at("shadow"), 1);
-    const engine::RayTree miss = engine::Whitted(*engine, {}).tree({{0, 0, 0}, {1, 0, 0}});
+    const engine::RayTree miss = engine::Whitted(*engine, {}).tree({{0, 0, 0}, {1, 0, 0}}).value();
     const Json m = Json::parse(write_trace_json(engine->scene(), miss, engine::Precision::exact));
     EXPECT_TRUE(m.at("tree").is_null());
     EXPECT_EQ(m.at("summary").at("points"), 0);

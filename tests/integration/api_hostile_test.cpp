@@ -114,5 +114,36 @@ TEST(Hostile, CurlDashDSendsAWholeSceneAsAForm) {
     EXPECT_EQ(json::parse(body_of(a)).at("spheres"), 2000);
 }
 
+TEST(Token, WritesNeedTheBearerTokenQueriesDoNot) {
+    testing::ServerProcess server({"--token", "s3cret"});
+    const std::string scene = R"({"objects":[{"type":"sphere","center":[0,0,5],"radius":1}]})";
+    const std::string none = exchange(server.port(), post("/v1/scenes", scene));
+    EXPECT_EQ(status_of(none), 401) << none;
+    EXPECT_EQ(error_code(none), "unauthorized");
+    EXPECT_NE(none.find("WWW-Authenticate: Bearer"), std::string::npos);
+    const auto with = [&](const std::string& auth, const std::string& request) {
+        const std::string head_end = "\r\n";
+        const auto at = request.find(head_end);
+        return request.substr(0, at + 2) + "Authorization: " + auth + "\r\n" +
+               request.substr(at + 2);
+    };
+    EXPECT_EQ(status_of(exchange(server.port(), with("Bearer wrong", post("/v1/scenes", scene)))),
+              401);
+    EXPECT_EQ(status_of(exchange(server.port(), with("Basic s3cret", post("/v1/scenes", scene)))),
+              401);
+    const std::string ok =
+        exchange(server.port(), with("Bearer s3cret", post("/v1/scenes", scene)));
+    ASSERT_EQ(status_of(ok), 201) << ok;
+    const std::string id = json::parse(body_of(ok)).at("id");
+    // Queries stay open.
+    const std::string query =
+        exchange(server.port(), post("/v1/scenes/" + id + "/intersect",
+                                     R"({"rays":[{"origin":[0,0,0],"direction":[0,0,1]}]})"));
+    EXPECT_EQ(status_of(query), 200) << query;
+    const std::string del = "DELETE /v1/scenes/" + id + " HTTP/1.1\r\nHost: x\r\n\r\n";
+    EXPECT_EQ(status_of(exchange(server.port(), del)), 401);
+    EXPECT_EQ(status_of(exchange(server.port(), with("bearer s3cret", del))), 200);
+}
+
 }  // namespace
 }  // namespace raycastd

@@ -1,4 +1,4 @@
-// The preview page (API.md "GET /"): pick or upload a scene, orbit it, watch the preview refine,
+// The preview page (docs/api.md "GET /"): pick or upload a scene, orbit it, watch the preview refine,
 // click a pixel to see its hit and ray tree. State lives in `view` (what the URL carries) and
 // in `scene` (the registered scene's summary); the server does all the rendering.
 

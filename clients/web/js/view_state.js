@@ -1,4 +1,4 @@
-// The view as data: what the URL carries (API.md "GET /": ?scene=…&camera=…&shading=…&spp=…),
+// The view as data: what the URL carries (docs/api.md "GET /": ?scene=…&camera=…&shading=…&spp=…),
 // the render request body made from it, and the same request as a curl command.
 // Pure functions (no DOM), so they are tested under Node (clients/web/tests/).
 

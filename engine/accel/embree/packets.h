@@ -41,8 +41,11 @@ bool coherent(std::size_t n, const Dir& dir, const Org& org, T max_spread2) {
         const Vec3<T> d = dir(k);
         const T c = dot(d, d0);
         const Vec3<T> o = org(k) - o0;
-        incoherent |=
-            (c <= T(0)) | (c * c < T(0.97) * dot(d, d) * d0d0) | (dot(o, o) > max_spread2);
+        // Branch-free: three |= rather than one a | b | c, which clang's
+        // -Wbitwise-instead-of-logical rejects on bool operands.
+        incoherent |= c <= T(0);
+        incoherent |= c * c < T(0.97) * dot(d, d) * d0d0;
+        incoherent |= dot(o, o) > max_spread2;
     }
     return !incoherent;
 }

@@ -1,0 +1,12 @@
+#pragma once
+// RAYCASTD_FMA_CLONES: compile a function twice, with and without hardware FMA, and pick one
+// when the program loads (GCC's function multiversioning, an ifunc). ThreadSanitizer cannot
+// run an ifunc resolver: the resolver is instrumented but runs during relocation, before the
+// sanitizer's runtime exists, and the program dies before main (server_tests under
+// -fsanitize=thread). Such builds define RAYCASTD_NO_TARGET_CLONES and get the default clone.
+
+#if defined(RAYCASTD_NO_TARGET_CLONES)
+#define RAYCASTD_FMA_CLONES
+#else
+#define RAYCASTD_FMA_CLONES __attribute__((target_clones("fma", "default")))
+#endif

@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Runs the libFuzzer targets of tests/fuzz (built by the `fuzz` preset) and reports on them.
+#   tests/fuzz/run.sh [--seconds N | --long] [--target NAME] [--build-dir DIR] [--models DIR]
+# For each target: writes its seed corpus into BUILD/corpus/<target>/ (generated documents and
+# requests, the models of shared/data/models when present, and the committed crashers of
+# tests/fuzz/regressions/<target>/), fuzzes it for N seconds (default 30; --long: 600), then
+# replays regressions/<target>/ as plain inputs under the sanitizers, and writes a JSON summary
+# to BUILD/summary/<target>.json (tests/load/report.py --fuzz-summary reads the folder). A crash
+# prints the reproducer and the command that reruns it. Exits non-zero when a target failed;
+# the last line is "fuzz: N passed, M failed".
+set -uo pipefail
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
+seconds=30
+only=""
+build="$repo/build/fuzz"
+models="$repo/../shared/data/models"
+while (($#)); do
+    case "$1" in
+        --seconds) seconds="$2"; shift 2 ;;
+        --long) seconds=600; shift ;;
+        --target) only="${2#fuzz_}"; shift 2 ;;
+        --build-dir) build="$2"; shift 2 ;;
+        --models) models="$2"; shift 2 ;;
+        -h|--help) sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        *) echo "run.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
+    esac
+done
+
+# target, -max_len, extra libFuzzer flags. max_len fits the largest seed the target takes
+# (make_seeds.py's MAX_MODEL_SEED; 128 float64 records + 1 byte for binary_rays).
+targets=(
+    "scene_doc 32768 -dict=$repo/tests/fuzz/json.dict"
+    "gltf 65536"
+    "mesh_formats 32768"
+    "binary_rays 8193"
+    "ray_scanner 4096 -dict=$repo/tests/fuzz/json.dict"
+    "http_routes 16384 -dict=$repo/tests/fuzz/json.dict"
+)
+bin_dir="$build/tests/fuzz"
+regressions="$repo/tests/fuzz/regressions"
+mkdir -p "$build/corpus" "$build/summary" "$build/logs" "$build/artifacts"
+
+if [[ -d "$models" ]]; then
+    python3 "$repo/tests/fuzz/make_seeds.py" --out "$build/corpus" --models "$models"
+else
+    echo "run.sh: no models at $models: seeding from generated inputs and regressions only" >&2
+    python3 "$repo/tests/fuzz/make_seeds.py" --out "$build/corpus" --models /nonexistent 2>/dev/null
+fi
+
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}"
+# The number after a libFuzzer final-stats key (-print_final_stats=1), or 0.
+stat() { sed -n "s/^stat::$1: *\([0-9]*\).*/\1/p" "$2" | tail -1 | grep . || echo 0; }
+
+passed=0 failed=0 ran=0
+for spec in "${targets[@]}"; do
+    read -r name max_len extra <<<"$spec"
+    [[ -n "$only" && "$only" != "$name" ]] && continue
+    ran=$((ran + 1))
+    bin="$bin_dir/fuzz_$name"
+    if [[ ! -x "$bin" ]]; then
+        echo "run.sh: $bin is not built: cmake --preset fuzz && cmake --build --preset fuzz" >&2
+        failed=$((failed + 1))
+        continue
+    fi
+    corpus="$build/corpus/$name"
+    mkdir -p "$corpus" "$build/artifacts/$name"
+    [[ -d "$regressions/$name" ]] && cp -n "$regressions/$name"/* "$corpus"/ 2>/dev/null
+    log="$build/logs/$name.log"
+    echo "=== fuzz $name: ${seconds}s, $(ls "$corpus" | wc -l) inputs in $corpus" >&2
+    start=$(date +%s)
+    # shellcheck disable=SC2086  # $extra is a list of flags
+    "$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" \
+        -print_final_stats=1 -artifact_prefix="$build/artifacts/$name/" $extra "$corpus" \
+        >"$log" 2>&1
+    rc=$?
+    elapsed=$(($(date +%s) - start))
+    reproducer=""
+    if ((rc != 0)); then
+        reproducer="$(sed -n 's/.*Test unit written to \(.*\)$/\1/p' "$log" | tail -1)"
+        grep -E -A25 "ERROR: (AddressSanitizer|libFuzzer|LeakSanitizer)|runtime error|fuzz property broken" \
+            "$log" | head -60 >&2
+        echo "run.sh: $name FAILED (exit $rc); log: $log" >&2
+        [[ -n "$reproducer" ]] && {
+            echo "run.sh: reproducer: $reproducer" >&2
+            echo "run.sh: rerun with: $bin $reproducer" >&2
+        }
+    fi
+    replay_ok=true
+    replay_count=$(ls "$regressions/$name" 2>/dev/null | wc -l)
+    "$repo/tests/fuzz/replay.sh" "$bin_dir" "$regressions" "$name" >>"$log" 2>&1 || {
+        replay_ok=false
+        grep "^replay:" "$log" >&2
+    }
+    execs=$(stat number_of_executed_units "$log")
+    rate=$(stat average_exec_per_sec "$log")
+    result=pass
+    { ((rc != 0)) || ! $replay_ok; } && result=fail
+    cat >"$build/summary/$name.json" <<JSON
+{"target": "$name", "result": "$result", "seconds": $elapsed, "max_total_time": $seconds,
+ "execs": $execs, "execs_per_second": $rate, "new_units": $(stat new_units_added "$log"),
+ "corpus_size": $(ls "$corpus" | wc -l), "peak_rss_mb": $(stat peak_rss_mb "$log"),
+ "crashes": $((rc != 0 ? 1 : 0)), "reproducer": ${reproducer:+\"}${reproducer:-null}${reproducer:+\"},
+ "regressions": $replay_count, "regressions_passed": $($replay_ok && echo true || echo false)}
+JSON
+    echo "fuzz $name: $result, $execs execs in ${elapsed}s ($rate/s), corpus $(ls "$corpus" | wc -l), $replay_count regression input(s)" >&2
+    if [[ $result == pass ]]; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
+done
+if ((ran == 0)); then
+    echo "run.sh: no target named $only" >&2
+    exit 2
+fi
+echo "fuzz: $passed passed, $failed failed"
+((failed == 0))
