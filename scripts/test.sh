@@ -16,6 +16,7 @@ scripts/setup.sh
 # Formatting first: it takes a second and names the one command that fixes it.
 scripts/check_format.sh
 jobs="$(nproc)"
+failed=0
 presets=(release asan tsan)
 fuzz=1
 long=0
@@ -27,13 +28,22 @@ for arg in "$@"; do
     esac
 done
 summary="$(mktemp)"
-trap 'rm -f "$summary" "$summary.log"' EXIT
+trap 'rm -f "$summary" "$summary.log" "$summary.times"' EXIT
+: >"$summary.times"
+# Each stage's build and test times go into the summary, so that CI's log says where its
+# minutes went.
+stage_start=$SECONDS
+lap() { echo "$1 $((SECONDS - stage_start)) s" >>"$summary.times"; stage_start=$SECONDS; }
 for preset in "${presets[@]}"; do
     echo "=== ${preset}: configure and build" >&2
     cmake --preset "$preset" >/dev/null
     cmake --build --preset "$preset" -j"$jobs"
+    lap "${preset}: build"
     echo "=== ${preset}: test" >&2
-    ctest --preset "$preset" -j"$jobs" --timeout 600 | tee "$summary.log"
+    # A failing stage does not stop the later ones (their failures are worth seeing in the same
+    # run); the script fails at the end.
+    ctest --preset "$preset" -j"$jobs" --timeout 600 | tee "$summary.log" || failed=1
+    lap "${preset}: test"
     sed -n "s/^\([0-9]*% tests passed.*\)/${preset}: \1/p" "$summary.log" >>"$summary"
 done
 if ((fuzz)); then
@@ -42,19 +52,24 @@ if ((fuzz)); then
     echo "=== fuzz: configure and build" >&2
     cmake --preset fuzz >/dev/null
     cmake --build --preset fuzz -j"$jobs"
+    lap "fuzz: build"
     echo "=== fuzz: run" >&2
     seconds="${FUZZ_SECONDS:-20}"
     ((long)) && seconds=600
-    tests/fuzz/run.sh --seconds "$seconds" | tee "$summary.log"
+    tests/fuzz/run.sh --seconds "$seconds" | tee "$summary.log" || failed=1
     sed -n 's/^\(fuzz: .*\)/\1/p' "$summary.log" >>"$summary"
-    ctest --preset fuzz --timeout 600 | tee "$summary.log"
+    ctest --preset fuzz --timeout 600 | tee "$summary.log" || failed=1
     sed -n "s/^\([0-9]*% tests passed.*\)/fuzz: \1/p" "$summary.log" >>"$summary"
+    lap "fuzz: run and replay"
 fi
 if ((long)); then
     echo "=== long load and fault run" >&2
     /usr/bin/python3 tests/load/run.py --long --server build/release/server/raycastd \
-        --shared "$(cd .. && pwd)/shared" --report docs/reliability.md | tee "$summary.log"
+        --shared "$(cd .. && pwd)/shared" --report docs/reliability.md | tee "$summary.log" ||
+        failed=1
     sed -n 's/^\(load: .*\)/\1/p' "$summary.log" >>"$summary"
 fi
 echo "=== summary" >&2
 cat "$summary"
+echo "times: $(paste -sd, "$summary.times" | sed 's/,/, /g'); total ${SECONDS} s"
+exit "$failed"

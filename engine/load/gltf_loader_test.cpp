@@ -495,6 +495,29 @@ TEST(GltfLoader, GlbContainerChecks) {
     EXPECT_TRUE(load_model(extra, ModelFormat::glb, no_resources(), "t").ok());
 }
 
+// A byteLength of a petabyte is refused without being allocated: buffers are sized from the
+// bytes present (under ASan an allocation that size would abort the test), in a data: URI, a
+// GLB's BIN chunk and an external file alike.
+TEST(GltfLoader, HugeByteLengthIsRefusedBeforeAnyAllocation) {
+    Doc d;
+    d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::string json = d.json(one_primitive(R"({"attributes":{"POSITION":0}})"));
+    const std::string from = R"("byteLength":36,"uri")";
+    const std::string huge = R"("byteLength":1000000000000000,"uri")";
+    std::string data_uri = json;
+    data_uri.replace(data_uri.find(from), from.size(), huge);
+    auto a = load(data_uri);
+    ASSERT_FALSE(a.ok());
+    EXPECT_EQ(a.status().code, Code::model_load_failed);
+
+    std::string bin_json = json;
+    const std::size_t uri = bin_json.find(R"(,"uri")");
+    bin_json.replace(uri, bin_json.find("}]", uri) - uri, "");
+    bin_json.replace(bin_json.find(R"("byteLength":36)"), 15, R"("byteLength":1000000000000000)");
+    EXPECT_FALSE(
+        load_model(glb(bin_json, d.bin()), ModelFormat::glb, no_resources(), "t.glb").ok());
+}
+
 TEST(GltfLoader, SkinnedMeshStaysInBindPose) {
     Doc d;
     d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});

@@ -101,7 +101,11 @@ void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q
     send_records(res, engine.effective_precision(q.options.precision), mode, bytes,
                  [scratch = std::move(scratch)](std::size_t offset, std::size_t length,
                                                 httplib::DataSink& sink) {
-                     return sink.write(scratch->out.data() + offset, length);
+                     // A client gone before the answer was written: freed, not pooled.
+                     if (sink.write(scratch->out.data() + offset, length))
+                         return true;
+                     scratch->discard = true;
+                     return false;
                  });
 }
 

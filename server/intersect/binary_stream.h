@@ -75,7 +75,8 @@ class StreamedBatch {
     std::size_t answer_bytes() const { return rays_ * record_; }
     /// Hands answer bytes [offset, offset + length), cut at the end of the chunk that holds
     /// `offset` (tracing that chunk first if needed), to `write`, and returns what `write`
-    /// returned; false, with nothing written, if the chunk could not be traced. For
+    /// returned; false, with nothing written, if the chunk could not be traced. A failed write
+    /// marks the scratch to be freed rather than pooled. For
     /// cpp-httplib's content provider, after finish(). Never throws.
     template <class Write>
     bool write_answer(std::size_t offset, std::size_t length, Write&& write) noexcept {
@@ -88,7 +89,12 @@ class StreamedBatch {
             // chunk: its 200 status is already on its way.
             if (offset >= end || options_.cancel.cancelled() || !answer_chunk(c))
                 return false;
-            return write(chunk_[c]->out.data() + (offset - begin), end - offset);
+            const bool ok = write(chunk_[c]->out.data() + (offset - begin), end - offset);
+            // A failed write is a client that has gone with the answer half read, after the
+            // tracing may have finished: its buffers are freed, not pooled (scratch.h).
+            if (!ok)
+                scratch_->discard = true;
+            return ok;
         } catch (...) {
             return false;
         }

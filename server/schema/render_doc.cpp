@@ -90,18 +90,9 @@ void write_labels(JsonWriter& w, const engine::RayTree& tree, bool full) {
     w.ch(']');
 }
 
-}  // namespace
-
-RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
-    RenderRequest r;
+/// The members of a render body over the defaults already in `r`.
+void read_render_members(const Json& body, RenderRequest& r) {
     engine::RenderOptions& o = r.options;
-    // A preview defaults to fast: an 8-bit pixel cannot show the digits refined adds (float
-    // hits are within ~1e-7 of the scene's size; spawned rays are offset by each precision's
-    // own error bound, so no acne at any precision), and fast renders 1.5-3x sooner
-    // (docs/rendering.md). Ray trees default to refined, like intersect: their t are read.
-    o.whitted.precision = engine::Precision::fast;
-    if (body.is_null())
-        return r;
     require_object(body, "", kInvalid);
     o.width = read_int(body, "width", o.width, 1, kMaxSide);
     o.height = read_int(body, "height", o.height, 1, kMaxSide);
@@ -139,6 +130,21 @@ RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
             throw ApiError(kInvalid, "/async must be a boolean", "/async");
         r.async = v->get<bool>();
     }
+}
+
+}  // namespace
+
+RenderRequest parse_render_request(const Json& body, std::size_t max_pixels) {
+    RenderRequest r;
+    engine::RenderOptions& o = r.options;
+    // A preview defaults to fast: an 8-bit pixel cannot show the digits refined adds (float
+    // hits are within ~1e-7 of the scene's size; spawned rays are offset by each precision's
+    // own error bound, so no acne at any precision), and fast renders 1.5-3x sooner
+    // (docs/rendering.md). Ray trees default to refined, like intersect: their t are read.
+    o.whitted.precision = engine::Precision::fast;
+    if (!body.is_null())
+        read_render_members(body, r);
+    // The limit holds for the defaults too (an empty body), whatever --max-pixels is.
     const std::size_t samples = static_cast<std::size_t>(o.width) *
                                 static_cast<std::size_t>(o.height) *
                                 static_cast<std::size_t>(o.spp);

@@ -82,6 +82,16 @@ TEST(RenderDoc, PixelLimitCountsSamples) {
     EXPECT_EQ(e.http_status(), 413);
 }
 
+TEST(RenderDoc, PixelLimitHoldsForTheDefaults) {
+    // An empty body renders the defaults (640 × 480 at 1 spp): a smaller --max-pixels refuses
+    // them too.
+    EXPECT_NO_THROW(parse_render_request(Json(), 640 * 480));
+    EXPECT_EQ(error_of([] { parse_render_request(Json(), 640 * 480 - 1); }).code,
+              ErrorCode::too_large);
+    EXPECT_EQ(error_of([] { parse_render_request(Json::object(), 1000); }).code,
+              ErrorCode::too_large);
+}
+
 TEST(RenderDoc, TraceRequestAndRayErrors) {
     const TraceRequest t = parse_trace_request(
         Json::parse(R"({"ray": {"origin": [0,0,0], "direction": [0,0,1]}, "max_depth": 2})"));

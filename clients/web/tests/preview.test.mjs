@@ -7,15 +7,23 @@ import { Preview } from '../js/preview.js';
 
 globalThis.requestAnimationFrame ??= (f) => setTimeout(f, 0);
 const wait = (ms) => new Promise((r) => setTimeout(r, ms));
+/** Waits until `cond()` holds (a loaded CI machine runs timers late), at most `ms`. */
+async function until(cond, ms = 5000) {
+    for (const end = Date.now() + ms; !cond() && Date.now() < end; ) await wait(5);
+}
 
-/** A fake server: each render takes `ms` unless aborted; records what happened. */
+/**
+ * A fake server: each render takes `ms` (or `ms(view)`; Infinity: until aborted) unless
+ * aborted; records what happened.
+ */
 function fakeRender(ms = 25) {
     const log = [];
     const render = (view, stage, signal) =>
         new Promise((resolve, reject) => {
             const entry = { view: view.id, stage: stage.name, aborted: false };
             log.push(entry);
-            const t = setTimeout(() => resolve({ stage: stage.name }), ms);
+            const delay = typeof ms === 'function' ? ms(view) : ms;
+            const t = delay === Infinity ? undefined : setTimeout(() => resolve({ stage: stage.name }), delay);
             signal.addEventListener('abort', () => {
                 clearTimeout(t);
                 entry.aborted = true;
@@ -34,18 +42,20 @@ test('a still view refines 1/8 → 1/2 → full', async () => {
     const frames = [];
     const p = preview(render, frames);
     p.update({ id: 'a' });
-    await wait(200);
+    await until(() => frames.length >= 3);
     assert.deepEqual(frames, ['a:1/8', 'a:1/2', 'a:full']);
 });
 
 test('a newer view aborts the request the older one has in flight', async () => {
-    const { render, log } = fakeRender(40);
+    // The older view's render never ends on its own, so the newer view always finds it in flight
+    // (a fixed 40 ms render ended first on a loaded CI machine).
+    const { render, log } = fakeRender((view) => (view.id === 'a' ? Infinity : 5));
     const frames = [];
     const p = preview(render, frames);
     p.update({ id: 'a' });
-    await wait(15);
+    await until(() => log.length >= 1);
     p.update({ id: 'b' });
-    await wait(300);
+    await until(() => frames.length >= 3);
     assert.deepEqual(log[0], { view: 'a', stage: '1/8', aborted: true });
     assert.ok(frames.every((f) => f.startsWith('b:')), frames.join());
     assert.deepEqual(frames, ['b:1/8', 'b:1/2', 'b:full']);
@@ -60,7 +70,7 @@ test('while the camera moves only 1/8 frames come; release lets the pass finish'
     await wait(120);
     assert.deepEqual(frames, ['a:1/8']);
     p.release();
-    await wait(200);
+    await until(() => frames.length >= 3);
     assert.deepEqual(frames, ['a:1/8', 'a:1/2', 'a:full']);
 });
 
@@ -69,7 +79,8 @@ test('a failed render is reported once and the pass stops', async () => {
     const frames = [];
     const p = preview(() => Promise.reject(Object.assign(new Error('boom'), { code: 'internal' })), frames, errors);
     p.update({ id: 'a' });
-    await wait(80);
+    await until(() => errors.length >= 1);
+    await wait(50);
     assert.equal(errors.length, 1);
     assert.deepEqual(frames, []);
 });
