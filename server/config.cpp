@@ -21,6 +21,7 @@ usage: raycastd [options]
   --demo FILE             register the scene document FILE at start-up (repeatable)
   --max-body-mb N         largest request body (default 512)
   --max-rays N            most rays per intersect request (default 16777216)
+  --max-points N          most points per points request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
   --max-concurrent N      work requests in flight before 503 busy (default: 8 per hardware
@@ -122,6 +123,8 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
             c.limits.max_body_bytes = n << 20;
         } else if (a == "--max-rays") {
             c.limits.max_rays = n;
+        } else if (a == "--max-points") {
+            c.limits.max_points = n;
         } else if (a == "--max-pixels") {
             c.limits.max_pixels = n;
         } else if (a == "--max-triangles") {
