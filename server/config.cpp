@@ -49,19 +49,11 @@ bool to_size(const char* s, std::size_t& out) {
 
 /// The flags that take a number, so that an unknown flag is called unknown whatever its value.
 const std::set<std::string>& numeric_flags() {
-    static const std::set<std::string> flags = {"--port",
-                                                "--threads",
-                                                "--max-connections",
-                                                "--max-body-mb",
-                                                "--max-rays",
-                                                "--max-pixels",
-                                                "--max-triangles",
-                                                "--max-concurrent",
-                                                "--memory-budget-mb",
-                                                "--body-budget-mb",
-                                                "--header-timeout-s",
-                                                "--idle-timeout-s",
-                                                "--request-timeout-s"};
+    static const std::set<std::string> flags = {
+        "--port",           "--threads",          "--max-connections", "--max-body-mb",
+        "--max-rays",       "--max-points",       "--max-pixels",      "--max-triangles",
+        "--max-concurrent", "--memory-budget-mb", "--body-budget-mb",  "--header-timeout-s",
+        "--idle-timeout-s", "--request-timeout-s"};
     return flags;
 }
 

@@ -255,8 +255,9 @@ void expect_stopped(const ServerProcess& server, const char* what, const Abandon
     EXPECT_GT(a.working_cpu_s, 0.05) << what << ": the work should have been running";
     ASSERT_TRUE(a.stop_s) << what << ": the work went on after its client had gone";
     EXPECT_LT(*a.stop_s, 0.5) << what;
-    if (kAllocatorHandsMemoryBack)
+    if (kAllocatorHandsMemoryBack) {
         EXPECT_LT(a.rss_after, a.rss_before + (64u << 20)) << what;
+    }
     expect_serving(server);
 }
 
@@ -305,8 +306,9 @@ TEST(Cancel, ClientGoneAfterTheTracingFreesTheAnswer) {
         "[ measured ] answer never read: RSS %.0f MB before, %.0f MB waiting, %.0f MB after\n",
         mb(rss_before), mb(rss_waiting), mb(rss_after));
     EXPECT_GT(rss_waiting, rss_before + (128u << 20)) << "the answer should have been held";
-    if (kAllocatorHandsMemoryBack)
+    if (kAllocatorHandsMemoryBack) {
         EXPECT_LT(rss_after, rss_before + (64u << 20));
+    }
     expect_serving(server);
 }
 
