@@ -192,6 +192,29 @@ class TutorialExampleTest(ServerTestCase):
             )
             self.assertIn("your program exited with status 2", msgs["tracer_t"])
 
+    def test_closest_point_and_inside_questions(self) -> None:
+        # The points endpoint's questions: a unit sphere at (0, 0, 5); from (0, 0, 2) the nearest
+        # surface point is (0, 0, 4); (0, 0, 5) is inside, (3, 0, 5) outside.
+        with tempfile.TemporaryDirectory() as tmp:
+            root = pathlib.Path(tmp)
+            scene = "scene = { objects = [{ type = 'sphere', center = [0, 0, 5], radius = 1 }] }\n"
+            (root / "q.toml").write_text(
+                "[[question]]\nid = 'near'\npoints = 1\nask = 'closest_point'\n"
+                "point = [0, 0, 2]\n" + scene + "[[question]]\nid = 'in'\npoints = 2\n"
+                "ask = 'inside'\npoints_at = [[0, 0, 5], [3, 0, 5]]\n" + scene
+            )
+            right, wrong = root / "right.toml", root / "wrong.toml"
+            right.write_text("near = [0, 0, 4]\nin = [true, false]\n")
+            wrong.write_text("near = [0, 0, 6]\nin = [true, true]\n")
+            grader = Grader(load_questions(root / "q.toml"), self.server.url)
+            good = {r.question.id: r for r in grader.grade(load_answers(right), None).results}
+            self.assertEqual((good["near"].score, good["in"].score), (1, 2), good["in"].message)
+            bad = {r.question.id: r for r in grader.grade(load_answers(wrong), None).results}
+            self.assertEqual(bad["near"].score, 0)
+            self.assertIn("expected (0, 0, 4)", bad["near"].message)
+            self.assertEqual(bad["in"].score, 1)  # one of two points right
+            self.assertIsNone(bad["in"].instructor_error)
+
     def test_a_failing_reference_writes_results_and_exits_1(self) -> None:
         # The server refuses the question's scene (a negative radius): the student scores 0 for
         # that question with the instructor's message, the results file is written, and the
