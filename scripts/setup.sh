@@ -5,7 +5,8 @@
 # package playwright-core pinned in tests/browser/package-lock.json (`npm ci` there, only when
 # the installed copy differs from the lock).
 #   scripts/setup.sh          build + test dependencies (Python: the client's tests, black;
-#                             clang and its libFuzzer runtime: the fuzz preset, tests/fuzz)
+#                             clang and its libFuzzer runtime: the fuzz preset, tests/fuzz;
+#                             prometheus-client, yaml and nginx: tests/deploy, tests/scale)
 #   scripts/setup.sh --bench  also the benchmark peers (Open3D, NumPy, POV-Ray, matplotlib)
 set -euo pipefail
 
@@ -16,6 +17,7 @@ packages=(
     clang-format
     clang libclang-rt-14-dev
     python3 python3-numpy python3-pip python3-setuptools black
+    python3-prometheus-client python3-yaml nginx
     chromium
 )
 # Node.js and npm: Debian's packages, unless a node and npm are there already (NodeSource's
