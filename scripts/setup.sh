@@ -10,10 +10,16 @@
 #   scripts/setup.sh --bench  also the benchmark peers (Open3D, NumPy, POV-Ray, matplotlib)
 set -euo pipefail
 
-packages=(
+# What building raycastd needs: the Dockerfile's build stage installs exactly this list
+# (tests/deploy/test_dockerfile.py compares the two).
+build_packages=(
     build-essential cmake pkg-config git curl ca-certificates
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
     nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
+)
+# What testing, formatting and fuzzing need besides.
+packages=(
+    "${build_packages[@]}"
     clang-format
     clang libclang-rt-14-dev
     python3 python3-numpy python3-pip python3-setuptools black

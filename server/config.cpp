@@ -41,6 +41,9 @@ usage: raycastd [options]
                           method, route, status, duration_ms, rays; the default), debug (and
                           each request's path and sizes)
   --access-log            the same as --log-level info (kept for old command lines)
+  --health-check          do not serve: ask the server at --host/--port (0.0.0.0: this
+                          machine) for GET /v1/health and exit 0 if it answers 200 within
+                          3 s, else 1 (a container's HEALTHCHECK)
   --help                  this text
 
 Every option that takes a value, except --demo and --threads, may be given instead in the
@@ -201,6 +204,10 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
         if (a == "--help" || a == "-h") {
             message = usage();
             return std::nullopt;
+        }
+        if (a == "--health-check") {
+            c.health_check = true;
+            continue;
         }
         if (a == "--access-log") {
             // Kept from before --log-level: request lines are the info level.

@@ -41,6 +41,10 @@ struct Config {
     /// when set (--token, else $RAYCASTD_TOKEN); empty: writes are open.
     std::string token;
     Limits limits;
+    /// --health-check: ask a running server's GET /v1/health at host:port (0.0.0.0 and ::
+    /// meaning this machine) and exit 0 when it answers 200, 1 otherwise; for a container's
+    /// HEALTHCHECK, whose runtime image has no curl.
+    bool health_check = false;
 };
 
 /// Whether `host` names only this machine (127.0.0.0/8, ::1, localhost): a server bound
