@@ -73,6 +73,15 @@ void add_reason_headers(httplib::Response& res, const ApiError& e) {
         res.set_header("Retry-After", "1");
 }
 
+/// An X-Request-Id a client may choose: 1 to 128 letters, digits and "._:-" (it is echoed in
+/// a header and written into log lines, so nothing else).
+bool is_request_id(const std::string& id) {
+    return !id.empty() && id.size() <= 128 && std::all_of(id.begin(), id.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == ':' ||
+               c == '-';
+    });
+}
+
 /// The id group of our route patterns, and the rest-of-the-path group (static files): the only
 /// regexes in them.
 constexpr std::string_view kIdGroup = "([A-Za-z0-9_]+)";
@@ -191,8 +200,11 @@ App::~App() {
 }
 
 void App::install_handlers() {
-    http_.set_pre_routing_handler([this](const httplib::Request&, httplib::Response& res) {
-        res.set_header("X-Request-Id", http_.next_request_id());
+    http_.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+        // A balancer's id (nginx's $request_id, deploy/nginx.conf) is adopted, so that its log
+        // and ours name the same request; one that is not a plain token gets ours.
+        const std::string given = req.get_header_value("X-Request-Id");
+        res.set_header("X-Request-Id", is_request_id(given) ? given : http_.next_request_id());
         // The request is timed from here (its head has been read) to its logger call.
         RequestRecord& r = current_request();
         r = RequestRecord{};

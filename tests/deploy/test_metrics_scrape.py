@@ -37,10 +37,12 @@ class Server:
         line = self.proc.stdout.readline()  # "raycastd listening on http://127.0.0.1:PORT"
         self.url = line.strip().split()[-1]
 
-    def request(self, method: str, path: str, body: object = None) -> tuple:
+    def request(self, method: str, path: str, body: object = None, headers: dict = {}) -> tuple:
         data = None if body is None else json.dumps(body).encode()
         req = urllib.request.Request(self.url + path, data=data, method=method)
         req.add_header("Content-Type", "application/json")
+        for k, v in headers.items():
+            req.add_header(k, v)
         try:
             with urllib.request.urlopen(req, timeout=30) as r:
                 return r.status, r.headers, r.read()
@@ -131,11 +133,20 @@ class MetricsScrape(unittest.TestCase):
         status, headers, _ = self.server.request("GET", "/v1/scenes/sc_missing")
         self.assertEqual(status, 404)
         missing_id = headers["X-Request-Id"]
+        # A balancer's id is adopted (and named in the log); one that is not a plain token is not.
+        status, headers, _ = self.server.request(
+            "GET", "/v1/health", headers={"X-Request-Id": "ngx-42"}
+        )
+        self.assertEqual(headers["X-Request-Id"], "ngx-42")
+        status, headers, _ = self.server.request(
+            "GET", "/v1/health", headers={"X-Request-Id": 'a"b'}
+        )
+        self.assertTrue(headers["X-Request-Id"].startswith("rq_"))
         # A line is written once its answer has been sent, so it may trail the answer a little.
         deadline = time.monotonic() + 5
         while True:
             lines = {l["request_id"]: l for l in self.server.log_lines() if l["msg"] == "request"}
-            if {health_id, missing_id} <= lines.keys() or time.monotonic() > deadline:
+            if {health_id, missing_id, "ngx-42"} <= lines.keys() or time.monotonic() > deadline:
                 break
             time.sleep(0.02)
         self.assertEqual(lines[health_id]["route"], "/v1/health")
@@ -145,6 +156,7 @@ class MetricsScrape(unittest.TestCase):
         self.assertEqual(lines[health_id]["rays"], 0)
         self.assertEqual(lines[missing_id]["route"], "/v1/scenes/{id}")
         self.assertEqual(lines[missing_id]["status"], 404)
+        self.assertEqual(lines["ngx-42"]["route"], "/v1/health")
 
 
 class LogLevels(unittest.TestCase):
