@@ -85,7 +85,18 @@ class MetricsScrape(unittest.TestCase):
         for _ in range(3):
             status, _, body = self.server.request("POST", f"/v1/scenes/{sid}/intersect", rays)
             self.assertEqual(status, 200, body)
-        f = self.families()
+        # A request is counted once its answer is written: the client may be a moment ahead.
+        deadline = time.monotonic() + 5
+        while True:
+            f = self.families()
+            counted = sum(
+                s.value
+                for s in f["raycastd_http_request_duration_seconds"].samples
+                if s.name.endswith("_count") and s.labels["route"] == "/v1/scenes/{id}/intersect"
+            )
+            if counted >= 3 or time.monotonic() > deadline:
+                break
+            time.sleep(0.02)
         # The parser names counters without their _total suffix.
         self.assertEqual(f["raycastd_http_requests"].type, "counter")
         self.assertEqual(f["raycastd_http_request_duration_seconds"].type, "histogram")

@@ -2,6 +2,9 @@
 // pattern, status, ray kind and precision), the exposition has the Prometheus 0.0.4 content
 // type, and a client's paths do not become labels.
 
+#include <chrono>
+#include <thread>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -67,8 +70,16 @@ TEST_F(Metrics, CountersMoveWithTheRequestsServed) {
     ASSERT_TRUE(missing);
     EXPECT_EQ(missing->status, 404);
 
-    const std::string after = scrape();
+    // A request is counted once its answer has been written, so the client may see the answer
+    // a moment before the counter moves: the scrape is repeated until the last one is counted.
     const std::string intersect = R"(method="POST",route="/v1/scenes/{id}/intersect")";
+    std::string after = scrape();
+    for (int i = 0; i < 100 && sample(after, "raycastd_http_request_duration_seconds_count{" +
+                                                 intersect + "}") < 3;
+         ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        after = scrape();
+    }
     EXPECT_EQ(sample(after, "raycastd_http_requests_total{" + intersect + R"(,status="200"})"), 2);
     EXPECT_EQ(sample(after, "raycastd_http_requests_total{" + intersect + R"(,status="404"})"), 1);
     EXPECT_EQ(sample(after, "raycastd_http_request_duration_seconds_count{" + intersect + "}"), 3);
