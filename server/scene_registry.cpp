@@ -3,10 +3,15 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <random>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "server/api_error.h"
@@ -87,9 +92,29 @@ bool is_scene_id(const std::string& id) {
     });
 }
 
-/// Entries of tmp/ older than this are writes that died (a replica killed mid-write): a live
-/// write takes seconds, and a replica starting must not remove another's write in progress.
-constexpr auto kStaleTmpAge = std::chrono::hours(1);
+/// The writer a tmp/ entry belongs to: the instance token in "<stem>.<token>.<n>" (every name
+/// unique_tmp_name makes), or "" for a name of another shape.
+std::string tmp_owner(const std::string& name) {
+    const std::size_t last = name.rfind('.');
+    if (last == std::string::npos || last == 0)
+        return {};
+    const std::size_t before = name.rfind('.', last - 1);
+    if (before == std::string::npos)
+        return {};
+    return name.substr(before + 1, last - before - 1);
+}
+
+/// Whether the writer holding `lock` (locks/<token>.lock) is alive: it keeps an exclusive flock
+/// on the file while it runs, which the kernel drops when it dies, kill -9 included (on NFS
+/// too: Linux maps flock to the protocol's byte-range locks).
+bool writer_alive(const fs::path& lock) {
+    const int fd = ::open(lock.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return false;  // no lock file: its writer is gone (or predates locks)
+    const bool held = ::flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+    ::close(fd);
+    return held;
+}
 
 }  // namespace
 
@@ -99,6 +124,40 @@ SceneRegistry::SceneRegistry(std::string data_dir, std::size_t memory_budget, Bu
     char buf[17];
     std::snprintf(buf, sizeof buf, "%08x%08x", rd(), rd());
     instance_ = buf;
+}
+
+SceneRegistry::~SceneRegistry() {
+    if (lock_fd_ >= 0)
+        ::close(lock_fd_);  // releases the flock: this writer's leftovers may be removed
+}
+
+bool SceneRegistry::hold_writer_lock(std::string& error) {
+    std::error_code ec;
+    fs::create_directories(fs::path(data_dir_) / "locks", ec);
+    const fs::path lock = fs::path(data_dir_) / "locks" / (instance_ + ".lock");
+    // Another replica starting may take a lock file for a dead writer's between its creation
+    // and its flock, and remove it: then it is made again (the path must name the locked file).
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        // Read-only: a file open for writing would keep the data dir's filesystem from being
+        // remounted read-only (and flock needs no write access).
+        const int fd = ::open(lock.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0644);
+        if (fd < 0)
+            break;
+        struct stat held {
+        }, named{};
+        if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 &&
+            ::stat(lock.c_str(), &named) == 0 && held.st_ino == named.st_ino &&
+            held.st_dev == named.st_dev) {
+            lock_fd_ = fd;
+            return true;
+        }
+        ::close(fd);
+    }
+    // A data dir that refuses writes cannot hold a lock; it is served read-only (open() warns).
+    if (errno == EROFS || errno == EACCES || errno == EPERM)
+        return true;
+    error = "cannot lock " + lock.string() + ": " + std::strerror(errno);
+    return false;
 }
 
 std::string SceneRegistry::unique_tmp_name(const std::string& stem) const {
@@ -116,14 +175,30 @@ bool SceneRegistry::open(std::string& error) {
         error = "cannot create data directory " + data_dir_ + ": " + ec.message();
         return false;
     }
-    // What is in tmp/ was never acknowledged; but in a data dir shared by replicas, a recent
-    // entry may be another replica's write in progress, so only old ones are removed.
-    const auto now = fs::file_time_type::clock::now();
-    for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "tmp", ec)) {
-        std::error_code age_ec;
-        const auto written = fs::last_write_time(d.path(), age_ec);
-        if (!age_ec && now - written > kStaleTmpAge)
-            fs::remove_all(d.path(), age_ec);
+    if (!hold_writer_lock(error))
+        return false;
+    // What is in tmp/ was never acknowledged. In a data dir shared by replicas some of it is
+    // another replica's write in progress: an entry goes only when its writer's lock is free
+    // (that process has ended).
+    const fs::path tmp_dir = fs::path(data_dir_) / "tmp";
+    const fs::path locks = fs::path(data_dir_) / "locks";
+    std::map<std::string, bool> alive = {{instance_, true}};
+    const auto owner_alive = [&](const std::string& owner) {
+        auto it = alive.find(owner);
+        if (it == alive.end())
+            it = alive.emplace(owner, writer_alive(locks / (owner + ".lock"))).first;
+        return it->second;
+    };
+    for (const auto& d : fs::directory_iterator(tmp_dir, ec)) {
+        std::error_code rm_ec;
+        if (!owner_alive(tmp_owner(d.path().filename().string())))
+            fs::remove_all(d.path(), rm_ec);
+    }
+    // Dead writers' locks go after their entries, so that a crash here leaves them dead.
+    for (const auto& d : fs::directory_iterator(locks, ec)) {
+        std::error_code rm_ec;
+        if (d.path().extension() == ".lock" && !owner_alive(d.path().stem().string()))
+            fs::remove(d.path(), rm_ec);
     }
     // A data dir that refuses writes (read-only mount, full disk) still serves what it holds;
     // registering and deleting will answer 507. Said once, loudly, at start-up.

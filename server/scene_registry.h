@@ -17,9 +17,10 @@
 //    is looked up there before it is called unknown, so any replica serves any scene another
 //    registered. Concurrent writers of one id (two replicas, or two threads) each write a
 //    temp dir of their own (a name unique across hosts and containers, where pids repeat) and
-//    publish it by rename(2); the loser finds the winner's complete copy in place, which has
-//    the same bytes (the id is their hash), and keeps it. Nothing ever removes a published
-//    copy except DELETE.
+//    publish it by rename(2), and holds a lock (locks/<token>.lock) while it lives, so that a
+//    replica starting removes only the leftovers of writers that have died. The loser of a
+//    race finds the winner's complete copy in place, which has the same bytes (the id is
+//    their hash), and keeps it. Nothing ever removes a published copy except DELETE.
 
 #include <chrono>
 #include <functional>
@@ -56,6 +57,9 @@ class SceneRegistry {
         const SceneSource& source, const FileSource& files)>;
 
     SceneRegistry(std::string data_dir, std::size_t memory_budget, Builder builder);
+    ~SceneRegistry();
+    SceneRegistry(const SceneRegistry&) = delete;
+    SceneRegistry& operator=(const SceneRegistry&) = delete;
 
     /// Loads the index of the scenes saved in the data directory (their engines are built on
     /// first use). False with `error` when the directory cannot be used.
@@ -116,11 +120,16 @@ class SceneRegistry {
     Saved persist(const std::string& id, const SceneSource& source,
                   const std::map<std::string, std::string>& files, const Entry& e,
                   IoError& error) const;
+    /// Takes locks/<instance>.lock (an exclusive flock held while this registry lives), by which
+    /// other replicas opening the data dir tell this one's writes in progress from a dead
+    /// writer's leftovers. False with `error` when the lock cannot be taken in a writable dir.
+    bool hold_writer_lock(std::string& error);
     /// A name in tmp/ no other writer uses, on any host sharing the data dir.
     std::string unique_tmp_name(const std::string& stem) const;
 
     std::string data_dir_;
     std::string instance_;  ///< random, per registry: tmp names of replicas never collide
+    int lock_fd_ = -1;      ///< holds the flock of locks/<instance_>.lock
     std::size_t budget_;
     Builder builder_;
     mutable std::mutex mu_;

@@ -5,7 +5,9 @@
 #include <fstream>
 #include <thread>
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include "engine/query/intersect.h"
@@ -95,17 +97,27 @@ TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
     ASSERT_TRUE(engine);
     EXPECT_EQ(g.builds.load(), 1);
     EXPECT_EQ(engine->scene().objects.size(), 2u);
-    // Old leftovers of an unfinished write are ignored and cleaned up; a recent one may be
-    // another replica's write in progress on a shared data dir, and is left alone.
-    const fs::path old_write = dir.path / "tmp" / "sc_half.123.0";
-    const fs::path live_write = dir.path / "tmp" / "sc_live.456.0";
-    fs::create_directories(old_write);
+    // Leftovers of a writer that died are ignored and cleaned up; the temp files of a writer
+    // still running (another replica on a shared data dir, holding its lock) are left alone.
+    const fs::path dead_write = dir.path / "tmp" / "sc_half.123.0";
+    const fs::path live_write = dir.path / "tmp" / "sc_live.feedface.0";
+    const fs::path live_lock = dir.path / "locks" / "feedface.lock";
+    fs::create_directories(dead_write);
     fs::create_directories(live_write);
-    fs::last_write_time(old_write, fs::file_time_type::clock::now() - std::chrono::hours(2));
-    Fixture h(dir.path.string());
-    EXPECT_EQ(h.registry.size(), 1u);
-    EXPECT_FALSE(fs::exists(old_write));
-    EXPECT_TRUE(fs::exists(live_write));
+    const int fd = ::open(live_lock.c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+    {
+        Fixture h(dir.path.string());
+        EXPECT_EQ(h.registry.size(), 1u);
+        EXPECT_FALSE(fs::exists(dead_write));
+        EXPECT_TRUE(fs::exists(live_write));
+        EXPECT_TRUE(fs::exists(live_lock));
+    }
+    ::close(fd);  // that writer ends (as kill -9 would end it): its leftovers go next time
+    Fixture k(dir.path.string());
+    EXPECT_FALSE(fs::exists(live_write));
+    EXPECT_FALSE(fs::exists(live_lock));
 }
 
 // Two registries on one data dir, as two replicas are: each serves what the other registered,
