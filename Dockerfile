@@ -29,7 +29,7 @@ FROM debian:12-slim AS runtime
 RUN apt-get update -q \
     && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
         libembree3-3 libtbb12 libtinygltf2d libstb0 libcpp-httplib0.11 libssl3 libbrotli1 \
-        zlib1g libstdc++6 libgcc-s1 \
+        libopenmesh1 zlib1g libstdc++6 libgcc-s1 \
     && rm -rf /var/lib/apt/lists/*
 # A system user with no shell and no home: the server needs to write /data only.
 RUN useradd --system --uid 10001 --no-create-home --home-dir /nonexistent \

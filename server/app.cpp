@@ -349,6 +349,7 @@ void App::install_routes() {
     install_trace_routes(*this);
     install_scene_routes(*this);
     install_render_routes(*this);
+    install_points_routes(*this);
     install_web_routes(*this);
 }
 

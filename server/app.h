@@ -133,6 +133,7 @@ void install_intersect_routes(App& app);
 void install_trace_routes(App& app);
 void install_scene_routes(App& app);
 void install_render_routes(App& app);
+void install_points_routes(App& app);  // routes_points.cpp
 
 /// Sends `body` as application/json with the given status.
 void send_json(httplib::Response& res, std::string body, int status = 200);

@@ -24,6 +24,7 @@ usage: raycastd [options]
   --demo FILE             register the scene document FILE at start-up (repeatable)
   --max-body-mb N         largest request body (default 512)
   --max-rays N            most rays per intersect request (default 16777216)
+  --max-points N          most points per points request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
   --max-concurrent N      work requests in flight before 503 busy (default: 8 per hardware
@@ -62,19 +63,11 @@ bool to_size(const char* s, std::size_t& out) {
 
 /// The flags that take a number, so that an unknown flag is called unknown whatever its value.
 const std::set<std::string>& numeric_flags() {
-    static const std::set<std::string> flags = {"--port",
-                                                "--threads",
-                                                "--max-connections",
-                                                "--max-body-mb",
-                                                "--max-rays",
-                                                "--max-pixels",
-                                                "--max-triangles",
-                                                "--max-concurrent",
-                                                "--memory-budget-mb",
-                                                "--body-budget-mb",
-                                                "--header-timeout-s",
-                                                "--idle-timeout-s",
-                                                "--request-timeout-s"};
+    static const std::set<std::string> flags = {
+        "--port",           "--threads",          "--max-connections", "--max-body-mb",
+        "--max-rays",       "--max-points",       "--max-pixels",      "--max-triangles",
+        "--max-concurrent", "--memory-budget-mb", "--body-budget-mb",  "--header-timeout-s",
+        "--idle-timeout-s", "--request-timeout-s"};
     return flags;
 }
 
@@ -103,6 +96,7 @@ const std::vector<std::string>& env_flags() {
                                                    "--data-dir",
                                                    "--max-body-mb",
                                                    "--max-rays",
+                                                   "--max-points",
                                                    "--max-pixels",
                                                    "--max-triangles",
                                                    "--max-concurrent",
@@ -154,6 +148,8 @@ std::string apply(Config& c, const std::string& a, const std::string& v) {
         c.limits.max_body_bytes = n << 20;
     } else if (a == "--max-rays") {
         c.limits.max_rays = n;
+    } else if (a == "--max-points") {
+        c.limits.max_points = n;
     } else if (a == "--max-pixels") {
         c.limits.max_pixels = n;
     } else if (a == "--max-triangles") {

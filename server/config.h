@@ -14,6 +14,7 @@ namespace raycastd::server {
 struct Limits {
     std::size_t max_body_bytes = 512u << 20;       ///< request body (413 too_large above)
     std::size_t max_rays = 16u << 20;              ///< rays per intersect request
+    std::size_t max_points = 16u << 20;            ///< points per points request
     std::size_t max_pixels = 16u << 20;            ///< width × height × spp per render
     std::size_t max_triangles = 50'000'000;        ///< triangles per scene
     std::size_t max_concurrent = 0;                ///< work requests in flight (0: 2 × threads)

@@ -25,6 +25,7 @@ void install_meta_routes(App& app) {
                 {"limits",
                  {{"max_body_bytes", c.limits.max_body_bytes},
                   {"max_rays", c.limits.max_rays},
+                  {"max_points", c.limits.max_points},
                   {"max_pixels", c.limits.max_pixels},
                   {"max_triangles", c.limits.max_triangles},
                   {"max_concurrent", app.max_concurrent()},

@@ -28,6 +28,8 @@ std::string info_body(const SceneInfo& i) {
     w.raw(",\"refraction\":").boolean(i.features.refraction);
     w.raw(",\"textures\":").boolean(i.features.textures).ch('}');
     w.raw(",\"memory_bytes\":").integer(i.memory_bytes);
+    w.raw(",\"topology\":");
+    write_topology(w, i.topology);
     w.raw(",\"warnings\":[");
     for (std::size_t k = 0; k < i.warnings.size(); ++k) {
         if (k)

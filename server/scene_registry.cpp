@@ -37,7 +37,8 @@ Json info_json(const SceneInfo& i) {
                 {"refraction", i.features.refraction},
                 {"textures", i.features.textures}}},
               {"warnings", i.warnings},
-              {"memory_bytes", i.memory_bytes}};
+              {"memory_bytes", i.memory_bytes},
+              {"topology", topology_to_json(i.topology)}};
     if (i.bounds.empty()) {
         j["bounds"] = nullptr;
     } else {
@@ -59,6 +60,8 @@ SceneInfo info_from_json(const Json& j) {
                   f.at("refraction").get<bool>(), f.at("textures").get<bool>()};
     i.warnings = j.at("warnings").get<std::vector<std::string>>();
     i.memory_bytes = j.at("memory_bytes").get<std::size_t>();
+    if (const auto t = j.find("topology"); t != j.end())  // absent in scenes saved before it
+        i.topology = topology_from_json(*t);
     if (!j.at("bounds").is_null()) {
         const auto lo = j.at("bounds").at("min").get<std::vector<double>>();
         const auto hi = j.at("bounds").at("max").get<std::vector<double>>();
@@ -80,6 +83,7 @@ SceneInfo describe(const engine::QueryEngine& engine) {
     i.features = s.features();
     i.warnings = s.warnings;
     i.memory_bytes = engine.memory_bytes();
+    i.topology = topology_entries(engine);
     return i;
 }
 

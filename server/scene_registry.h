@@ -35,6 +35,7 @@
 #include "engine/query/intersect.h"
 #include "server/durable_file.h"
 #include "server/model_source.h"
+#include "server/schema/topology_doc.h"
 
 namespace raycastd::server {
 
@@ -46,7 +47,8 @@ struct SceneInfo {
     double build_ms = 0;
     engine::Features features;
     std::vector<std::string> warnings;
-    std::size_t memory_bytes = 0;  ///< estimate of the prepared scene's footprint
+    std::size_t memory_bytes = 0;         ///< estimate of the prepared scene's footprint
+    std::vector<TopologyEntry> topology;  ///< one per mesh object (schema/topology_doc.h)
 };
 
 class SceneRegistry {

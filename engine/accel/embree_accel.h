@@ -23,13 +23,15 @@
 // The parts, one concept a file, in engine/accel/embree/: device (the shared RTCDevice, errors
 // → Status, RAII handles), impl.h (the BVHs, RayContext, NativeHit), float_ray (clipping, the
 // float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks), packets
-// (16-wide traversal, the one coherence test). embree_accel.cpp holds the builds and, for each
-// query, one function per precision.
+// (16-wide traversal, the one coherence test), point_query (closest points through
+// rtcPointQuery). embree_accel.cpp holds the builds and, for each query, one function per
+// precision.
 
 #include <memory>
 #include <optional>
 #include <vector>
 
+#include "engine/geometry/closest_point.h"
 #include "engine/math/float_frame.h"
 #include "engine/query_types.h"
 #include "engine/scene/scene.h"
@@ -68,6 +70,11 @@ class EmbreeAccel {
     /// recomputed in double and merged with a float-sized edge tolerance; refined and exact:
     /// every candidate decided in double.
     void all(const Ray& ray, Precision precision, bool want_normal, std::vector<Hit>& out) const;
+
+    /// The closest surface point to p within max_distance, decided in double by the kernels of
+    /// engine/geometry/closest_point.h, ties by the API's rule; Embree's point query only culls
+    /// (embree/point_query.cpp). nullopt when nothing is that close.
+    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
 
     /// The frame Embree computes in (coordinates relative to the centre of the scene's bounds,
     /// of magnitude twice its diagonal): what a fast or refined answer's float rounding is

@@ -154,6 +154,13 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
         return cancel.status();
     std::shared_ptr<QueryEngine> engine(new QueryEngine(std::move(scene)));
     engine->scene_bytes_ = engine->scene_memory_bytes();
+    // The meshes' topology (engine/mesh: for the point queries and the scene's `topology`),
+    // before the BVH rather than beside it: on a thread of its own it raced Embree's build for
+    // the cores and cost ~300 ms more CPU on 1M triangles than the two one after the other
+    // (TBB's workers spin while they wait; bench_points --registration-only, docs/loading.md).
+    engine->prepare_points();
+    if (cancel.cancelled())
+        return cancel.status();
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
     if (prims > kBruteForceMaxPrimitives && fits_float(*engine->scene_)) {
         auto accel = EmbreeAccel::build(*engine->scene_, cancel);
@@ -199,7 +206,7 @@ std::unique_ptr<EmbreeAccel> QueryEngine::bvh_for_many_rays(Precision precision)
 std::size_t QueryEngine::memory_bytes() const {
     // The scene's part is fixed once built; the accelerator's grows when a query builds the
     // exact or the fast BVH.
-    return scene_bytes_ + (accel_ ? accel_->memory_bytes() : 0);
+    return scene_bytes_ + (accel_ ? accel_->memory_bytes() : 0) + point_memory_bytes();
 }
 
 std::size_t QueryEngine::scene_memory_bytes() const {

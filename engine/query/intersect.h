@@ -10,7 +10,9 @@
 #include <optional>
 #include <vector>
 
+#include "engine/geometry/closest_point.h"
 #include "engine/math/float_frame.h"
+#include "engine/mesh/topology.h"
 #include "engine/query/query_result.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
@@ -18,6 +20,7 @@
 namespace raycastd::engine {
 
 class EmbreeAccel;
+struct WindingTrees;  // query/point_entry.cpp
 
 /// A scene made ready for queries.
 class QueryEngine {
@@ -91,6 +94,20 @@ class QueryEngine {
     /// than float can hold (answered in double at every precision).
     bool brute_force() const { return accel_ == nullptr; }
 
+    // ---- Point queries: what engine/points builds closest points, distances and inside/outside
+    // on (query/point_entry.cpp). ----
+
+    /// The closest surface point to p within max_distance (inclusive), in double (kernels of
+    /// geometry/closest_point.h; Embree's point query culls above 16 primitives), ties by the API's
+    /// rule; nullopt when nothing is that close. p must be finite.
+    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
+    /// Each object's topology (engine/mesh/topology.h), computed at build (objects in parallel,
+    /// before the BVH); the entry of a sphere is all zeros.
+    const std::vector<MeshTopology>& topology() const { return topology_; }
+    /// The generalized winding number of triangle object `object` at p, by fast winding numbers
+    /// (accel/winding_bvh.h); the object's tree is built on its first such query.
+    double winding_number(std::uint32_t object, const Vec3d& p) const;
+
     ~QueryEngine();
 
   private:
@@ -103,9 +120,17 @@ class QueryEngine {
     /// failed).
     std::unique_ptr<EmbreeAccel> bvh_for_many_rays(Precision precision) const;
     std::size_t scene_memory_bytes() const;
+    /// point_entry.cpp: each object's topology (objects in parallel) and the empty winding-tree
+    /// slots; run by build() before the BVH.
+    void prepare_points();
+    /// Bytes of the winding-number trees built so far.
+    std::size_t point_memory_bytes() const;
     std::shared_ptr<const Scene> scene_;
     std::size_t scene_bytes_ = 0;  ///< scene_memory_bytes(), once
     std::unique_ptr<EmbreeAccel> accel_;
+    std::vector<MeshTopology> topology_;  ///< per object (point_entry.cpp)
+    /// Built per object on first use; shared_ptr, whose deleter is made where the type is complete.
+    std::shared_ptr<WindingTrees> winding_;
 };
 
 /// Whether a ray meets the API's rules: finite origin and direction, |d|² neither zero nor

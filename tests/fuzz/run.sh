@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs the libFuzzer targets of tests/fuzz (built by the `fuzz` preset) and reports on them.
+# Runs the libFuzzer targets of tests/fuzz (built by the `asan` preset, or the `fuzz` one) and reports on them.
 #   tests/fuzz/run.sh [--seconds N | --long] [--target NAME] [--build-dir DIR] [--models DIR]
 # For each target: writes its seed corpus into BUILD/corpus/<target>/ (generated documents and
 # requests, the models of shared/data/models when present, and the committed crashers of
@@ -12,7 +12,7 @@ set -uo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 seconds=30
 only=""
-build="$repo/build/fuzz"
+build="$repo/build/asan"
 models="$repo/../shared/data/models"
 while (($#)); do
     case "$1" in
@@ -59,7 +59,7 @@ for spec in "${targets[@]}"; do
     ran=$((ran + 1))
     bin="$bin_dir/fuzz_$name"
     if [[ ! -x "$bin" ]]; then
-        echo "run.sh: $bin is not built: cmake --preset fuzz && cmake --build --preset fuzz" >&2
+        echo "run.sh: $bin is not built: cmake --preset asan && cmake --build --preset asan (or the fuzz preset, with --build-dir build/fuzz)" >&2
         failed=$((failed + 1))
         continue
     fi

@@ -27,6 +27,21 @@
 namespace raycastd {
 namespace {
 
+// ASan's allocator keeps freed memory in its quarantine (256 MB by default) instead of handing
+// it back, so under it resident memory says nothing of what the server freed: the release
+// build checks it (the server under test is built with the same sanitizers as this test).
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAllocatorHandsMemoryBack = false;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAllocatorHandsMemoryBack = false;
+#else
+constexpr bool kAllocatorHandsMemoryBack = true;
+#endif
+#else
+constexpr bool kAllocatorHandsMemoryBack = true;
+#endif
+
 using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 using namespace std::chrono_literals;
@@ -232,14 +247,17 @@ void expect_serving(const ServerProcess& server) {
 }
 
 /// What every disconnect test asks: the work was running, it stopped within half a second of
-/// the disconnect, resident memory came back to within 64 MB of where it was, and the server
+/// the disconnect, resident memory came back to within 64 MB of where it was (not asked under
+/// ASan: kAllocatorHandsMemoryBack), and the server
 /// goes on serving.
 void expect_stopped(const ServerProcess& server, const char* what, const Abandoned& a) {
     report(what, a);
     EXPECT_GT(a.working_cpu_s, 0.05) << what << ": the work should have been running";
     ASSERT_TRUE(a.stop_s) << what << ": the work went on after its client had gone";
     EXPECT_LT(*a.stop_s, 0.5) << what;
-    EXPECT_LT(a.rss_after, a.rss_before + (64u << 20)) << what;
+    if (kAllocatorHandsMemoryBack) {
+        EXPECT_LT(a.rss_after, a.rss_before + (64u << 20)) << what;
+    }
     expect_serving(server);
 }
 
@@ -288,7 +306,9 @@ TEST(Cancel, ClientGoneAfterTheTracingFreesTheAnswer) {
         "[ measured ] answer never read: RSS %.0f MB before, %.0f MB waiting, %.0f MB after\n",
         mb(rss_before), mb(rss_waiting), mb(rss_after));
     EXPECT_GT(rss_waiting, rss_before + (128u << 20)) << "the answer should have been held";
-    EXPECT_LT(rss_after, rss_before + (64u << 20));
+    if (kAllocatorHandsMemoryBack) {
+        EXPECT_LT(rss_after, rss_before + (64u << 20));
+    }
     expect_serving(server);
 }
 

@@ -73,7 +73,9 @@ class ListPathTest(ServerTestCase):
     def test_points_lists(self) -> None:
         self.skip_without_points()
         d = self.lists.compute_distance(TUTORIAL, [[0, 0, 0], [0, 0, 10]])
-        self.assertAlmostEqual(d[0], math.dist((0, 0, 0), (0, 1, 9)) - 2, places=9)
+        # The nearest of the three spheres to the eye is sphere 2 at (0, 3, 8), not the first hit
+        # along +z (sphere 3): 8.544 − 2 against 9.055 − 2.
+        self.assertAlmostEqual(d[0], math.dist((0, 0, 0), (0, 3, 8)) - 2, places=9)
         self.assertEqual(
             self.lists.compute_occupancy(TUTORIAL, [[0, 0, 10], [0, 0, -9]]), [1.0, 0.0]
         )

@@ -192,6 +192,47 @@ class TutorialExampleTest(ServerTestCase):
             )
             self.assertIn("your program exited with status 2", msgs["tracer_t"])
 
+    def test_a_failing_reference_writes_results_and_exits_1(self) -> None:
+        # The server refuses the question's scene (a negative radius): the student scores 0 for
+        # that question with the instructor's message, the results file is written, and the
+        # exit status and stderr tell the instructor.
+        with tempfile.TemporaryDirectory() as tmp:
+            root = pathlib.Path(tmp)
+            (root / "q.toml").write_text(
+                "[[question]]\nid = 'broken'\npoints = 1\nask = 't'\n"
+                "ray = { origin = [0, 0, 0], direction = [0, 0, 1] }\n"
+                "scene = { objects = [{ type = 'sphere', center = [0, 0, 5], radius = -1 }] }\n"
+                "[[question]]\nid = 'fine'\npoints = 1\nask = 't'\n"
+                "ray = { origin = [0, 0, 0], direction = [0, 0, 1] }\n"
+                "scene = { objects = [{ type = 'sphere', center = [0, 0, 5], radius = 1 }] }\n"
+            )
+            (root / "answers.toml").write_text("broken = 4.0\nfine = 4.0\n")
+            gs = root / "results.json"
+            err = io.StringIO()
+            code = main(
+                [
+                    "grade",
+                    str(root / "q.toml"),
+                    "--answers",
+                    str(root / "answers.toml"),
+                    "--gradescope",
+                    str(gs),
+                    "--server",
+                    self.server.url,
+                ],
+                io.StringIO(),
+                err,
+            )
+            self.assertEqual(code, 1, err.getvalue())
+            self.assertIn("question broken could not be graded", err.getvalue())
+            self.assertIn("invalid_scene", err.getvalue())
+            g = json.loads(gs.read_text())
+            check_gradescope(self, g)
+            msgs = {t["number"]: (t["score"], t["output"]) for t in g["tests"]}
+            self.assertEqual(msgs["fine"][0], 1)
+            self.assertEqual(msgs["broken"][0], 0)
+            self.assertIn("the reference could not be computed (instructor:", msgs["broken"][1])
+
     def test_malformed_answers_and_values(self) -> None:
         with tempfile.TemporaryDirectory() as tmp:
             bad = pathlib.Path(tmp) / "answers.toml"

@@ -65,7 +65,15 @@ def run_grade(args: argparse.Namespace, io: Any) -> int:
         ) as server:
             report = grade_files(qset, server.url, args.answers, args.submission)
     write_outputs(report, args, io)
-    return 0
+    # A reference that failed is the instructor's problem, and must not pass unnoticed as a
+    # student's 0: the results stay written, the exit status says it (1, as for an API error).
+    broken = [r for r in report.results if r.instructor_error]
+    for r in broken:
+        io.message(
+            f"raycastd grade: question {r.question.id} could not be graded: its reference "
+            f"failed ({r.instructor_error})"
+        )
+    return 1 if broken else 0
 
 
 def write_outputs(report: Report, args: argparse.Namespace, io: Any) -> None:

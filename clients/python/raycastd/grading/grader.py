@@ -48,6 +48,9 @@ class QuestionResult:
     message: str  # what the student sees
     images: list[tuple[str, bytes]] = field(default_factory=list)  # (label, PNG bytes)
     seconds: float = 0.0
+    # The question could not be graded for a reason of the instructor's, not the student's (its
+    # reference failed): `grade` still writes every result, then exits 1 naming it.
+    instructor_error: str | None = None
 
     @property
     def score(self) -> float:
@@ -176,7 +179,10 @@ class Grader:
                 refs, scale = self._reference(q, client)
             except RaycastdError as exc:
                 return QuestionResult(
-                    q, 0.0, f"the reference could not be computed (instructor: {exc})"
+                    q,
+                    0.0,
+                    f"the reference could not be computed (instructor: {exc})",
+                    instructor_error=str(exc),
                 )
             return self._compare(q, refs, value, scale)
 

@@ -1,0 +1,277 @@
+// bench_points: the point queries in-process (issue 18), and what topology costs a registration.
+//
+//   bench_points            full size: registration of workload B (1,024,000 triangles, binary
+//                           PLY) with and without the topology; 1M query points against
+//                           workload A (the 81,920-triangle icosphere): closest points, signed
+//                           distance, occupancy; 1M points' signed distance against B with one
+//                           triangle removed (the winding-number path on 1M triangles)
+//   bench_points --quick    small sizes (seconds)
+//   bench_points --registration-only   the registration part alone
+//   bench_points --smoke    tiny sizes, < 1 s; exits 1 if a signed distance disagrees with the
+//                           sphere it approximates (the CTest `bench_points_smoke`)
+//
+// When Debian's python3-open3d is installed (and not in --smoke), Open3D's
+// RaycastingScene.compute_closest_points and compute_signed_distance run on the same mesh and
+// points in the same run (bench/peers/open3d_points_peer.py, with the Embree mask shim
+// preloaded: its sign comes from rays, which hit nothing without it; PERFORMANCE.md).
+//
+// Registration is timed in its parts, each the median of 3 runs after a warm-up: parse
+// (load_model), validate, the Embree BVH (EmbreeAccel::build), the topology (compute_topology)
+// and QueryEngine::build, which runs the last two one after the other. "Without topology" is
+// parse + validate + BVH, what QueryEngine::build did before issue 18; "with" is parse +
+// QueryEngine::build. Wall and CPU seconds are both printed: on a shared 2-core machine the CPU
+// figures are the steadier ones.
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "bench/bench_files.h"
+#include "bench/timing.h"
+#include "bench/workloads.h"
+#include "engine/accel/embree_accel.h"
+#include "engine/load/model_loader.h"
+#include "engine/mesh/topology.h"
+#include "engine/points/point_queries.h"
+
+namespace rb = raycastd::bench;
+namespace re = raycastd::engine;
+
+namespace {
+
+struct Sizes {
+    const char* name;
+    int ico_level;       ///< A: 20·4^level triangles
+    int field_count;     ///< B: this many icospheres ...
+    int field_level;     ///< ... of this level
+    std::size_t points;  ///< query points per measurement
+};
+
+constexpr Sizes kFull{"full", 6, 200, 4, std::size_t{1} << 20};
+constexpr Sizes kQuick{"quick", 4, 50, 3, std::size_t{1} << 16};
+constexpr Sizes kSmoke{"smoke", 3, 8, 2, 4096};
+constexpr std::uint64_t kFieldSeed = 0x5eed0001;  // bench_intersect's workload B
+constexpr std::uint64_t kPointSeed = 0x5eed0018;
+
+double cpu_now() {
+    return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+}
+
+/// Wall and CPU seconds of one call.
+struct Timed {
+    double wall = 0, cpu = 0;
+};
+template <class F>
+Timed timed(F&& f) {
+    const double c0 = cpu_now();
+    const double w = rb::seconds(f);
+    return {w, cpu_now() - c0};
+}
+/// The median (by wall time) of 3 runs after a warm-up.
+template <class F>
+Timed median3(F&& f) {
+    f();
+    Timed t[3] = {timed(f), timed(f), timed(f)};
+    std::sort(t, t + 3, [](const Timed& a, const Timed& b) { return a.wall < b.wall; });
+    return t[1];
+}
+
+std::string file_bytes(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+void registration(const Sizes& s) {
+    const rb::Workload w = rb::make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
+    const std::string path =
+        (std::filesystem::temp_directory_path() / "bench_points_B.ply").string();
+    if (!rb::write_ply(path, w)) {
+        std::printf("cannot write %s\n", path.c_str());
+        return;
+    }
+    const std::string bytes = file_bytes(path);
+    std::filesystem::remove(path);
+    std::shared_ptr<re::Scene> scene;
+    const Timed parse = median3([&] {
+        auto m = re::load_model(bytes, re::ModelFormat::ply, re::no_resources(), "B");
+        scene = std::make_shared<re::Scene>();
+        scene->materials.push_back(re::Material{});
+        re::Object o;
+        o.kind = re::ObjectKind::mesh;
+        o.name = "B";
+        o.mesh = std::make_shared<re::TriangleMesh>(std::move(m->parts.at(0).mesh));
+        scene->objects.push_back(std::move(o));
+    });
+    const Timed validate = median3([&] { (void)re::validate(*scene); });
+    const Timed bvh = median3([&] { (void)re::EmbreeAccel::build(*scene); });
+    re::MeshTopology topo;
+    const Timed topology = median3([&] { topo = re::compute_topology(*scene->objects[0].mesh); });
+    const Timed build = median3([&] { (void)re::QueryEngine::build(scene); });
+    const double without = parse.wall + validate.wall + bvh.wall;
+    const double with = parse.wall + build.wall;
+    const double without_cpu = parse.cpu + validate.cpu + bvh.cpu;
+    const double with_cpu = parse.cpu + build.cpu;
+    std::printf(
+        "registration of B (%zu triangles, binary PLY %.1f MB), median of 3, wall / CPU ms:\n",
+        scene->triangle_count(), bytes.size() / 1e6);
+    std::printf(
+        "  parse %.0f / %.0f   validate %.0f / %.0f   Embree BVH %.0f / %.0f   "
+        "topology %.0f / %.0f   QueryEngine::build (topology, then BVH) %.0f / %.0f\n",
+        parse.wall * 1e3, parse.cpu * 1e3, validate.wall * 1e3, validate.cpu * 1e3, bvh.wall * 1e3,
+        bvh.cpu * 1e3, topology.wall * 1e3, topology.cpu * 1e3, build.wall * 1e3, build.cpu * 1e3);
+    std::printf(
+        "  without topology %.0f ms (CPU %.0f)   with %.0f ms (CPU %.0f)   growth %+.0f%% "
+        "wall, %+.0f%% CPU\n",
+        without * 1e3, without_cpu * 1e3, with * 1e3, with_cpu * 1e3, 100 * (with / without - 1),
+        100 * (with_cpu / without_cpu - 1));
+    std::printf("  topology: V %zu, closed %d, components %zu, chi %lld, half-edge %d, sign %s\n",
+                topo.vertices, topo.closed, topo.components,
+                static_cast<long long>(topo.euler_characteristic), topo.half_edge,
+                re::to_string(topo.sign));
+}
+
+/// n points uniform in the bounds scaled 1.5× about their centre, rounded to float so that a
+/// float32 peer gets exactly the same points.
+std::vector<re::Vec3d> random_points(const re::Bounds3& b, std::size_t n) {
+    std::mt19937_64 rng(kPointSeed);
+    std::uniform_real_distribution<double> u(-0.75, 0.75);
+    const re::Vec3d c = b.center(), d = b.diagonal();
+    std::vector<re::Vec3d> out(n);
+    for (auto& p : out)
+        p = re::Vec3d(re::Vec3f(c + re::Vec3d{u(rng) * d.x, u(rng) * d.y, u(rng) * d.z}));
+    return out;
+}
+
+/// Where the Open3D peer's files go, and the peer itself (empty: no peer in this run).
+struct Peer {
+    std::string data_dir, shim, script;
+};
+
+/// Writes A's mesh, the points and our distances for the peer, runs it and prints its line.
+void run_open3d(const Peer& peer, const rb::Workload& a, const std::vector<re::Vec3d>& pts,
+                const std::vector<re::PointAnswer>& dist,
+                const std::vector<re::PointAnswer>& signed_dist) {
+    std::filesystem::create_directories(peer.data_dir);
+    const std::string stem = peer.data_dir + "/A";
+    std::vector<float> p, d, sd;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        p.insert(p.end(), {float(pts[i].x), float(pts[i].y), float(pts[i].z)});
+        d.push_back(float(dist[i].distance));
+        sd.push_back(float(signed_dist[i].distance));
+    }
+    if (!rb::write_mesh_arrays(stem, a) ||
+        !rb::write_npy(stem + "_points.npy", p.data(), {pts.size(), 3}) ||
+        !rb::write_npy(stem + "_distance.npy", d.data(), {pts.size()}) ||
+        !rb::write_npy(stem + "_signed.npy", sd.data(), {pts.size()})) {
+        std::printf("  open3d: cannot write its files to %s\n", peer.data_dir.c_str());
+        return;
+    }
+    const std::string cmd = "LD_PRELOAD=" + peer.shim + " /usr/bin/python3 " + peer.script +
+                            " --data-dir " + peer.data_dir + " --workload A";
+    std::FILE* f = popen(cmd.c_str(), "r");
+    if (!f)
+        return;
+    char line[4096];
+    while (std::fgets(line, sizeof line, f))
+        std::printf("  open3d (same points, same run): %s", line);
+    pclose(f);
+}
+
+/// Times one query over the points; returns the answers.
+std::vector<re::PointAnswer> run(const re::QueryEngine& e, const std::vector<re::Vec3d>& pts,
+                                 re::PointQuery q, const char* what) {
+    std::vector<re::PointAnswer> out;
+    const Timed t = timed([&] {
+        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}}, out);
+    });
+    std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s\n",
+                re::to_string(q), what, pts.size(), t.wall, t.cpu, pts.size() / t.wall * 1e-6);
+    return out;
+}
+
+std::shared_ptr<const re::QueryEngine> prepare(re::Scene s) {
+    auto e = re::QueryEngine::build(std::make_shared<re::Scene>(std::move(s)));
+    return e.ok() ? *e : nullptr;
+}
+
+/// Points against A; returns the largest |signed distance − (|p| − 1)| (the icosphere is within
+/// 1 − cos of its edge's half angle of the unit sphere), for the smoke check.
+double points_on_a(const Sizes& s, const Peer& peer) {
+    const rb::Workload a = rb::make_icosphere(s.ico_level);
+    auto e = prepare(rb::to_engine_scene(a));
+    const auto pts = random_points(e->scene().bounds(), s.points);
+    std::printf("points against A (icosphere, %zu triangles, sign %s):\n", a.triangles.size(),
+                re::to_string(e->topology()[0].sign));
+    run(*e, pts, re::PointQuery::closest, "(first: no warm-up)");
+    run(*e, pts, re::PointQuery::closest, "");
+    const auto dist = run(*e, pts, re::PointQuery::distance, "");
+    const auto sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
+    run(*e, pts, re::PointQuery::occupancy, "");
+    if (!peer.script.empty())
+        run_open3d(peer, a, pts, dist, sd);
+    double worst = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        worst = std::max(worst, std::abs(sd[i].distance - (re::length(pts[i]) - 1.0)));
+    return worst;
+}
+
+void winding_on_b(const Sizes& s) {
+    rb::Workload b = rb::make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
+    b.triangles.pop_back();  // a hole: the winding-number path
+    auto e = prepare(rb::to_engine_scene(b));
+    const auto pts = random_points(e->scene().bounds(), s.points);
+    std::printf("points against B minus one triangle (%zu triangles, sign %s):\n",
+                b.triangles.size(), re::to_string(e->topology()[0].sign));
+    const Timed tree = timed([&] { (void)e->winding_number(0, {0, 0, 0}); });
+    std::printf("  winding-number tree built on first use in %.3f s\n", tree.wall);
+    run(*e, pts, re::PointQuery::signed_distance, "(fast winding numbers)");
+    run(*e, pts, re::PointQuery::occupancy, "");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Sizes s = kFull;
+    bool registration_only = false;
+    const std::filesystem::path here = std::filesystem::path(argv[0]).parent_path();
+    Peer peer{(here / "points_peer_data").string(), (here / "libembree_mask_shim.so").string(),
+              std::string(RAYCASTD_SOURCE_DIR) + "/bench/peers/open3d_points_peer.py"};
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--quick") {
+            s = kQuick;
+        } else if (a == "--smoke") {
+            s = kSmoke;
+        } else if (a == "--registration-only") {
+            registration_only = true;
+        } else {
+            std::fprintf(stderr, "usage: bench_points [--quick | --smoke] [--registration-only]\n");
+            return 2;
+        }
+    }
+    if (std::string(s.name) == kSmoke.name) {
+        peer.script.clear();  // the smoke run stays quick and self-contained
+    } else if (std::system("/usr/bin/python3 -c 'import open3d' >/dev/null 2>&1") != 0) {
+        std::printf("(python3-open3d is not installed: no Open3D peer in this run)\n");
+        peer.script.clear();
+    }
+    std::printf("bench_points (%s)\n", s.name);
+    registration(s);
+    if (registration_only)
+        return 0;
+    const double worst = points_on_a(s, peer);
+    winding_on_b(s);
+    // The icosphere of level l is within about (π/(5·2^l))²/2 of the unit sphere.
+    const double tolerance = 0.5 * std::pow(M_PI / (5.0 * std::pow(2.0, s.ico_level)), 2) * 4;
+    std::printf("signed distance vs the unit sphere: worst %.2e (the icosphere is within %.2e)\n",
+                worst, tolerance);
+    return worst <= tolerance ? 0 : 1;
+}

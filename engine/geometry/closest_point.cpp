@@ -1,0 +1,221 @@
+#include "engine/geometry/closest_point.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/math/float_bounds.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+/// The error bound of every distance here, and the width of "on the surface" (see the header):
+/// γ₁₆ times the magnitude of the coordinates involved.
+constexpr double kErrScale = gamma(16);
+
+/// max(|v.x|, |v.y|, |v.z|), with std::max: max_component's std::fmax is a call out of line, and
+/// this runs for every candidate of a point query.
+double max_abs(const Vec3d& v) {
+    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
+}
+
+/// a < b in lexicographic order of (x, y, z): the fixed order of an edge's endpoints.
+bool lex_less(const Vec3d& a, const Vec3d& b) {
+    if (a.x != b.x)
+        return a.x < b.x;
+    if (a.y != b.y)
+        return a.y < b.y;
+    return a.z < b.z;
+}
+
+/// The closest point of the segment [p0, p1] to p, computed from the endpoints in lexicographic
+/// order so that the two triangles sharing the edge get the same point, bit for bit. Returns the
+/// parameter of the point measured from p0 as given (0 at p0, 1 at p1).
+double closest_on_segment(const Vec3d& p0, const Vec3d& p1, const Vec3d& p, Vec3d& q) {
+    const bool swap = lex_less(p1, p0);
+    const Vec3d& s0 = swap ? p1 : p0;
+    const Vec3d& s1 = swap ? p0 : p1;
+    const Vec3d e = s1 - s0;
+    const double t = std::clamp(dot(p - s0, e) / dot(e, e), 0.0, 1.0);
+    // The endpoints themselves, not s0 + e·t rounded: a vertex's point is the vertex.
+    q = t == 0.0 ? s0 : (t == 1.0 ? s1 : s0 + e * t);
+    return swap ? 1.0 - t : t;
+}
+
+/// The point of one edge region: the edge a→b of the triangle as (u, v) = (1−s)·ua + s·ub
+/// (the barycentrics of a and b).
+ClosestPoint edge_point(const Vec3d& a, const Vec3d& b, const Vec3d& p, double ua_u, double ua_v,
+                        double ub_u, double ub_v) {
+    ClosestPoint out;
+    const double s = closest_on_segment(a, b, p, out.point);
+    out.distance = length(p - out.point);
+    out.u = (1.0 - s) * ua_u + s * ub_u;
+    out.v = (1.0 - s) * ua_v + s * ub_v;
+    return out;
+}
+
+/// The closest of the three edges: for a sliver whose face-region determinant rounds to zero or
+/// below (the face region then has no interior worth computing).
+ClosestPoint closest_of_edges(const Triangle& t, const Vec3d& p) {
+    ClosestPoint best = edge_point(t.a, t.b, p, 0, 0, 1, 0);
+    ClosestPoint ac = edge_point(t.a, t.c, p, 0, 0, 0, 1);
+    if (ac.distance < best.distance)
+        best = ac;
+    ClosestPoint bc = edge_point(t.b, t.c, p, 1, 0, 0, 1);
+    if (bc.distance < best.distance)
+        best = bc;
+    return best;
+}
+
+ClosestPoint vertex_point(const Vec3d& x, const Vec3d& p, double u, double v) {
+    ClosestPoint out;
+    out.point = x;
+    out.distance = length(p - x);
+    out.u = u;
+    out.v = v;
+    return out;
+}
+
+/// Ericson's regions, in the book's order (RTCD §5.1.5); the edge and vertex points through the
+/// helpers above.
+ClosestPoint regions(const Triangle& t, const Vec3d& p) {
+    const Vec3d ab = t.b - t.a, ac = t.c - t.a, ap = p - t.a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0)
+        return vertex_point(t.a, p, 0, 0);
+    const Vec3d bp = p - t.b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3)
+        return vertex_point(t.b, p, 1, 0);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0)
+        return edge_point(t.a, t.b, p, 0, 0, 1, 0);
+    const Vec3d cp = p - t.c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6)
+        return vertex_point(t.c, p, 0, 1);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0)
+        return edge_point(t.a, t.c, p, 0, 0, 0, 1);
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0)
+        return edge_point(t.b, t.c, p, 1, 0, 0, 1);
+    const double denom = va + vb + vc;
+    if (!(denom > 0.0))
+        return closest_of_edges(t, p);
+    // The face: p projects inside. The point from the barycentrics, the distance from the plane.
+    ClosestPoint out;
+    out.u = vb / denom;
+    out.v = vc / denom;
+    out.point = t.a + ab * out.u + ac * out.v;
+    const Vec3d n = cross(ab, ac);
+    out.distance = std::abs(dot(n, ap)) / length(n);
+    return out;
+}
+
+}  // namespace
+
+std::optional<ClosestPoint> closest_point_on_triangle(const Triangle& tri, const Vec3d& p) {
+    if (is_degenerate(tri) || !is_finite(p))
+        return std::nullopt;
+    ClosestPoint out = regions(tri, p);
+    const double scale =
+        std::max({max_abs(p), max_abs(tri.a), max_abs(tri.b), max_abs(tri.c), 1e-300});
+    out.err = kErrScale * scale;
+    return out;
+}
+
+ClosestPoint closest_point_on_sphere(const Sphere& s, const Vec3d& p) {
+    ClosestPoint out;
+    const Vec3d f = p - s.center;
+    const double len = length(f);
+    if (len == 0.0) {
+        out.point = s.center + Vec3d{s.radius, 0.0, 0.0};
+        out.distance = s.radius;
+    } else {
+        out.point = s.center + f * (s.radius / len);
+        out.distance = std::abs(len - s.radius);
+    }
+    out.err = kErrScale * std::max(max_abs(p) + max_abs(s.center) + s.radius, 1e-300);
+    return out;
+}
+
+namespace {
+
+/// Lower (object, primitive) first.
+bool lower_ids(const PointHit& a, const PointHit& b) {
+    if (a.object != b.object)
+        return a.object < b.object;
+    return a.primitive < b.primitive;
+}
+
+/// Whether h can still tie with or beat `best`: its distance is within both error bounds.
+bool near(const PointHit& h, const PointHit& best) {
+    return h.distance <= best.distance + best.err + h.err;
+}
+
+}  // namespace
+
+void PointCandidates::offer(const PointHit& h) {
+    if (best_ >= 0 && !near(h, kept_[best_]))
+        return;
+    const bool new_best = best_ < 0 || h.distance < kept_[best_].distance ||
+                          (h.distance == kept_[best_].distance && lower_ids(h, kept_[best_]));
+    if (count_ == kKeep)
+        make_room(h, new_best);
+    if (count_ == kKeep)
+        return;  // h has higher ids than every kept candidate that ties
+    kept_[count_] = h;
+    if (new_best)
+        best_ = count_;
+    ++count_;
+}
+
+void PointCandidates::make_room(const PointHit& h, bool new_best) {
+    // First drop what the best (the new one, if h is) leaves out of reach.
+    const PointHit b = new_best ? h : kept_[best_];
+    int n = 0;
+    for (int i = 0; i < count_; ++i) {
+        if (i == best_)
+            best_ = near(kept_[i], b) ? n : -1;
+        if (near(kept_[i], b))
+            kept_[n++] = kept_[i];
+    }
+    count_ = n;
+    if (count_ < kKeep)
+        return;
+    // Still full: every candidate ties. The one with the highest ids (never the best) goes, unless
+    // h's ids are higher still and h is not the new best.
+    int worst = best_ == 0 ? 1 : 0;
+    for (int i = 0; i < count_; ++i) {
+        if (i != best_ && lower_ids(kept_[worst], kept_[i]))
+            worst = i;
+    }
+    if (!new_best && lower_ids(kept_[worst], h))
+        return;
+    --count_;
+    if (best_ == count_)
+        best_ = worst;
+    kept_[worst] = kept_[count_];
+}
+
+PointHit PointCandidates::winner() const {
+    if (best_ < 0)
+        return PointHit{};
+    const PointHit& b = kept_[best_];
+    int win = best_;
+    for (int i = 0; i < count_; ++i) {
+        if (near(kept_[i], b) && lower_ids(kept_[i], kept_[win])) {
+            win = i;
+        }
+    }
+    return kept_[win];
+}
+
+double PointCandidates::cull_distance() const {
+    if (best_ < 0)
+        return kInfinity;
+    return kept_[best_].distance + 4.0 * kept_[best_].err;
+}
+
+}  // namespace raycastd::engine

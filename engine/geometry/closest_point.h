@@ -1,0 +1,100 @@
+#pragma once
+// The closest point of a triangle or a sphere to a query point, in double precision, and the
+// PointHit the point queries return.
+//
+// Triangle: the region-based method of Ericson, *Real-Time Collision Detection* (2005) §5.1.5
+// ("ClosestPtPointTriangle"): the signs of six dot products d1..d6 and of the three scaled
+// barycentric determinants va, vb, vc place p in the Voronoi region of a vertex, an edge or the
+// face, and only that region's point is computed. Two changes to the book's code, both for the
+// API's tie rule (lower object, then lower primitive wins an exact tie):
+//   * an edge's point is computed from its two endpoints taken in a fixed (lexicographic) order,
+//     and a vertex's point is the vertex itself, so two triangles that share the edge or the
+//     vertex compute the same point and the same distance, bit for bit;
+//   * the face region's distance is the plane distance |n·(p − a)| / |n| (n = ab × ac), whose
+//     rounding follows |p − a| rather than the coordinates' magnitude.
+// Sphere: q = c + r·(p − c)/|p − c|, distance ||p − c| − r| (exact up to the rounding of |p − c|).
+//
+// Error: each distance comes with `err`, a bound on its rounding error that is also the width of
+// "on the surface": 16 ulps of the magnitude of the coordinates involved (max |p_i|, |a_i|, |b_i|,
+// |c_i|; for spheres |c_i| + r), i.e. γ₁₆·scale (Higham 2002 §3.1). The computation itself stays
+// within about 4u·scale (closest_point_test.cpp measures it against a long-double evaluation of
+// the same regions: docs/accuracy.md); the rest of the margin covers a client's point that was
+// computed to lie on the surface and rounded on the way (p = (a + b + c)/3 is off the plane by
+// about u·scale). A point within err of a surface is on it: distance 0 (engine/points).
+// Degenerate (zero-area) triangles are not part of the surface, as for intersect: they give no
+// point (closest_point_on_triangle returns nullopt).
+
+#include <cstdint>
+#include <optional>
+
+#include "engine/geometry/sphere.h"
+#include "engine/geometry/triangle.h"
+
+namespace raycastd::engine {
+
+/// A primitive's closest point to a query point.
+struct ClosestPoint {
+    Vec3d point;
+    double distance = kInfinity;
+    double err = 0.0;  ///< bound on the rounding of `distance` (see the file comment)
+    double u = 0.0;  ///< barycentric weight of b (point = (1−u−v)·a + u·b + v·c); 0 for spheres
+    double v = 0.0;  ///< barycentric weight of c
+};
+
+/// The closest point of the triangle to p and its distance; nullopt for a degenerate triangle
+/// ((b−a)×(c−a) exactly zero) and for non-finite p.
+std::optional<ClosestPoint> closest_point_on_triangle(const Triangle& tri, const Vec3d& p);
+
+/// The closest point of the sphere's surface to p; for p at the centre (every surface point is
+/// as close) the point at +x, c + (r, 0, 0).
+ClosestPoint closest_point_on_sphere(const Sphere& s, const Vec3d& p);
+
+/// The answer of a closest-point query: the nearest surface point, the object and primitive it
+/// lies on, its barycentrics (triangles) and the primitive's unit geometric normal there (for a
+/// sphere the outward normal at the point; for a triangle normalize((b−a)×(c−a))).
+struct PointHit {
+    Vec3d point;
+    double distance = kInfinity;
+    double err = 0.0;  ///< ClosestPoint::err of the winner
+    std::uint32_t object = kInvalidId;
+    std::uint32_t primitive = kInvalidId;
+    double u = 0.0, v = 0.0;
+    Vec3d normal;
+
+    bool valid() const { return object != kInvalidId; }
+};
+
+/// The API's order for closest points: the smaller distance, where two distances differ by more
+/// than their error bounds together; otherwise (a tie within rounding) the lower object, then the
+/// lower primitive. Not a strict weak order on near-ties of three or more: callers collect the
+/// candidates within the error of the smallest distance and pick by id (PointCandidates).
+inline bool clearly_closer(const PointHit& a, const PointHit& b) {
+    return a.distance + a.err + b.err < b.distance;
+}
+
+/// Keeps the winner of a closest-point search whatever order the candidates come in: among the
+/// candidates whose distance ties the smallest one within their error bounds, the lowest
+/// (object, primitive). Candidates that can still tie are kept in a fixed buffer (no allocation
+/// per query); past kKeep of them (a point equidistant from many primitives, e.g. the apex of a
+/// fan, where vertex points tie bit for bit) the one with the highest ids is dropped.
+class PointCandidates {
+  public:
+    /// Offers one candidate.
+    void offer(const PointHit& h);
+    /// The winner; an invalid PointHit when nothing was offered.
+    PointHit winner() const;
+    /// Beyond this distance no primitive can win or tie (for culling): the smallest distance so
+    /// far plus four times its error bound (a tying primitive's bound is of the same size: both
+    /// follow the magnitude of the coordinates); +inf while empty.
+    double cull_distance() const;
+
+  private:
+    /// Frees a place in the full buffer for h, if h can keep one.
+    void make_room(const PointHit& h, bool new_best);
+    static constexpr int kKeep = 16;
+    PointHit kept_[kKeep];
+    int count_ = 0;
+    int best_ = -1;  ///< index in kept_ of the smallest distance
+};
+
+}  // namespace raycastd::engine

@@ -1,0 +1,292 @@
+#include "engine/geometry/closest_point.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace raycastd::engine {
+namespace {
+
+// The triangle a = (0,0,0), b = (2,0,0), c = (0,2,0) in the plane z = 0.
+const Triangle kTri{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+
+ClosestPoint on_tri(const Vec3d& p) {
+    auto c = closest_point_on_triangle(kTri, p);
+    EXPECT_TRUE(c);
+    return c ? *c : ClosestPoint{};
+}
+
+TEST(ClosestPoint, FaceRegion) {
+    const ClosestPoint c = on_tri({0.5, 0.5, 3});
+    EXPECT_EQ(c.point, (Vec3d{0.5, 0.5, 0}));
+    EXPECT_EQ(c.distance, 3.0);
+    EXPECT_DOUBLE_EQ(c.u, 0.25);
+    EXPECT_DOUBLE_EQ(c.v, 0.25);
+    const ClosestPoint below = on_tri({0.5, 0.5, -3});  // the side does not matter
+    EXPECT_EQ(below.distance, 3.0);
+}
+
+TEST(ClosestPoint, VertexRegions) {
+    const ClosestPoint a = on_tri({-1, -1, 1});
+    EXPECT_EQ(a.point, kTri.a);
+    EXPECT_EQ(a.distance, std::sqrt(3.0));
+    EXPECT_EQ(a.u, 0.0);
+    EXPECT_EQ(a.v, 0.0);
+    const ClosestPoint b = on_tri({5, -1, 0});
+    EXPECT_EQ(b.point, kTri.b);
+    EXPECT_EQ(b.u, 1.0);
+    const ClosestPoint c = on_tri({-0.5, 4, 0});
+    EXPECT_EQ(c.point, kTri.c);
+    EXPECT_EQ(c.v, 1.0);
+}
+
+TEST(ClosestPoint, EdgeRegions) {
+    const ClosestPoint ab = on_tri({1, -2, 0});
+    EXPECT_EQ(ab.point, (Vec3d{1, 0, 0}));
+    EXPECT_EQ(ab.distance, 2.0);
+    EXPECT_DOUBLE_EQ(ab.u, 0.5);
+    EXPECT_EQ(ab.v, 0.0);
+    const ClosestPoint ac = on_tri({-3, 1.5, 4});
+    EXPECT_EQ(ac.point, (Vec3d{0, 1.5, 0}));
+    EXPECT_EQ(ac.distance, 5.0);
+    EXPECT_EQ(ac.u, 0.0);
+    EXPECT_DOUBLE_EQ(ac.v, 0.75);
+    const ClosestPoint bc = on_tri({2, 2, 0});  // beyond the hypotenuse
+    EXPECT_DOUBLE_EQ(bc.point.x, 1.0);
+    EXPECT_DOUBLE_EQ(bc.point.y, 1.0);
+    EXPECT_DOUBLE_EQ(bc.distance, std::sqrt(2.0));
+    EXPECT_DOUBLE_EQ(bc.u, 0.5);
+    EXPECT_DOUBLE_EQ(bc.v, 0.5);
+}
+
+TEST(ClosestPoint, FarPointsKeepTheirDigits) {
+    const ClosestPoint face = on_tri({0.5, 0.25, 1e12});
+    EXPECT_EQ(face.distance, 1e12);
+    EXPECT_EQ(face.point, (Vec3d{0.5, 0.25, 0}));
+    const ClosestPoint vertex = on_tri({-3e9, -4e9, 0});
+    EXPECT_EQ(vertex.distance, 5e9);
+    EXPECT_EQ(vertex.point, kTri.a);
+}
+
+TEST(ClosestPoint, PointsOnTheSurfaceAreWithinTheBound) {
+    // On the face, on each edge and at each vertex: distance 0 or within err (the caller then
+    // reports 0: engine/points).
+    const Vec3d on[] = {{0.5, 0.5, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, kTri.a, kTri.b, kTri.c};
+    for (const Vec3d& p : on) {
+        const ClosestPoint c = on_tri(p);
+        EXPECT_LE(c.distance, c.err) << p.x << " " << p.y;
+        EXPECT_GT(c.err, 0.0);
+    }
+    // The centroid of a tilted triangle far from the origin is off its plane by rounding only.
+    const Triangle far{{1e6 + 0.1, 3, 7}, {1e6 + 1.3, 4.7, 7.9}, {1e6 - 0.4, 3.3, 9.1}};
+    const Vec3d g = (far.a + far.b + far.c) / 3.0;
+    auto c = closest_point_on_triangle(far, g);
+    ASSERT_TRUE(c);
+    EXPECT_LE(c->distance, c->err);
+}
+
+TEST(ClosestPoint, DegenerateTrianglesGiveNoPoint) {
+    EXPECT_FALSE(closest_point_on_triangle({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}, {0, 1, 0}));
+    EXPECT_FALSE(closest_point_on_triangle({{0, 0, 0}, {0, 0, 0}, {1, 0, 0}}, {0, 1, 0}));
+    EXPECT_FALSE(closest_point_on_triangle(kTri, {std::nan(""), 0, 0}));
+}
+
+TEST(ClosestPoint, SharedEdgesAndVerticesTieBitForBit) {
+    // Two triangles of a roof sharing the ridge p0–p1, listed in opposite directions; a point
+    // above the ridge (in both faces' edge regions) is closest to it in both.
+    const Vec3d p0{0.1, 0.3, 1.7}, p1{2.9, 0.3, 1.7};
+    const Triangle left{p0, p1, {1.3, -1.7, 0.7}};
+    const Triangle right{p1, p0, {1.7, 2.3, 0.7}};
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> s(0.05, 0.95), h(0.1, 3.0), side(-0.4, 0.4);
+    int same = 0;
+    for (int i = 0; i < 1000; ++i) {
+        // Inside both edge regions: above the ridge by b, sideways by at most 0.4·b (each face
+        // falls away from the ridge with slope 1/2).
+        const double b = h(rng);
+        const Vec3d p = p0 + (p1 - p0) * s(rng) + Vec3d{0, side(rng) * b, b};
+        auto l = closest_point_on_triangle(left, p);
+        auto r = closest_point_on_triangle(right, p);
+        ASSERT_TRUE(l && r);
+        if (l->point == r->point) {
+            EXPECT_EQ(l->distance, r->distance);
+            ++same;
+        } else {
+            // One of them took its face region by a rounding: the distances then tie within
+            // the bounds.
+            EXPECT_LE(std::abs(l->distance - r->distance), l->err + r->err);
+        }
+    }
+    EXPECT_GT(same, 900);
+    // A shared vertex: the vertex itself, from every triangle around it.
+    const Vec3d apex{0.3, 0.7, 0.9};
+    auto t1 = closest_point_on_triangle({apex, {1, 0, 0}, {0, 1, 0}}, {0.3, 0.7, 5});
+    auto t2 = closest_point_on_triangle({{0, 1, 0}, {-1, 0, 0}, apex}, {0.3, 0.7, 5});
+    ASSERT_TRUE(t1 && t2);
+    EXPECT_EQ(t1->point, apex);
+    EXPECT_EQ(t2->point, apex);
+    EXPECT_EQ(t1->distance, t2->distance);
+}
+
+// --- Against a long-double evaluation of the same regions ------------------------------------
+
+using L = long double;
+struct V3 {
+    L x, y, z;
+};
+V3 sub(V3 a, V3 b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+L dotl(V3 a, V3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+V3 axpy(V3 a, V3 d, L s) {
+    return {a.x + d.x * s, a.y + d.y * s, a.z + d.z * s};
+}
+V3 wide(const Vec3d& v) {
+    return {v.x, v.y, v.z};
+}
+
+/// Ericson's method (RTCD §5.1.5) as printed, in long double (64-bit significand).
+L reference_distance(const Triangle& t, const Vec3d& pd) {
+    const V3 a = wide(t.a), b = wide(t.b), c = wide(t.c), p = wide(pd);
+    const V3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+    const L d1 = dotl(ab, ap), d2 = dotl(ac, ap);
+    auto dist = [&](V3 q) { return std::sqrt(dotl(sub(p, q), sub(p, q))); };
+    if (d1 <= 0 && d2 <= 0)
+        return dist(a);
+    const V3 bp = sub(p, b);
+    const L d3 = dotl(ab, bp), d4 = dotl(ac, bp);
+    if (d3 >= 0 && d4 <= d3)
+        return dist(b);
+    const L vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0)
+        return dist(axpy(a, ab, d1 / (d1 - d3)));
+    const V3 cp = sub(p, c);
+    const L d5 = dotl(ab, cp), d6 = dotl(ac, cp);
+    if (d6 >= 0 && d5 <= d6)
+        return dist(c);
+    const L vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0)
+        return dist(axpy(a, ac, d2 / (d2 - d6)));
+    const L va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return dist(axpy(b, sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    const L denom = 1 / (va + vb + vc);
+    return dist(axpy(axpy(a, ab, vb * denom), ac, vc * denom));
+}
+
+TEST(ClosestPoint, AgreesWithALongDoubleReference) {
+    std::mt19937_64 rng(2024);
+    std::uniform_real_distribution<double> box(-1, 1);
+    auto rnd = [&](double s, const Vec3d& o) {
+        return o + Vec3d{box(rng), box(rng), box(rng)} * s;
+    };
+    double worst = 0;  // |error| / (u · scale)
+    for (int i = 0; i < 200000; ++i) {
+        // Triangles of size 1 at offsets up to 1e4, points near them and far from them.
+        const Vec3d o = rnd(i % 3 == 0 ? 1e4 : 1.0, {0, 0, 0});
+        const Triangle t{rnd(1, o), rnd(1, o), rnd(1, o)};
+        const Vec3d p = rnd(i % 5 == 0 ? 100.0 : 1.5, o);
+        auto c = closest_point_on_triangle(t, p);
+        if (!c)
+            continue;
+        const L ref = reference_distance(t, p);
+        const double err = static_cast<double>(std::abs(static_cast<L>(c->distance) - ref));
+        ASSERT_LE(err, c->err) << i;
+        worst = std::max(worst, err / (c->err / 16.0));
+        // The point lies on the triangle: barycentrics in the closed simplex.
+        EXPECT_GE(c->u, 0.0);
+        EXPECT_GE(c->v, 0.0);
+        EXPECT_LE(c->u + c->v, 1.0 + 1e-12);
+    }
+    std::printf("closest point on triangle: worst distance error %.2f u·scale (bound 16)\n", worst);
+}
+
+TEST(ClosestPoint, NoSampledPointOfTheTriangleIsCloser) {
+    std::mt19937_64 rng(99);
+    std::uniform_real_distribution<double> box(-2, 2), unit(0, 1);
+    for (int i = 0; i < 2000; ++i) {
+        const Triangle t{{box(rng), box(rng), box(rng)},
+                         {box(rng), box(rng), box(rng)},
+                         {box(rng), box(rng), box(rng)}};
+        const Vec3d p{box(rng), box(rng), box(rng)};
+        auto c = closest_point_on_triangle(t, p);
+        ASSERT_TRUE(c);
+        for (int k = 0; k < 200; ++k) {
+            double u = unit(rng), v = unit(rng);
+            if (u + v > 1) {
+                u = 1 - u;
+                v = 1 - v;
+            }
+            const Vec3d x = t.a * (1 - u - v) + t.b * u + t.c * v;
+            ASSERT_LE(c->distance, length(p - x) + c->err);
+        }
+    }
+}
+
+TEST(ClosestPoint, Sphere) {
+    const Sphere s{{1, 2, 3}, 2};
+    const ClosestPoint out = closest_point_on_sphere(s, {1, 2, 13});
+    EXPECT_EQ(out.point, (Vec3d{1, 2, 5}));
+    EXPECT_EQ(out.distance, 8.0);
+    const ClosestPoint in = closest_point_on_sphere(s, {1, 2.5, 3});
+    EXPECT_EQ(in.point, (Vec3d{1, 4, 3}));
+    EXPECT_EQ(in.distance, 1.5);
+    const ClosestPoint centre = closest_point_on_sphere(s, {1, 2, 3});
+    EXPECT_EQ(centre.point, (Vec3d{3, 2, 3}));
+    EXPECT_EQ(centre.distance, 2.0);
+    // A point on the surface along a diagonal: within the bound.
+    const Vec3d d = normalize(Vec3d{1, 1, 1});
+    const ClosestPoint on = closest_point_on_sphere(s, s.center + d * 2.0);
+    EXPECT_LE(on.distance, on.err);
+    EXPECT_EQ(closest_point_on_sphere(s, {1e12, 2, 3}).distance, 1e12 - 1 - 2);
+}
+
+PointHit hit(double d, std::uint32_t object, std::uint32_t prim, double err = 1e-15) {
+    PointHit h;
+    h.distance = d;
+    h.err = err;
+    h.object = object;
+    h.primitive = prim;
+    return h;
+}
+
+TEST(PointCandidates, TiesGoToTheLowerObjectThenPrimitiveInAnyOrder) {
+    std::vector<PointHit> hits = {hit(1.0, 2, 0), hit(1.0 + 1e-16, 1, 5), hit(1.0, 1, 7),
+                                  hit(0.9999999999999999, 3, 1), hit(1.5, 0, 0)};
+    std::sort(hits.begin(), hits.end(), [](auto& a, auto& b) { return a.object < b.object; });
+    do {
+        PointCandidates c;
+        for (const PointHit& h : hits)
+            c.offer(h);
+        EXPECT_EQ(c.winner().object, 1u);
+        EXPECT_EQ(c.winner().primitive, 5u);
+    } while (std::next_permutation(hits.begin(), hits.end(),
+                                   [](auto& a, auto& b) { return a.object < b.object; }));
+    PointCandidates clear;
+    clear.offer(hit(2.0, 0, 0));
+    clear.offer(hit(1.0, 4, 4));  // closer by far more than the bounds: wins whatever its ids
+    EXPECT_EQ(clear.winner().object, 4u);
+    EXPECT_FALSE(PointCandidates{}.winner().valid());
+}
+
+TEST(PointCandidates, ManyTiesKeepTheLowestIds) {
+    // A fan's apex: 100 primitives at exactly the same distance, offered highest id first.
+    PointCandidates c;
+    for (std::uint32_t i = 100; i-- > 0;)
+        c.offer(hit(1.0, 0, i));
+    EXPECT_EQ(c.winner().primitive, 0u);
+    PointCandidates d;
+    for (std::uint32_t i = 0; i < 100; ++i)
+        d.offer(hit(1.0, 0, i));
+    d.offer(hit(0.5, 9, 9));
+    EXPECT_EQ(d.winner().object, 9u);
+}
+
+}  // namespace
+}  // namespace raycastd::engine

@@ -1,0 +1,336 @@
+#include "engine/mesh/topology.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "engine/mesh/edge_map.h"
+#include "engine/mesh/test_models.h"
+#include "engine/testing/point_meshes.h"
+
+namespace raycastd::engine {
+namespace {
+
+MeshTopology of(const Object& o) {
+    return compute_topology(*o.mesh);
+}
+
+TEST(Topology, ClosedCube) {
+    const MeshTopology t = of(testing::cube_object(0, 1));
+    EXPECT_EQ(t.vertices, 8u);
+    EXPECT_EQ(t.triangles, 12u);
+    EXPECT_TRUE(t.closed);
+    EXPECT_EQ(t.boundary_edges, 0u);
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.non_manifold_edges, 0u);
+    EXPECT_EQ(t.non_manifold_vertices, 0u);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.euler_characteristic, 2);
+    EXPECT_TRUE(t.consistently_oriented);
+    EXPECT_EQ(t.degenerate_triangles, 0u);
+    EXPECT_EQ(t.refused_triangles, 0u);
+    EXPECT_TRUE(t.half_edge);
+    EXPECT_EQ(t.sign, SignMethod::parity);
+}
+
+TEST(Topology, Icospheres) {
+    for (int level = 0; level <= 4; ++level) {
+        const MeshTopology t = of(testing::icosphere_object(level));
+        EXPECT_EQ(t.triangles, 20u << (2 * level));
+        EXPECT_EQ(t.vertices, 10u * (1u << (2 * level)) + 2u);
+        EXPECT_TRUE(t.closed);
+        EXPECT_EQ(t.euler_characteristic, 2);
+        EXPECT_EQ(t.sign, SignMethod::parity);
+    }
+}
+
+TEST(Topology, CubeWithAFaceRemovedHasOneHole) {
+    const MeshTopology t = of(testing::open_cube_object(0, 1));
+    EXPECT_EQ(t.triangles, 10u);
+    EXPECT_FALSE(t.closed);
+    EXPECT_EQ(t.boundary_edges, 4u);
+    EXPECT_EQ(t.boundary_loops, 1u);
+    EXPECT_EQ(t.euler_characteristic, 1);  // a disc
+    EXPECT_TRUE(t.consistently_oriented);
+    EXPECT_EQ(t.sign, SignMethod::winding);
+}
+
+TEST(Topology, AFlippedTriangleIsClosedButNotOriented) {
+    const MeshTopology t = of(testing::flipped_cube_object(0, 1, 5));
+    EXPECT_TRUE(t.closed);
+    EXPECT_FALSE(t.consistently_oriented);
+    // The orientation walk turns it round for OpenMesh: one closed surface, nothing refused.
+    EXPECT_EQ(t.refused_triangles, 0u);
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.euler_characteristic, 2);
+    EXPECT_EQ(t.sign, SignMethod::winding);
+}
+
+TEST(Topology, NonManifoldEdgesAndVerticesAreCountedNotFatal) {
+    // Three triangles on the edge (0,1), and a fourth meeting the rest at vertex 0 only.
+    TriangleMesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0},    {0, 1, 0},   {0, -1, 0},
+                   {0, 0, 1}, {-1, -1, -1}, {-1, -2, -1}};
+    m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {0, 5, 6}};
+    const MeshTopology t = compute_topology(m);
+    EXPECT_EQ(t.non_manifold_edges, 1u);
+    EXPECT_GE(t.non_manifold_vertices, 2u);  // 0 and 1 (the edge's ends; 0 is also a bow-tie)
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_FALSE(t.closed);
+    EXPECT_FALSE(t.consistently_oriented);
+    EXPECT_GE(t.refused_triangles, 1u);  // OpenMesh takes two faces of an edge at most
+    EXPECT_EQ(t.sign, SignMethod::winding);
+}
+
+TEST(Topology, BowTieVertex) {
+    TriangleMesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+    m.triangles = {{0, 1, 2}, {0, 3, 4}};
+    const MeshTopology t = compute_topology(m);
+    EXPECT_EQ(t.non_manifold_vertices, 1u);
+    EXPECT_EQ(t.non_manifold_edges, 0u);
+    EXPECT_EQ(t.boundary_edges, 6u);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.euler_characteristic, 1);
+}
+
+TEST(Topology, DegenerateTrianglesAreCountedAndMakeItWinding) {
+    Object o = testing::cube_object(0, 1);
+    auto mesh = std::make_shared<TriangleMesh>(*o.mesh);
+    mesh->triangles.push_back({0, 0, 1});    // a repeated corner
+    mesh->positions.push_back({0.5, 0, 0});  // on the edge 0–1
+    mesh->triangles.push_back({0, 1, 8});    // zero area, three distinct corners
+    const MeshTopology t = compute_topology(*mesh);
+    EXPECT_EQ(t.triangles, 14u);
+    EXPECT_EQ(t.degenerate_triangles, 2u);
+    EXPECT_EQ(t.sign, SignMethod::winding);
+}
+
+TEST(Topology, AHugeFanInRandomOrderDoesNotHang) {
+    // 100,000 triangles around one vertex, listed in random order (OpenMesh's add_face walks a
+    // vertex's one-ring; the edge map's per-vertex work is O(n log n)). Closed by a second fan,
+    // so the surface is a double cone: closed, genus 0.
+    const int n = 100000;
+    TriangleMesh m;
+    m.positions.push_back({0, 0, 1});
+    m.positions.push_back({0, 0, -1});
+    for (int i = 0; i < n; ++i) {
+        const double a = 2 * M_PI * i / n;
+        m.positions.push_back({std::cos(a), std::sin(a), 0});
+    }
+    for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(n); ++i) {
+        const std::uint32_t a = 2 + i, b = 2 + (i + 1) % n;
+        m.triangles.push_back({0, a, b});
+        m.triangles.push_back({1, b, a});
+    }
+    std::shuffle(m.triangles.begin(), m.triangles.end(), std::mt19937(3));
+    const MeshTopology t = compute_topology(m);
+    EXPECT_TRUE(t.closed);
+    EXPECT_EQ(t.euler_characteristic, 2);
+    EXPECT_EQ(t.non_manifold_vertices, 0u);
+    EXPECT_FALSE(t.half_edge);  // over add_face's valence budget: the edge map's counts only
+    EXPECT_EQ(t.boundary_loops, 0u);
+    EXPECT_EQ(t.refused_triangles, 0u);
+}
+
+TEST(Topology, LargeCleanMeshesCountTheirLoopsWithoutOpenMesh) {
+    // 327,680 triangles (past 2¹⁸) with three holes far apart.
+    Object o = testing::icosphere_object(7);
+    auto mesh = std::make_shared<TriangleMesh>(*o.mesh);
+    for (std::size_t t : {300000u, 150000u, 7u})
+        mesh->triangles.erase(mesh->triangles.begin() + static_cast<std::ptrdiff_t>(t));
+    const MeshTopology t = compute_topology(*mesh);
+    EXPECT_FALSE(t.half_edge);
+    EXPECT_EQ(t.boundary_edges, 9u);
+    EXPECT_EQ(t.boundary_loops, 3u);
+    EXPECT_EQ(t.euler_characteristic, -1);
+    EXPECT_EQ(t.refused_triangles, 0u);
+    EXPECT_TRUE(t.consistently_oriented);
+    // The same count as OpenMesh's on a smaller cut of the same kind.
+    Object small = testing::icosphere_object(4);
+    auto cut = std::make_shared<TriangleMesh>(*small.mesh);
+    for (std::size_t k : {4000u, 2000u, 7u})
+        cut->triangles.erase(cut->triangles.begin() + static_cast<std::ptrdiff_t>(k));
+    const MeshTopology s = compute_topology(*cut);
+    EXPECT_TRUE(s.half_edge);
+    EXPECT_EQ(s.boundary_loops, 3u);
+}
+
+TEST(Topology, WithoutTheHalfEdgeStructureBoundariesAreStillCounted) {
+    // A disc fan of 100,000 triangles (open: one boundary loop), over the valence budget.
+    const int n = 100000;
+    TriangleMesh m;
+    m.positions.push_back({0, 0, 0});
+    for (int i = 0; i < n; ++i) {
+        const double a = 2 * M_PI * i / n;
+        m.positions.push_back({std::cos(a), std::sin(a), 0});
+    }
+    for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(n); ++i)
+        m.triangles.push_back({0, 1 + i, 1 + (i + 1) % n});
+    const MeshTopology t = compute_topology(m);
+    EXPECT_FALSE(t.half_edge);
+    EXPECT_EQ(t.boundary_edges, static_cast<std::size_t>(n));
+    EXPECT_EQ(t.boundary_loops, 1u);
+    EXPECT_EQ(t.euler_characteristic, 1);
+}
+
+// --- An independent count: a std::map of edges, nothing shared with edge_map.cpp or OpenMesh ---
+
+struct Reference {
+    std::size_t vertices = 0, edges = 0, faces = 0, boundary = 0, non_manifold = 0;
+    std::size_t same_direction = 0, components = 0;
+};
+
+Reference reference_counts(const TriangleMesh& m) {
+    Reference r;
+    std::map<std::array<double, 3>, std::size_t> ids;
+    auto id = [&](std::uint32_t i) {
+        const Vec3d& p = m.positions[i];
+        return ids.emplace(std::array<double, 3>{p.x + 0.0, p.y + 0.0, p.z + 0.0}, ids.size())
+            .first->second;
+    };
+    std::map<std::pair<std::size_t, std::size_t>, std::pair<int, int>> edges;  // up, down uses
+    std::map<std::size_t, std::set<std::size_t>> adjacent;
+    for (const auto& t : m.triangles) {
+        const std::size_t v[3] = {id(t[0]), id(t[1]), id(t[2])};
+        for (int k = 0; k < 3; ++k) {
+            adjacent[v[k]].insert(v[(k + 1) % 3]);
+            adjacent[v[(k + 1) % 3]].insert(v[k]);
+        }
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+            continue;
+        ++r.faces;
+        for (int k = 0; k < 3; ++k) {
+            const std::size_t a = v[k], b = v[(k + 1) % 3];
+            auto& e = edges[{std::min(a, b), std::max(a, b)}];
+            (a < b ? e.first : e.second)++;
+        }
+    }
+    r.vertices = ids.size();
+    r.edges = edges.size();
+    for (const auto& [key, uses] : edges) {
+        const int n = uses.first + uses.second;
+        r.boundary += n == 1;
+        r.non_manifold += n > 2;
+        r.same_direction += n == 2 && uses.first != 1;
+    }
+    std::set<std::size_t> seen;
+    for (const auto& [v, next] : adjacent) {
+        if (!seen.insert(v).second)
+            continue;
+        ++r.components;
+        std::vector<std::size_t> stack = {v};
+        while (!stack.empty()) {
+            const std::size_t x = stack.back();
+            stack.pop_back();
+            for (std::size_t y : adjacent[x]) {
+                if (seen.insert(y).second)
+                    stack.push_back(y);
+            }
+        }
+    }
+    return r;
+}
+
+void expect_matches_reference(const TriangleMesh& m, const MeshTopology& t) {
+    const Reference r = reference_counts(m);
+    EXPECT_EQ(t.vertices, r.vertices);
+    EXPECT_EQ(t.boundary_edges, r.boundary);
+    EXPECT_EQ(t.non_manifold_edges, r.non_manifold);
+    EXPECT_EQ(t.components, r.components);
+    EXPECT_EQ(t.euler_characteristic, static_cast<std::int64_t>(r.vertices) -
+                                          static_cast<std::int64_t>(r.edges) +
+                                          static_cast<std::int64_t>(r.faces));
+    EXPECT_EQ(t.closed, r.faces > 0 && r.boundary == 0 && r.non_manifold == 0);
+    EXPECT_EQ(t.consistently_oriented, r.same_direction == 0 && r.non_manifold == 0);
+}
+
+TEST(Topology, RandomSoupsMatchAnIndependentCount) {
+    std::mt19937 rng(11);
+    for (int trial = 0; trial < 50; ++trial) {
+        TriangleMesh m;
+        std::uniform_int_distribution<std::uint32_t> vid(0, 14);
+        for (int i = 0; i < 15; ++i)
+            m.positions.push_back(
+                {static_cast<double>(i % 4), static_cast<double>(i / 4), i * 0.1});
+        for (int i = 0; i < 40; ++i)
+            m.triangles.push_back({vid(rng), vid(rng), vid(rng)});
+        const MeshTopology t = compute_topology(m);
+        expect_matches_reference(m, t);
+        EXPECT_LE(t.refused_triangles, t.triangles);
+    }
+}
+
+TEST(Topology, PublishedModelsMatchAnIndependentCount) {
+    if (!std::filesystem::exists(testing::models_dir()))
+        GTEST_SKIP() << "models not found at " << testing::models_dir();
+    const char* files[] = {"stanford-bunny/stanford-bunny.obj",
+                           "bunny_ply/bunny.ply",
+                           "spot/spot.obj",
+                           "cow/cow.obj",
+                           "fandisk/fandisk.obj",
+                           "teapot_stl/teapot.stl",
+                           "sphereWithHole/sphereWithHole.stl",
+                           "ballA_off/ballA.off",
+                           "suzanne/suzanne.obj",
+                           "Duck/glTF-Binary/Duck.glb",
+                           "spider/Spider_binary.stl",
+                           "beetle/beetle.obj",
+                           "cube_off/Cube.off",
+                           "featuretype/featuretype.STL",
+                           "Wuson/Wuson.stl"};
+    int found = 0;
+    for (const char* f : files) {
+        auto o = testing::model_object(f);
+        if (!o)
+            continue;
+        ++found;
+        SCOPED_TRACE(f);
+        const MeshTopology t = of(*o);
+        std::printf(
+            "%-36s V %6zu T %6zu closed %d bnd %4zu loops %3zu nme %3zu nmv %3zu comp %3zu "
+            "chi %4lld oriented %d degen %3zu refused %3zu %s\n",
+            f, t.vertices, t.triangles, t.closed, t.boundary_edges, t.boundary_loops,
+            t.non_manifold_edges, t.non_manifold_vertices, t.components,
+            static_cast<long long>(t.euler_characteristic), t.consistently_oriented,
+            t.degenerate_triangles, t.refused_triangles, to_string(t.sign));
+        expect_matches_reference(*o->mesh, t);
+        // Where the mesh is clean, the edge map's own boundary cycles (what large clean meshes
+        // report) are OpenMesh's.
+        const WeldedTriangles w = weld(*o->mesh);
+        const EdgeMap e = build_edge_map(w);
+        if (e.non_manifold_edges == 0 && e.same_direction_edges == 0 &&
+            t.non_manifold_vertices == 0) {
+            EXPECT_TRUE(t.half_edge);
+            EXPECT_EQ(count_boundary_loops(w, e), t.boundary_loops);
+        }
+    }
+    if (found == 0)
+        GTEST_SKIP() << "none of the models found at " << testing::models_dir();
+}
+
+TEST(Topology, StanfordBunnyAsTheApiDocumentsIt) {
+    auto o = testing::model_object("stanford-bunny/stanford-bunny.obj");
+    if (!o)
+        GTEST_SKIP() << "models not found at " << testing::models_dir();
+    const MeshTopology t = of(*o);
+    EXPECT_EQ(t.vertices, 34834u);
+    EXPECT_EQ(t.triangles, 69451u);
+    EXPECT_FALSE(t.closed);
+    EXPECT_EQ(t.boundary_edges, 223u);
+    EXPECT_EQ(t.boundary_loops, 5u);
+    EXPECT_EQ(t.non_manifold_edges, 0u);
+    EXPECT_EQ(t.non_manifold_vertices, 0u);
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.euler_characteristic, -3);
+    EXPECT_TRUE(t.consistently_oriented);
+    EXPECT_EQ(t.degenerate_triangles, 0u);
+    EXPECT_EQ(t.sign, SignMethod::winding);
+}
+
+}  // namespace
+}  // namespace raycastd::engine

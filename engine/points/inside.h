@@ -1,0 +1,46 @@
+#pragma once
+// Inside or outside, object by object, for a batch of points whose nearest surface point is
+// known (point_queries.h computes it first).
+//
+//   on a surface   within the nearest hit's error bound: inside, winding 1, nothing else asked;
+//   sphere         |p − c| < r, exactly as far as it matters (points within the bound of the
+//                  surface were decided above): winding 1 or 0;
+//   parity mesh    (MeshTopology::sign, closed and consistently oriented): the number of
+//                  crossings of a ray from p, odd inside. The rays go through QueryEngine on the
+//                  exact path (Mode::all, Precision::exact: the watertight double test, a crossing
+//                  of a shared edge or vertex counted once, a tangent touch twice), away from the
+//                  nearest surface point, so that every crossing is at least the point's distance
+//                  from it (more than the rounding of any t). A ray that crosses an edge or a
+//                  vertex of the mesh (a ray along a face's plane meets its edges) is cast again
+//                  along two fixed directions, and if those also touch edges the three vote;
+//                  winding 1 or 0;
+//   winding mesh   the generalized winding number (QueryEngine::winding_number: fast winding
+//                  numbers), inside where it is ≥ ½; a lone triangle encloses nothing.
+// The scene's answer: inside any object; its winding number is the largest of the objects'.
+
+#include <cstddef>
+
+#include "engine/cancel.h"
+#include "engine/query/intersect.h"
+
+namespace raycastd::engine {
+
+/// One point's classification.
+struct Occupancy {
+    bool inside = false;
+    double winding = 0.0;
+};
+
+/// Classifies points[0..n), whose nearest surface points (any distance; !valid() for an empty
+/// scene) are nearest[0..n), into out[0..n). `all_objects = false` (signed distance) stops at
+/// the first object that contains the point (the winding then is not the largest). ok, or
+/// Code::cancelled once `cancel` has fired (asked per block of points and by the parity rays).
+Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
+                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out);
+
+/// Whether `nearest` puts its query point on a surface (within the distance's error bound).
+inline bool on_surface(const PointHit& nearest) {
+    return nearest.valid() && nearest.distance <= nearest.err;
+}
+
+}  // namespace raycastd::engine

@@ -1,0 +1,81 @@
+#include "engine/points/point_queries.h"
+
+#include "engine/points/batch.h"
+#include "engine/points/inside.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+/// The nearest surface point as the API reports it: on a surface, the point itself at distance 0.
+PointHit as_reported(PointHit h, const Vec3d& p) {
+    if (on_surface(h)) {
+        h.point = p;
+        h.distance = 0.0;
+    }
+    return h;
+}
+
+}  // namespace
+
+const char* to_string(PointQuery q) {
+    switch (q) {
+        case PointQuery::closest:
+            return "closest";
+        case PointQuery::distance:
+            return "distance";
+        case PointQuery::signed_distance:
+            return "signed_distance";
+        case PointQuery::occupancy:
+            return "occupancy";
+    }
+    return "closest";
+}
+
+std::optional<PointQuery> point_query_from_string(std::string_view name) {
+    for (PointQuery q : {PointQuery::closest, PointQuery::distance, PointQuery::signed_distance,
+                         PointQuery::occupancy}) {
+        if (name == to_string(q))
+            return q;
+    }
+    return std::nullopt;
+}
+
+Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
+                    const PointOptions& options, std::vector<PointAnswer>& out) {
+    const std::size_t n = points.size();
+    out.assign(n, PointAnswer{});
+    const bool signs =
+        options.query == PointQuery::signed_distance || options.query == PointQuery::occupancy;
+    const double reach = signs ? kInfinity : options.max_distance;
+    for_each_point(n, options.cancel, [&](std::size_t i) {
+        auto h = engine.closest_point(points[i], reach);
+        if (!h)
+            return;
+        out[i].hit = as_reported(*h, points[i]);
+        out[i].distance = out[i].hit.distance;
+    });
+    if (options.cancel.fired())
+        return options.cancel.status();
+    if (!signs)
+        return {};
+    std::vector<PointHit> nearest(n);
+    for (std::size_t i = 0; i < n; ++i)
+        nearest[i] = out[i].hit;
+    // classify_points reads the error bound: the reported hit keeps it (distance 0 ≤ err).
+    std::vector<Occupancy> occ(n);
+    const Status st =
+        classify_points(engine, points.data(), nearest.data(), n,
+                        options.query == PointQuery::occupancy, options.cancel, occ.data());
+    if (!st.ok())
+        return st;
+    for (std::size_t i = 0; i < n; ++i) {
+        out[i].inside = occ[i].inside;
+        out[i].winding = occ[i].winding;
+        if (occ[i].inside && out[i].distance > 0.0)
+            out[i].distance = -out[i].distance;
+    }
+    return {};
+}
+
+}  // namespace raycastd::engine
