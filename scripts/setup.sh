@@ -5,17 +5,25 @@
 # package playwright-core pinned in tests/browser/package-lock.json (`npm ci` there, only when
 # the installed copy differs from the lock).
 #   scripts/setup.sh          build + test dependencies (Python: the client's tests, black;
-#                             clang and its libFuzzer runtime: the fuzz preset, tests/fuzz)
+#                             clang and its libFuzzer runtime: the fuzz preset, tests/fuzz;
+#                             prometheus-client, yaml and nginx: tests/deploy, tests/scale)
 #   scripts/setup.sh --bench  also the benchmark peers (Open3D, NumPy, POV-Ray, matplotlib)
 set -euo pipefail
 
-packages=(
+# What building raycastd needs: the Dockerfile's build stage installs exactly this list
+# (tests/deploy/test_dockerfile.py compares the two).
+build_packages=(
     build-essential cmake pkg-config git curl ca-certificates
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
     nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
+)
+# What testing, formatting and fuzzing need besides.
+packages=(
+    "${build_packages[@]}"
     clang-format
     clang libclang-rt-14-dev
     python3 python3-numpy python3-pip python3-setuptools black
+    python3-prometheus-client python3-yaml nginx
     chromium
 )
 # Node.js and npm: Debian's packages, unless a node and npm are there already (NodeSource's

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cctype>
+#include <chrono>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -11,7 +12,9 @@
 
 #include "server/content_hash.h"
 #include "server/request_cancel.h"
+#include "server/request_log.h"
 #include "server/routes_web.h"
+
 namespace raycastd::server {
 
 namespace {
@@ -61,21 +64,22 @@ class WorkSlot {
     std::atomic<std::size_t>& counter_;
 };
 
-void send_error(httplib::Response& res, const ApiError& e) {
+/// Busy and timeout answers by a reason of their own, as an operator alerts on them.
+void add_reason_headers(httplib::Response& res, const ApiError& e) {
     if (e.code == ErrorCode::unauthorized)
         res.set_header("WWW-Authenticate", "Bearer");
     // A busy server is over a momentary limit: a second is what a request takes here.
     if (e.code == ErrorCode::busy)
         res.set_header("Retry-After", "1");
-    send_json(res, error_body(e), e.http_status());
 }
 
-/// Logs a bug with the request id and answers 500 internal naming it.
-void send_internal(const httplib::Request& req, httplib::Response& res, const char* what) {
-    const std::string id = res.get_header_value("X-Request-Id");
-    std::fprintf(stderr, "raycastd: internal error in %s %s [%s]: %s\n", req.method.c_str(),
-                 req.path.c_str(), id.c_str(), what);
-    send_error(res, ApiError(ErrorCode::internal, "internal error (request " + id + ")"));
+/// An X-Request-Id a client may choose: 1 to 128 letters, digits and "._:-" (it is echoed in
+/// a header and written into log lines, so nothing else).
+bool is_request_id(const std::string& id) {
+    return !id.empty() && id.size() <= 128 && std::all_of(id.begin(), id.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == ':' ||
+               c == '-';
+    });
 }
 
 /// The id group of our route patterns, and the rest-of-the-path group (static files): the only
@@ -148,6 +152,21 @@ bool lists_method(const std::string& allow, const std::string& method) {
 
 }  // namespace
 
+void App::send_error(httplib::Response& res, const ApiError& e) {
+    metrics_.count_error(e.code);
+    add_reason_headers(res, e);
+    send_json(res, error_body(e), e.http_status());
+}
+
+void App::send_internal(const httplib::Request& req, httplib::Response& res, const char* what) {
+    const std::string id = res.get_header_value("X-Request-Id");
+    // Always logged: error is the lowest --log-level.
+    const std::string line = message_log_line(
+        LogLevel::error, "internal error in " + req.method + " " + req.path + ": " + what, id);
+    std::fprintf(stderr, "%s\n", line.c_str());
+    send_error(res, ApiError(ErrorCode::internal, "internal error (request " + id + ")"));
+}
+
 void send_json(httplib::Response& res, std::string body, int status) {
     res.status = status;
     res.set_content(std::move(body), "application/json");
@@ -157,11 +176,15 @@ App::App(Config config)
     : config_(std::move(config)),
       http_(connection_limits(config_)),
       models_(config_.limits, config_.scene_root) {
-    registry_ =
-        std::make_unique<SceneRegistry>(config_.data_dir, config_.limits.memory_budget_bytes,
-                                        [this](const SceneSource& src, const FileSource& files) {
-                                            return models_.build_scene(src, files);
-                                        });
+    registry_ = std::make_unique<SceneRegistry>(
+        config_.data_dir, config_.limits.memory_budget_bytes,
+        [this](const SceneSource& src, const FileSource& files) {
+            const auto t0 = std::chrono::steady_clock::now();
+            auto engine = models_.build_scene(src, files);
+            metrics_.observe_scene_build(
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+            return engine;
+        });
     threads_ = pick_connections(config_);
     max_concurrent_ = pick_max_concurrent(config_);
     // Connections, deadlines, keep-alive and framing are HttpServer's (server/http/); the
@@ -169,6 +192,7 @@ App::App(Config config)
     http_.set_payload_max_length(config_.limits.max_body_bytes);
     install_handlers();
     install_routes();
+    add_gauges();
 }
 
 App::~App() {
@@ -176,8 +200,17 @@ App::~App() {
 }
 
 void App::install_handlers() {
-    http_.set_pre_routing_handler([this](const httplib::Request&, httplib::Response& res) {
-        res.set_header("X-Request-Id", http_.next_request_id());
+    http_.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+        // A balancer's id (nginx's $request_id, deploy/nginx.conf) is adopted, so that its log
+        // and ours name the same request; one that is not a plain token gets ours.
+        const std::string given = req.get_header_value("X-Request-Id");
+        res.set_header("X-Request-Id", is_request_id(given) ? given : http_.next_request_id());
+        // The request is timed from here (its head has been read) to its logger call.
+        RequestRecord& r = current_request();
+        r = RequestRecord{};
+        r.open = true;
+        r.start = std::chrono::steady_clock::now();
+        r.metrics = &metrics_;
         return httplib::Server::HandlerResponse::Unhandled;
     });
     // Errors raised by httplib itself (no route, body over the limit, ...) get the same JSON
@@ -188,7 +221,7 @@ void App::install_handlers() {
                                                : httplib::Server::HandlerResponse::Unhandled;
         }));
     http_.set_exception_handler(
-        [](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
+        [this](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
             std::string what = "unknown exception";
             try {
                 if (ep)
@@ -199,15 +232,79 @@ void App::install_handlers() {
             }
             send_internal(req, res, what.c_str());
         });
-    if (config_.access_log) {
-        http_.set_logger([](const httplib::Request& req, const httplib::Response& res) {
-            std::fprintf(stderr, "%s %s %d %zu [%s]\n", req.method.c_str(), req.path.c_str(),
-                         res.status, res.body.size(), res.get_header_value("X-Request-Id").c_str());
-        });
-    }
+    // cpp-httplib calls its logger on the serving thread once the answer has been written,
+    // streamed answers included.
+    http_.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
+        close_request(req, res);
+    });
 }
 
-bool App::answer_http_error(const httplib::Request& req, httplib::Response& res) const {
+void App::close_request(const httplib::Request& req, const httplib::Response& res) {
+    RequestRecord& r = current_request();
+    // A request httplib could not read (a bad request line) never reached the pre-routing
+    // handler: it has no start time and is counted as unmatched, in no time.
+    const double seconds =
+        r.open ? std::chrono::duration<double>(std::chrono::steady_clock::now() - r.start).count()
+               : 0.0;
+    const std::size_t route = r.open ? r.route : 0;
+    metrics_.observe_request(route, res.status, seconds);
+    if (logs_request(config_.log_level, res.status)) {
+        RequestLogEntry e;
+        const std::string id = res.get_header_value("X-Request-Id");
+        e.request_id = id;
+        e.method = req.method;
+        e.route = metrics_.route_name(route);
+        e.path = req.path;
+        e.status = res.status;
+        e.duration_ms = seconds * 1e3;
+        e.rays = r.open ? r.rays : 0;
+        e.request_bytes = req.body.size();
+        e.response_bytes = res.content_length_ > 0 ? res.content_length_ : res.body.size();
+        const std::string line = request_log_line(e, config_.log_level);
+        std::fprintf(stderr, "%s\n", line.c_str());
+    }
+    r = RequestRecord{};
+}
+
+void App::add_gauges() {
+    // Read at scrape time from the figures their owners keep (each behind its own lock or an
+    // atomic); none is touched by the request path for the sake of /metrics.
+    metrics_.add_gauge("raycastd_scenes_registered", "gauge",
+                       "Scenes this replica knows (in memory or saved in the data dir).",
+                       [this] { return static_cast<double>(registry_->size()); });
+    metrics_.add_gauge("raycastd_scenes_loaded", "gauge",
+                       "Scenes prepared in memory (the rest reload on demand).",
+                       [this] { return static_cast<double>(registry_->resident()); });
+    metrics_.add_gauge("raycastd_scene_memory_bytes", "gauge",
+                       "Estimated memory of the prepared scenes (--memory-budget-mb bounds it).",
+                       [this] { return static_cast<double>(registry_->resident_bytes()); });
+    metrics_.add_gauge("process_resident_memory_bytes", "gauge",
+                       "Resident set size of the process (/proc/self/statm).",
+                       [] { return static_cast<double>(resident_memory_bytes()); });
+    metrics_.add_gauge("raycastd_requests_in_flight", "gauge",
+                       "Work requests holding a --max-concurrent slot.",
+                       [this] { return static_cast<double>(in_flight_.load()); });
+    metrics_.add_gauge("raycastd_connections_open", "gauge", "Client connections open.",
+                       [this] { return static_cast<double>(http_.stats().open_connections); });
+    metrics_.add_gauge("raycastd_busy_rejections_total", "counter",
+                       "Requests refused 503 busy: over --max-concurrent, the render queue, or "
+                       "--body-budget-mb.",
+                       [this] {
+                           return static_cast<double>(metrics_.errors(ErrorCode::busy) +
+                                                      http_.stats().busy_bodies);
+                       });
+    metrics_.add_gauge("raycastd_request_timeouts_total", "counter",
+                       "Work stopped at --request-timeout-s (503 timeout).",
+                       [this] { return static_cast<double>(metrics_.errors(ErrorCode::timeout)); });
+    metrics_.add_gauge("raycastd_connection_timeouts_total", "counter",
+                       "Connections dropped at a deadline (slow head or body).",
+                       [this] { return static_cast<double>(http_.stats().timeouts); });
+    metrics_.add_gauge("raycastd_refused_heads_total", "counter",
+                       "Malformed or oversized request heads answered by the connection layer.",
+                       [this] { return static_cast<double>(http_.stats().refused_heads); });
+}
+
+bool App::answer_http_error(const httplib::Request& req, httplib::Response& res) {
     if (!res.body.empty())
         return false;
     // No route for this method (404), or a method httplib routes nowhere (400: TRACE): 405 if
@@ -233,12 +330,14 @@ bool App::answer_http_error(const httplib::Request& req, httplib::Response& res)
     } else if (res.status == 414) {
         // The contract's one exception to the table: a URL over the limit is too_large with
         // the status that names a URL (cpp-httplib refuses request lines over 8,192 bytes).
+        metrics_.count_error(ErrorCode::too_large);
         send_json(res,
                   error_body(ApiError(ErrorCode::too_large,
                                       "the request line is over the limit of 8,192 bytes")),
                   414);
     } else {
         // httplib's own status (416 bad range, ...) is kept.
+        metrics_.count_error(ErrorCode::internal);
         send_json(res, error_body(ApiError(ErrorCode::internal, "HTTP error")), res.status);
     }
     return true;
@@ -254,29 +353,39 @@ void App::install_routes() {
     install_web_routes(*this);
 }
 
-void App::remember(const std::string& pattern, const char* method) {
+std::size_t App::remember(const std::string& pattern, const char* method) {
     assert(is_plain_route(pattern));
     routes_.push_back({pattern, method});
+    return metrics_.add_route(method, pattern);
 }
 
+namespace {
+
+/// `handler`, naming its route in the request's record first (for the metrics and log line).
+template <typename Handler>
+Handler named_route(std::size_t route, Handler handler) {
+    return [route, handler = std::move(handler)](auto&&... args) {
+        current_request().route = route;
+        return handler(std::forward<decltype(args)>(args)...);
+    };
+}
+
+}  // namespace
+
 void App::on_get(const std::string& pattern, httplib::Server::Handler handler) {
-    remember(pattern, "GET");
-    http_.Get(pattern, std::move(handler));
+    http_.Get(pattern, named_route(remember(pattern, "GET"), std::move(handler)));
 }
 
 void App::on_post(const std::string& pattern, httplib::Server::Handler handler) {
-    remember(pattern, "POST");
-    http_.Post(pattern, std::move(handler));
+    http_.Post(pattern, named_route(remember(pattern, "POST"), std::move(handler)));
 }
 
 void App::on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler) {
-    remember(pattern, "POST");
-    http_.Post(pattern, std::move(handler));
+    http_.Post(pattern, named_route(remember(pattern, "POST"), std::move(handler)));
 }
 
 void App::on_delete(const std::string& pattern, httplib::Server::Handler handler) {
-    remember(pattern, "DELETE");
-    http_.Delete(pattern, std::move(handler));
+    http_.Delete(pattern, named_route(remember(pattern, "DELETE"), std::move(handler)));
 }
 
 std::string App::allowed_methods(const std::string& path) const {

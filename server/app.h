@@ -15,6 +15,7 @@
 #include "server/api_error.h"
 #include "server/config.h"
 #include "server/http/http_server.h"
+#include "server/metrics.h"
 #include "server/model_source.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_read.h"
@@ -85,6 +86,12 @@ class App {
     std::shared_ptr<const engine::QueryEngine> scene_or_404(const std::string& id);
     static ApiError scene_not_found(const std::string& id);
 
+    /// The counters of GET /metrics (lock-free; see server/metrics.h).
+    Metrics& metrics() { return metrics_; }
+    /// The exposition of GET /metrics: the counters and, read now, the registry's, the
+    /// connections' and the jobs' figures.
+    std::string metrics_text() const { return metrics_.render(); }
+
     /// Adds the registry's figures (scenes, memory, stateless cache hits) to a /v1/info document.
     void add_registry_info(Json& info) const;
 
@@ -95,12 +102,22 @@ class App {
     };
     void install_handlers();
     void install_routes();
-    void remember(const std::string& pattern, const char* method);
+    /// Records the route (for Allow and for the metrics); its metrics route index.
+    std::size_t remember(const std::string& pattern, const char* method);
     /// Fills in the API's error for a response httplib gave up on (no route, body too large,
     /// malformed HTTP); false for a response a handler has already filled in.
-    bool answer_http_error(const httplib::Request& req, httplib::Response& res) const;
+    bool answer_http_error(const httplib::Request& req, httplib::Response& res);
+    /// Sends the API error `e` (counted by code).
+    void send_error(httplib::Response& res, const ApiError& e);
+    /// Logs a bug with the request id and answers 500 internal naming it.
+    void send_internal(const httplib::Request& req, httplib::Response& res, const char* what);
+    /// The request's metrics and log line, once its answer has been written.
+    void close_request(const httplib::Request& req, const httplib::Response& res);
+    /// The gauges of GET /metrics that read the registry, connections and work slots.
+    void add_gauges();
 
     Config config_;
+    Metrics metrics_;  ///< before http_: the routes' wrappers use it while http_ serves
     HttpServer http_;
     int threads_ = 0;
     std::size_t max_concurrent_ = 0;

@@ -1,9 +1,12 @@
 #include "server/config.h"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstdlib>
 #include <cstring>
 #include <set>
+#include <vector>
 
 namespace raycastd::server {
 
@@ -34,8 +37,19 @@ usage: raycastd [options]
                           "Authorization: Bearer T" (default: $RAYCASTD_TOKEN; none: open)
   --request-timeout-s N   stop a render, trace, ray batch or stateless scene build after N s
                           of work and answer 503 timeout (default 0: no limit)
-  --access-log            log every request to stderr
+  --log-level L           what goes to stderr, as JSON lines: error (internal errors),
+                          warn (and requests answered 5xx), info (and every request: id,
+                          method, route, status, duration_ms, rays; the default), debug (and
+                          each request's path and sizes)
+  --access-log            the same as --log-level info (kept for old command lines)
+  --health-check          do not serve: ask the server at --host/--port (0.0.0.0: this
+                          machine) for GET /v1/health and exit 0 if it answers 200 within
+                          3 s, else 1 (a container's HEALTHCHECK)
   --help                  this text
+
+Every option that takes a value, except --demo and --threads, may be given instead in the
+environment as RAYCASTD_ and its name in capitals with _ for - (RAYCASTD_MAX_RAYS=1000,
+RAYCASTD_DATA_DIR=/data, RAYCASTD_LOG_LEVEL=warn); a flag overrides its variable.
 )";
 }
 
@@ -63,6 +77,105 @@ bool is_loopback_host(const std::string& host) {
     return host == "localhost" || host == "::1" || host == "[::1]" || host.rfind("127.", 0) == 0;
 }
 
+std::string env_name(const std::string& flag) {
+    std::string out = "RAYCASTD_";
+    for (char ch : flag.substr(2))
+        out += ch == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    return out;
+}
+
+namespace {
+
+/// The options that take a value and may come from the environment (--demo is repeatable and
+/// --threads is --max-connections under its old name, so neither has a variable).
+const std::vector<std::string>& env_flags() {
+    static const std::vector<std::string> flags = {"--host",
+                                                   "--port",
+                                                   "--max-connections",
+                                                   "--scene-root",
+                                                   "--data-dir",
+                                                   "--max-body-mb",
+                                                   "--max-rays",
+                                                   "--max-points",
+                                                   "--max-pixels",
+                                                   "--max-triangles",
+                                                   "--max-concurrent",
+                                                   "--memory-budget-mb",
+                                                   "--body-budget-mb",
+                                                   "--header-timeout-s",
+                                                   "--idle-timeout-s",
+                                                   "--request-timeout-s",
+                                                   "--token",
+                                                   "--log-level"};
+    return flags;
+}
+
+/// Applies one option and its value to `c`; the error's text, or empty.
+std::string apply(Config& c, const std::string& a, const std::string& v) {
+    std::size_t n = 0;
+    const bool numeric = to_size(v.c_str(), n);
+    if (a == "--host") {
+        c.host = v;
+    } else if (a == "--scene-root") {
+        c.scene_root = v;
+    } else if (a == "--data-dir") {
+        c.data_dir = v;
+    } else if (a == "--demo") {
+        c.demo.push_back(v);
+    } else if (a == "--token") {
+        if (v.empty())
+            return "--token must not be empty";
+        c.token = v;
+    } else if (a == "--log-level") {
+        const auto level = parse_log_level(v);
+        if (!level)
+            return "--log-level must be error, warn, info or debug, got \"" + v + "\"";
+        c.log_level = *level;
+    } else if (!numeric_flags().count(a)) {
+        return "unknown option " + a;
+    } else if (!numeric) {
+        return a + " needs a non-negative whole number, got \"" + v + "\"";
+    } else if (a == "--port") {
+        if (n > 65535)
+            return "--port must be at most 65535";
+        c.port = static_cast<int>(n);
+    } else if (a == "--threads" || a == "--max-connections") {
+        // cpp-httplib refuses descriptors past FD_SETSIZE (1024) with a 500.
+        if (n > 900)
+            return a + " must be at most 900";
+        c.threads = static_cast<int>(n);
+    } else if (a == "--max-body-mb") {
+        c.limits.max_body_bytes = n << 20;
+    } else if (a == "--max-rays") {
+        c.limits.max_rays = n;
+    } else if (a == "--max-points") {
+        c.limits.max_points = n;
+    } else if (a == "--max-pixels") {
+        c.limits.max_pixels = n;
+    } else if (a == "--max-triangles") {
+        c.limits.max_triangles = n;
+    } else if (a == "--max-concurrent") {
+        c.limits.max_concurrent = n;
+    } else if (a == "--memory-budget-mb") {
+        c.limits.memory_budget_bytes = n << 20;
+    } else if (a == "--body-budget-mb") {
+        c.limits.body_budget_bytes = n << 20;
+    } else if (a == "--header-timeout-s" || a == "--idle-timeout-s") {
+        if (n == 0 || n > 3600)
+            return a + " must be from 1 to 3600";
+        (a == "--header-timeout-s" ? c.limits.header_timeout_s : c.limits.idle_timeout_s) = n;
+    } else if (a == "--request-timeout-s") {
+        if (n > 86400)
+            return "--request-timeout-s must be at most 86400";
+        c.limits.request_timeout_s = n;
+    } else {
+        return "unknown option " + a;
+    }
+    return {};
+}
+
+}  // namespace
+
 std::optional<Config> parse_args(int argc, char** argv, std::string& message, bool& error) {
     Config c;
     error = false;
@@ -71,77 +184,37 @@ std::optional<Config> parse_args(int argc, char** argv, std::string& message, bo
         error = true;
         return std::nullopt;
     };
+    // The environment first, so that a flag given too overrides it (a container's image sets
+    // variables, its command line the exceptions).
+    for (const std::string& flag : env_flags()) {
+        const std::string var = env_name(flag);
+        const char* env = std::getenv(var.c_str());
+        if (!env || (flag == "--token" && *env == '\0'))
+            continue;
+        const std::string e = apply(c, flag, env);
+        if (!e.empty())
+            return fail(var + "=" + env + ": " + e);
+    }
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--help" || a == "-h") {
             message = usage();
             return std::nullopt;
         }
+        if (a == "--health-check") {
+            c.health_check = true;
+            continue;
+        }
         if (a == "--access-log") {
-            c.access_log = true;
+            // Kept from before --log-level: request lines are the info level.
+            c.log_level = std::max(c.log_level, LogLevel::info);
             continue;
         }
         if (i + 1 >= argc)
             return fail("missing value for " + a);
-        const char* v = argv[++i];
-        std::size_t n = 0;
-        const bool numeric = to_size(v, n);
-        if (a == "--host") {
-            c.host = v;
-        } else if (a == "--scene-root") {
-            c.scene_root = v;
-        } else if (a == "--data-dir") {
-            c.data_dir = v;
-        } else if (a == "--demo") {
-            c.demo.emplace_back(v);
-        } else if (a == "--token") {
-            c.token = v;
-            if (c.token.empty())
-                return fail("--token must not be empty");
-        } else if (!numeric_flags().count(a)) {
-            return fail("unknown option " + a);
-        } else if (!numeric) {
-            return fail(a + " needs a non-negative whole number, got \"" + v + "\"");
-        } else if (a == "--port") {
-            if (n > 65535)
-                return fail("--port must be at most 65535");
-            c.port = static_cast<int>(n);
-        } else if (a == "--threads" || a == "--max-connections") {
-            // cpp-httplib refuses descriptors past FD_SETSIZE (1024) with a 500.
-            if (n > 900)
-                return fail(a + " must be at most 900");
-            c.threads = static_cast<int>(n);
-        } else if (a == "--max-body-mb") {
-            c.limits.max_body_bytes = n << 20;
-        } else if (a == "--max-rays") {
-            c.limits.max_rays = n;
-        } else if (a == "--max-points") {
-            c.limits.max_points = n;
-        } else if (a == "--max-pixels") {
-            c.limits.max_pixels = n;
-        } else if (a == "--max-triangles") {
-            c.limits.max_triangles = n;
-        } else if (a == "--max-concurrent") {
-            c.limits.max_concurrent = n;
-        } else if (a == "--memory-budget-mb") {
-            c.limits.memory_budget_bytes = n << 20;
-        } else if (a == "--body-budget-mb") {
-            c.limits.body_budget_bytes = n << 20;
-        } else if (a == "--header-timeout-s" || a == "--idle-timeout-s") {
-            if (n == 0 || n > 3600)
-                return fail(a + " must be from 1 to 3600");
-            (a == "--header-timeout-s" ? c.limits.header_timeout_s : c.limits.idle_timeout_s) = n;
-        } else if (a == "--request-timeout-s") {
-            if (n > 86400)
-                return fail("--request-timeout-s must be at most 86400");
-            c.limits.request_timeout_s = n;
-        } else {
-            return fail("unknown option " + a);
-        }
-    }
-    if (c.token.empty()) {
-        if (const char* env = std::getenv("RAYCASTD_TOKEN"))
-            c.token = env;
+        const std::string e = apply(c, a, argv[++i]);
+        if (!e.empty())
+            return fail(e);
     }
     return c;
 }

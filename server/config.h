@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "server/request_log.h"
+
 namespace raycastd::server {
 
 struct Limits {
@@ -34,21 +36,30 @@ struct Config {
     std::string scene_root = ".";   ///< mesh `uri`s resolve inside this directory only
     std::string data_dir;           ///< registered scenes persist here ("" = memory only)
     std::vector<std::string> demo;  ///< scene documents registered at start-up
-    bool access_log = false;
+    /// What goes to stderr (server/request_log.h); info: a JSON line per request.
+    LogLevel log_level = LogLevel::info;
     /// Writes (POST /v1/scenes, DELETE /v1/scenes/{id}) need `Authorization: Bearer <token>`
     /// when set (--token, else $RAYCASTD_TOKEN); empty: writes are open.
     std::string token;
     Limits limits;
+    /// --health-check: ask a running server's GET /v1/health at host:port (0.0.0.0 and ::
+    /// meaning this machine) and exit 0 when it answers 200, 1 otherwise; for a container's
+    /// HEALTHCHECK, whose runtime image has no curl.
+    bool health_check = false;
 };
 
 /// Whether `host` names only this machine (127.0.0.0/8, ::1, localhost): a server bound
 /// elsewhere without a token lets anyone on the network register and delete scenes.
 bool is_loopback_host(const std::string& host);
 
-/// Parses argv (and $RAYCASTD_TOKEN when --token is absent). Returns nullopt and fills `message`
-/// for --help (exit 0) or a usage error
-/// (`error` set, exit 2).
+/// Parses argv over the environment: every option that takes a value may also be given as
+/// RAYCASTD_<OPTION> (--max-rays: RAYCASTD_MAX_RAYS), which a flag overrides; an empty
+/// RAYCASTD_TOKEN means no token. Returns nullopt and fills `message` for --help (exit 0) or a
+/// usage error (`error` set, exit 2), which names the variable when it came from one.
 std::optional<Config> parse_args(int argc, char** argv, std::string& message, bool& error);
+
+/// "--max-rays" → "RAYCASTD_MAX_RAYS".
+std::string env_name(const std::string& flag);
 
 /// The --help text.
 std::string usage();

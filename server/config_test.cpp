@@ -26,7 +26,7 @@ TEST(Config, DefaultsAndFlags) {
     EXPECT_EQ(c->threads, 3);
     EXPECT_EQ(c->limits.max_rays, 10u);
     EXPECT_EQ(c->demo.size(), 2u);
-    EXPECT_TRUE(c->access_log);
+    EXPECT_EQ(c->log_level, LogLevel::info);
 }
 
 // Every flag --help lists with a number is taken with one (--request-timeout-s and then
@@ -78,6 +78,52 @@ TEST(Config, TokenFromTheFlagOrTheEnvironment) {
     ::setenv("RAYCASTD_TOKEN", "from-env", 1);
     EXPECT_EQ(parse({}, msg, error)->token, "from-env");
     EXPECT_EQ(parse({"--token", "flag-wins"}, msg, error)->token, "flag-wins");
+    ::unsetenv("RAYCASTD_TOKEN");
+}
+
+TEST(Config, LogLevel) {
+    std::string msg;
+    bool error = false;
+    ::unsetenv("RAYCASTD_LOG_LEVEL");
+    EXPECT_EQ(parse({}, msg, error)->log_level, LogLevel::info);
+    EXPECT_EQ(parse({"--log-level", "debug"}, msg, error)->log_level, LogLevel::debug);
+    EXPECT_EQ(parse({"--log-level", "error"}, msg, error)->log_level, LogLevel::error);
+    EXPECT_FALSE(parse({"--log-level", "verbose"}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_NE(msg.find("error, warn, info or debug"), std::string::npos) << msg;
+    ::setenv("RAYCASTD_LOG_LEVEL", "warn", 1);
+    EXPECT_EQ(parse({}, msg, error)->log_level, LogLevel::warn);
+    EXPECT_EQ(parse({"--log-level", "info"}, msg, error)->log_level, LogLevel::info);
+    ::unsetenv("RAYCASTD_LOG_LEVEL");
+}
+
+TEST(Config, LimitsFromTheEnvironment) {
+    std::string msg;
+    bool error = false;
+    EXPECT_EQ(env_name("--max-rays"), "RAYCASTD_MAX_RAYS");
+    EXPECT_EQ(env_name("--memory-budget-mb"), "RAYCASTD_MEMORY_BUDGET_MB");
+    ::setenv("RAYCASTD_MAX_RAYS", "1234", 1);
+    ::setenv("RAYCASTD_MEMORY_BUDGET_MB", "2", 1);
+    ::setenv("RAYCASTD_DATA_DIR", "/data", 1);
+    auto c = parse({}, msg, error);
+    ASSERT_TRUE(c) << msg;
+    EXPECT_EQ(c->limits.max_rays, 1234u);
+    EXPECT_EQ(c->limits.memory_budget_bytes, 2u << 20);
+    EXPECT_EQ(c->data_dir, "/data");
+    EXPECT_EQ(parse({"--max-rays", "7"}, msg, error)->limits.max_rays, 7u);  // the flag wins
+    // A bad value is refused with the variable's name, as a bad flag is.
+    ::setenv("RAYCASTD_MAX_RAYS", "lots", 1);
+    EXPECT_FALSE(parse({}, msg, error));
+    EXPECT_TRUE(error);
+    EXPECT_NE(msg.find("RAYCASTD_MAX_RAYS=lots"), std::string::npos) << msg;
+    ::unsetenv("RAYCASTD_MAX_RAYS");
+    ::unsetenv("RAYCASTD_MEMORY_BUDGET_MB");
+    ::unsetenv("RAYCASTD_DATA_DIR");
+    // An empty RAYCASTD_TOKEN is no token (a template's blank), not an error.
+    ::setenv("RAYCASTD_TOKEN", "", 1);
+    auto open = parse({}, msg, error);
+    ASSERT_TRUE(open) << msg;
+    EXPECT_EQ(open->token, "");
     ::unsetenv("RAYCASTD_TOKEN");
 }
 

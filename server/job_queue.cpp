@@ -99,6 +99,7 @@ void JobQueue::run() {
                 continue;  // cancelled while queued
             job->state = JobState::running;
             job->started = Clock::now();
+            ++running_;
         }
         std::shared_ptr<const JobOutput> output;
         std::optional<ApiError> error;
@@ -125,9 +126,15 @@ void JobQueue::run() {
         }
         job->work = nullptr;  // releases the scene it held
         --pending_;
+        --running_;
         finished_.push_back(job->id);
         trim_finished();
     }
+}
+
+JobQueue::Counts JobQueue::counts() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return {pending_ - running_, running_};
 }
 
 void JobQueue::trim_finished() {

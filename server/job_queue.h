@@ -73,6 +73,12 @@ class JobQueue {
     /// id is unknown.
     std::optional<JobState> cancel_or_remove(const std::string& id);
 
+    struct Counts {
+        std::size_t queued = 0, running = 0;
+    };
+    /// Jobs waiting and rendering now (for GET /metrics).
+    Counts counts() const;
+
   private:
     struct Job;
     void run();
@@ -86,6 +92,7 @@ class JobQueue {
     std::deque<std::shared_ptr<Job>> queue_;
     std::deque<std::string> finished_;  ///< ids in the order they finished
     std::size_t pending_ = 0;           ///< queued + running
+    std::size_t running_ = 0;           ///< 0 or 1: one worker renders
     bool stopping_ = false;
     std::thread worker_;
 };

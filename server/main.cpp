@@ -1,4 +1,5 @@
-// raycastd: parse flags, build the App, listen; SIGINT/SIGTERM stop it cleanly.
+// raycastd: parse flags, build the App, listen; SIGINT/SIGTERM stop it cleanly. With
+// --health-check it serves nothing and asks a running server whether it is healthy.
 
 #include <atomic>
 #include <chrono>
@@ -11,6 +12,26 @@
 
 #include "server/app.h"
 
+namespace {
+
+/// --health-check: 0 when the server at `c`'s address answers GET /v1/health with 200.
+int health_check(const raycastd::server::Config& c) {
+    // A server listening on every address is reached on loopback.
+    const std::string host = c.host == "0.0.0.0" ? "127.0.0.1" : c.host == "::" ? "::1" : c.host;
+    httplib::Client client(host, c.port);
+    client.set_connection_timeout(3, 0);
+    client.set_read_timeout(3, 0);
+    const auto res = client.Get("/v1/health");
+    if (res && res->status == 200)
+        return 0;
+    std::cerr << "raycastd: health check of " << host << ":" << c.port << " failed: "
+              << (res ? "HTTP " + std::to_string(res->status) : httplib::to_string(res.error()))
+              << "\n";
+    return 1;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
     std::string message;
     bool error = false;
@@ -19,6 +40,8 @@ int main(int argc, char** argv) {
         (error ? std::cerr : std::cout) << message;
         return error ? 2 : 0;
     }
+    if (config->health_check)
+        return health_check(*config);
     // A client that hangs up mid-response, or a closed stdout, must not end the server.
     std::signal(SIGPIPE, SIG_IGN);
     // SIGINT/SIGTERM are taken by one thread with sigwait (blocked everywhere else, so every

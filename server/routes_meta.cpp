@@ -1,7 +1,5 @@
-// GET /v1/health, GET /v1/info, GET /v1/openapi.json
+// GET /v1/health, GET /v1/info, GET /v1/openapi.json, GET /metrics
 
-#include <fstream>
-#include <sstream>
 #include <thread>
 
 #include "engine/backend.h"
@@ -10,19 +8,6 @@
 #include "server/schema/json_writer.h"
 
 namespace raycastd::server {
-
-namespace {
-
-/// Resident set size of this process in bytes, from /proc/self/statm (0 where unavailable).
-std::size_t resident_bytes() {
-    std::ifstream f("/proc/self/statm");
-    std::size_t pages_total = 0, pages_resident = 0;
-    if (!(f >> pages_total >> pages_resident))
-        return 0;
-    return pages_resident * 4096;
-}
-
-}  // namespace
 
 void install_meta_routes(App& app) {
     app.on_get("/v1/health", [&app](const httplib::Request& req, httplib::Response& res) {
@@ -46,10 +31,17 @@ void install_meta_routes(App& app) {
                   {"max_concurrent", app.max_concurrent()},
                   {"memory_budget_bytes", c.limits.memory_budget_bytes}}},
                 {"requests_in_flight", app.requests_in_flight()},
-                {"memory_resident_bytes", resident_bytes()},
+                {"memory_resident_bytes", resident_memory_bytes()},
             };
             app.add_registry_info(info);
             send_json(res, info.dump());
+        });
+    });
+    // Prometheus' scrape (server/metrics.h); light work, so a server at its limit still says so.
+    app.on_get("/metrics", [&app](const httplib::Request& req, httplib::Response& res) {
+        app.handle(req, res, Work::light, [&] {
+            res.status = 200;
+            res.set_content(app.metrics_text(), Metrics::kContentType);
         });
     });
     app.on_get("/v1/openapi.json", [&app](const httplib::Request& req, httplib::Response& res) {

@@ -6,6 +6,7 @@
 #include "server/app.h"
 #include "server/job_queue.h"
 #include "server/request_cancel.h"
+#include "server/request_log.h"
 #include "server/schema/json_writer.h"
 #include "server/schema/render_doc.h"
 
@@ -20,13 +21,17 @@ constexpr std::size_t kJobsKept = 32;
 /// say how long it took and which rays it traced.
 engine::Result<JobOutput> render_output(const engine::QueryEngine& engine, const RenderRequest& req,
                                         engine::RenderProgress* progress,
-                                        const engine::CancelToken& cancel) {
+                                        const engine::CancelToken& cancel, Metrics& metrics) {
     engine::RenderOptions options = req.options;
     options.cancel = cancel;
     const auto rendered = engine::render(engine, options, progress);
     if (!rendered.ok())
         return rendered.status();
     const engine::RenderResult& r = *rendered;
+    note_rays(metrics, RayKind::primary, r.precision, r.counts.primary);
+    note_rays(metrics, RayKind::shadow, r.precision, r.counts.shadow);
+    note_rays(metrics, RayKind::reflected, r.precision, r.counts.reflected);
+    note_rays(metrics, RayKind::refracted, r.precision, r.counts.refracted);
     JobOutput out;
     out.body = engine::encode_image(r.image, req.format, engine::is_data_mode(req.options.shading));
     out.content_type = engine::mime_type(req.format);
@@ -87,6 +92,10 @@ void install_render_routes(App& app) {
     // The queue lives as long as the routes that use it (the App's server); its destructor
     // cancels what is still running and joins its worker.
     auto jobs = std::make_shared<JobQueue>(app.max_concurrent(), kJobsKept);
+    app.metrics().add_gauge("raycastd_jobs_queued", "gauge", "Async render jobs waiting.",
+                            [jobs] { return static_cast<double>(jobs->counts().queued); });
+    app.metrics().add_gauge("raycastd_jobs_running", "gauge", "Async render jobs rendering.",
+                            [jobs] { return static_cast<double>(jobs->counts().running); });
 
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/render)", [&app, jobs](const httplib::Request& req,
                                                                      httplib::Response& res) {
@@ -96,18 +105,19 @@ void install_render_routes(App& app) {
             const Json body = req.body.empty() ? Json() : parse_json(req.body);
             const RenderRequest r = parse_render_request(body, app.config().limits.max_pixels);
             if (!r.async) {
-                const auto out = render_output(*engine, r, nullptr, cancel.token());
+                const auto out = render_output(*engine, r, nullptr, cancel.token(), app.metrics());
                 send_output(res, cancel.check(out));
                 return;
             }
             // Not tied to this request: the job's own token, fired by DELETE /v1/jobs/{job}.
-            auto id = jobs->submit([engine, r](engine::RenderProgress& progress,
-                                               const engine::CancelToken& job_cancel) {
-                auto out = render_output(*engine, r, &progress, job_cancel);
-                if (!out.ok())
-                    throw from_status(out.status());  // the queue sees the token: cancelled
-                return std::move(out).value();
-            });
+            auto id = jobs->submit(
+                [engine, r, &metrics = app.metrics()](engine::RenderProgress& progress,
+                                                      const engine::CancelToken& job_cancel) {
+                    auto out = render_output(*engine, r, &progress, job_cancel, metrics);
+                    if (!out.ok())
+                        throw from_status(out.status());  // the queue sees the token: cancelled
+                    return std::move(out).value();
+                });
             if (!id) {
                 throw ApiError(ErrorCode::busy,
                                "too many render jobs queued or running; "

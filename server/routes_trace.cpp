@@ -6,6 +6,7 @@
 #include "engine/shade/whitted.h"
 #include "server/app.h"
 #include "server/request_cancel.h"
+#include "server/request_log.h"
 #include "server/schema/explain_doc.h"
 #include "server/schema/render_doc.h"
 
@@ -20,8 +21,13 @@ void install_trace_routes(App& app) {
             const TraceRequest t = parse_trace_request(parse_json(req.body));
             const engine::Whitted whitted(*engine, t.options);
             const auto tree = whitted.tree(t.ray, cancel.token());
-            send_json(res, write_trace_json(engine->scene(), cancel.check(tree),
-                                            engine->effective_precision(t.options.precision)));
+            const engine::RayTree& rt = cancel.check(tree);
+            const engine::Precision precision = engine->effective_precision(t.options.precision);
+            note_rays(RayKind::primary, precision, rt.counts.primary);
+            note_rays(RayKind::shadow, precision, rt.counts.shadow);
+            note_rays(RayKind::reflected, precision, rt.counts.reflected);
+            note_rays(RayKind::refracted, precision, rt.counts.refracted);
+            send_json(res, write_trace_json(engine->scene(), rt, precision));
         });
     });
     app.on_post("/v1/explain", [&app](const httplib::Request& req, httplib::Response& res) {

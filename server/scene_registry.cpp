@@ -1,8 +1,17 @@
 #include "server/scene_registry.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <random>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "server/api_error.h"
@@ -78,8 +87,87 @@ SceneInfo describe(const engine::QueryEngine& engine) {
     return i;
 }
 
+namespace {
+
+/// A saved copy's files are named after ids only: anything else is not looked up on disk.
+bool is_scene_id(const std::string& id) {
+    return !id.empty() && id.size() <= 128 && std::all_of(id.begin(), id.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    });
+}
+
+/// The writer a tmp/ entry belongs to: the instance token in "<stem>.<token>.<n>" (every name
+/// unique_tmp_name makes), or "" for a name of another shape.
+std::string tmp_owner(const std::string& name) {
+    const std::size_t last = name.rfind('.');
+    if (last == std::string::npos || last == 0)
+        return {};
+    const std::size_t before = name.rfind('.', last - 1);
+    if (before == std::string::npos)
+        return {};
+    return name.substr(before + 1, last - before - 1);
+}
+
+/// Whether the writer holding `lock` (locks/<token>.lock) is alive: it keeps an exclusive flock
+/// on the file while it runs, which the kernel drops when it dies, kill -9 included (on NFS
+/// too: Linux maps flock to the protocol's byte-range locks).
+bool writer_alive(const fs::path& lock) {
+    const int fd = ::open(lock.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return false;  // no lock file: its writer is gone (or predates locks)
+    const bool held = ::flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+    ::close(fd);
+    return held;
+}
+
+}  // namespace
+
 SceneRegistry::SceneRegistry(std::string data_dir, std::size_t memory_budget, Builder builder)
-    : data_dir_(std::move(data_dir)), budget_(memory_budget), builder_(std::move(builder)) {}
+    : data_dir_(std::move(data_dir)), budget_(memory_budget), builder_(std::move(builder)) {
+    std::random_device rd;
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%08x%08x", rd(), rd());
+    instance_ = buf;
+}
+
+SceneRegistry::~SceneRegistry() {
+    if (lock_fd_ >= 0)
+        ::close(lock_fd_);  // releases the flock: this writer's leftovers may be removed
+}
+
+bool SceneRegistry::hold_writer_lock(std::string& error) {
+    std::error_code ec;
+    fs::create_directories(fs::path(data_dir_) / "locks", ec);
+    const fs::path lock = fs::path(data_dir_) / "locks" / (instance_ + ".lock");
+    // Another replica starting may take a lock file for a dead writer's between its creation
+    // and its flock, and remove it: then it is made again (the path must name the locked file).
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        // Read-only: a file open for writing would keep the data dir's filesystem from being
+        // remounted read-only (and flock needs no write access).
+        const int fd = ::open(lock.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0644);
+        if (fd < 0)
+            break;
+        struct stat held {
+        }, named{};
+        if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 &&
+            ::stat(lock.c_str(), &named) == 0 && held.st_ino == named.st_ino &&
+            held.st_dev == named.st_dev) {
+            lock_fd_ = fd;
+            return true;
+        }
+        ::close(fd);
+    }
+    // A data dir that refuses writes cannot hold a lock; it is served read-only (open() warns).
+    if (errno == EROFS || errno == EACCES || errno == EPERM)
+        return true;
+    error = "cannot lock " + lock.string() + ": " + std::strerror(errno);
+    return false;
+}
+
+std::string SceneRegistry::unique_tmp_name(const std::string& stem) const {
+    static std::atomic<std::uint64_t> counter{0};
+    return stem + "." + instance_ + "." + std::to_string(counter++);
+}
 
 bool SceneRegistry::open(std::string& error) {
     if (data_dir_.empty())
@@ -91,14 +179,35 @@ bool SceneRegistry::open(std::string& error) {
         error = "cannot create data directory " + data_dir_ + ": " + ec.message();
         return false;
     }
-    // Anything in tmp/ is a write that never reached its rename: never acknowledged.
-    for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "tmp", ec)) {
-        fs::remove_all(d.path(), ec);
+    if (!hold_writer_lock(error))
+        return false;
+    // What is in tmp/ was never acknowledged. In a data dir shared by replicas some of it is
+    // another replica's write in progress: an entry goes only when its writer's lock is free
+    // (that process has ended).
+    const fs::path tmp_dir = fs::path(data_dir_) / "tmp";
+    const fs::path locks = fs::path(data_dir_) / "locks";
+    std::map<std::string, bool> alive = {{instance_, true}};
+    const auto owner_alive = [&](const std::string& owner) {
+        auto it = alive.find(owner);
+        if (it == alive.end())
+            it = alive.emplace(owner, writer_alive(locks / (owner + ".lock"))).first;
+        return it->second;
+    };
+    for (const auto& d : fs::directory_iterator(tmp_dir, ec)) {
+        std::error_code rm_ec;
+        if (!owner_alive(tmp_owner(d.path().filename().string())))
+            fs::remove_all(d.path(), rm_ec);
+    }
+    // Dead writers' locks go after their entries, so that a crash here leaves them dead.
+    for (const auto& d : fs::directory_iterator(locks, ec)) {
+        std::error_code rm_ec;
+        if (d.path().extension() == ".lock" && !owner_alive(d.path().stem().string()))
+            fs::remove(d.path(), rm_ec);
     }
     // A data dir that refuses writes (read-only mount, full disk) still serves what it holds;
     // registering and deleting will answer 507. Said once, loudly, at start-up.
     IoError probe_error;
-    const fs::path probe = fs::path(data_dir_) / "tmp" / (".probe." + std::to_string(::getpid()));
+    const fs::path probe = fs::path(data_dir_) / "tmp" / unique_tmp_name(".probe");
     if (!write_synced(probe, "probe", probe_error)) {
         std::fprintf(stderr,
                      "raycastd: WARNING: the data directory %s refuses writes (%s): its scenes "
@@ -107,25 +216,53 @@ bool SceneRegistry::open(std::string& error) {
                      data_dir_.c_str(), probe_error.message.c_str());
     }
     fs::remove(probe, ec);
-    std::lock_guard<std::mutex> lock(mu_);
+    std::vector<Entry> saved;
     for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "scenes", ec)) {
-        auto meta = read_file(d.path() / "meta.json");
-        if (!meta)
-            continue;
-        try {
-            const Json m = Json::parse(*meta);
-            Entry e;
-            e.info = info_from_json(m.at("info"));
-            e.request_key = m.at("request_key").get<std::string>();
-            e.file_sha = m.at("file_sha").get<std::map<std::string, std::string>>();
-            e.lru = lru_.end();
-            by_request_key_.emplace(e.request_key, e.info.id);
-            entries_.emplace(e.info.id, std::move(e));
-        } catch (const std::exception& ex) {
-            std::fprintf(stderr, "raycastd: skipping unreadable saved scene %s: %s\n",
-                         d.path().c_str(), ex.what());
-        }
+        if (auto e = read_saved(d.path().filename().string()))
+            saved.push_back(std::move(*e));
     }
+    std::lock_guard<std::mutex> lock(mu_);
+    for (Entry& e : saved) {
+        e.lru = lru_.end();
+        const std::string id = e.info.id;
+        by_request_key_.emplace(e.request_key, id);
+        entries_.emplace(id, std::move(e));
+    }
+    return true;
+}
+
+std::optional<SceneRegistry::Entry> SceneRegistry::read_saved(const std::string& id) const {
+    if (data_dir_.empty() || !is_scene_id(id))
+        return std::nullopt;
+    const fs::path dir = fs::path(data_dir_) / "scenes" / id;
+    auto meta = read_file(dir / "meta.json");
+    if (!meta)
+        return std::nullopt;
+    try {
+        const Json m = Json::parse(*meta);
+        Entry e;
+        e.info = info_from_json(m.at("info"));
+        e.request_key = m.at("request_key").get<std::string>();
+        e.file_sha = m.at("file_sha").get<std::map<std::string, std::string>>();
+        if (e.info.id != id)
+            throw std::runtime_error("its meta.json names " + e.info.id);
+        return e;
+    } catch (const std::exception& ex) {
+        std::fprintf(stderr, "raycastd: skipping unreadable saved scene %s: %s\n", dir.c_str(),
+                     ex.what());
+        return std::nullopt;
+    }
+}
+
+bool SceneRegistry::adopt_saved(const std::string& id) {
+    auto e = read_saved(id);
+    if (!e)
+        return false;
+    std::lock_guard<std::mutex> lock(mu_);
+    e->lru = lru_.end();  // lru_ is guarded by mu_: the iterator is taken under it
+    auto [it, inserted] = entries_.emplace(id, std::move(*e));
+    if (inserted)
+        by_request_key_.emplace(it->second.request_key, id);
     return true;
 }
 
@@ -179,48 +316,54 @@ SceneRegistry::Added SceneRegistry::add(const SceneSource& source, const FileSou
     e.info = describe(*engine);
     e.info.id = scene_id(request_key, e.file_sha);
     e.info.build_ms = build_ms;
-    e.lru = lru_.end();
     const std::string id = e.info.id;
     {
         std::lock_guard<std::mutex> lock(mu_);
+        e.lru = lru_.end();
         auto it = entries_.find(id);
         if (it != entries_.end())
             return {it->second.info, false};
     }
     IoError error;
-    if (!data_dir_.empty() && !persist(id, source, read_files, e, error)) {
-        if (error.storage_refused()) {
-            throw ApiError(ErrorCode::insufficient_storage,
-                           "cannot save the scene, so nothing was registered: " + error.message);
+    Saved saved = Saved::now;
+    if (!data_dir_.empty()) {
+        saved = persist(id, source, read_files, e, error);
+        if (saved == Saved::failed) {
+            if (error.storage_refused()) {
+                throw ApiError(
+                    ErrorCode::insufficient_storage,
+                    "cannot save the scene, so nothing was registered: " + error.message);
+            }
+            throw ApiError(ErrorCode::internal, "cannot save the scene: " + error.message);
         }
-        throw ApiError(ErrorCode::internal, "cannot save the scene: " + error.message);
     }
+    // Created: with a data dir, by the one writer whose rename published the copy (of all the
+    // threads and replicas posting the same content at once); without, by the first insert.
+    const bool published = data_dir_.empty() || saved == Saved::now;
     std::lock_guard<std::mutex> lock(mu_);
     auto [it, inserted] = entries_.emplace(id, std::move(e));
     if (!inserted)
-        return {it->second.info, false};  // a concurrent post of the same content
+        return {it->second.info, !data_dir_.empty() && published};  // a concurrent post
     by_request_key_.emplace(request_key, id);
     make_resident(it->second, std::move(engine));
     evict_over_budget(id);
-    return {it->second.info, true};
+    return {it->second.info, published};
 }
 
-bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
-                            const std::map<std::string, std::string>& files, const Entry& e,
-                            IoError& error) const {
-    static std::atomic<std::uint64_t> counter{0};
+SceneRegistry::Saved SceneRegistry::persist(const std::string& id, const SceneSource& source,
+                                            const std::map<std::string, std::string>& files,
+                                            const Entry& e, IoError& error) const {
     const fs::path scenes = fs::path(data_dir_) / "scenes";
     const fs::path final_dir = scenes / id;
     std::error_code ec;
     if (fs::exists(final_dir / "meta.json", ec))
-        return true;  // saved by an earlier run
-    const fs::path tmp = fs::path(data_dir_) / "tmp" /
-                         (id + "." + std::to_string(::getpid()) + "." + std::to_string(counter++));
+        return Saved::already;
+    const fs::path tmp = fs::path(data_dir_) / "tmp" / unique_tmp_name(id);
     fs::create_directories(tmp, ec);
     if (ec) {
         error.code = ec.value();
         error.message = "cannot create " + tmp.string() + ": " + ec.message();
-        return false;
+        return Saved::failed;
     }
     Json file_names = Json::object();
     std::size_t k = 0;
@@ -236,23 +379,37 @@ bool SceneRegistry::persist(const std::string& id, const SceneSource& source,
                        {"file_sha", e.file_sha},
                        {"files", file_names},
                        {"info", info_json(e.info)}};
+    // meta.json is written last: a directory is a saved copy once it holds one, and only a
+    // rename of a complete temp dir ever creates scenes/<id>.
     ok = ok && write_synced(tmp / "meta.json", meta.dump(1), error);
     ok = ok && sync_dir(tmp, error);
-    if (ok) {
-        fs::remove_all(final_dir, ec);  // a partial directory cannot exist, but be sure
-        ok = rename_synced(tmp, final_dir, error);
-    }
-    if (!ok)
+    if (!ok) {
         fs::remove_all(tmp, ec);
-    return ok;
+        return Saved::failed;
+    }
+    if (rename_synced(tmp, final_dir, error))
+        return Saved::now;
+    fs::remove_all(tmp, ec);
+    // rename(2) onto a directory that is not empty fails (ENOTEMPTY, or EEXIST): another writer
+    // published the same id first. Its copy has the same bytes (the id is their hash), and it
+    // is never replaced, so that a replica reading it meanwhile reads whole files.
+    if (fs::exists(final_dir / "meta.json", ec)) {
+        error = {};
+        return Saved::already;
+    }
+    return Saved::failed;
 }
 
 std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::string& id) {
     const fs::path dir = fs::path(data_dir_) / "scenes" / id;
     auto meta_text = read_file(dir / "meta.json");
     auto body = read_file(dir / "body");
-    if (!meta_text || !body)
+    if (!meta_text || !body) {
+        std::error_code ec;
+        if (!fs::exists(dir, ec))
+            return nullptr;  // deleted through another replica sharing the data dir
         throw ApiError(ErrorCode::internal, "saved copy of " + id + " is missing");
+    }
     const Json meta = Json::parse(*meta_text);
     const auto names = meta.at("files").get<std::map<std::string, std::string>>();
     // Replay exactly the bytes the scene was built from, not today's files under the root.
@@ -271,22 +428,33 @@ std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::str
 }
 
 std::shared_ptr<const engine::QueryEngine> SceneRegistry::get(const std::string& id) {
+    bool known = false;
     {
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
-        if (it == entries_.end())
-            return nullptr;
-        if (it->second.engine) {
-            touch(it->second);
-            refresh_bytes(it->second);
-            return it->second.engine;
+        if (it != entries_.end()) {
+            if (it->second.engine) {
+                touch(it->second);
+                refresh_bytes(it->second);
+                return it->second.engine;
+            }
+            known = true;
         }
     }
+    // Unknown here: perhaps registered by another replica sharing the data dir.
+    if (!known && !adopt_saved(id))
+        return nullptr;
     // Rebuilt outside the lock: other scenes stay available meanwhile. Two threads may rebuild
     // the same scene at once; the first to finish is kept.
     auto engine = rebuild(id);
     std::lock_guard<std::mutex> lock(mu_);
     auto it = entries_.find(id);
+    if (!engine) {
+        // Its saved copy was deleted through another replica: deleted here too.
+        if (it != entries_.end() && !it->second.engine)
+            forget(it);
+        return nullptr;
+    }
     if (it == entries_.end())
         return engine;  // deleted meanwhile: serve this request only
     if (!it->second.engine)
@@ -335,7 +503,15 @@ void SceneRegistry::evict_over_budget(const std::string& keep) {
     }
 }
 
-std::optional<SceneInfo> SceneRegistry::info(const std::string& id) const {
+std::optional<SceneInfo> SceneRegistry::info(const std::string& id) {
+    {
+        std::lock_guard<std::mutex> lock(mu_);
+        auto it = entries_.find(id);
+        if (it != entries_.end())
+            return it->second.info;
+    }
+    if (!adopt_saved(id))
+        return std::nullopt;
     std::lock_guard<std::mutex> lock(mu_);
     auto it = entries_.find(id);
     if (it == entries_.end())
@@ -343,7 +519,21 @@ std::optional<SceneInfo> SceneRegistry::info(const std::string& id) const {
     return it->second.info;
 }
 
-std::vector<SceneInfo> SceneRegistry::list() const {
+std::vector<SceneInfo> SceneRegistry::list() {
+    // Scenes other replicas saved in a shared data dir since this one opened it are listed too.
+    if (!data_dir_.empty()) {
+        std::error_code ec;
+        for (const auto& d : fs::directory_iterator(fs::path(data_dir_) / "scenes", ec)) {
+            const std::string id = d.path().filename().string();
+            bool known = false;
+            {
+                std::lock_guard<std::mutex> lock(mu_);
+                known = entries_.count(id) > 0;
+            }
+            if (!known)
+                adopt_saved(id);
+        }
+    }
     std::lock_guard<std::mutex> lock(mu_);
     std::vector<SceneInfo> out;
     for (const auto& [id, e] : entries_)
@@ -351,8 +541,26 @@ std::vector<SceneInfo> SceneRegistry::list() const {
     return out;
 }
 
+void SceneRegistry::forget(std::map<std::string, Entry>::iterator it) {
+    Entry& e = it->second;
+    if (e.engine)
+        resident_bytes_ -= e.info.memory_bytes;
+    if (e.lru != lru_.end())
+        lru_.erase(e.lru);
+    auto range = by_request_key_.equal_range(e.request_key);
+    for (auto k = range.first; k != range.second; ++k) {
+        if (k->second == it->first) {
+            by_request_key_.erase(k);
+            break;
+        }
+    }
+    entries_.erase(it);
+}
+
 bool SceneRegistry::remove(const std::string& id) {
-    const fs::path deleted = fs::path(data_dir_) / "tmp" / (id + ".deleted");
+    const fs::path deleted = fs::path(data_dir_) / "tmp" / unique_tmp_name(id + ".deleted");
+    if (!info(id))  // a scene saved by another replica can be deleted through this one
+        return false;
     {
         std::lock_guard<std::mutex> lock(mu_);
         auto it = entries_.find(id);
@@ -374,23 +582,11 @@ bool SceneRegistry::remove(const std::string& id) {
                         ", so the scene stays registered: " + error.message);
             }
         }
-        Entry& e = it->second;
-        if (e.engine)
-            resident_bytes_ -= e.info.memory_bytes;
-        if (e.lru != lru_.end())
-            lru_.erase(e.lru);
-        auto range = by_request_key_.equal_range(e.request_key);
-        for (auto k = range.first; k != range.second; ++k) {
-            if (k->second == id) {
-                by_request_key_.erase(k);
-                break;
-            }
-        }
-        entries_.erase(it);
+        forget(it);
     }
     if (!data_dir_.empty()) {
         std::error_code ec;
-        fs::remove_all(deleted, ec);  // what stays is removed by the next open()
+        fs::remove_all(deleted, ec);  // what stays is removed by a later open()
     }
     return true;
 }

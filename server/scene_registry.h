@@ -13,6 +13,14 @@
 //    was built from.
 //  * A memory budget evicts the least recently used scenes from memory; they are rebuilt from
 //    their saved copies on next use. Without a data directory nothing is evicted.
+//  * Replicas may share one data directory (docs/deploy.md): an id this registry does not know
+//    is looked up there before it is called unknown, so any replica serves any scene another
+//    registered. Concurrent writers of one id (two replicas, or two threads) each write a
+//    temp dir of their own (a name unique across hosts and containers, where pids repeat) and
+//    publish it by rename(2), and holds a lock (locks/<token>.lock) while it lives, so that a
+//    replica starting removes only the leftovers of writers that have died. The loser of a
+//    race finds the winner's complete copy in place, which has the same bytes (the id is
+//    their hash), and keeps it. Nothing ever removes a published copy except DELETE.
 
 #include <chrono>
 #include <functional>
@@ -51,6 +59,9 @@ class SceneRegistry {
         const SceneSource& source, const FileSource& files)>;
 
     SceneRegistry(std::string data_dir, std::size_t memory_budget, Builder builder);
+    ~SceneRegistry();
+    SceneRegistry(const SceneRegistry&) = delete;
+    SceneRegistry& operator=(const SceneRegistry&) = delete;
 
     /// Loads the index of the scenes saved in the data directory (their engines are built on
     /// first use). False with `error` when the directory cannot be used.
@@ -64,10 +75,14 @@ class SceneRegistry {
     /// (insufficient_storage when the data dir refuses the saved copy: nothing is registered).
     Added add(const SceneSource& source, const FileSource& root_files);
 
-    /// The prepared scene, rebuilt from disk if it was evicted; nullptr for an unknown id.
+    /// The prepared scene, rebuilt from disk if it was evicted or was saved by another replica
+    /// sharing the data dir; nullptr for an unknown id (or one whose saved copy another replica
+    /// has deleted since).
     std::shared_ptr<const engine::QueryEngine> get(const std::string& id);
-    std::optional<SceneInfo> info(const std::string& id) const;
-    std::vector<SceneInfo> list() const;
+    /// The scene's summary (looked up in the data dir too); nullopt for an unknown id.
+    std::optional<SceneInfo> info(const std::string& id);
+    /// Every scene known here and saved in the data dir, by id.
+    std::vector<SceneInfo> list();
     /// Deletes the scene's saved copy, then forgets the scene; false for an unknown id. Throws
     /// ApiError insufficient_storage, with the scene still registered, when the data dir
     /// refuses the deletion (read-only).
@@ -86,17 +101,37 @@ class SceneRegistry {
         std::list<std::string>::iterator lru;
     };
 
+    /// Reads the saved copy's index entry (meta.json) into an Entry; nullopt when there is
+    /// none (or it is unreadable: said on stderr).
+    std::optional<Entry> read_saved(const std::string& id) const;
+    /// Makes a scene saved in the data dir (by another replica) known here; false when the dir
+    /// has no such scene.
+    bool adopt_saved(const std::string& id);
+    /// nullptr when the saved copy is gone (deleted through another replica).
     std::shared_ptr<const engine::QueryEngine> rebuild(const std::string& id);
+    /// Drops an entry and its LRU place, request key and bytes (with mu_ held).
+    void forget(std::map<std::string, Entry>::iterator it);
     void make_resident(Entry& e, std::shared_ptr<const engine::QueryEngine> engine);
     void touch(Entry& e);
     /// Takes e's memory_bytes anew (it grows when a query builds a lazy BVH).
     void refresh_bytes(Entry& e);
     void evict_over_budget(const std::string& keep);
-    bool persist(const std::string& id, const SceneSource& source,
-                 const std::map<std::string, std::string>& files, const Entry& e,
-                 IoError& error) const;
+    enum class Saved { now, already, failed };
+    /// Saves the scene's copy: `already` when the data dir holds it (an earlier run, another
+    /// replica, or a concurrent writer that published first).
+    Saved persist(const std::string& id, const SceneSource& source,
+                  const std::map<std::string, std::string>& files, const Entry& e,
+                  IoError& error) const;
+    /// Takes locks/<instance>.lock (an exclusive flock held while this registry lives), by which
+    /// other replicas opening the data dir tell this one's writes in progress from a dead
+    /// writer's leftovers. False with `error` when the lock cannot be taken in a writable dir.
+    bool hold_writer_lock(std::string& error);
+    /// A name in tmp/ no other writer uses, on any host sharing the data dir.
+    std::string unique_tmp_name(const std::string& stem) const;
 
     std::string data_dir_;
+    std::string instance_;  ///< random, per registry: tmp names of replicas never collide
+    int lock_fd_ = -1;      ///< holds the flock of locks/<instance_>.lock
     std::size_t budget_;
     Builder builder_;
     mutable std::mutex mu_;

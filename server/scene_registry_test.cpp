@@ -5,7 +5,9 @@
 #include <fstream>
 #include <thread>
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include "engine/query/intersect.h"
@@ -95,11 +97,84 @@ TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
     ASSERT_TRUE(engine);
     EXPECT_EQ(g.builds.load(), 1);
     EXPECT_EQ(engine->scene().objects.size(), 2u);
-    // Leftovers of an unfinished write are ignored and cleaned up.
-    fs::create_directories(dir.path / "tmp" / "sc_half.123.0");
-    Fixture h(dir.path.string());
-    EXPECT_EQ(h.registry.size(), 1u);
-    EXPECT_FALSE(fs::exists(dir.path / "tmp" / "sc_half.123.0"));
+    // Leftovers of a writer that died are ignored and cleaned up; the temp files of a writer
+    // still running (another replica on a shared data dir, holding its lock) are left alone.
+    const fs::path dead_write = dir.path / "tmp" / "sc_half.123.0";
+    const fs::path live_write = dir.path / "tmp" / "sc_live.feedface.0";
+    const fs::path live_lock = dir.path / "locks" / "feedface.lock";
+    fs::create_directories(dead_write);
+    fs::create_directories(live_write);
+    const int fd = ::open(live_lock.c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+    {
+        Fixture h(dir.path.string());
+        EXPECT_EQ(h.registry.size(), 1u);
+        EXPECT_FALSE(fs::exists(dead_write));
+        EXPECT_TRUE(fs::exists(live_write));
+        EXPECT_TRUE(fs::exists(live_lock));
+    }
+    ::close(fd);  // that writer ends (as kill -9 would end it): its leftovers go next time
+    Fixture k(dir.path.string());
+    EXPECT_FALSE(fs::exists(live_write));
+    EXPECT_FALSE(fs::exists(live_lock));
+}
+
+// Two registries on one data dir, as two replicas are: each serves what the other registered,
+// on demand, and a scene deleted through one is gone from the other once it looks on disk.
+TEST(SceneRegistry, ReplicasShareADataDir) {
+    TempDir dir;
+    Fixture a(dir.path.string());
+    Fixture b(dir.path.string());  // opened before a registers anything
+    const auto added = a.registry.add({"application/json", kSpheres}, no_files());
+    ASSERT_TRUE(added.created);
+    const std::string id = added.info.id;
+    auto info = b.registry.info(id);
+    ASSERT_TRUE(info);
+    EXPECT_EQ(info->spheres, 2u);
+    auto engine = b.registry.get(id);
+    ASSERT_TRUE(engine);
+    EXPECT_EQ(engine->scene().objects.size(), 2u);
+    // The same content posted to b: already registered (by a), built but not saved again.
+    EXPECT_FALSE(b.registry.add({"application/json", kSpheres}, no_files()).created);
+    const auto other = a.registry.add(
+        {"application/json", R"({"objects":[{"type":"sphere","center":[0,0,5],"radius":1}]})"},
+        no_files());
+    ASSERT_EQ(b.registry.list().size(), 2u);  // the listing looks on disk too
+    EXPECT_FALSE(b.registry.get("sc_not_a_scene"));
+    EXPECT_FALSE(b.registry.info("../tmp"));  // only ids are looked up on disk
+    // b knows `other` (listed) but has not loaded it; a deletes it; b answers unknown.
+    ASSERT_TRUE(a.registry.remove(other.info.id));
+    EXPECT_FALSE(b.registry.get(other.info.id));
+    EXPECT_EQ(b.registry.size(), 1u);
+}
+
+// Threads of two registries racing to save the same scene into one data dir: every add
+// succeeds, exactly one reports it created, the saved copy is whole, and tmp/ is left empty.
+TEST(SceneRegistry, ConcurrentWritersOfOneIdCannotCorruptIt) {
+    TempDir dir;
+    Fixture a(dir.path.string());
+    Fixture b(dir.path.string());
+    std::atomic<int> created{0}, failed{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 8; ++t) {
+        threads.emplace_back([&, t] {
+            try {
+                auto& r = (t % 2 ? a : b).registry;
+                created += r.add({"application/json", kSpheres}, no_files()).created ? 1 : 0;
+            } catch (const std::exception&) {
+                ++failed;
+            }
+        });
+    }
+    for (auto& t : threads)
+        t.join();
+    EXPECT_EQ(failed.load(), 0);
+    EXPECT_EQ(created.load(), 1);  // the one whose rename published the copy
+    EXPECT_TRUE(fs::is_empty(dir.path / "tmp"));
+    Fixture c(dir.path.string());
+    ASSERT_EQ(c.registry.size(), 1u);
+    EXPECT_TRUE(c.registry.get(c.registry.list().at(0).id));
 }
 
 // A scene that cannot be saved is not acknowledged: the error names what failed, and the

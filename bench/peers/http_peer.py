@@ -48,7 +48,12 @@ class RaycastdServer:
     def __init__(self, binary: str, log_path: str) -> None:
         self.log = open(log_path, "w")
         self.proc = subprocess.Popen(
-            [binary, "--port", "0"], stdout=subprocess.PIPE, stderr=self.log, text=True
+            # warn: the figures are the server's work, comparable with those before request
+            # lines existed (at info a one-ray request also writes its line: ~15-35% of it).
+            [binary, "--port", "0", "--log-level", "warn"],
+            stdout=subprocess.PIPE,
+            stderr=self.log,
+            text=True,
         )
         line = self.proc.stdout.readline() if self.proc.stdout else ""
         prefix = "raycastd listening on http://"

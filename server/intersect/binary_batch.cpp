@@ -3,6 +3,7 @@
 #include <atomic>
 #include <string>
 
+#include "server/request_log.h"
 #include "server/schema/query_doc.h"
 
 namespace raycastd::server {
@@ -90,11 +91,13 @@ void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q
             stopped();
         if (bad < n)
             throw_invalid_ray(ray_at(s.body, q.dtype, bad), bad);
+        note_rays(ray_kind(mode), engine.effective_precision(q.options.precision), n);
     } else {
         decode_rays(s.body, q.dtype, max_rays, s.rays);
         if (!engine.intersect(s.rays, q.options, s.result).ok())
             stopped();  // the only Status intersect() returns: its token fired
         encode_results(s.result, mode, q.dtype, s.rays.size(), s.out);
+        note_rays(ray_kind(mode), engine.effective_precision(q.options.precision), s.rays.size());
     }
     const std::size_t bytes = s.out.size();
     // The provider keeps the scratch (and so `out`) until the response has been written.

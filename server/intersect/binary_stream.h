@@ -102,6 +102,7 @@ class StreamedBatch {
 
     engine::Precision precision() const { return precision_; }
     engine::Mode mode() const { return options_.mode; }
+    std::size_t rays() const { return rays_; }
 
   private:
     // A chunk's life once its bytes are in; tracing is claimed with a compare-and-swap by

@@ -14,6 +14,7 @@
 #include "server/intersect/binary_batch.h"
 #include "server/intersect/binary_stream.h"
 #include "server/request_cancel.h"
+#include "server/request_log.h"
 #include "server/schema/query_doc.h"
 #include "server/schema/ray_scanner.h"
 #include "server/scratch.h"
@@ -29,6 +30,8 @@ void answer_json(const engine::QueryEngine& engine, const IntersectRequest& req,
     engine::QueryOptions options = req.options;
     options.cancel = cancel.token();
     cancel.check(engine.intersect(req.rays, options, result));
+    note_rays(ray_kind(options.mode), engine.effective_precision(options.precision),
+              req.rays.size());
     send_json(res, write_intersect_response(engine.scene(), req, result));
 }
 
@@ -121,6 +124,8 @@ void answer_registered(App& app, const httplib::Request& req, httplib::Response&
             cancel.stopped();
         }
         stream->finish();
+        // Counted as submitted: the rays of a streamed batch are traced while it is written.
+        note_rays(ray_kind(stream->mode()), stream->precision(), stream->rays());
         send_streamed_answer(std::move(stream), app.extend_work_slot(), res);
         return;
     }

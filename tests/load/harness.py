@@ -435,8 +435,10 @@ def list_tree(root):
 def check_data_dir(root, listed_ids):
     """Problems with a data dir's layout (server/scene_registry.cpp): DIR/scenes/<id>/ holds
     body, meta.json and file0..N (copies of files the scene read); DIR/tmp/ holds writes in
-    progress (<id>.<pid>.<n>/) and deletions in progress (<id>.deleted/), and is emptied when a
-    server opens the dir. Returns a list of strings; empty when the layout is clean."""
+    progress (<id>.<token>.<n>/) and deletions in progress (<id>.deleted.<token>.<n>/), and a
+    server opening the dir empties it of the entries of writers that have ended; DIR/locks/
+    holds one <token>.lock per server using the dir (flocked while it runs). Returns a list of
+    strings; empty when the layout is clean."""
     problems = []
     tmp = os.path.join(root, "tmp")
     scenes = os.path.join(root, "scenes")
@@ -445,8 +447,12 @@ def check_data_dir(root, listed_ids):
         if left:
             problems.append("tmp/ not empty: %s" % left[:5])
     for entry in sorted(os.listdir(root)) if os.path.isdir(root) else []:
-        if entry not in ("scenes", "tmp"):
+        if entry not in ("scenes", "tmp", "locks"):
             problems.append("unexpected entry in data dir: %s" % entry)
+    locks = os.path.join(root, "locks")
+    for name in sorted(os.listdir(locks)) if os.path.isdir(locks) else []:
+        if not name.endswith(".lock") or os.path.isdir(os.path.join(locks, name)):
+            problems.append("locks/%s: unexpected entry" % name)
     on_disk = set()
     if os.path.isdir(scenes):
         for sid in sorted(os.listdir(scenes)):
