@@ -5,7 +5,7 @@
 # package playwright-core pinned in tests/browser/package-lock.json (`npm ci` there, only when
 # the installed copy differs from the lock).
 #   scripts/setup.sh          build + test dependencies (Python: the client's tests, black;
-#                             clang and its libFuzzer runtime: the fuzz preset, tests/fuzz;
+#                             clang and its libFuzzer runtime: the asan, tsan and fuzz presets;
 #                             prometheus-client, yaml and nginx: tests/deploy, tests/scale)
 #   scripts/setup.sh --bench  also the benchmark peers (Open3D, NumPy, POV-Ray, matplotlib)
 set -euo pipefail

@@ -150,6 +150,10 @@ void Metrics::count_rays(RayKind kind, engine::Precision precision, std::uint64_
     rays_[k * kPrecisions + p].fetch_add(n, kRelaxed);
 }
 
+void Metrics::count_points(engine::PointQuery query, std::uint64_t n) {
+    points_[static_cast<std::size_t>(query)].fetch_add(n, kRelaxed);
+}
+
 void Metrics::count_error(ErrorCode code) {
     errors_[static_cast<std::size_t>(code)].fetch_add(1, kRelaxed);
 }
@@ -198,6 +202,13 @@ std::string Metrics::render() const {
                    "\",precision=\"" + engine::to_string(static_cast<engine::Precision>(p)) +
                    "\"} " + std::to_string(rays_[k * kPrecisions + p].load(kRelaxed)) + "\n";
         }
+    }
+    header(out, "raycastd_points_total", "counter",
+           "Points answered by the points routes, by query.");
+    for (std::size_t q = 0; q < kPointQueries; ++q) {
+        out += std::string("raycastd_points_total{query=\"") +
+               engine::to_string(static_cast<engine::PointQuery>(q)) + "\"} " +
+               std::to_string(points_[q].load(kRelaxed)) + "\n";
     }
     header(out, "raycastd_api_errors_total", "counter",
            "Error answers by API error code (docs/api.md).");

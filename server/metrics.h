@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/points/point_queries.h"
 #include "engine/query_types.h"
 #include "server/api_error.h"
 
@@ -64,6 +65,8 @@ class Metrics {
     /// One answered request: its route index, HTTP status and time from head to last byte.
     void observe_request(std::size_t route, int status, double seconds);
     void count_rays(RayKind kind, engine::Precision precision, std::uint64_t n);
+    /// Points answered by the points routes, by query.
+    void count_points(engine::PointQuery query, std::uint64_t n);
     /// An API error answered (by code): busy and timeout among them.
     void count_error(ErrorCode code);
     /// The API errors answered with `code` so far.
@@ -90,11 +93,12 @@ class Metrics {
         std::string name, type, help;
         std::function<double()> read;
     };
-    static constexpr std::size_t kRayKinds = 8, kPrecisions = 3;
+    static constexpr std::size_t kRayKinds = 8, kPrecisions = 3, kPointQueries = 4;
     static constexpr std::size_t kErrorCodes = static_cast<std::size_t>(ErrorCode::internal) + 1;
 
     std::deque<Route> routes_;  ///< a deque: entries never move once added
     std::array<std::atomic<std::uint64_t>, kRayKinds * kPrecisions> rays_{};
+    std::array<std::atomic<std::uint64_t>, kPointQueries> points_{};
     std::array<std::atomic<std::uint64_t>, kErrorCodes> errors_{};
     Histogram scene_build_;
     std::vector<Gauge> gauges_;

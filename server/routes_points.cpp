@@ -17,10 +17,11 @@ namespace {
 /// Answers a parsed JSON request over `engine`, stopping when `cancel` fires
 /// (server/request_cancel.h).
 void answer_json(const engine::QueryEngine& engine, PointsRequest req, const RequestCancel& cancel,
-                 httplib::Response& res) {
+                 Metrics& metrics, httplib::Response& res) {
     std::vector<engine::PointAnswer> answers;
     req.options.cancel = cancel.token();
     cancel.check(engine::query_points(engine, req.points, req.options, answers));
+    metrics.count_points(req.options.query, req.points.size());
     send_json(res, write_points_response(engine.scene(), req.options.query, answers));
 }
 
@@ -53,13 +54,15 @@ BinaryPointsQuery parse_binary_points_query(const httplib::Request& req) {
 }
 
 void answer_binary(const engine::QueryEngine& engine, const httplib::Request& req,
-                   std::size_t max_points, const RequestCancel& cancel, httplib::Response& res) {
+                   std::size_t max_points, const RequestCancel& cancel, Metrics& metrics,
+                   httplib::Response& res) {
     BinaryPointsQuery q = parse_binary_points_query(req);
     std::vector<engine::Vec3d> points;
     decode_points(req.body, q.dtype, max_points, points);
     std::vector<engine::PointAnswer> answers;
     q.options.cancel = cancel.token();
     cancel.check(engine::query_points(engine, points, q.options, answers));
+    metrics.count_points(q.options.query, points.size());
     std::string out;
     encode_point_answers(answers, q.options.query, q.dtype, out);
     res.status = 200;
@@ -82,7 +85,7 @@ void install_points_routes(App& app) {
             auto engine = cancel.guard(
                 [&] { return app.models().build_stateless_scene(body, cancel.token()); });
             answer_json(*engine, parse_points_request(body, "", app.config().limits.max_points),
-                        cancel, res);
+                        cancel, app.metrics(), res);
         });
     });
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/points)", [&app](const httplib::Request& req,
@@ -92,11 +95,11 @@ void install_points_routes(App& app) {
             auto engine = app.scene_or_404(req.matches[1]);
             const std::size_t max_points = app.config().limits.max_points;
             if (is_binary(req)) {
-                answer_binary(*engine, req, max_points, cancel, res);
+                answer_binary(*engine, req, max_points, cancel, app.metrics(), res);
                 return;
             }
             answer_json(*engine, parse_points_request(parse_json(req.body), "", max_points), cancel,
-                        res);
+                        app.metrics(), res);
         });
     });
 }

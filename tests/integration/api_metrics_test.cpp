@@ -66,6 +66,10 @@ TEST_F(Metrics, CountersMoveWithTheRequestsServed) {
                           R"({"width":8,"height":4,"precision":"refined"})", "application/json");
     ASSERT_TRUE(render);
     ASSERT_EQ(render->status, 200) << render->body;
+    const Json points = {{"points", {{0, 0, 0}, {0, 0, 20}}}, {"query", "signed_distance"}};
+    auto pts = c->Post(("/v1/scenes/" + id + "/points").c_str(), points.dump(), "application/json");
+    ASSERT_TRUE(pts);
+    ASSERT_EQ(pts->status, 200) << pts->body;
     auto missing = c->Post("/v1/scenes/sc_nosuchscene/intersect", rays.dump(), "application/json");
     ASSERT_TRUE(missing);
     EXPECT_EQ(missing->status, 404);
@@ -90,6 +94,8 @@ TEST_F(Metrics, CountersMoveWithTheRequestsServed) {
     // 8 × 4 camera rays at 1 sample per pixel, and shadow rays toward the light for the hits.
     EXPECT_EQ(sample(after, R"(raycastd_rays_total{kind="primary",precision="refined"})"), 32);
     EXPECT_EQ(sample(after, R"(raycastd_api_errors_total{code="scene_not_found"})"), 1);
+    EXPECT_EQ(sample(after, R"(raycastd_points_total{query="signed_distance"})"), 2);
+    EXPECT_EQ(sample(after, R"(raycastd_points_total{query="closest"})"), 0);
     // The route is the pattern: the id asked for appears nowhere in the scrape.
     EXPECT_EQ(after.find("sc_nosuchscene"), std::string::npos);
     EXPECT_EQ(after.find(id), std::string::npos);
