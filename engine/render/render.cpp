@@ -166,6 +166,37 @@ const char* to_string(ShadingMode mode) {
     return "phong";
 }
 
+std::optional<Lighting> lighting_from_name(std::string_view name) {
+    if (name == "scene")
+        return Lighting::scene;
+    if (name == "headlight")
+        return Lighting::headlight;
+    if (name == "auto")
+        return Lighting::automatic;
+    return std::nullopt;
+}
+
+const char* to_string(Lighting lighting) {
+    switch (lighting) {
+        case Lighting::scene:
+            return "scene";
+        case Lighting::headlight:
+            return "headlight";
+        case Lighting::automatic:
+            return "auto";
+    }
+    return "auto";
+}
+
+Lighting resolve_lighting(const Scene& scene, Lighting asked) {
+    if (asked != Lighting::automatic)
+        return asked;
+    // An ambient light alone does not count: it would still give a flat silhouette.
+    const bool lit = std::any_of(scene.lights.begin(), scene.lights.end(),
+                                 [](const Light& l) { return l.type != LightType::ambient; });
+    return lit ? Lighting::scene : Lighting::headlight;
+}
+
 std::size_t tile_count(const RenderOptions& o) {
     const auto tiles = [&](int n) {
         return static_cast<std::size_t>((n + o.tile_size - 1) / o.tile_size);
@@ -176,11 +207,19 @@ std::size_t tile_count(const RenderOptions& o) {
 Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
                             RenderProgress* progress) {
     const auto start = std::chrono::steady_clock::now();
-    WhittedOptions wo = opt.whitted;
-    wo.bvh_for_small_scenes = true;
-    const Whitted whitted(engine, wo);
     const Scene& scene = engine.scene();
     const Camera cam = resolve_camera(scene, opt.camera);
+    const Lighting lighting = resolve_lighting(scene, opt.lighting);
+    WhittedOptions wo = opt.whitted;
+    wo.bvh_for_small_scenes = true;
+    wo.headlight = std::nullopt;
+    if (lighting == Lighting::headlight) {
+        // The camera's view direction; a degenerate camera (look_at = position) has none.
+        const Vec3d f = normalize(cam.look_at - cam.position);
+        if (is_finite(f) && length(f) > 0.0)
+            wo.headlight = f;
+    }
+    const Whitted whitted(engine, wo);
     const Bounds3 b = scene.bounds();
     const double radius = b.empty() ? 1.0 : 0.5 * length(b.diagonal());
     const double dist = b.empty() ? 0.0 : length(b.center() - cam.position);
@@ -195,6 +234,7 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
 
     RenderResult out;
     out.precision = whitted.effective_precision();
+    out.lighting = lighting;
     // Every pixel is written by its tile: the image is not zero-filled first.
     out.image = Image(opt.width, opt.height, Image::Fill::unset);
     const int tiles_x = (opt.width + opt.tile_size - 1) / opt.tile_size;

@@ -27,12 +27,26 @@ inline bool is_data_mode(ShadingMode mode) {
     return mode != ShadingMode::phong;
 }
 
+/// Which lights a phong render uses (docs/api.md, render `lighting`): the scene's own; a
+/// headlight (ambient 0.1 and a directional light of 0.9 along the camera's view direction) in
+/// their place; or `automatic` ("auto"): the scene's when it has a point or directional light,
+/// else the headlight, so that a bare model file renders shaded rather than flat.
+enum class Lighting { scene, headlight, automatic };
+
+/// "scene", "headlight", "auto" → the lighting; nullopt otherwise.
+std::optional<Lighting> lighting_from_name(std::string_view name);
+const char* to_string(Lighting lighting);
+/// `asked` with `automatic` decided for `scene` (scene or headlight; never automatic).
+Lighting resolve_lighting(const Scene& scene, Lighting asked);
+
 struct RenderOptions {
     int width = 640;
     int height = 480;
     int spp = 1;  ///< samples per pixel, stratified over the pixel (1: its centre)
     ShadingMode shading = ShadingMode::phong;
-    WhittedOptions whitted;        ///< max_depth, precision, background
+    Lighting lighting = Lighting::automatic;
+    /// max_depth, precision, background (its headlight is set by render() from `lighting`)
+    WhittedOptions whitted;
     std::optional<Camera> camera;  ///< the request's camera (else the scene's, else framing)
     int tile_size = 16;            ///< pixels per tile side
     /// Asked once per tile (never per ray): once it fires, tiles not yet begun are skipped and
@@ -51,6 +65,7 @@ struct RenderResult {
     RayCounts counts;
     double render_ms = 0.0;
     Precision precision = Precision::exact;  ///< the path that answered
+    Lighting lighting = Lighting::scene;     ///< the lighting used (automatic decided)
 };
 
 /// The number of tiles a render of `options` is cut into.

@@ -61,12 +61,64 @@ TEST(Camera, RequestThenSceneThenFraming) {
 
 TEST(Render, NoLightsTracesNoShadowRays) {
     auto engine = prepare(testing::tutorial_spheres());
-    const RenderResult r = render(*engine, small()).value();
+    RenderOptions o = small();
+    o.lighting = Lighting::scene;
+    const RenderResult r = render(*engine, o).value();
+    EXPECT_EQ(r.lighting, Lighting::scene);
     EXPECT_EQ(r.counts.primary, 40u * 30u);
     EXPECT_EQ(r.counts.shadow, 0u);
     EXPECT_EQ(r.counts.reflected + r.counts.refracted, 0u);
     // Ambient 1.0 only: a hit shows ka = 0.1 exactly.
     EXPECT_NEAR(r.image.at(20, 15).x, 0.1, 1e-7);
+}
+
+TEST(Render, AutoLightingGivesABareSceneTheHeadlight) {
+    // The tutorial's spheres have no lights: auto takes the headlight. An odd size puts the
+    // centre of pixel (20, 15) on the axis, the ray (0,0,1) that meets sphere 3 at (0,0,7.27)
+    // with n = (0, −½, −√3/2); the headlight comes from l = (0,0,−1), so N·L = √3/2 and
+    // I = ka·0.1 + 0.9·kd·√3/2 (+ 0.9·ks·(R·V)³², R·V = ½: ~4e−11).
+    auto engine = prepare(testing::tutorial_spheres());
+    RenderOptions o = small();
+    o.width = 41;
+    o.height = 31;
+    const RenderResult r = render(*engine, o).value();
+    EXPECT_EQ(r.lighting, Lighting::headlight);
+    // Camera hits trace no shadow ray for the headlight, and the spheres are matte.
+    EXPECT_EQ(r.counts.shadow, 0u);
+    EXPECT_NEAR(r.image.at(20, 15).x, 0.1 * 0.1 + 0.9 * 0.7 * std::sqrt(3.0) / 2.0, 1e-6);
+    // A point light makes auto the scene's lighting; an ambient light alone does not.
+    EXPECT_EQ(render(*prepare(lit_spheres(0.0)), small()).value().lighting, Lighting::scene);
+    Scene ambient_only = testing::tutorial_spheres();
+    ambient_only.lights = {testing::ambient_light(0.5)};
+    EXPECT_EQ(resolve_lighting(ambient_only, Lighting::automatic), Lighting::headlight);
+    EXPECT_EQ(resolve_lighting(ambient_only, Lighting::scene), Lighting::scene);
+}
+
+TEST(Render, HeadlightReplacesTheSceneLightsAndShadowsOnlySecondaryHits) {
+    // A lit matte scene with the headlight asked for: its point light is not used (no shadow
+    // rays at all), and the picture differs from the scene-lit one.
+    auto matte = prepare(lit_spheres(0.0));
+    RenderOptions o = small();
+    o.lighting = Lighting::headlight;
+    const RenderResult head = render(*matte, o).value();
+    EXPECT_EQ(head.lighting, Lighting::headlight);
+    EXPECT_EQ(head.counts.shadow, 0u);
+    EXPECT_NE(head.image.rgb, render(*matte, small()).value().image.rgb);
+    // Reflecting spheres: every reflected ray that hits a sphere facing the headlight traces
+    // one shadow ray, so 0 < shadow ≤ reflected.
+    auto mirror = prepare(lit_spheres(0.5));
+    const RenderResult r = render(*mirror, o).value();
+    EXPECT_GT(r.counts.reflected, 0u);
+    EXPECT_GT(r.counts.shadow, 0u);
+    EXPECT_LE(r.counts.shadow, r.counts.reflected);
+}
+
+TEST(Render, LightingNames) {
+    EXPECT_EQ(lighting_from_name("auto"), Lighting::automatic);
+    EXPECT_EQ(lighting_from_name("headlight"), Lighting::headlight);
+    EXPECT_EQ(lighting_from_name("scene"), Lighting::scene);
+    EXPECT_FALSE(lighting_from_name("sun"));
+    EXPECT_STREQ(to_string(Lighting::automatic), "auto");
 }
 
 TEST(Render, MatteSceneTracesNoSecondaryRays) {

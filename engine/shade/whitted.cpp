@@ -15,8 +15,23 @@ bool is_nonzero(const Vec3d& v) {
 
 }  // namespace
 
-ShadingPlan plan_shading(const Scene& s) {
+ShadingPlan plan_shading(const Scene& s, const std::optional<Vec3d>& headlight) {
     ShadingPlan plan;
+    for (const Material& m : s.materials) {
+        plan.reflection = plan.reflection || m.reflectivity > 0.0;
+        plan.refraction = plan.refraction || m.transparency > 0.0;
+        plan.specular.push_back(is_nonzero(m.specular));
+    }
+    if (headlight) {
+        // The headlight replaces the scene's lights entirely (docs/api.md, render `lighting`).
+        plan.ambient = Vec3d{kHeadlightAmbient, kHeadlightAmbient, kHeadlightAmbient};
+        Light h;
+        h.type = LightType::directional;
+        h.direction = *headlight;
+        h.intensity = Vec3d{kHeadlightIntensity, kHeadlightIntensity, kHeadlightIntensity};
+        plan.headlight = h;
+        return plan;
+    }
     // The API's default (docs/api.md): "no lights = ambient 1.0 only".
     plan.ambient = s.lights.empty() ? Vec3d{1.0, 1.0, 1.0} : Vec3d{};
     for (std::uint32_t i = 0; i < s.lights.size(); ++i) {
@@ -26,11 +41,6 @@ ShadingPlan plan_shading(const Scene& s) {
             plan.shadow_lights.push_back(i);
         }
     }
-    for (const Material& m : s.materials) {
-        plan.reflection = plan.reflection || m.reflectivity > 0.0;
-        plan.refraction = plan.refraction || m.transparency > 0.0;
-        plan.specular.push_back(is_nonzero(m.specular));
-    }
     return plan;
 }
 
@@ -39,7 +49,7 @@ Whitted::Whitted(const QueryEngine& engine, WhittedOptions options)
       options_(options),
       tracer_(engine, options.precision,
               options.bvh_for_small_scenes ? BuildHint::many_rays : BuildHint::few_rays),
-      plan_(plan_shading(engine.scene())) {}
+      plan_(plan_shading(engine.scene(), options.headlight)) {}
 
 std::optional<Hit> Whitted::closest(const Ray& ray) const {
     return tracer_.closest(ray, /*want_normal=*/true);
@@ -117,11 +127,12 @@ struct Whitted::Surface {
     const Hit& hit;
     const Material& m;
     std::uint32_t material;
-    Vec3d d;      ///< unit direction of the incoming ray
-    Vec3d p;      ///< the hit point
-    Vec3d ng;     ///< geometric normal, turned to face the ray (spawned origins move along it)
-    Vec3d n;      ///< shading normal, on the same side
-    Vec3d p_err;  ///< error bound of p (shade/spawn.h)
+    Vec3d d;          ///< unit direction of the incoming ray
+    Vec3d p;          ///< the hit point
+    Vec3d ng;         ///< geometric normal, turned to face the ray (spawned origins move along it)
+    Vec3d n;          ///< shading normal, on the same side
+    Vec3d p_err;      ///< error bound of p (shade/spawn.h)
+    bool camera_hit;  ///< depth 1: the camera ray's own hit
 };
 
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
@@ -139,7 +150,8 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
                      ray.at(hit.t),
                      ng,
                      n,
-                     hit_point_error(ray, hit, tracer_.float_frame())};
+                     hit_point_error(ray, hit, tracer_.float_frame()),
+                     depth == 1};
 
     // Node k of the tree is written before its children so that labels run depth-first; the
     // vector may grow during the recursion, so the node is addressed by index, never by reference.
@@ -197,7 +209,27 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
         if (node)
             node->shadow_rays.push_back(rec);
     }
+    if (plan_.headlight)
+        color += headlight_terms(sp, counts, lit);
     return color;
+}
+
+Vec3d Whitted::headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) const {
+    const Light& h = *plan_.headlight;
+    const Vec3d l = -h.direction;
+    if (!(dot(sp.n, l) > 0.0))
+        return {};
+    // A camera hit is the closest point along the eye's ray, and the light comes from the eye's
+    // side, so it counts as lit without a ray (docs/api.md). Strictly that holds for the ray
+    // along the view direction; off-axis rays differ from it by at most half the field of view,
+    // and a preview takes that approximation for a shadow ray less per pixel.
+    if (!sp.camera_hit) {
+        ++counts.shadow;
+        if (occluded(spawn_ray(sp.p, sp.p_err, sp.ng, l)))
+            return {};
+    }
+    lit = true;
+    return phong_light(sp.m, sp.n, l, -sp.d, h.intensity, plan_.specular[sp.material]).sum();
 }
 
 Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,

@@ -40,6 +40,12 @@ struct WhittedOptions {
     int max_depth = 5;  ///< surface points along one path (1: camera hits only)
     Precision precision = Precision::refined;
     Vec3d background{0.0, 0.0, 0.0};  ///< the colour of a ray that hits nothing
+    /// A headlight in place of the scene's lights (a render's `lighting`, docs/api.md): ambient
+    /// 0.1 plus a directional light of intensity 0.9 travelling along this unit direction, the
+    /// camera's view direction. Camera hits trace no shadow ray for it (the light comes from the
+    /// eye's side, so what the eye sees is lit); deeper hits trace theirs. nullopt: the scene's
+    /// own lights (ray trees always use those).
+    std::optional<Vec3d> headlight;
     /// Trace through a Tracer built for many rays (BuildHint::many_rays): a scene QueryEngine
     /// answers by brute force gets a BVH of its own (renders: millions of rays). Off for a
     /// single ray tree, where exact brute force is the cheapest.
@@ -63,17 +69,26 @@ struct RayCounts {
     std::uint64_t total() const { return primary + shadow + reflected + refracted; }
 };
 
-/// What shading a scene needs, decided once per scene.
+/// What shading a scene needs, decided once per scene (and per headlight).
 struct ShadingPlan {
-    Vec3d ambient;  ///< Ia: the sum of the ambient lights; 1 when the scene has no lights at all
-    std::vector<std::uint32_t> shadow_lights;  ///< indices of the point and directional lights
-    bool reflection = false;                   ///< some material reflects
-    bool refraction = false;                   ///< some material is transparent
-    std::vector<bool> specular;                ///< per material: ks ≠ 0
+    /// Ia: the sum of the ambient lights; 1 when the scene has no lights at all; 0.1 with a
+    /// headlight
+    Vec3d ambient;
+    /// indices of the point and directional lights (none with a headlight)
+    std::vector<std::uint32_t> shadow_lights;
+    std::optional<Light> headlight;  ///< the directional headlight, in place of the scene's lights
+    bool reflection = false;         ///< some material reflects
+    bool refraction = false;         ///< some material is transparent
+    std::vector<bool> specular;      ///< per material: ks ≠ 0
 };
 
-/// Decides the plan for `scene`.
-ShadingPlan plan_shading(const Scene& scene);
+/// Ambient intensity and directional intensity of the headlight (docs/api.md, render `lighting`).
+constexpr double kHeadlightAmbient = 0.1;
+constexpr double kHeadlightIntensity = 0.9;
+
+/// Decides the plan for `scene`; with a `headlight` direction (unit, the direction the light
+/// travels) the scene's lights are replaced by kHeadlightAmbient and that light.
+ShadingPlan plan_shading(const Scene& scene, const std::optional<Vec3d>& headlight = std::nullopt);
 
 /// One shadow ray of a tree node.
 struct ShadowRayRecord {
@@ -147,6 +162,9 @@ class Whitted {
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
     Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit) const;
+    /// The headlight's diffuse and specular terms (zero when it is behind N or, below the camera
+    /// hit, its shadow ray is blocked).
+    Vec3d headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) const;
     /// The weighted reflected and refracted rays (below max_depth); children go into node k.
     Vec3d indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
                    std::size_t k) const;

@@ -115,6 +115,16 @@ void read_render_members(const Json& body, RenderRequest& r) {
         }
         o.shading = *mode;
     }
+    if (const Json* v = member(body, "lighting")) {
+        const std::string s = read_string(*v, "/lighting", kInvalid);
+        const auto lighting = engine::lighting_from_name(s);
+        if (!lighting) {
+            throw ApiError(kInvalid,
+                           "unknown lighting \"" + s + "\" (expected scene, headlight, auto)",
+                           "/lighting");
+        }
+        o.lighting = *lighting;
+    }
     if (const Json* v = member(body, "format")) {
         const std::string s = read_string(*v, "/format", kInvalid);
         const auto f = engine::image_format_from_name(s);

@@ -18,7 +18,7 @@ struct RenderRequest {
 };
 
 /// Parses a render body (null or {} gives every default: 640 × 480, spp 1, max_depth 5, phong,
-/// png, refined). invalid_request names the offending field; an unknown `format` is
+/// lighting auto, png, fast). invalid_request names the offending field; an unknown `format` is
 /// unsupported_format; width × height × spp over `max_pixels` is too_large.
 RenderRequest parse_render_request(const Json& body, std::size_t max_pixels);
 

@@ -29,6 +29,7 @@ TEST(RenderDoc, DefaultsFromAnEmptyBody) {
     EXPECT_EQ(r.options.whitted.max_depth, 5);
     EXPECT_EQ(r.options.whitted.precision, engine::Precision::fast);  // previews: fast
     EXPECT_EQ(r.options.shading, engine::ShadingMode::phong);
+    EXPECT_EQ(r.options.lighting, engine::Lighting::automatic);
     EXPECT_EQ(r.format, engine::ImageFormat::png);
     EXPECT_FALSE(r.async);
     EXPECT_FALSE(r.options.camera);
@@ -39,7 +40,7 @@ TEST(RenderDoc, ReadsEveryField) {
     const Json body = Json::parse(R"({"camera": {"position": [0,0,-5], "look_at": [0,0,0],
         "up": [0,1,0], "fov_y_deg": 30}, "width": 64, "height": 32, "spp": 4, "max_depth": 3,
         "shading": "object_id", "format": "exr", "precision": "fast", "async": true,
-        "background": [0.1, 0.2, 0.3]})");
+        "background": [0.1, 0.2, 0.3], "lighting": "headlight"})");
     const RenderRequest r = parse_render_request(body, kMaxPixels);
     ASSERT_TRUE(r.options.camera);
     EXPECT_EQ(r.options.camera->position, engine::Vec3d(0, 0, -5));
@@ -53,6 +54,12 @@ TEST(RenderDoc, ReadsEveryField) {
     EXPECT_EQ(r.options.shading, engine::ShadingMode::object_id);
     EXPECT_EQ(r.format, engine::ImageFormat::exr);
     EXPECT_TRUE(r.async);
+    EXPECT_EQ(r.options.lighting, engine::Lighting::headlight);
+    for (const auto& [name, lighting] :
+         {std::pair{"scene", engine::Lighting::scene}, {"auto", engine::Lighting::automatic}}) {
+        const Json b{{"lighting", name}};
+        EXPECT_EQ(parse_render_request(b, kMaxPixels).options.lighting, lighting) << name;
+    }
 }
 
 TEST(RenderDoc, ErrorsNameTheField) {
@@ -64,6 +71,11 @@ TEST(RenderDoc, ErrorsNameTheField) {
     EXPECT_EQ(parse(R"({"spp": "4"})").path, "/spp");
     EXPECT_EQ(parse(R"({"max_depth": 0})").path, "/max_depth");
     EXPECT_EQ(parse(R"({"shading": "toon"})").path, "/shading");
+    const ApiError l = parse(R"({"lighting": "sun"})");
+    EXPECT_EQ(l.code, ErrorCode::invalid_request);
+    EXPECT_EQ(l.path, "/lighting");
+    EXPECT_EQ(l.http_status(), 400);
+    EXPECT_EQ(parse(R"({"lighting": 1})").path, "/lighting");
     const ApiError f = parse(R"({"format": "jpeg"})");
     EXPECT_EQ(f.code, ErrorCode::unsupported_format);
     EXPECT_EQ(f.http_status(), 400);

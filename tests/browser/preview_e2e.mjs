@@ -6,7 +6,8 @@
 // Steps, each with a screenshot in $RAYCASTD_ARTIFACTS (default build/test-artifacts/browser):
 //   1. the empty page at 1280×800, no console errors
 //   2. upload Duck.glb by the file input: the preview appears (decoded: non-background pixels in
-//      the model's region, more than one colour); normal shading gives many colours
+//      the model's region, shaded: many colours and a spread of brightness); lighting headlight
+//      and scene are taken; normal shading gives many colours
 //   3. orbit by dragging: the image and the URL's camera change; a render over the pixel limit
 //      shows "413 too_large"; a newer view aborts the render in flight; the keyboard orbits too
 //   4. click a pixel on the model: the hit panel names the object, the tree shows I1
@@ -166,6 +167,7 @@ const decode = () =>
         let central = 0;
         let centralFg = 0;
         const colours = new Set();
+        const lum = [];
         const thumb = new Array(32 * 24).fill(0);
         for (let y = 0; y < h; y++) {
             for (let x = 0; x < w; x++) {
@@ -175,6 +177,7 @@ const decode = () =>
                 if (isFg) {
                     fg += 1;
                     colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+                    lum.push(0.2126 * d[i] + 0.7152 * d[i + 1] + 0.0722 * d[i + 2]);
                 }
                 if (inCentre) {
                     central += 1;
@@ -184,7 +187,14 @@ const decode = () =>
             }
         }
         const per = (w / 32) * (h / 24);
-        return { w, h, fg: fg / (w * h), centralFg: centralFg / central, colours: colours.size, thumb: thumb.map((v) => v / per) };
+        // The spread of the model's brightness (Rec. 709 luma, 8-bit): its 90th minus its 10th
+        // percentile. A flat silhouette has ~0 (only its antialiased edge differs).
+        lum.sort((a, b) => a - b);
+        const pct = (q) => (lum.length ? lum[Math.min(lum.length - 1, Math.floor(q * lum.length))] : 0);
+        return {
+            w, h, fg: fg / (w * h), centralFg: centralFg / central, colours: colours.size,
+            lumSpread: pct(0.9) - pct(0.1), thumb: thumb.map((v) => v / per),
+        };
     });
 const thumbDiff = (a, b) => a.thumb.reduce((s, v, i) => s + Math.abs(v - b.thumb[i]), 0) / a.thumb.length;
 const urlCamera = () => JSON.parse(new URL(page.url()).searchParams.get('camera') ?? 'null');
@@ -216,13 +226,33 @@ try {
         const duck = await decode();
         check(duck.w === 640 && duck.h === 480, `the full frame is 640×480 (${duck.w}×${duck.h})`);
         check(duck.fg > 0.05 && duck.centralFg > 0.2, `the duck covers the middle of the picture (${(duck.fg * 100).toFixed(1)}% of all pixels, ${(duck.centralFg * 100).toFixed(1)}% of the central box)`);
-        check(duck.colours > 1, `the duck has more than one colour (${duck.colours})`);
+        // Shaded, not a flat grey silhouette: the Duck has no lights, so lighting auto gives it
+        // the headlight, and its vertex normals shade it smoothly.
+        check(duck.colours > 100 && duck.lumSpread > 40, `the duck is shaded: many colours (${duck.colours}) and a spread of brightness (p90 − p10 = ${duck.lumSpread.toFixed(1)} of 255)`);
         const sceneId = new URL(page.url()).searchParams.get('scene');
         check(/^sc_/.test(sceneId ?? '') && urlCamera() !== null, `the URL names the scene and camera (${sceneId})`);
         check((await page.textContent('#scene-info')).includes('4,212') || (await page.textContent('#scene-info')).includes('4212'), 'the scene panel shows its 4212 triangles');
         await screenshot('duck-phong');
 
+        // Each lighting is taken by the server (no error, no fallback): headlight looks like
+        // auto here (the Duck has no lights), scene is the flat ambient-only silhouette.
         let n = await frames();
+        await page.selectOption('#settings select[name=lighting]', 'headlight');
+        await waitFull(n);
+        const head = await decode();
+        check(!(await page.isVisible('#error')) && thumbDiff(head, duck) < 1, `lighting=headlight is taken and looks like auto (thumbnail difference ${thumbDiff(head, duck).toFixed(2)})`);
+        check(new URL(page.url()).searchParams.get('lighting') === 'headlight', 'the URL carries lighting=headlight');
+        n = await frames();
+        await page.selectOption('#settings select[name=lighting]', 'scene');
+        await waitFull(n);
+        const flat = await decode();
+        check(!(await page.isVisible('#error')) && flat.lumSpread < duck.lumSpread, `lighting=scene is taken: ambient only, flatter (spread ${flat.lumSpread.toFixed(1)})`);
+        await screenshot('duck-scene-lighting');
+        n = await frames();
+        await page.selectOption('#settings select[name=lighting]', 'auto');
+        await waitFull(n);
+
+        n = await frames();
         await page.selectOption('#settings select[name=shading]', 'normal');
         await waitFull(n);
         const normal = await decode();

@@ -121,7 +121,8 @@ TEST_F(RenderApi, EmptyBodyRendersTheDefaults) {
 }
 
 TEST_F(RenderApi, SkippingIsVisibleInXRays) {
-    // No lights: ambient 1.0 only, no shadow rays; matte materials: no secondary rays.
+    // No lights: the headlight (lighting auto), whose camera hits trace no shadow rays; matte
+    // materials: no secondary rays.
     const std::string dark =
         add_scene(R"({"objects": [{"type": "sphere", "center": [0,0,10], "radius": 2}]})");
     auto res = render(dark, {{"width", 32}, {"height", 32}});
@@ -135,6 +136,44 @@ TEST_F(RenderApi, SkippingIsVisibleInXRays) {
     EXPECT_GT(n.at("shadow"), 0);
     EXPECT_EQ(n.at("reflected"), 0);
     EXPECT_EQ(n.at("refracted"), 0);
+}
+
+TEST_F(RenderApi, LightingAutoGivesABareSceneTheHeadlight) {
+    // No lights, a mirror sphere beside a matte one: auto = headlight. Camera hits trace no
+    // shadow ray for it, the hits of reflected rays do (docs/rendering.md).
+    const std::string bare = add_scene(R"({"objects": [
+        {"type": "sphere", "center": [-1.2,0,10], "radius": 1, "material": "mirror"},
+        {"type": "sphere", "center": [1.2,0,10], "radius": 1}],
+        "materials": {"mirror": {"reflectivity": 0.8}}})");
+    ASSERT_FALSE(bare.empty());
+    const Json size{{"width", 48}, {"height", 32}};
+    auto deflt = render(bare, size);
+    ASSERT_EQ(deflt->status, 200) << deflt->body;
+    const auto n = parse_rays(deflt->get_header_value("X-Rays"));
+    EXPECT_GT(n.at("reflected"), 0);
+    EXPECT_GT(n.at("shadow"), 0);
+    EXPECT_LE(n.at("shadow"),
+              n.at("reflected"));  // one per secondary hit facing the light, at most
+    Json head = size;
+    head["lighting"] = "headlight";
+    auto asked = render(bare, head);
+    EXPECT_EQ(asked->get_header_value("X-Rays"), deflt->get_header_value("X-Rays"));
+    EXPECT_EQ(asked->body, deflt->body);
+    // The document's own lights: none, so ambient 1.0 only and no shadow rays at all.
+    Json scene = size;
+    scene["lighting"] = "scene";
+    auto flat = render(bare, scene);
+    ASSERT_EQ(flat->status, 200);
+    EXPECT_EQ(parse_rays(flat->get_header_value("X-Rays")).at("shadow"), 0);
+    EXPECT_NE(flat->body, deflt->body);
+    // A lit document keeps its lights under auto; headlight replaces them.
+    const std::string lit = add_scene(scene_file("spheres"));
+    EXPECT_GT(parse_rays(render(lit, size)->get_header_value("X-Rays")).at("shadow"), 0);
+    EXPECT_EQ(parse_rays(render(lit, head)->get_header_value("X-Rays")).at("shadow"), 0);
+    auto bad = render(bare, {{"lighting", "sun"}});
+    EXPECT_EQ(bad->status, 400);
+    EXPECT_EQ(Json::parse(bad->body).at("error").at("code"), "invalid_request");
+    EXPECT_EQ(Json::parse(bad->body).at("error").at("path"), "/lighting");
 }
 
 TEST_F(RenderApi, OtherFormatsAndModes) {

@@ -155,22 +155,11 @@ const preview = new Preview({
         ui.viewport.dataset.aborted = String(preview.stats.aborted);
         clearError('render');
     },
-    onError: (err, v) => {
+    onError: (err) => {
         ui.frame.classList.add('stale');
         ui.badge.textContent = 'render failed';
         ui.badge.hidden = false;
         ui.viewport.dataset.stage = 'error';
-        if (err.path === '/lighting' && v.lighting !== 'auto') {
-            // A server without the `lighting` option: say so, and go on with the default.
-            showError(
-                new api.ApiError(err.status, err.code, `${err.message} — this server does not take lighting "${v.lighting}"; using auto`, err.path),
-                'settings',
-            );
-            view.lighting = 'auto';
-            writeForm();
-            refresh();
-            return;
-        }
         showError(err, 'render');
     },
     onState: (state) => {

@@ -101,8 +101,9 @@ export function toQuery(view) {
 
 /**
  * The body of POST /v1/scenes/{id}/render for the view at `scale` of its size (1/8 and 1/2 for
- * the refining preview) with `spp` samples. `lighting` and `precision` are sent only when they
- * are not the defaults, so a server without them answers the default request.
+ * the refining preview) with `spp` samples. `lighting` is always sent (the server's `auto`
+ * is the default too; sending it keeps a copied curl command explicit); `precision` only when
+ * chosen (`auto`: the server's default for renders, `fast`).
  */
 export function renderBody(view, { scale = 1, spp = view.spp } = {}) {
     const { width, height } = parseSize(view.size) ?? parseSize(DEFAULTS.size);
@@ -113,8 +114,8 @@ export function renderBody(view, { scale = 1, spp = view.spp } = {}) {
         spp,
         max_depth: view.max_depth,
         shading: view.shading,
+        lighting: view.lighting,
     };
-    if (view.lighting !== 'auto') body.lighting = view.lighting;
     if (view.precision !== 'auto') body.precision = view.precision;
     return body;
 }

@@ -25,9 +25,9 @@ test('unusable values fall back to the defaults and are named', () => {
     assert.equal(problems.length, 7);
 });
 
-test('the render body: sizes scaled for the preview; lighting and precision only when chosen', () => {
+test('the render body: sizes scaled for the preview; lighting always, precision only when chosen', () => {
     const view = { ...DEFAULTS, scene: 'sc_1', camera };
-    assert.deepEqual(renderBody(view), { camera, width: 640, height: 480, spp: 4, max_depth: 5, shading: 'phong' });
+    assert.deepEqual(renderBody(view), { camera, width: 640, height: 480, spp: 4, max_depth: 5, shading: 'phong', lighting: 'auto' });
     const eighth = renderBody(view, { scale: 1 / 8, spp: 1 });
     assert.equal(eighth.width, 80);
     assert.equal(eighth.height, 60);
