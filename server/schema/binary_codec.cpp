@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -45,6 +46,14 @@ std::size_t decode_as(std::string_view body, std::size_t begin, std::size_t end,
         r.direction = {double(v[3]), double(v[4]), double(v[5])};
         r.tmin = double(v[6]);
         r.tmax = double(v[7]);
+        if constexpr (std::is_same_v<F, float>) {
+            // A float32 answer writes t as a float: a hit beyond FLT_MAX along the ray (a
+            // denormal direction, (0,0,1e-45), puts an ordinary surface at t ~ 1e45) would be
+            // written as +inf with an object id, which reads as neither a hit nor a miss. So a
+            // float32 ray ends at FLT_MAX: what lies farther is a miss, as for any tmax.
+            r.tmin = std::min(r.tmin, double(std::numeric_limits<float>::max()));
+            r.tmax = std::min(r.tmax, double(std::numeric_limits<float>::max()));
+        }
         if (!engine::is_valid_ray(r))
             return i;
     }

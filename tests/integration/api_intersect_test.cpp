@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <thread>
 
@@ -148,6 +149,41 @@ TEST_F(Intersect, Float32Binary) {
         }
     }
     EXPECT_GT(hits, 50);
+}
+
+// A float32 answer cannot write a t beyond FLT_MAX: a ray whose denormal direction puts the
+// surface at t ~ 5e45 ends at FLT_MAX in float32 (a miss record, not +inf with an object id),
+// while float64 reports the hit.
+TEST_F(Intersect, Float32RaysEndAtTheLargestFloat) {
+    const float inf = std::numeric_limits<float>::infinity();
+    const float tiny = std::numeric_limits<float>::denorm_min();
+    const float f32[2][8] = {{0, 0, -8, 0, 0, 1, 0, inf}, {0, 0, -8, 0, 0, tiny, 0, inf}};
+    auto a = post_binary("precision=exact&dtype=float32",
+                         std::string(reinterpret_cast<const char*>(f32), sizeof f32));
+    ASSERT_TRUE(a);
+    ASSERT_EQ(a->status, 200) << a->body;
+    ASSERT_EQ(a->body.size(), 2u * 32);
+    float f[6];
+    std::uint32_t ids[2];
+    read_record(a->body, 0, f, ids);
+    ASSERT_FALSE(std::isinf(f[0])) << "the unit-direction ray along +z should hit the scene";
+    read_record(a->body, 1, f, ids);
+    EXPECT_TRUE(std::isinf(f[0]));
+    EXPECT_EQ(ids[0], 0xFFFFFFFFu);
+    EXPECT_EQ(ids[1], 0xFFFFFFFFu);
+
+    const double f64[8] = {
+        0, 0, -8, 0, 0, double(tiny), 0, std::numeric_limits<double>::infinity()};
+    auto b = post_binary("precision=exact&dtype=float64",
+                         std::string(reinterpret_cast<const char*>(f64), sizeof f64));
+    ASSERT_TRUE(b);
+    ASSERT_EQ(b->status, 200) << b->body;
+    double d[6];
+    std::uint32_t dids[2];
+    read_record(b->body, 0, d, dids);
+    EXPECT_GT(d[0], 1e45);
+    EXPECT_TRUE(std::isfinite(d[0]));
+    EXPECT_NE(dids[0], 0xFFFFFFFFu);
 }
 
 TEST_F(Intersect, ModesInBinary) {
