@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
             std::cerr << "skipping " << name << ": " << e.what() << "\n";
             continue;
         }
-        const engine::Camera cam = engine::resolve_camera(engine->scene(), std::nullopt);
+        const engine::Camera cam = engine::resolve_camera(engine->scene(), std::nullopt, w, h);
         if (!a.write_pov.empty()) {
             std::ofstream(a.write_pov + "/" + name + ".pov")
                 << bench::to_pov(engine->scene(), cam, w, h, 5);

@@ -159,6 +159,7 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     // the cores and cost ~300 ms more CPU on 1M triangles than the two one after the other
     // (TBB's workers spin while they wait; bench_points --registration-only, docs/loading.md).
     engine->prepare_points();
+    engine->prepare_normals();
     if (cancel.cancelled())
         return cancel.status();
     const std::size_t prims = engine->scene_->triangle_count() + engine->scene_->sphere_count();
@@ -206,7 +207,8 @@ std::unique_ptr<EmbreeAccel> QueryEngine::bvh_for_many_rays(Precision precision)
 std::size_t QueryEngine::memory_bytes() const {
     // The scene's part is fixed once built; the accelerator's grows when a query builds the
     // exact or the fast BVH.
-    return scene_bytes_ + (accel_ ? accel_->memory_bytes() : 0) + point_memory_bytes();
+    return scene_bytes_ + (accel_ ? accel_->memory_bytes() : 0) + point_memory_bytes() +
+           normals_memory_bytes();
 }
 
 std::size_t QueryEngine::scene_memory_bytes() const {

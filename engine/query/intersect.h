@@ -13,6 +13,7 @@
 #include "engine/geometry/closest_point.h"
 #include "engine/math/float_frame.h"
 #include "engine/mesh/topology.h"
+#include "engine/mesh/vertex_normals.h"
 #include "engine/query/query_result.h"
 #include "engine/scene/scene.h"
 #include "engine/status.h"
@@ -20,7 +21,8 @@
 namespace raycastd::engine {
 
 class EmbreeAccel;
-struct WindingTrees;  // query/point_entry.cpp
+struct WindingTrees;     // query/point_entry.cpp
+struct ComputedNormals;  // query/shading_normals.cpp
 
 /// A scene made ready for queries.
 class QueryEngine {
@@ -108,6 +110,15 @@ class QueryEngine {
     /// (accel/winding_bvh.h); the object's tree is built on its first such query.
     double winding_number(std::uint32_t object, const Vec3d& p) const;
 
+    // ---- Shading (query/shading_normals.cpp). ----
+
+    /// The shading normals of mesh object `object` when its file gives none: area-weighted
+    /// vertex normals split at creases (mesh/vertex_normals.h), computed on the first call for
+    /// that object (thread-safe; registration does not pay for scenes never rendered) and kept
+    /// with the engine (counted in memory_bytes). nullptr for spheres, lone triangles (their
+    /// normal is the geometric one) and meshes with their own vertex normals.
+    const CornerNormals* computed_normals(std::uint32_t object) const;
+
     ~QueryEngine();
 
   private:
@@ -131,6 +142,11 @@ class QueryEngine {
     std::vector<MeshTopology> topology_;  ///< per object (point_entry.cpp)
     /// Built per object on first use; shared_ptr, whose deleter is made where the type is complete.
     std::shared_ptr<WindingTrees> winding_;
+    std::shared_ptr<ComputedNormals> normals_;  ///< the same, for computed_normals()
+    /// shading_normals.cpp: the empty slots, made by build().
+    void prepare_normals();
+    /// Bytes of the computed normals built so far.
+    std::size_t normals_memory_bytes() const;
 };
 
 /// Whether a ray meets the API's rules: finite origin and direction, |d|² neither zero nor

@@ -4,12 +4,13 @@
 
 namespace raycastd::engine {
 
-Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested) {
+Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested, int width,
+                      int height) {
     if (requested)
         return *requested;
     if (scene.camera)
         return *scene.camera;
-    return default_camera(scene.bounds());
+    return default_camera(scene.bounds(), static_cast<double>(width) / height);
 }
 
 CameraRays::CameraRays(const Camera& camera, int width, int height)

@@ -7,7 +7,7 @@
 // with f the unit forward vector, r = normalize(f × up) the right vector and u = r × f the true
 // up vector; (x, y) are pixel coordinates with (0, 0) at the top-left corner of the image.
 // Which camera a render uses: the request's, else the scene's (its document's, else its glTF
-// file's), else one framing the scene bounds (engine/scene/scene.h default_camera).
+// file's), else one whose bounding sphere fills the image (engine/scene/scene.h default_camera).
 
 #include <optional>
 
@@ -16,8 +16,10 @@
 
 namespace raycastd::engine {
 
-/// The camera a render of `scene` uses given the one the request asked for (if any).
-Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested);
+/// The camera a width × height render of `scene` uses given the one the request asked for (if
+/// any): the request's, else the scene's, else default_camera(bounds, width / height).
+Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested, int width,
+                      int height);
 
 /// Precomputed frame of a camera for a W × H image.
 class CameraRays {

@@ -208,7 +208,7 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
                             RenderProgress* progress) {
     const auto start = std::chrono::steady_clock::now();
     const Scene& scene = engine.scene();
-    const Camera cam = resolve_camera(scene, opt.camera);
+    const Camera cam = resolve_camera(scene, opt.camera, opt.width, opt.height);
     const Lighting lighting = resolve_lighting(scene, opt.lighting);
     WhittedOptions wo = opt.whitted;
     wo.bvh_for_small_scenes = true;

@@ -51,12 +51,44 @@ TEST(Camera, RequestThenSceneThenFraming) {
     Scene s = testing::tutorial_spheres();
     Camera asked;
     asked.position = {1, 2, 3};
-    EXPECT_EQ(resolve_camera(s, asked).position, asked.position);
-    EXPECT_EQ(resolve_camera(s, std::nullopt).look_at, s.bounds().center());
+    EXPECT_EQ(resolve_camera(s, asked, 40, 30).position, asked.position);
+    EXPECT_EQ(resolve_camera(s, std::nullopt, 40, 30).look_at, s.bounds().center());
     Camera doc;
     doc.position = {0, 0, -1};
     s.camera = doc;
-    EXPECT_EQ(resolve_camera(s, std::nullopt).position, doc.position);
+    EXPECT_EQ(resolve_camera(s, std::nullopt, 40, 30).position, doc.position);
+}
+
+/// The distance from point c to the line of `ray`.
+double distance_to_line(const Ray& ray, const Vec3d& c) {
+    const Vec3d d = normalize(ray.direction);
+    const Vec3d v = c - ray.origin;
+    return length(v - d * dot(v, d));
+}
+
+TEST(Camera, DefaultFramingFillsTheNarrowerFieldOfView) {
+    // The bounding sphere (centre and half-diagonal of the bounds) just fills the image: the
+    // rays through the middles of the two edges of the narrower side are tangent to it, and
+    // those of the wider side pass outside it. Landscape: top and bottom; portrait: left and
+    // right.
+    const Bounds3 b{{-1, 0, 2}, {3, 1, 4}};
+    const Vec3d c = b.center();
+    const double r = 0.5 * length(b.diagonal());
+    for (const auto& [w, h] : {std::pair{640, 480}, {480, 640}, {300, 300}}) {
+        Scene s;
+        s.objects.push_back(
+            testing::mesh_object("box", {b.lo, b.hi, {b.lo.x, b.hi.y, b.hi.z}}, {{0, 1, 2}}));
+        s.materials.push_back(Material{});
+        const Camera cam = resolve_camera(s, std::nullopt, w, h);
+        EXPECT_EQ(cam.look_at, c);
+        const CameraRays rays(cam, w, h);
+        const double top = distance_to_line(rays.ray(w / 2.0, 0), c);
+        const double left = distance_to_line(rays.ray(0, h / 2.0), c);
+        const double narrow = w >= h ? top : left, wide = w >= h ? left : top;
+        EXPECT_NEAR(narrow, r, 1e-12 * r) << w << "x" << h;
+        EXPECT_GE(wide, r * (1 - 1e-12)) << w << "x" << h;
+        EXPECT_NEAR(distance_to_line(rays.ray(w / 2.0, h), c), top, 1e-12 * r);  // centred
+    }
 }
 
 TEST(Render, NoLightsTracesNoShadowRays) {

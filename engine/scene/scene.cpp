@@ -104,14 +104,21 @@ Status validate(const Scene& scene) {
     return {};
 }
 
-Camera default_camera(const Bounds3& bounds) {
+Camera default_camera(const Bounds3& bounds, double aspect) {
     Camera cam;
     if (bounds.empty())
         return cam;
     const Vec3d c = bounds.center();
     const double radius = std::max(0.5 * length(bounds.diagonal()), 1e-9);
-    const double half_fov = 0.5 * cam.fov_y_deg * M_PI / 180.0;
-    const double dist = radius / std::sin(half_fov);
+    // A sphere of radius r seen from distance d fills a cone of half-angle asin(r/d); it just
+    // fills the image when that is the narrower half-angle of the pinhole's view. The vertical
+    // one is fov_y/2; the horizontal one is atan(tan(fov_y/2)·W/H), since the image plane at
+    // distance 1 spans ±tan(fov_y/2)·W/H across (engine/render/camera_rays.h).
+    const double half_fov_y = 0.5 * cam.fov_y_deg * M_PI / 180.0;
+    const double half_fov_x = aspect > 0.0 && std::isfinite(aspect)
+                                  ? std::atan(std::tan(half_fov_y) * aspect)
+                                  : half_fov_y;
+    const double dist = radius / std::sin(std::min(half_fov_y, half_fov_x));
     cam.look_at = c;
     cam.position = c - Vec3d{0.0, 0.0, dist};
     return cam;

@@ -57,7 +57,10 @@ struct Scene {
 /// indices in range, material indices valid); the path names the offending object.
 Status validate(const Scene& scene);
 
-/// The default camera: looks at the centre of the bounds from −z far enough to frame them.
-Camera default_camera(const Bounds3& bounds);
+/// The default camera for an image of `aspect` = width / height: looks along +z at the centre
+/// of the bounds, from the distance at which their bounding sphere (centre, half the diagonal)
+/// just fills the narrower of the two fields of view (engine/scene/scene.cpp). The camera at the
+/// origin looking along +z for empty bounds.
+Camera default_camera(const Bounds3& bounds, double aspect);
 
 }  // namespace raycastd::engine

@@ -1,5 +1,6 @@
 #include "engine/shade/whitted.h"
 
+#include <array>
 #include <cmath>
 
 #include "engine/shade/optics.h"
@@ -49,7 +50,12 @@ Whitted::Whitted(const QueryEngine& engine, WhittedOptions options)
       options_(options),
       tracer_(engine, options.precision,
               options.bvh_for_small_scenes ? BuildHint::many_rays : BuildHint::few_rays),
-      plan_(plan_shading(engine.scene(), options.headlight)) {}
+      plan_(plan_shading(engine.scene(), options.headlight)) {
+    const auto n = static_cast<std::uint32_t>(engine.scene().objects.size());
+    computed_normals_.reserve(n);
+    for (std::uint32_t i = 0; i < n; ++i)
+        computed_normals_.push_back(engine.computed_normals(i));
+}
 
 std::optional<Hit> Whitted::closest(const Ray& ray) const {
     return tracer_.closest(ray, /*want_normal=*/true);
@@ -72,11 +78,21 @@ std::uint32_t Whitted::material_of(const Hit& hit) const {
 
 Vec3d Whitted::shading_normal(const Hit& hit) const {
     const Object& o = scene().objects[hit.object];
-    if (!o.mesh || o.mesh->normals.size() != o.mesh->positions.size())
+    if (!o.mesh)
         return hit.normal;
-    const auto& t = o.mesh->triangles[hit.primitive];
-    const Vec3d n = Vec3d(o.mesh->normals[t[0]]) * (1.0 - hit.u - hit.v) +
-                    Vec3d(o.mesh->normals[t[1]]) * hit.u + Vec3d(o.mesh->normals[t[2]]) * hit.v;
+    std::array<Vec3d, 3> c;
+    if (o.mesh->normals.size() == o.mesh->positions.size()) {
+        const auto& t = o.mesh->triangles[hit.primitive];
+        c = {Vec3d(o.mesh->normals[t[0]]), Vec3d(o.mesh->normals[t[1]]),
+             Vec3d(o.mesh->normals[t[2]])};
+    } else if (const CornerNormals* computed = computed_normals_[hit.object]) {
+        const auto& k = computed->corners[hit.primitive];
+        c = {Vec3d(computed->normals[k[0]]), Vec3d(computed->normals[k[1]]),
+             Vec3d(computed->normals[k[2]])};
+    } else {
+        return hit.normal;
+    }
+    const Vec3d n = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
     const double len = length(n);
     if (!(len > 0.0) || !std::isfinite(len))
         return hit.normal;

@@ -148,8 +148,11 @@ class Whitted {
 
     /// The material index of a hit (per-triangle material when the mesh has them).
     std::uint32_t material_of(const Hit& hit) const;
-    /// The unit shading normal of a hit as stored (interpolated vertex normals on meshes that
-    /// have them, else the geometric normal); not yet turned towards the ray.
+    /// The unit shading normal of a hit as stored, not yet turned towards the ray: on a mesh,
+    /// its vertex normals interpolated with the hit's barycentrics (u, v) as
+    /// (1−u−v)·n₀ + u·n₁ + v·n₂, normalized; the file's normals where it has them, else the
+    /// computed ones (QueryEngine::computed_normals: area-weighted, split at creases). The
+    /// geometric normal for spheres, lone triangles, and where the interpolation vanishes.
     Vec3d shading_normal(const Hit& hit) const;
 
   private:
@@ -173,6 +176,9 @@ class Whitted {
     WhittedOptions options_;
     Tracer tracer_;
     ShadingPlan plan_;
+    /// Per object, the computed shading normals of a mesh without its own (else nullptr),
+    /// fetched once here so that a hit costs no lookup beyond an index.
+    std::vector<const CornerNormals*> computed_normals_;
 };
 
 }  // namespace raycastd::engine

@@ -211,5 +211,48 @@ TEST(Whitted, PlanSkipsWhatTheSceneDoesNotNeed) {
     EXPECT_EQ(plan_shading(engine->scene()).ambient, Vec3d(0.3, 0.3, 0.3));
 }
 
+TEST(Whitted, MeshesWithoutNormalsAreShadedWithComputedOnes) {
+    // A coarse icosphere (80 faces) from a "file" without normals, seen along +z: the shading
+    // normal is the area-weighted vertex normals interpolated, much nearer the true sphere's
+    // radius than the faceted geometric normal, which intersect keeps reporting. A cube keeps
+    // its creases: its shading normal is the face's. The normals are computed on first use
+    // and counted in memory_bytes.
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::icosphere_object(1, {0, 0, 5}, 1.0));
+    s.objects.push_back(testing::cube_object(3, 4));
+    auto engine = prepare(std::move(s));
+    const std::size_t bytes_before = engine->memory_bytes();
+    const Whitted w(*engine, WhittedOptions{});
+    EXPECT_GT(engine->memory_bytes(), bytes_before);
+    double smooth = 0, faceted = 0;
+    int hits = 0;
+    for (int i = -8; i <= 8; ++i) {
+        for (int j = -8; j <= 8; ++j) {
+            Ray r;
+            r.origin = {0.1 * i, 0.1 * j, 0};
+            r.direction = {0, 0, 1};
+            const std::optional<Hit> h = w.closest(r);
+            if (!h)
+                continue;
+            ++hits;
+            const Vec3d radius = normalize(r.at(h->t) - Vec3d{0, 0, 5});
+            EXPECT_NEAR(length(w.shading_normal(*h)), 1.0, 1e-6);
+            smooth += std::acos(std::min(1.0, dot(w.shading_normal(*h), radius)));
+            faceted += std::acos(std::min(1.0, dot(h->normal, radius)));
+            const Triangle tri = engine->scene().objects[0].mesh->triangle(h->primitive);
+            EXPECT_LT(length(h->normal - triangle_normal(tri)), 1e-6);  // intersect: geometric
+        }
+    }
+    ASSERT_GT(hits, 100);
+    EXPECT_LT(smooth, 0.5 * faceted);
+    Ray r;
+    r.origin = {3.5, 3.5, -1};
+    r.direction = {0, 0, 1};
+    const std::optional<Hit> cube = w.closest(r);
+    ASSERT_TRUE(cube);
+    EXPECT_LT(length(w.shading_normal(*cube) - Vec3d{0, 0, -1}), 1e-6);
+}
+
 }  // namespace
 }  // namespace raycastd::engine

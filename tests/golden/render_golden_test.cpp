@@ -160,6 +160,18 @@ TEST_F(Golden, BareDuckIsShaded) {
     EXPECT_GT(colours.size(), 100u);
 }
 
+TEST_F(Golden, BareObjWithoutNormalsIsSmoothWithCreases) {
+    // fandisk.obj has no vn: its shading normals are computed (area-weighted over the weld,
+    // split at creases), lit by the headlight, framed by the default camera. Its curved
+    // patches shade smoothly, its sharp edges stay sharp.
+    const std::string obj = kModels + "/fandisk/fandisk.obj";
+    if (!std::filesystem::exists(obj)) {
+        GTEST_SKIP() << "models not found at " << kModels;
+    }
+    check_body(read_file(obj), "model/obj", "fandisk_bare",
+               Json{{"width", 160}, {"height", 120}, {"spp", 4}});
+}
+
 TEST_F(Golden, GltfDuckNormals) {
     if (!std::filesystem::exists(kModels + "/Duck/glTF-Binary/Duck.glb")) {
         GTEST_SKIP() << "models not found at " << kModels;

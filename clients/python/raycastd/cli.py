@@ -151,6 +151,11 @@ def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
     q.add_argument("--spp", type=int, help="samples per pixel (1)")
     q.add_argument("--max-depth", type=int)
     q.add_argument("--shading", choices=["phong", "normal", "depth", "object_id", "barycentric"])
+    q.add_argument(
+        "--lighting",
+        choices=["auto", "scene", "headlight"],
+        help="auto (default): the scene's lights, or a headlight when it has none",
+    )
     q.add_argument("--precision", choices=["fast", "refined", "exact"])
     q.add_argument("--format", choices=["png", "ppm", "pfm", "exr"], help="default: by -o suffix")
     q.add_argument("--camera", help="camera JSON, or a file holding it")
@@ -484,6 +489,7 @@ def cmd_render(client: Client, args: argparse.Namespace, io: Output) -> int:
         ("spp", args.spp),
         ("max_depth", args.max_depth),
         ("shading", args.shading),
+        ("lighting", args.lighting),
         ("precision", args.precision),
         ("format", fmt),
     ):

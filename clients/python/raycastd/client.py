@@ -293,8 +293,8 @@ class Client(ArrayQueries):
     ) -> bytes:
         """Renders an image and returns its bytes (PNG unless `format=` says otherwise).
 
-        `options` are the other body fields (`camera`, `shading`, `max_depth`, `precision`,
-        `background`, `format`). With `progress` (True, or a callback taking
+        `options` are the other body fields (`camera`, `shading`, `lighting`, `max_depth`,
+        `precision`, `background`, `format`). With `progress` (True, or a callback taking
         `(fraction, job_status)`) the render runs as an async job that is polled every
         `poll_s` seconds, and cancelled if the wait is interrupted."""
         body: dict[str, Any] = {}

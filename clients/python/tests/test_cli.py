@@ -157,7 +157,16 @@ class CliTest(ServerTestCase):
     def test_render_writes_a_png(self) -> None:
         out_png = self.dir / "out.png"
         code, out, err = self.run_cli(
-            "render", str(self.scene_file), "-o", str(out_png), "--size", "40x30", "--spp", "2"
+            "render",
+            str(self.scene_file),
+            "-o",
+            str(out_png),
+            "--size",
+            "40x30",
+            "--spp",
+            "2",
+            "--lighting",
+            "headlight",
         )
         self.assertEqual(code, 0, err)
         self.assertEqual(out, "")  # messages go to stderr

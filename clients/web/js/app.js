@@ -216,8 +216,13 @@ async function openScene(id, { camera = null, label = null } = {}) {
     }
     clearError('scene');
     // The scene's camera: the summary's (when the server reports one), else the document's
-    // that this browser uploaded, else the server's default framing of the bounds.
-    const home = checkCamera(summary.camera) ?? checkCamera(memory.read('cameras')[id]) ?? defaultCamera(summary.bounds);
+    // that this browser uploaded, else the server's default framing of the bounds for the
+    // chosen image size (the sphere fills its narrower side).
+    const size = vs.parseSize(view.size) ?? vs.parseSize(vs.DEFAULTS.size);
+    const home =
+        checkCamera(summary.camera) ??
+        checkCamera(memory.read('cameras')[id]) ??
+        defaultCamera(summary.bounds, size.width / size.height);
     scene = { summary, label: label ?? memory.read('names')[id] ?? null, home: roundCamera(home) };
     view.scene = id;
     view.camera = roundCamera(camera ?? home);

@@ -29,17 +29,19 @@ export function normalize(v) {
     return len > 0 ? [v[0] / len, v[1] / len, v[2] / len] : v;
 }
 
-/** The camera the server frames a scene with when none is given (engine/scene/scene.cpp
- *  default_camera): the bounds' centre seen from −z, its bounding sphere filling the height. */
-export function defaultCamera(bounds) {
+/** The camera the server frames a scene with when none is given, for an image of `aspect` =
+ *  width / height (engine/scene/scene.cpp default_camera): the bounds' centre seen from −z,
+ *  their bounding sphere (half the diagonal) just filling the narrower field of view. */
+export function defaultCamera(bounds, aspect = 4 / 3) {
     const cam = { position: [0, 0, 0], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 };
     if (!bounds || !bounds.min || !bounds.max) return cam;
     const { min: lo, max: hi } = bounds;
     if (lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]) return cam;
     const c = scale(add(lo, hi), 0.5);
     const radius = Math.max(0.5 * length(sub(hi, lo)), 1e-9);
-    const halfFov = (0.5 * cam.fov_y_deg * Math.PI) / 180.0;
-    const dist = radius / Math.sin(halfFov);
+    const halfFovY = (0.5 * cam.fov_y_deg * Math.PI) / 180.0;
+    const halfFovX = aspect > 0 && Number.isFinite(aspect) ? Math.atan(Math.tan(halfFovY) * aspect) : halfFovY;
+    const dist = radius / Math.sin(Math.min(halfFovY, halfFovX));
     cam.look_at = c;
     cam.position = sub(c, [0, 0, dist]);
     return cam;

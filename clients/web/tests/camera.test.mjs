@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import test from 'node:test';
 
 import {
-    cameraRay, checkCamera, cross, defaultCamera, dot, length, normalize, orbit, pan, pixelRay, roundCamera, sub, zoom,
+    cameraRay, checkCamera, cross, defaultCamera, dot, length, normalize, orbit, pan, pixelRay, roundCamera, scale, sub, zoom,
 } from '../js/camera.js';
 
 const tutorial = { position: [0, 0, 0], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 };
@@ -37,6 +37,23 @@ test('default framing: the bounds\' centre seen from -z, the bounding sphere fil
     assert.deepEqual(cam.look_at, [0, 1.5, 9]);
     assert.ok(close(cam.position, [0, 1.5, 9 - radius / Math.sin((22.5 * Math.PI) / 180)]));
     assert.deepEqual(defaultCamera({ min: [1, 1, 1], max: [0, 0, 0] }).position, [0, 0, 0]);
+});
+
+test('default framing, portrait: the bounding sphere fills the width (as engine/render/render_test.cpp checks)', () => {
+    const bounds = { min: [-1, 0, 2], max: [3, 1, 4] };
+    const c = [1, 0.5, 3];
+    const radius = 0.5 * Math.sqrt(16 + 1 + 4);
+    const distance = (ray) => length(sub(sub(c, ray.origin), scale(ray.direction, dot(sub(c, ray.origin), ray.direction))));
+    for (const [w, h] of [[640, 480], [480, 640], [300, 300]]) {
+        const cam = defaultCamera(bounds, w / h);
+        const top = distance(cameraRay(cam, w, h, w / 2, 0));
+        const left = distance(cameraRay(cam, w, h, 0, h / 2));
+        const [narrow, wide] = w >= h ? [top, left] : [left, top];
+        assert.ok(Math.abs(narrow - radius) < 1e-12 * radius, `${w}x${h}: ${narrow} vs ${radius}`);
+        assert.ok(wide >= radius * (1 - 1e-12), `${w}x${h}`);
+    }
+    // Landscape images frame by the height: the 4:3 default is the old framing.
+    assert.deepEqual(defaultCamera(bounds, 16 / 9), defaultCamera(bounds));
 });
 
 test('orbit keeps look_at, the distance and up; a full turn comes back', () => {
