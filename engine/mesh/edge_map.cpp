@@ -108,6 +108,10 @@ EdgeMap build_edge_map(const WeldedTriangles& w) {
     for (std::uint32_t lo = 0; lo < w.vertices; ++lo) {
         Entry* b = entries.data() + off[lo];
         Entry* e = entries.data() + off[lo + 1];
+        // An empty row does nothing; with no faces at all entries.data() is null, and b + 1 would
+        // offset a null pointer (UBSan, found by fuzz_scene_doc).
+        if (b == e)
+            continue;
         // Stable: the half-edges of one edge stay in triangle order. Rows are short (about six
         // entries): insertion sort, without the buffer std::stable_sort allocates per call (that
         // allocation was most of this pass on 1M triangles).

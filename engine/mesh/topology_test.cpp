@@ -110,6 +110,19 @@ TEST(Topology, DegenerateTrianglesAreCountedAndMakeItWinding) {
     EXPECT_EQ(t.sign, SignMethod::winding);
 }
 
+// A mesh of nothing but a triangle with three equal corners has no edges at all: the edge map's
+// rows are all empty (fuzz_scene_doc found them offsetting a null pointer; UBSan catches it).
+TEST(Topology, OnlyDegenerateTrianglesHaveNoEdges) {
+    auto mesh = std::make_shared<TriangleMesh>();
+    mesh->positions = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    mesh->triangles = {{0, 1, 2}};
+    const MeshTopology t = compute_topology(*mesh);
+    EXPECT_EQ(t.triangles, 1u);
+    EXPECT_EQ(t.degenerate_triangles, 1u);
+    EXPECT_EQ(t.boundary_edges, 0u);
+    EXPECT_EQ(t.non_manifold_edges, 0u);
+}
+
 TEST(Topology, AHugeFanInRandomOrderDoesNotHang) {
     // 100,000 triangles around one vertex, listed in random order (OpenMesh's add_face walks a
     // vertex's one-ring; the edge map's per-vertex work is O(n log n)). Closed by a second fan,

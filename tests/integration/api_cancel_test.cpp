@@ -254,7 +254,8 @@ void expect_stopped(const ServerProcess& server, const char* what, const Abandon
     report(what, a);
     EXPECT_GT(a.working_cpu_s, 0.05) << what << ": the work should have been running";
     ASSERT_TRUE(a.stop_s) << what << ": the work went on after its client had gone";
-    EXPECT_LT(*a.stop_s, 0.5) << what;
+    // Under ASan a tile or block takes several times longer, so the next check comes later.
+    EXPECT_LT(*a.stop_s, kAllocatorHandsMemoryBack ? 0.5 : 1.5) << what;
     if (kAllocatorHandsMemoryBack) {
         EXPECT_LT(a.rss_after, a.rss_before + (64u << 20)) << what;
     }
