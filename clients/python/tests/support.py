@@ -17,7 +17,7 @@ PACKAGE_ROOT = HERE.parent
 REPO = PACKAGE_ROOT.parents[1]
 sys.path.insert(0, str(PACKAGE_ROOT))
 
-from raycastd import Client, NotFound  # noqa: E402
+from raycastd import Client  # noqa: E402
 from raycastd.server import LocalServer  # noqa: E402
 
 EXAMPLES = REPO / "clients" / "examples"
@@ -57,12 +57,3 @@ class ServerTestCase(unittest.TestCase):
     def tearDownClass(cls) -> None:
         cls.client.close()
         cls.server.close()
-
-    def skip_without_points(self) -> None:
-        """Skips the test when the server has no points route yet (404 not_found)."""
-        try:
-            self.client.points(TUTORIAL, [[0, 0, 0]], query="distance")
-        except NotFound as exc:
-            if exc.code == "not_found":
-                self.skipTest(f"server has no points endpoint yet: {exc}")
-            raise

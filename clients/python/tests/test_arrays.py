@@ -71,7 +71,6 @@ class ListPathTest(ServerTestCase):
             self.lists.cast_rays(TUTORIAL, [[0, 0, 0, 0, 0, 1]], dtype="float16")
 
     def test_points_lists(self) -> None:
-        self.skip_without_points()
         d = self.lists.compute_distance(TUTORIAL, [[0, 0, 0], [0, 0, 10]])
         # The nearest of the three spheres to the eye is sphere 2 at (0, 3, 8), not the first hit
         # along +z (sphere 3): 8.544 − 2 against 9.055 − 2.
@@ -158,7 +157,6 @@ class NumpyPathTest(ServerTestCase):
             self.np.cast_rays(TUTORIAL, np.zeros((4, 5)))
 
     def test_points_numpy(self) -> None:
-        self.skip_without_points()
         np = numpy
         pts = np.array([[[0, 0, 0], [0, 0, 10]]], dtype=np.float64)
         d = self.np.compute_distance(TUTORIAL, pts)

@@ -216,7 +216,6 @@ class CliTest(ServerTestCase):
         )
 
     def test_points(self) -> None:
-        self.skip_without_points()
         out = self.ok("points", str(self.scene_file), "--point", "0,0,0", "--query", "closest")
         self.assertIn("closest", out)
         data = json.loads(
@@ -231,13 +230,6 @@ class CliTest(ServerTestCase):
             )
         )
         self.assertTrue(data["results"][0]["inside"])
-
-    def test_points_route_missing_is_an_api_error(self) -> None:
-        code, out, err = self.run_cli("points", str(self.scene_file), "--point", "0,0,0")
-        if code == 0:
-            self.skipTest("the server has a points endpoint")
-        self.assertEqual(code, 1)
-        self.assertIn("not_found", err)
 
     def test_usage_errors_exit_2(self) -> None:
         for args in (

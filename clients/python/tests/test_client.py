@@ -142,7 +142,6 @@ class EndpointsTest(ServerTestCase):
             self.client.job(job)
 
     def test_points_json(self) -> None:
-        self.skip_without_points()
         ans = self.client.points(TUTORIAL, [[0, 0, 0], [0, 0, 10]], query="closest")
         self.assertEqual(ans["query"], "closest")
         self.assertTrue(ans["results"][0]["found"])
