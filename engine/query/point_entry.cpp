@@ -1,24 +1,19 @@
 // QueryEngine's point-query entries (intersect.h): closest points through the accelerator the
 // scene has, each object's topology, and the winding-number trees built on first use.
 
-#include <atomic>
-#include <mutex>
-
 #include <tbb/parallel_for.h>
 
 #include "engine/accel/embree_accel.h"
 #include "engine/accel/point_query.h"
 #include "engine/accel/winding_bvh.h"
 #include "engine/query/intersect.h"
+#include "engine/query/per_object_once.h"
 
 namespace raycastd::engine {
 
-/// One lazily built WindingBvh per object (null for spheres and until first asked for).
-struct WindingTrees {
-    explicit WindingTrees(std::size_t n) : once(n), trees(n) {}
-    std::vector<std::once_flag> once;
-    std::vector<std::unique_ptr<const WindingBvh>> trees;
-    std::atomic<std::size_t> bytes{0};
+/// One lazily built WindingBvh per mesh object (never for spheres).
+struct WindingTrees : PerObjectOnce<WindingBvh> {
+    using PerObjectOnce::PerObjectOnce;
 };
 
 std::optional<PointHit> QueryEngine::closest_point(const Vec3d& p, double max_distance) const {
@@ -31,16 +26,12 @@ double QueryEngine::winding_number(std::uint32_t object, const Vec3d& p) const {
     const Object& o = scene_->objects[object];
     if (o.kind == ObjectKind::sphere)
         return 0.0;
-    std::call_once(winding_->once[object], [&] {
-        auto tree = std::make_unique<const WindingBvh>(*o.mesh);
-        winding_->bytes += tree->memory_bytes();
-        winding_->trees[object] = std::move(tree);
-    });
-    return winding_->trees[object]->winding_number(p);
+    return winding_->get(object, [&] { return std::make_unique<const WindingBvh>(*o.mesh); })
+        .winding_number(p);
 }
 
 std::size_t QueryEngine::point_memory_bytes() const {
-    return winding_ ? winding_->bytes.load() : 0;
+    return winding_ ? winding_->memory_bytes() : 0;
 }
 
 void QueryEngine::prepare_points() {

@@ -1,19 +1,14 @@
 // QueryEngine's computed shading normals (intersect.h): built per mesh on first use, as the
 // winding-number trees are (point_entry.cpp), so that a registration never pays for them.
 
-#include <atomic>
-#include <mutex>
-
 #include "engine/query/intersect.h"
+#include "engine/query/per_object_once.h"
 
 namespace raycastd::engine {
 
-/// One lazily computed CornerNormals per object (null where none is needed, and until asked).
-struct ComputedNormals {
-    explicit ComputedNormals(std::size_t n) : once(n), normals(n) {}
-    std::vector<std::once_flag> once;
-    std::vector<std::unique_ptr<const CornerNormals>> normals;
-    std::atomic<std::size_t> bytes{0};
+/// One lazily computed CornerNormals per mesh object that has no normals of its own.
+struct ComputedNormals : PerObjectOnce<CornerNormals> {
+    using PerObjectOnce::PerObjectOnce;
 };
 
 void QueryEngine::prepare_normals() {
@@ -21,19 +16,16 @@ void QueryEngine::prepare_normals() {
 }
 
 std::size_t QueryEngine::normals_memory_bytes() const {
-    return normals_ ? normals_->bytes.load() : 0;
+    return normals_ ? normals_->memory_bytes() : 0;
 }
 
 const CornerNormals* QueryEngine::computed_normals(std::uint32_t object) const {
     const Object& o = scene_->objects[object];
     if (o.kind != ObjectKind::mesh || o.mesh->normals.size() == o.mesh->positions.size())
         return nullptr;
-    std::call_once(normals_->once[object], [&] {
-        auto n = std::make_unique<const CornerNormals>(compute_corner_normals(*o.mesh));
-        normals_->bytes += n->memory_bytes();
-        normals_->normals[object] = std::move(n);
+    return &normals_->get(object, [&] {
+        return std::make_unique<const CornerNormals>(compute_corner_normals(*o.mesh));
     });
-    return normals_->normals[object].get();
 }
 
 }  // namespace raycastd::engine
