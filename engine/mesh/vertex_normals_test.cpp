@@ -43,13 +43,7 @@ TEST(VertexNormals, CubeKeepsItsCreases) {
     // corner normal is its face's normal, for the indexed cube and for the STL-style soup (which
     // welding joins).
     const Object cube = testing::cube_object(0, 1);
-    TriangleMesh soup;
-    for (const auto& t : cube.mesh->triangles) {
-        const auto base = static_cast<std::uint32_t>(soup.positions.size());
-        for (std::uint32_t k : t)
-            soup.positions.push_back(cube.mesh->positions[k]);
-        soup.triangles.push_back({base, base + 1, base + 2});
-    }
+    const TriangleMesh soup = testing::triangle_soup(*cube.mesh);
     for (const TriangleMesh* m : std::array<const TriangleMesh*, 2>{cube.mesh.get(), &soup}) {
         const CornerNormals n = compute_corner_normals(*m);
         EXPECT_EQ(n.normals.size(), 8u * 3u + 1u);

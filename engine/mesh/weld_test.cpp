@@ -10,13 +10,7 @@ namespace {
 TEST(Weld, RepeatedPositionsShareOneVertex) {
     // The cube as STL stores it: three corners per triangle, 36 positions for 8 points.
     const Object cube = testing::cube_object(0, 1);
-    TriangleMesh soup;
-    for (const auto& t : cube.mesh->triangles) {
-        const auto base = static_cast<std::uint32_t>(soup.positions.size());
-        for (std::uint32_t k : t)
-            soup.positions.push_back(cube.mesh->positions[k]);
-        soup.triangles.push_back({base, base + 1, base + 2});
-    }
+    const TriangleMesh soup = testing::triangle_soup(*cube.mesh);
     const WeldedTriangles w = weld(soup);
     EXPECT_EQ(w.vertices, 8u);
     ASSERT_EQ(w.triangles.size(), 12u);

@@ -86,6 +86,18 @@ inline Object cube_object(double lo, double hi) {
     return mesh_object("cube", std::move(p), std::move(t));
 }
 
+/// `m` as an STL stores it: three positions of its own for every triangle (welding joins them).
+inline TriangleMesh triangle_soup(const TriangleMesh& m) {
+    TriangleMesh soup;
+    for (const auto& t : m.triangles) {
+        const auto base = static_cast<std::uint32_t>(soup.positions.size());
+        for (std::uint32_t k : t)
+            soup.positions.push_back(m.positions[k]);
+        soup.triangles.push_back({base, base + 1, base + 2});
+    }
+    return soup;
+}
+
 /// A closed icosphere: the icosahedron subdivided `level` times (20·4^level triangles), shared
 /// vertices projected onto the sphere, faces counter-clockwise seen from outside.
 inline Object icosphere_object(int level, Vec3d center = {0, 0, 0}, double radius = 1.0) {
