@@ -5,7 +5,7 @@
 #include <charconv>
 #include <cstdlib>
 #include <cstring>
-#include <set>
+#include <map>
 #include <vector>
 
 namespace raycastd::server {
@@ -61,14 +61,95 @@ bool to_size(const char* s, std::size_t& out) {
     return r.ec == std::errc() && r.ptr == end;
 }
 
-/// The flags that take a number, so that an unknown flag is called unknown whatever its value.
-const std::set<std::string>& numeric_flags() {
-    static const std::set<std::string> flags = {
-        "--port",           "--threads",          "--max-connections", "--max-body-mb",
-        "--max-rays",       "--max-points",       "--max-pixels",      "--max-triangles",
-        "--max-concurrent", "--memory-budget-mb", "--body-budget-mb",  "--header-timeout-s",
-        "--idle-timeout-s", "--request-timeout-s"};
-    return flags;
+std::string set_threads(Config& c, const std::string& a, std::size_t n) {
+    if (n > 900)
+        return a + " must be at most 900";
+    c.threads = static_cast<int>(n);
+    return {};
+}
+
+/// A number-valued option: stores n in the config, or returns why n is refused.
+using NumberSetter = std::string (*)(Config&, const std::string& flag, std::size_t n);
+
+/// The options that take a number, each with what it sets: one table, so that a flag is either
+/// known here or "unknown option" whatever its value (--max-points was once listed by --help but
+/// missing from a separate list of numeric flags, and refused).
+const std::map<std::string, NumberSetter>& number_options() {
+    static const std::map<std::string, NumberSetter> options = {
+        {"--port",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             if (n > 65535)
+                 return "--port must be at most 65535";
+             c.port = static_cast<int>(n);
+             return {};
+         }},
+        // --threads is --max-connections under its old name. cpp-httplib refuses descriptors
+        // past FD_SETSIZE (1024) with a 500.
+        {"--threads", &set_threads},
+        {"--max-connections", &set_threads},
+        {"--max-body-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_body_bytes = n << 20;
+             return {};
+         }},
+        {"--max-rays",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_rays = n;
+             return {};
+         }},
+        {"--max-points",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_points = n;
+             return {};
+         }},
+        {"--max-pixels",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_pixels = n;
+             return {};
+         }},
+        {"--max-triangles",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_triangles = n;
+             return {};
+         }},
+        {"--max-concurrent",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_concurrent = n;
+             return {};
+         }},
+        {"--memory-budget-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.memory_budget_bytes = n << 20;
+             return {};
+         }},
+        {"--body-budget-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.body_budget_bytes = n << 20;
+             return {};
+         }},
+        {"--header-timeout-s",
+         [](Config& c, const std::string& a, std::size_t n) -> std::string {
+             if (n == 0 || n > 3600)
+                 return a + " must be from 1 to 3600";
+             c.limits.header_timeout_s = n;
+             return {};
+         }},
+        {"--idle-timeout-s",
+         [](Config& c, const std::string& a, std::size_t n) -> std::string {
+             if (n == 0 || n > 3600)
+                 return a + " must be from 1 to 3600";
+             c.limits.idle_timeout_s = n;
+             return {};
+         }},
+        {"--request-timeout-s",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             if (n > 86400)
+                 return "--request-timeout-s must be at most 86400";
+             c.limits.request_timeout_s = n;
+             return {};
+         }},
+    };
+    return options;
 }
 
 }  // namespace
@@ -131,45 +212,12 @@ std::string apply(Config& c, const std::string& a, const std::string& v) {
         if (!level)
             return "--log-level must be error, warn, info or debug, got \"" + v + "\"";
         c.log_level = *level;
-    } else if (!numeric_flags().count(a)) {
+    } else if (const auto o = number_options().find(a); o == number_options().end()) {
         return "unknown option " + a;
     } else if (!numeric) {
         return a + " needs a non-negative whole number, got \"" + v + "\"";
-    } else if (a == "--port") {
-        if (n > 65535)
-            return "--port must be at most 65535";
-        c.port = static_cast<int>(n);
-    } else if (a == "--threads" || a == "--max-connections") {
-        // cpp-httplib refuses descriptors past FD_SETSIZE (1024) with a 500.
-        if (n > 900)
-            return a + " must be at most 900";
-        c.threads = static_cast<int>(n);
-    } else if (a == "--max-body-mb") {
-        c.limits.max_body_bytes = n << 20;
-    } else if (a == "--max-rays") {
-        c.limits.max_rays = n;
-    } else if (a == "--max-points") {
-        c.limits.max_points = n;
-    } else if (a == "--max-pixels") {
-        c.limits.max_pixels = n;
-    } else if (a == "--max-triangles") {
-        c.limits.max_triangles = n;
-    } else if (a == "--max-concurrent") {
-        c.limits.max_concurrent = n;
-    } else if (a == "--memory-budget-mb") {
-        c.limits.memory_budget_bytes = n << 20;
-    } else if (a == "--body-budget-mb") {
-        c.limits.body_budget_bytes = n << 20;
-    } else if (a == "--header-timeout-s" || a == "--idle-timeout-s") {
-        if (n == 0 || n > 3600)
-            return a + " must be from 1 to 3600";
-        (a == "--header-timeout-s" ? c.limits.header_timeout_s : c.limits.idle_timeout_s) = n;
-    } else if (a == "--request-timeout-s") {
-        if (n > 86400)
-            return "--request-timeout-s must be at most 86400";
-        c.limits.request_timeout_s = n;
     } else {
-        return "unknown option " + a;
+        return o->second(c, a, n);
     }
     return {};
 }
