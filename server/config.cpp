@@ -26,6 +26,8 @@ usage: raycastd [options]
   --max-rays N            most rays per intersect request (default 16777216)
   --max-points N          most points per points request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
+  --max-texture-pixels N  largest texture image, read from its header before decoding; a
+                          larger one is dropped with a warning (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
   --max-concurrent N      work requests in flight before 503 busy (default: 8 per hardware
                           thread, at least 64)
@@ -107,6 +109,11 @@ const std::map<std::string, NumberSetter>& number_options() {
              c.limits.max_pixels = n;
              return {};
          }},
+        {"--max-texture-pixels",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.max_texture_pixels = n;
+             return {};
+         }},
         {"--max-triangles",
          [](Config& c, const std::string&, std::size_t n) -> std::string {
              c.limits.max_triangles = n;
@@ -179,6 +186,7 @@ const std::vector<std::string>& env_flags() {
                                                    "--max-rays",
                                                    "--max-points",
                                                    "--max-pixels",
+                                                   "--max-texture-pixels",
                                                    "--max-triangles",
                                                    "--max-concurrent",
                                                    "--memory-budget-mb",

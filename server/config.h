@@ -16,6 +16,7 @@ struct Limits {
     std::size_t max_rays = 16u << 20;              ///< rays per intersect request
     std::size_t max_points = 16u << 20;            ///< points per points request
     std::size_t max_pixels = 16u << 20;            ///< width × height × spp per render
+    std::size_t max_texture_pixels = 16u << 20;    ///< pixels of one texture image (else dropped)
     std::size_t max_triangles = 50'000'000;        ///< triangles per scene
     std::size_t max_concurrent = 0;                ///< work requests in flight (0: 2 × threads)
     std::size_t memory_budget_bytes = 4ull << 30;  ///< resident scenes before LRU eviction

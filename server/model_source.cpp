@@ -49,6 +49,8 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
     const bool all_normals = std::all_of(model.parts.begin(), model.parts.end(),
                                          [](const auto& p) { return !p.mesh.normals.empty(); });
     const bool any_material = !model.materials.empty();
+    const bool any_uvs = std::any_of(model.parts.begin(), model.parts.end(),
+                                     [](const auto& p) { return !p.mesh.corner_uvs.empty(); });
     for (const auto& part : model.parts) {
         const auto base = static_cast<std::uint32_t>(mesh->positions.size());
         mesh->positions.insert(mesh->positions.end(), part.mesh.positions.begin(),
@@ -65,6 +67,11 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
                                                       ? fallback
                                                       : material_base +
                                                             part.mesh.triangle_material[t]);
+            }
+            if (any_uvs) {
+                mesh->corner_uvs.push_back(part.mesh.corner_uvs.empty()
+                                               ? std::array<std::array<float, 2>, 3>{}
+                                               : part.mesh.corner_uvs[t]);
             }
         }
     }
@@ -96,6 +103,7 @@ engine::LoadLimits load_limits(const Limits& limits) {
     l.max_triangles = limits.max_triangles;
     // A mesh has at most about three vertices per triangle unless it is padding itself out.
     l.max_vertices = 3 * limits.max_triangles;
+    l.max_texture_pixels = limits.max_texture_pixels;
     return l;
 }
 

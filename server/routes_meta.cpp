@@ -27,6 +27,7 @@ void install_meta_routes(App& app) {
                   {"max_rays", c.limits.max_rays},
                   {"max_points", c.limits.max_points},
                   {"max_pixels", c.limits.max_pixels},
+                  {"max_texture_pixels", c.limits.max_texture_pixels},
                   {"max_triangles", c.limits.max_triangles},
                   {"max_concurrent", app.max_concurrent()},
                   {"memory_budget_bytes", c.limits.memory_budget_bytes}}},

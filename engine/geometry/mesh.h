@@ -19,6 +19,11 @@ struct TriangleMesh {
     std::vector<Vec3f> normals;
     /// Optional per-triangle material index into Scene::materials (empty: the object's).
     std::vector<std::uint32_t> triangle_material;
+    /// Optional texture coordinates (u, v) of each triangle's three corners, in the order of
+    /// its indices, in glTF's convention (engine/scene/texture.h); empty when the model has
+    /// none. Per corner rather than per vertex because OBJ gives a vertex a different (u, v)
+    /// on each side of a texture seam.
+    std::vector<std::array<std::array<float, 2>, 3>> corner_uvs;
 
     std::size_t size() const { return triangles.size(); }
     Triangle triangle(std::size_t i) const {

@@ -35,6 +35,10 @@ struct LocalMesh {
     std::vector<std::uint32_t>
         materials;  ///< per triangle, kNoMaterial when the primitive has none
     bool any_material = false;
+    /// Per triangle, (0, 0) where its primitive's material is not textured; kept only when
+    /// some primitive's are (any_uvs).
+    std::vector<std::array<std::array<float, 2>, 3>> corner_uvs;
+    bool any_uvs = false;
 };
 
 struct Placed {
@@ -254,9 +258,52 @@ Result<std::vector<std::uint32_t>> primitive_indices(const tinygltf::Model& m,
     return read;
 }
 
+/// Appends the corner texture coordinates of the triangles from `first` on: the primitive's
+/// TEXCOORD_n set mapped by the material's UvMapping when its material is textured, else
+/// (0, 0). A set that is missing or has another count than POSITION is a warning.
+Status add_corner_uvs(const tinygltf::Model& m, const tinygltf::Primitive& prim,
+                      const std::string& where, const UvMapping* mapping, std::uint32_t base,
+                      std::size_t count, std::size_t first, LocalMesh& out,
+                      std::vector<std::string>& warnings) {
+    std::vector<double> uv;
+    if (mapping && mapping->texcoord >= 0) {
+        const std::string set = "TEXCOORD_" + std::to_string(mapping->texcoord);
+        auto it = prim.attributes.find(set);
+        if (it == prim.attributes.end()) {
+            warnings.push_back(where + " has a textured material but no " + set +
+                               "; drawn untextured");
+        } else {
+            auto read = read_floats(m, it->second, 2, where + "/attributes/" + set);
+            if (!read)
+                return read.status();
+            if (read->size() != 2 * count) {
+                warnings.push_back(where + ": " + set +
+                                   " count differs from POSITION count; drawn untextured");
+            } else {
+                uv = std::move(*read);
+                out.any_uvs = true;
+            }
+        }
+    }
+    for (std::size_t t = first; t < out.triangles.size(); ++t) {
+        std::array<std::array<float, 2>, 3> corners{};
+        if (!uv.empty()) {
+            const auto& k = mapping->matrix;
+            for (std::size_t c = 0; c < 3; ++c) {
+                const std::size_t v = out.triangles[t][c] - base;
+                const double u0 = uv[2 * v], v0 = uv[2 * v + 1];
+                corners[c] = {static_cast<float>(k[0] * u0 + k[1] * v0 + k[2]),
+                              static_cast<float>(k[3] * u0 + k[4] * v0 + k[5])};
+            }
+        }
+        out.corner_uvs.push_back(corners);
+    }
+    return {};
+}
+
 Status add_primitive(const tinygltf::Model& m, std::size_t mesh, std::size_t p,
-                     const std::vector<double>& weights, LocalMesh& out, bool& normals_complete,
-                     std::vector<std::string>& warnings) {
+                     const std::vector<double>& weights, const std::vector<UvMapping>& uv_maps,
+                     LocalMesh& out, bool& normals_complete, std::vector<std::string>& warnings) {
     const tinygltf::Primitive& prim = m.meshes[mesh].primitives[p];
     const std::string where =
         "/meshes/" + std::to_string(mesh) + "/primitives/" + std::to_string(p);
@@ -316,20 +363,26 @@ Status add_primitive(const tinygltf::Model& m, std::size_t mesh, std::size_t p,
         out.normals.push_back(nrm.empty() ? Vec3d{}
                                           : Vec3d{nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]});
     }
+    const std::size_t first = out.triangles.size();
     append_triangles(prim.mode, *indices, base, material, out);
-    return {};
+    const UvMapping* mapping = material < uv_maps.size() ? &uv_maps[material] : nullptr;
+    return add_corner_uvs(m, prim, where, mapping, base, count, first, out, warnings);
 }
 
 Result<LocalMesh> build_local_mesh(const tinygltf::Model& m, std::size_t mesh,
                                    const std::vector<double>& weights,
+                                   const std::vector<UvMapping>& uv_maps,
                                    std::vector<std::string>& warnings) {
     LocalMesh out;
     bool normals_complete = true;
     for (std::size_t p = 0; p < m.meshes[mesh].primitives.size(); ++p) {
-        if (Status st = add_primitive(m, mesh, p, weights, out, normals_complete, warnings);
+        if (Status st =
+                add_primitive(m, mesh, p, weights, uv_maps, out, normals_complete, warnings);
             !st.ok())
             return st;
     }
+    if (!out.any_uvs)
+        out.corner_uvs.clear();
     if (!normals_complete) {
         if (std::any_of(out.normals.begin(), out.normals.end(),
                         [](const Vec3d& n) { return n != Vec3d{}; })) {
@@ -356,9 +409,12 @@ ModelPart instance(const LocalMesh& local, const Transform& world, std::string n
         mesh.normals.push_back(Vec3f(world.apply_normal(n)));
     const bool mirrored = world.determinant3() < 0.0;
     mesh.triangles = local.triangles;
+    mesh.corner_uvs = local.corner_uvs;
     if (mirrored) {
         for (auto& t : mesh.triangles)
             std::swap(t[1], t[2]);
+        for (auto& c : mesh.corner_uvs)
+            std::swap(c[1], c[2]);
     }
     if (local.any_material) {
         mesh.triangle_material.reserve(local.materials.size());
@@ -406,7 +462,8 @@ Status add_camera_and_lights(const tinygltf::Model& m, const std::vector<Placed>
 /// Builds each mesh once (at its default weights; again for nodes with their own weights) and
 /// places one part per mesh node, in traversal order. `built` records which meshes were read.
 Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& placed,
-                       std::string_view name, const LoadLimits& limits, std::vector<bool>& built,
+                       std::string_view name, const LoadLimits& limits,
+                       const std::vector<UvMapping>& uv_maps, std::vector<bool>& built,
                        LoadedModel& out) {
     std::optional<std::uint32_t> default_index;
     auto default_material = [&]() {
@@ -428,7 +485,7 @@ Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& plac
         LocalMesh own;
         const LocalMesh* local = nullptr;
         if (!node.weights.empty()) {
-            auto local_mesh = build_local_mesh(m, mesh, node.weights, out.warnings);
+            auto local_mesh = build_local_mesh(m, mesh, node.weights, uv_maps, out.warnings);
             if (!local_mesh)
                 return local_mesh.status();
             own = std::move(*local_mesh);
@@ -436,7 +493,8 @@ Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& plac
         } else if (auto it = cache.find(mesh); it != cache.end()) {
             local = &it->second;
         } else {
-            auto local_mesh = build_local_mesh(m, mesh, m.meshes[mesh].weights, out.warnings);
+            auto local_mesh =
+                build_local_mesh(m, mesh, m.meshes[mesh].weights, uv_maps, out.warnings);
             if (!local_mesh)
                 return local_mesh.status();
             local = &cache.emplace(mesh, std::move(*local_mesh)).first->second;
@@ -465,8 +523,8 @@ Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& plac
 
 }  // namespace
 
-Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLimits& limits,
-                   LoadedModel& out) {
+Status build_model(const tinygltf::Model& m, std::string_view name, const ResourceReader& read,
+                   const LoadLimits& limits, LoadedModel& out) {
     if (Status st = check_hierarchy(m); !st.ok())
         return st;
     auto roots = scene_roots(m);
@@ -481,8 +539,10 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLi
         out.material_names.push_back(m.materials[i].name.empty() ? "material " + std::to_string(i)
                                                                  : m.materials[i].name);
     }
+    const std::vector<UvMapping> uv_maps =
+        attach_base_color_textures(m, read, limits, out.materials, out.warnings);
     std::vector<bool> built(m.meshes.size(), false);
-    if (Status st = instance_meshes(m, *placed, name, limits, built, out); !st.ok())
+    if (Status st = instance_meshes(m, *placed, name, limits, uv_maps, built, out); !st.ok())
         return st;
     // Meshes no node instances are still checked (references, accessor types, index ranges),
     // so a file is accepted or refused as a whole, as the glTF-Validator judges it; their
@@ -491,7 +551,7 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const LoadLi
         if (built[mesh])
             continue;
         std::vector<std::string> unused_warnings;
-        auto checked = build_local_mesh(m, mesh, m.meshes[mesh].weights, unused_warnings);
+        auto checked = build_local_mesh(m, mesh, m.meshes[mesh].weights, uv_maps, unused_warnings);
         if (!checked)
             return checked.status();
     }

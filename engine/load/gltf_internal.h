@@ -2,6 +2,7 @@
 // Internal to engine/load: what the glTF loader's translation units share. This header
 // includes tinygltf, so no public header may include it (model_loader.h hides the backend).
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -19,13 +20,33 @@
 
 namespace raycastd::engine::gltf {
 
+/// How a material's texture coordinates are read: the TEXCOORD_<texcoord> set, mapped by the
+/// KHR_texture_transform affine map `matrix` (row-major 2×3: u' = m0·u + m1·v + m2,
+/// v' = m3·u + m4·v + m5). texcoord −1: the material is not textured, so its primitives need
+/// no texture coordinates.
+struct UvMapping {
+    int texcoord = -1;
+    std::array<double, 6> matrix{1, 0, 0, 0, 1, 0};
+};
+
+/// Gives materials[i] the decoded base-colour texture of glTF material i (gltf_textures.cpp):
+/// each image decoded once, from a bufferView, a base64 data: URI or a file read through
+/// `read`, checked against limits.max_texture_pixels before decoding. A texture that cannot
+/// be used is a warning, and the material keeps its factor alone. Returns each material's
+/// UvMapping. Requires validate_buffers() to have passed.
+std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& model,
+                                                  const ResourceReader& read,
+                                                  const LoadLimits& limits,
+                                                  std::vector<Material>& materials,
+                                                  std::vector<std::string>& warnings);
+
 /// Instances every mesh of the default scene (else scene 0, else every root node) with its
 /// world transform into out.parts, and fills materials, lights, camera and warnings
 /// (gltf_build.cpp). Requires validate_buffers() to have passed. Errors are model_load_failed
 /// (bad reference, index out of range, node cycle or shared child, hierarchy deeper than 256)
 /// or too_large; messages carry a JSON pointer but not the model's name.
-Status build_model(const tinygltf::Model& model, std::string_view name, const LoadLimits& limits,
-                   LoadedModel& out);
+Status build_model(const tinygltf::Model& model, std::string_view name, const ResourceReader& read,
+                   const LoadLimits& limits, LoadedModel& out);
 
 /// Checks every bufferView against its buffer, and every accessor (with its sparse indices and
 /// values) against its bufferView, before any of them is read: offset + (count − 1)·stride +

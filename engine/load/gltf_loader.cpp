@@ -5,8 +5,9 @@
 // declared length and ignores the version), every accessor and bufferView range
 // (gltf_accessors.cpp), every index against its vertex count, and the node graph (cycles,
 // shared children, depth). tinygltf's file access is routed to the caller's ResourceReader
-// and allowed only for the URIs of the document's buffers, so images are neither read nor
-// decoded (we do not texture). nlohmann/json, tinygltf's own parser, is used beforehand to list
+// and allowed only for the URIs of the document's buffers; tinygltf neither reads nor decodes
+// images: the base-colour textures that materials use are read and decoded afterwards, by
+// us (gltf_textures.cpp). nlohmann/json, tinygltf's own parser, is used beforehand to list
 // those URIs and, after a failed parse, to name an unsupported required extension.
 
 #include <map>
@@ -27,8 +28,7 @@ constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
 constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 
 // Extensions whose absence of support cannot change the geometry or lighting we produce:
-// lights and quantized attributes we implement; texture transforms and emissive strength only
-// affect what we read (emissive) or ignore (textures).
+// lights, quantized attributes, texture transforms and emissive strength we implement.
 const std::set<std::string> kSupportedRequired = {"KHR_lights_punctual", "KHR_mesh_quantization",
                                                   "KHR_texture_transform",
                                                   "KHR_materials_emissive_strength"};
@@ -239,8 +239,17 @@ class ResourceBridge {
     std::string failure_;
 };
 
-bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
-                  const unsigned char*, int, void*) {
+/// tinygltf's image callback. Images are decoded later, and only those a material uses
+/// (gltf_textures.cpp), so nothing is decoded here; but a data: URI's bytes reach us only
+/// through this callback (tinygltf decodes the base64 and keeps no URI), so those are kept as
+/// they are (`as_is`). Images in bufferViews are read from their buffer later; external files
+/// never get here (the file-system callbacks refuse them to tinygltf).
+bool keep_data_uri_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                         const unsigned char* bytes, int size, void*) {
+    if (image->bufferView < 0 && image->uri.empty() && bytes && size > 0) {
+        image->image.assign(bytes, bytes + size);
+        image->as_is = true;
+    }
     return true;
 }
 
@@ -289,7 +298,7 @@ Result<tinygltf::Model> parse(std::string_view bytes, bool binary, const Resourc
     ResourceBridge bridge(read, buffer_uris(doc));
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks(bridge.callbacks());
-    loader.SetImageLoader(&ignore_image, nullptr);
+    loader.SetImageLoader(&keep_data_uri_image, nullptr);
     tinygltf::Model model;
     std::string err, warn;
     bool ok;
@@ -367,7 +376,7 @@ Result<LoadedModel> load_gltf(std::string_view bytes, bool binary, const Resourc
     const tinygltf::Model& m = *parsed;
     if (Status st = check_model(m, glb, binary, out.warnings); !st.ok())
         return with_name(name, st);
-    if (Status st = gltf::build_model(m, name, limits, out); !st.ok())
+    if (Status st = gltf::build_model(m, name, read, limits, out); !st.ok())
         return with_name(name, st);
     if (Status st = finish_model(out, name, limits); !st.ok())
         return st;

@@ -58,7 +58,7 @@ Result<Transform> local_transform(const tinygltf::Node& node, int index) {
 // roughness as α = roughness². Walter et al., "Microfacet Models for Refraction through Rough
 // Surfaces" (EGSR 2007) eq. 33 relates a Beckmann α to the Phong exponent that gives the same
 // highlight width: n = 2/α² − 2, i.e. n = 2/roughness⁴ − 2. Hence:
-//   diffuse   = baseColor.rgb            (texture not sampled)
+//   diffuse   = baseColor.rgb            (× the baseColorTexture at the hit: shade/whitted.cpp)
 //   ambient   = 0.1 · diffuse            (the engine's ambient-to-diffuse ratio)
 //   specular  = mix(0.04, baseColor.rgb, metallic)
 //   shininess = clamp(2/roughness⁴ − 2, 1, 1000)

@@ -4,11 +4,13 @@
 
 #include <cctype>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "engine/load/model_loader.h"
+#include "engine/scene/texture.h"
 
 namespace raycastd::engine::detail {
 
@@ -51,6 +53,13 @@ Status check_resource_uri(std::string_view uri);
 /// triangles that is (0 for fewer than 3 vertices). Fan triangulation is exact for convex
 /// polygons; a concave polygon gets overlapping triangles, as in every fan-based reader.
 std::size_t add_fan(TriangleMesh& mesh, const std::vector<std::uint32_t>& poly);
+
+/// A PNG or JPEG texture image decoded to 8-bit sRGB RGB (texture_image.cpp). The width ×
+/// height its header declares is checked against `max_pixels` before anything is decoded.
+/// Errors (model_load_failed) carry a reason for the caller's warning: not PNG/JPEG, an
+/// unreadable header, over the limit, or pixels that do not decode.
+Result<std::shared_ptr<const TextureImage>> decode_texture_image(std::string_view bytes,
+                                                                 std::size_t max_pixels);
 
 /// Checks shared by every format once the parts are built: finite positions (model_load_failed
 /// naming the part and vertex), finite normals (dropped with a warning otherwise), the limits

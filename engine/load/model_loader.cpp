@@ -163,6 +163,8 @@ void apply_transform(LoadedModel& model, const Transform& t) {
         if (mirrored) {
             for (auto& tri : part.mesh.triangles)
                 std::swap(tri[1], tri[2]);
+            for (auto& c : part.mesh.corner_uvs)
+                std::swap(c[1], c[2]);
         }
     }
     for (Light& l : model.lights) {

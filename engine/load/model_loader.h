@@ -4,9 +4,9 @@
 //
 // The loaders never touch the file system: what a model refers to (external glTF buffers, OBJ
 // material libraries) is fetched through the caller's ResourceReader, which the server confines
-// to its scene root. Images are never read: nothing is textured yet. The glTF backend (tinygltf) is
-// hidden behind this header; OBJ, PLY, STL and OFF have small readers of their own. Errors come
-// back as Status values and nothing is thrown across this API.
+// to its scene root, and so are the images of base-colour textures (PNG, JPEG). The glTF backend
+// (tinygltf) is hidden behind this header; OBJ, PLY, STL and OFF have small readers of their own.
+// Errors come back as Status values and nothing is thrown across this API.
 
 #include <cstddef>
 #include <functional>
@@ -64,6 +64,8 @@ struct ModelPart {
     /// empty (never computed). triangle_material is empty when no triangle of the part names a
     /// material; otherwise it has one index per triangle into LoadedModel::materials, and
     /// triangles without a material of their own use an appended grey "default" material.
+    /// corner_uvs is filled when some triangle's material is textured and its primitive (glTF)
+    /// or its face (OBJ) gives texture coordinates, with (0, 0) for the other triangles.
     TriangleMesh mesh;
 };
 
@@ -88,6 +90,9 @@ struct LoadLimits {
     std::size_t max_triangles = 50'000'000;
     /// Vertices over all parts.
     std::size_t max_vertices = 50'000'000;
+    /// Pixels of one texture image, checked from its header before it is decoded; a larger
+    /// image is dropped with a warning (the material keeps its factor alone).
+    std::size_t max_texture_pixels = 16'777'216;
 };
 
 /// Parses `bytes` as `format`. display_name names the parts and appears in messages (a file

@@ -6,12 +6,13 @@
 // bypass the ResourceReader and so the scene-root confinement; keeps its state in a
 // process-wide singleton, so concurrent loads would race; and reports materials only as face
 // colours, losing the face → material mapping. OBJ is a line format with a handful of
-// statements we need: v, vn, f (and fo), usemtl, mtllib; everything else is skipped.
+// statements we need: v, vt, vn, f (and fo), usemtl, mtllib; everything else is skipped.
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "engine/load/loaders.h"
 #include "engine/load/text_scan.h"
@@ -54,13 +55,77 @@ std::optional<Vec3d> parse_color(const std::vector<std::string_view>& t) {
     return is_finite(c) ? std::optional<Vec3d>(c) : std::nullopt;
 }
 
+/// A material's `map_Kd`: the image's URI (relative to the model, backslashes turned into '/') and
+/// the options that change where it is sampled (MTL appendix B3: -o origin offset, -s scale,
+/// -clamp on).
+struct DiffuseMap {
+    std::string uri;
+    std::array<double, 2> offset{0, 0};
+    std::array<double, 2> scale{1, 1};
+    bool clamp = false;
+};
+
+/// One `newmtl` entry: its Phong material and its diffuse map, if any.
+struct MtlEntry {
+    Material material;
+    std::optional<DiffuseMap> map_kd;
+};
+
+/// `map_Kd [options] file`: the options MTL defines take a fixed number of arguments, except
+/// -o, -s and -t, which take one to three numbers; what follows them is the file name, which
+/// may contain spaces. `dir` is the MTL file's own directory, which names are relative to.
+std::optional<DiffuseMap> parse_map(const std::vector<std::string_view>& t,
+                                    const std::string& dir) {
+    static const std::map<std::string_view, int> kArity = {
+        {"-blendu", 1}, {"-blendv", 1}, {"-boost", 1},   {"-mm", 2}, {"-texres", 1},
+        {"-clamp", 1},  {"-bm", 1},     {"-imfchan", 1}, {"-cc", 1}, {"-type", 1}};
+    DiffuseMap map;
+    std::size_t i = 1;
+    while (i < t.size() && t[i].size() > 1 && t[i][0] == '-') {
+        const std::string_view opt = t[i++];
+        if (opt == "-o" || opt == "-s" || opt == "-t") {
+            std::array<double, 3> v{opt == "-s" ? 1.0 : 0.0, opt == "-s" ? 1.0 : 0.0, 0.0};
+            for (std::size_t k = 0; k < 3 && i < t.size(); ++k, ++i) {
+                auto x = parse_double(t[i]);
+                if (!x || !std::isfinite(*x))
+                    break;
+                v[k] = *x;
+            }
+            if (opt == "-o")
+                map.offset = {v[0], v[1]};
+            if (opt == "-s")
+                map.scale = {v[0], v[1]};
+            continue;
+        }
+        auto a = kArity.find(opt);
+        if (a == kArity.end())
+            break;  // not an option after all: part of the file name
+        if (opt == "-clamp" && i < t.size())
+            map.clamp = t[i] == "on";
+        i += static_cast<std::size_t>(a->second);
+    }
+    std::string name;
+    for (; i < t.size(); ++i)
+        name += (name.empty() ? "" : " ") + std::string(t[i]);
+    if (name.empty())
+        return std::nullopt;
+    std::replace(name.begin(), name.end(), '\\', '/');
+    while (name.rfind("./", 0) == 0)
+        name.erase(0, 2);
+    map.uri = dir + name;
+    return map;
+}
+
 /// MTL statements mapped to Phong: Kd → diffuse, Ka → ambient (0.1·Kd when absent, as for
 /// glTF), Ks → specular, Ns → shininess (clamped to the MTL range 0..1000), d → 1 −
-/// transparency, Ni → index of refraction, Ke → emissive. Texture maps are not sampled.
-void parse_mtl(std::string_view text, std::map<std::string, Material>& out) {
+/// transparency, Ni → index of refraction, Ke → emissive; map_Kd → the diffuse map, whose
+/// colour multiplies diffuse and ambient (the other maps are not sampled).
+void parse_mtl(std::string_view text, const std::string& dir,
+               std::map<std::string, MtlEntry>& out) {
     LineReader lines(text);
     std::string_view line;
     Material* current = nullptr;
+    MtlEntry* entry = nullptr;
     bool has_ambient = false;
     auto close = [&]() {
         if (current && !has_ambient)
@@ -72,8 +137,9 @@ void parse_mtl(std::string_view text, std::map<std::string, Material>& out) {
             continue;
         if (t[0] == "newmtl") {
             close();
-            current = &out[rest_of_line(line, "newmtl")];
-            *current = Material{};
+            entry = &out[rest_of_line(line, "newmtl")];
+            *entry = MtlEntry{};
+            current = &entry->material;
             has_ambient = false;
             continue;
         }
@@ -98,6 +164,8 @@ void parse_mtl(std::string_view text, std::map<std::string, Material>& out) {
             current->transparency = 1.0 - *number;
         } else if (t[0] == "Ni" && number && *number > 0.0 && std::isfinite(*number)) {
             current->ior = *number;
+        } else if (t[0] == "map_Kd") {
+            entry->map_kd = parse_map(tokens(line, /*comments=*/false), dir);
         }
     }
     close();
@@ -153,6 +221,13 @@ class ObjReader {
                 return error(n, "malformed vertex coordinate");
             part_.mesh.positions.push_back({*x, *y, *z});
             vertex_normal_.push_back(kNone);
+        } else if (k == "vt") {
+            // vt u [v [w]]: v and w default to 0 (appendix B1).
+            auto u = t.size() >= 2 ? parse_double(t[1]) : std::nullopt;
+            auto v = t.size() >= 3 ? parse_double(t[2]) : std::optional<double>(0.0);
+            if (!u || !v)
+                return error(n, "malformed texture coordinate");
+            texcoords_.push_back({*u, *v});
         } else if (k == "vn") {
             if (t.size() < 4)
                 return error(n, "a normal needs x, y and z");
@@ -186,6 +261,7 @@ class ObjReader {
 
     Status face(const std::vector<std::string_view>& t, std::size_t n) {
         poly_.clear();
+        poly_uv_.clear();
         for (std::size_t i = 1; i < t.size(); ++i) {
             std::string_view corner = t[i];
             const std::size_t slash = corner.find('/');
@@ -198,9 +274,21 @@ class ObjReader {
             poly_.push_back(*v);
             // v/vt/vn or v//vn: remember the normal; a vertex must keep one normal throughout.
             std::uint32_t normal = kNone;
+            std::uint32_t uv = kNone;
             if (slash != std::string_view::npos) {
                 std::string_view rest = corner.substr(slash + 1);
                 const std::size_t slash2 = rest.find('/');
+                // A bad texture index costs the texture coordinates, not the geometry.
+                if (const std::string_view vt = rest.substr(0, slash2); !vt.empty()) {
+                    if (auto vti = resolve(vt, texcoords_.size())) {
+                        uv = *vti;
+                    } else if (!bad_uv_index_) {
+                        bad_uv_index_ = true;
+                        model_.warnings.push_back("line " + std::to_string(n) +
+                                                  ": texture index in '" + std::string(corner) +
+                                                  "' is out of range; texture coordinates dropped");
+                    }
+                }
                 if (slash2 != std::string_view::npos && slash2 + 1 < rest.size()) {
                     // A bad normal index costs the normals (shading only), not the geometry.
                     if (auto vn = resolve(rest.substr(slash2 + 1), normals_.size())) {
@@ -213,6 +301,7 @@ class ObjReader {
                     }
                 }
             }
+            poly_uv_.push_back(uv);
             std::uint32_t& assigned = vertex_normal_[*v];
             if (normal == kNone || (assigned != kNone && assigned != normal)) {
                 normals_consistent_ = false;
@@ -226,12 +315,59 @@ class ObjReader {
             return {};
         }
         triangle_material_.insert(triangle_material_.end(), added, material_);
+        add_corner_uvs(added);
         if (part_.mesh.triangles.size() > limits_.max_triangles) {
             return Status::error(Code::too_large, std::string(name_) + ": more than " +
                                                       std::to_string(limits_.max_triangles) +
                                                       " triangles");
         }
         return {};
+    }
+
+    /// The corners of the `added` fan triangles (v0, vi, vi+1) just appended, in glTF's uv
+    /// convention (v ↦ 1 − v, engine/scene/texture.h) after the material's -s and -o; (0, 0)
+    /// for a corner without vt.
+    void add_corner_uvs(std::size_t added) {
+        const DiffuseMap* map =
+            material_ < maps_.size() && maps_[material_] ? &*maps_[material_] : nullptr;
+        auto corner = [&](std::size_t k) -> std::array<float, 2> {
+            const std::uint32_t i = poly_uv_[k];
+            if (i == kNone)
+                return {0.0f, 0.0f};
+            any_uv_ = true;
+            double u = texcoords_[i][0], v = texcoords_[i][1];
+            if (map) {
+                u = map->scale[0] * u + map->offset[0];
+                v = map->scale[1] * v + map->offset[1];
+            }
+            return {static_cast<float>(u), static_cast<float>(1.0 - v)};
+        };
+        for (std::size_t i = 1; i <= added; ++i)
+            corner_uvs_.push_back({corner(0), corner(i), corner(i + 1)});
+    }
+
+    /// The texture of a diffuse map, decoded once per image file; null (with a warning) when
+    /// it cannot be read or decoded.
+    std::shared_ptr<const Texture> texture_of(const DiffuseMap& map) {
+        auto cached = textures_.find(map.uri);
+        if (cached == textures_.end()) {
+            Status allowed = check_resource_uri(map.uri);
+            auto bytes = allowed.ok() ? read_(map.uri) : Result<std::string>(allowed);
+            auto image = bytes ? decode_texture_image(*bytes, limits_.max_texture_pixels)
+                               : Result<std::shared_ptr<const TextureImage>>(bytes.status());
+            if (!image) {
+                model_.warnings.push_back("map_Kd '" + map.uri + "': " + image.status().message +
+                                          "; the material's Kd is used alone");
+            }
+            cached = textures_.emplace(map.uri, image ? *image : nullptr).first;
+        }
+        if (!cached->second)
+            return nullptr;
+        auto texture = std::make_shared<Texture>();
+        texture->image = cached->second;
+        if (map.clamp)
+            texture->wrap_s = texture->wrap_t = TextureWrap::clamp_to_edge;
+        return texture;
     }
 
     std::uint32_t material_index(const std::string& mtl) {
@@ -244,7 +380,13 @@ class ObjReader {
                 "' is not defined in any loaded mtllib; default material used");
         }
         const auto index = static_cast<std::uint32_t>(model_.materials.size());
-        model_.materials.push_back(lib == library_.end() ? Material{} : lib->second);
+        model_.materials.push_back(lib == library_.end() ? Material{} : lib->second.material);
+        maps_.push_back(lib == library_.end() ? std::nullopt : lib->second.map_kd);
+        if (maps_.back()) {
+            model_.materials.back().texture = texture_of(*maps_.back());
+            if (!model_.materials.back().texture)
+                maps_.back().reset();
+        }
         model_.material_names.push_back(mtl);
         used_.emplace(mtl, index);
         return index;
@@ -267,7 +409,9 @@ class ObjReader {
             Status allowed = check_resource_uri(uri);
             auto bytes = allowed.ok() ? read_(uri) : Result<std::string>(allowed);
             if (bytes) {
-                parse_mtl(*bytes, library_);
+                const std::size_t slash = uri.rfind('/');
+                parse_mtl(*bytes, slash == std::string::npos ? "" : uri.substr(0, slash + 1),
+                          library_);
                 any = true;
             }
         }
@@ -300,6 +444,13 @@ class ObjReader {
             }
             mesh.triangle_material = std::move(triangle_material_);
         }
+        // Texture coordinates are kept only where they are used: some face has them and some
+        // material that a face uses is textured.
+        if (any_uv_ && !bad_uv_index_ &&
+            std::any_of(maps_.begin(), maps_.end(), [](const auto& m) { return m; }) &&
+            corner_uvs_.size() == mesh.triangles.size()) {
+            mesh.corner_uvs = std::move(corner_uvs_);
+        }
         if (short_faces_ > 0)
             model_.warnings.push_back(std::to_string(short_faces_) +
                                       " faces with fewer than 3 vertices skipped");
@@ -323,7 +474,14 @@ class ObjReader {
     bool bad_normal_index_ = false;
     std::vector<std::uint32_t> triangle_material_;
     std::vector<std::uint32_t> poly_;
-    std::map<std::string, Material> library_;  ///< every material of every mtllib read
+    std::vector<std::array<double, 2>> texcoords_;  ///< vt, as the file writes them
+    std::vector<std::uint32_t> poly_uv_;  ///< the current face's vt indices, kNone for none
+    std::vector<std::array<std::array<float, 2>, 3>> corner_uvs_;  ///< per triangle
+    bool any_uv_ = false;
+    bool bad_uv_index_ = false;
+    std::map<std::string, MtlEntry> library_;      ///< every material of every mtllib read
+    std::vector<std::optional<DiffuseMap>> maps_;  ///< per model material: its usable map_Kd
+    std::map<std::string, std::shared_ptr<const TextureImage>> textures_;  ///< by image URI
     std::map<std::string, std::uint32_t> used_;
     std::uint32_t material_ = kNone;
     std::size_t short_faces_ = 0;

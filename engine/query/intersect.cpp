@@ -219,10 +219,11 @@ std::size_t QueryEngine::scene_memory_bytes() const {
             bytes += o.mesh->positions.capacity() * sizeof(Vec3d) +
                      o.mesh->triangles.capacity() * sizeof(o.mesh->triangles[0]) +
                      o.mesh->normals.capacity() * sizeof(Vec3f) +
-                     o.mesh->triangle_material.capacity() * sizeof(std::uint32_t);
+                     o.mesh->triangle_material.capacity() * sizeof(std::uint32_t) +
+                     o.mesh->corner_uvs.capacity() * sizeof(o.mesh->corner_uvs[0]);
         }
     }
-    return bytes;
+    return bytes + scene_->texture_bytes();
 }
 
 QueryResult QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& opt) const {

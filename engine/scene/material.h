@@ -2,7 +2,10 @@
 // Phong material (Phong 1975) with the Whitted extensions: reflectivity and transparency with an
 // index of refraction (Whitted 1980).
 
+#include <memory>
+
 #include "engine/math/vec3.h"
+#include "engine/scene/texture.h"
 
 namespace raycastd::engine {
 
@@ -15,6 +18,9 @@ struct Material {
     double transparency = 0.0;  ///< weight of the refracted ray, 0..1
     double ior = 1.0;           ///< index of refraction (Snell's law)
     Vec3d emissive{0.0, 0.0, 0.0};
+    /// Base-colour texture (glTF baseColorTexture, OBJ map_Kd): where a mesh has texture
+    /// coordinates, its colour multiplies diffuse and ambient (docs/api.md, render). Null: none.
+    std::shared_ptr<const Texture> texture;
 };
 
 }  // namespace raycastd::engine

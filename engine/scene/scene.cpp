@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 namespace raycastd::engine {
 
@@ -47,7 +48,26 @@ Features Scene::features() const {
         if (m.transparency > 0.0)
             f.refraction = true;
     }
+    auto textured = [&](std::uint32_t m) { return m < materials.size() && materials[m].texture; };
+    for (const auto& o : objects) {
+        if (f.textures || !o.mesh || o.mesh->corner_uvs.size() != o.mesh->size())
+            continue;
+        f.textures = o.mesh->triangle_material.empty()
+                         ? textured(o.material)
+                         : std::any_of(o.mesh->triangle_material.begin(),
+                                       o.mesh->triangle_material.end(), textured);
+    }
     return f;
+}
+
+std::size_t Scene::texture_bytes() const {
+    std::set<const TextureImage*> seen;
+    std::size_t n = 0;
+    for (const auto& m : materials) {
+        if (m.texture && m.texture->image && seen.insert(m.texture->image.get()).second)
+            n += m.texture->image->memory_bytes();
+    }
+    return n;
 }
 
 namespace {
@@ -99,6 +119,10 @@ Status validate(const Scene& scene) {
                 return Status::error(Code::model_load_failed, "triangle material out of range",
                                      object_path(i));
             }
+        }
+        if (!o.mesh->corner_uvs.empty() && o.mesh->corner_uvs.size() != o.mesh->size()) {
+            return Status::error(Code::internal, "texture coordinates for some triangles only",
+                                 object_path(i));
         }
     }
     return {};

@@ -36,7 +36,7 @@ struct Features {
     bool shadows = false;     ///< at least one point or directional light
     bool reflection = false;  ///< some material reflects
     bool refraction = false;  ///< some material is transparent
-    bool textures = false;    ///< some material samples a texture (none are sampled yet)
+    bool textures = false;    ///< some textured material is on a mesh with texture coordinates
 };
 
 struct Scene {
@@ -51,6 +51,8 @@ struct Scene {
     std::size_t sphere_count() const;
     Bounds3 bounds() const;
     Features features() const;
+    /// Bytes of the decoded texture images the materials hold (each image counted once).
+    std::size_t texture_bytes() const;
 };
 
 /// Checks the invariants every consumer relies on (finite coordinates, positive radii,

@@ -99,6 +99,24 @@ Vec3d Whitted::shading_normal(const Hit& hit) const {
     return n / len;
 }
 
+const Material& Whitted::textured(const Hit& hit, const Material& stored, Material& scratch) const {
+    if (!stored.texture)
+        return stored;
+    const Object& o = scene().objects[hit.object];
+    if (!o.mesh || o.mesh->corner_uvs.size() != o.mesh->size())
+        return stored;
+    // The hit's barycentrics interpolate the corners' (u, v) as they do the shading normal.
+    const auto& c = o.mesh->corner_uvs[hit.primitive];
+    const double w = 1.0 - hit.u - hit.v;
+    const double u = w * c[0][0] + hit.u * c[1][0] + hit.v * c[2][0];
+    const double v = w * c[0][1] + hit.u * c[1][1] + hit.v * c[2][1];
+    const Vec3d texel = stored.texture->sample(u, v);
+    scratch = stored;
+    scratch.diffuse = stored.diffuse * texel;
+    scratch.ambient = stored.ambient * texel;
+    return scratch;
+}
+
 Vec3d Whitted::radiance(const Ray& ray, RayCounts& counts) const {
     ++counts.primary;
     return trace(ray, 1, counts, nullptr, nullptr);
@@ -154,19 +172,15 @@ struct Whitted::Surface {
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
                      TreeBuild* tree) const {
     const std::uint32_t mi = material_of(hit);
+    Material scratch;
+    const Material& m = textured(hit, scene().materials[mi], scratch);
     const Vec3d d = normalize(ray.direction);
     const Vec3d ng = face_towards_ray(hit.normal, d);
     Vec3d n = shading_normal(hit);
     if (dot(n, ng) < 0.0)
         n = -n;
-    const Surface sp{hit,
-                     scene().materials[mi],
-                     mi,
-                     d,
-                     ray.at(hit.t),
-                     ng,
-                     n,
-                     hit_point_error(ray, hit, tracer_.float_frame()),
+    const Surface sp{hit,           m,  mi, d,
+                     ray.at(hit.t), ng, n,  hit_point_error(ray, hit, tracer_.float_frame()),
                      depth == 1};
 
     // Node k of the tree is written before its children so that labels run depth-first; the

@@ -154,6 +154,10 @@ class Whitted {
     /// computed ones (QueryEngine::computed_normals: area-weighted, split at creases). The
     /// geometric normal for spheres, lone triangles, and where the interpolation vanishes.
     Vec3d shading_normal(const Hit& hit) const;
+    /// The material as lit at a hit: `stored` itself, or, when it has a texture and the mesh
+    /// has texture coordinates, a copy in `scratch` whose diffuse and ambient colours are
+    /// multiplied by the texture's linear colour at the hit's (u, v) (docs/api.md, render).
+    const Material& textured(const Hit& hit, const Material& stored, Material& scratch) const;
 
   private:
     struct Surface;    // a hit made ready for shading (whitted.cpp)
