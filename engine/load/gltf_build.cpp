@@ -2,8 +2,10 @@
 // assembly (indices, strips, fans, morph targets at their default weights), instancing.
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "engine/load/gltf_internal.h"
 
@@ -39,7 +41,15 @@ struct LocalMesh {
     /// some primitive's are (any_uvs).
     std::vector<std::array<std::array<float, 2>, 3>> corner_uvs;
     bool any_uvs = false;
+    /// Skin influences, kInfluences per vertex (JOINTS_0/WEIGHTS_0, then JOINTS_1/WEIGHTS_1),
+    /// weight 0 in unused slots; empty when no primitive has JOINTS_0.
+    std::vector<std::uint32_t> joints;
+    std::vector<double> weights;
 };
+
+/// Influences kept per vertex: two JOINTS_n/WEIGHTS_n sets of four (glTF 2.0 §3.7.3.3 allows
+/// more; a third set is rare enough to be reported and ignored).
+constexpr std::size_t kInfluences = 8;
 
 struct Placed {
     int node = -1;
@@ -70,6 +80,10 @@ Status check_hierarchy(const tinygltf::Model& m) {
             return fail(node_path(i) + "/mesh refers to mesh " + std::to_string(node.mesh) +
                         ", but the file has " + std::to_string(m.meshes.size()));
         }
+        if (node.skin != -1 && !in_range(node.skin, m.skins.size())) {
+            return fail(node_path(i) + "/skin refers to skin " + std::to_string(node.skin) +
+                        ", but the file has " + std::to_string(m.skins.size()));
+        }
         if (node.camera != -1 && !in_range(node.camera, m.cameras.size())) {
             return fail(node_path(i) + "/camera refers to camera " + std::to_string(node.camera) +
                         ", but the file has " + std::to_string(m.cameras.size()));
@@ -97,6 +111,21 @@ Status check_hierarchy(const tinygltf::Model& m) {
     return {};
 }
 
+/// The nodes that are no node's child, in file order.
+std::vector<int> root_nodes(const tinygltf::Model& m) {
+    std::vector<bool> is_child(m.nodes.size(), false);
+    for (const auto& node : m.nodes) {
+        for (int c : node.children)
+            is_child[static_cast<std::size_t>(c)] = true;
+    }
+    std::vector<int> roots;
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+        if (!is_child[i])
+            roots.push_back(static_cast<int>(i));
+    }
+    return roots;
+}
+
 /// The nodes to instance: the default scene's (glTF 2.0 §3.5.1), else scene 0's, else, when
 /// the file has no scenes, every root node.
 Result<std::vector<int>> scene_roots(const tinygltf::Model& m) {
@@ -117,16 +146,7 @@ Result<std::vector<int>> scene_roots(const tinygltf::Model& m) {
         }
         return roots;
     }
-    std::vector<bool> is_child(m.nodes.size(), false);
-    for (const auto& node : m.nodes) {
-        for (int c : node.children)
-            is_child[static_cast<std::size_t>(c)] = true;
-    }
-    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
-        if (!is_child[i])
-            roots.push_back(static_cast<int>(i));
-    }
-    return roots;
+    return root_nodes(m);
 }
 
 /// Depth-first, parents before children, children in file order; world = parent · local
@@ -301,6 +321,54 @@ Status add_corner_uvs(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     return {};
 }
 
+/// Appends the primitive's skin influences (count vertices) to out.joints and out.weights:
+/// JOINTS_n as unsigned integers and WEIGHTS_n as floats or normalized integers (§3.7.3.3),
+/// for n = 0, 1. Vertices of a primitive without JOINTS_0 get no influence. Nothing is kept
+/// until some primitive of the mesh has JOINTS_0.
+Status add_influences(const tinygltf::Model& m, const tinygltf::Primitive& prim,
+                      const std::string& where, std::size_t count, LocalMesh& out,
+                      std::vector<std::string>& warnings) {
+    const bool skinned = prim.attributes.count("JOINTS_0") && prim.attributes.count("WEIGHTS_0");
+    if (!skinned && out.joints.empty())
+        return {};
+    const std::size_t before = out.positions.size() - count;  // this primitive's first vertex
+    out.joints.resize(before * kInfluences, 0);               // earlier primitives without a skin
+    out.weights.resize(before * kInfluences, 0.0);
+    out.joints.resize(out.positions.size() * kInfluences, 0);
+    out.weights.resize(out.positions.size() * kInfluences, 0.0);
+    if (!skinned)
+        return {};
+    if (prim.attributes.count("JOINTS_2"))
+        warnings.push_back(where + ": more than 8 joint influences per vertex; the rest ignored");
+    for (std::size_t set = 0; set < kInfluences / 4; ++set) {
+        const std::string js = "JOINTS_" + std::to_string(set),
+                          ws = "WEIGHTS_" + std::to_string(set);
+        auto j_it = prim.attributes.find(js), w_it = prim.attributes.find(ws);
+        if (j_it == prim.attributes.end() || w_it == prim.attributes.end())
+            break;
+        auto joints = read_floats(m, j_it->second, 4, where + "/attributes/" + js);
+        if (!joints)
+            return joints.status();
+        auto weights = read_floats(m, w_it->second, 4, where + "/attributes/" + ws);
+        if (!weights)
+            return weights.status();
+        if (joints->size() != 4 * count || weights->size() != 4 * count) {
+            return fail(where + ": " + js + " or " + ws + " count differs from POSITION count");
+        }
+        for (std::size_t v = 0; v < count; ++v) {
+            for (std::size_t k = 0; k < 4; ++k) {
+                const double j = (*joints)[4 * v + k], w = (*weights)[4 * v + k];
+                const std::size_t slot = (before + v) * kInfluences + 4 * set + k;
+                if (!(j >= 0.0) || j > std::numeric_limits<std::uint32_t>::max())
+                    return fail(where + "/attributes/" + js + " has an invalid joint index");
+                out.joints[slot] = static_cast<std::uint32_t>(j);
+                out.weights[slot] = std::isfinite(w) && w > 0.0 ? w : 0.0;
+            }
+        }
+    }
+    return {};
+}
+
 Status add_primitive(const tinygltf::Model& m, std::size_t mesh, std::size_t p,
                      const std::vector<double>& weights, const std::vector<UvMapping>& uv_maps,
                      LocalMesh& out, bool& normals_complete, std::vector<std::string>& warnings) {
@@ -363,6 +431,8 @@ Status add_primitive(const tinygltf::Model& m, std::size_t mesh, std::size_t p,
         out.normals.push_back(nrm.empty() ? Vec3d{}
                                           : Vec3d{nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2]});
     }
+    if (Status st = add_influences(m, prim, where, count, out, warnings); !st.ok())
+        return st;
     const std::size_t first = out.triangles.size();
     append_triangles(prim.mode, *indices, base, material, out);
     const UvMapping* mapping = material < uv_maps.size() ? &uv_maps[material] : nullptr;
@@ -396,25 +466,31 @@ Result<LocalMesh> build_local_mesh(const tinygltf::Model& m, std::size_t mesh,
 
 /// Places a local mesh in the world. A mirroring transform (negative determinant) reverses
 /// each triangle so front faces stay counter-clockwise (glTF 2.0 §3.7.2.1).
-ModelPart instance(const LocalMesh& local, const Transform& world, std::string name,
+/// `skin` (when not null) gives every vertex a transform of its own, the skinned mesh's
+/// (skin_transforms()); then the mirroring test is made per triangle, on its first vertex's.
+ModelPart instance(const LocalMesh& local, const Transform& world,
+                   const std::vector<Transform>* skin, std::string name,
                    const std::function<std::uint32_t()>& default_material) {
     ModelPart part;
     part.name = std::move(name);
     TriangleMesh& mesh = part.mesh;
+    auto at = [&](std::size_t v) -> const Transform& { return skin ? (*skin)[v] : world; };
     mesh.positions.reserve(local.positions.size());
-    for (const Vec3d& p : local.positions)
-        mesh.positions.push_back(world.apply_point(p));
+    for (std::size_t v = 0; v < local.positions.size(); ++v)
+        mesh.positions.push_back(at(v).apply_point(local.positions[v]));
     mesh.normals.reserve(local.normals.size());
-    for (const Vec3d& n : local.normals)
-        mesh.normals.push_back(Vec3f(world.apply_normal(n)));
-    const bool mirrored = world.determinant3() < 0.0;
+    for (std::size_t v = 0; v < local.normals.size(); ++v)
+        mesh.normals.push_back(Vec3f(at(v).apply_normal(local.normals[v])));
     mesh.triangles = local.triangles;
     mesh.corner_uvs = local.corner_uvs;
-    if (mirrored) {
-        for (auto& t : mesh.triangles)
-            std::swap(t[1], t[2]);
-        for (auto& c : mesh.corner_uvs)
-            std::swap(c[1], c[2]);
+    const bool world_mirrors = world.determinant3() < 0.0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        auto& tri = mesh.triangles[t];
+        if (skin ? at(tri[0]).determinant3() >= 0.0 : !world_mirrors)
+            continue;
+        std::swap(tri[1], tri[2]);
+        if (!mesh.corner_uvs.empty())
+            std::swap(mesh.corner_uvs[t][1], mesh.corner_uvs[t][2]);
     }
     if (local.any_material) {
         mesh.triangle_material.reserve(local.materials.size());
@@ -423,6 +499,75 @@ ModelPart instance(const LocalMesh& local, const Transform& world, std::string n
         }
     }
     return part;
+}
+
+/// Linear blend skinning in the default pose (glTF 2.0 §3.7.3.3): the joint matrix of joint j
+/// is globalTransform(joint j) · inverseBindMatrix j, and vertex v moves by
+/// Σₖ wₖ · jointMatrix(jₖ) over its influences. Weights are divided by their sum (quantized
+/// weights rarely sum to exactly 1); a vertex without weight keeps the identity, its bind pose.
+/// The skinned node's own transform plays no part (§3.7.3.1). `node_world` holds every node's
+/// global transform in the file's rest pose (no animation is played).
+Result<std::vector<Transform>> skin_transforms(const tinygltf::Model& m, int skin_index,
+                                               const std::vector<Transform>& node_world,
+                                               const LocalMesh& local) {
+    const tinygltf::Skin& skin = m.skins[static_cast<std::size_t>(skin_index)];
+    const std::string where = "/skins/" + std::to_string(skin_index);
+    std::vector<double> ibm;
+    if (skin.inverseBindMatrices != -1) {
+        auto read = read_floats(m, skin.inverseBindMatrices, 16, where + "/inverseBindMatrices");
+        if (!read)
+            return read.status();
+        if (read->size() < 16 * skin.joints.size())
+            return fail(where + "/inverseBindMatrices has fewer matrices than the skin has joints");
+        ibm = std::move(*read);
+    }
+    std::vector<std::array<std::array<double, 4>, 4>> joint(skin.joints.size());
+    for (std::size_t j = 0; j < skin.joints.size(); ++j) {
+        if (!in_range(skin.joints[j], m.nodes.size())) {
+            return fail(where + "/joints/" + std::to_string(j) + " is not a node of the file");
+        }
+        Transform inverse_bind;
+        if (!ibm.empty()) {
+            std::array<double, 16> cm{};
+            std::copy(ibm.begin() + static_cast<std::ptrdiff_t>(16 * j),
+                      ibm.begin() + static_cast<std::ptrdiff_t>(16 * j + 16), cm.begin());
+            inverse_bind = Transform::from_column_major(cm);
+        }
+        joint[j] = (node_world[static_cast<std::size_t>(skin.joints[j])] * inverse_bind).rows();
+    }
+    const std::size_t n = local.positions.size();
+    std::vector<Transform> out(n);
+    if (local.joints.size() != n * kInfluences)
+        return out;  // the mesh carries no influences: every vertex keeps its bind pose
+    for (std::size_t v = 0; v < n; ++v) {
+        std::array<std::array<double, 4>, 4> sum{};
+        double total = 0.0;
+        for (std::size_t k = 0; k < kInfluences; ++k) {
+            const double w = local.weights[v * kInfluences + k];
+            if (w == 0.0)
+                continue;
+            const std::uint32_t j = local.joints[v * kInfluences + k];
+            if (j >= joint.size()) {
+                return fail(where + ": a vertex names joint " + std::to_string(j) +
+                            ", but the skin has " + std::to_string(joint.size()));
+            }
+            for (std::size_t r = 0; r < 4; ++r) {
+                for (std::size_t c = 0; c < 4; ++c)
+                    sum[r][c] += w * joint[j][r][c];
+            }
+            total += w;
+        }
+        if (!(total > 0.0))
+            continue;
+        for (auto& row : sum) {
+            for (double& e : row)
+                e /= total;
+        }
+        out[v] = Transform(sum);
+        if (!out[v].is_finite())
+            return fail(where + ": a skinned vertex's transform overflows");
+    }
+    return out;
 }
 
 std::string part_name(const tinygltf::Model& m, const tinygltf::Node& node,
@@ -463,7 +608,8 @@ Status add_camera_and_lights(const tinygltf::Model& m, const std::vector<Placed>
 /// places one part per mesh node, in traversal order. `built` records which meshes were read.
 Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& placed,
                        std::string_view name, const LoadLimits& limits,
-                       const std::vector<UvMapping>& uv_maps, std::vector<bool>& built,
+                       const std::vector<UvMapping>& uv_maps,
+                       const std::vector<Transform>& node_world, std::vector<bool>& built,
                        LoadedModel& out) {
     std::optional<std::uint32_t> default_index;
     auto default_material = [&]() {
@@ -507,16 +653,15 @@ Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& plac
                                      " triangles or " + std::to_string(limits.max_vertices) +
                                      " vertices after instancing");
         }
-        // A skinned mesh's node transform is ignored (glTF 2.0 §3.7.3); without applying the
-        // skin, the mesh stays in its bind pose.
-        Transform world = p.world;
+        std::optional<std::vector<Transform>> skin;
         if (node.skin != -1) {
-            world = Transform();
-            out.warnings.push_back(node_path(static_cast<std::size_t>(p.node)) +
-                                   ": skinning is not applied; the mesh is drawn in its bind pose");
+            auto posed = skin_transforms(m, node.skin, node_world, *local);
+            if (!posed)
+                return posed.status();
+            skin = std::move(*posed);
         }
-        out.parts.push_back(
-            instance(*local, world, part_name(m, node, name, out.parts.size()), default_material));
+        out.parts.push_back(instance(*local, p.world, skin ? &*skin : nullptr,
+                                     part_name(m, node, name, out.parts.size()), default_material));
     }
     return {};
 }
@@ -541,8 +686,19 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const Resour
     }
     const std::vector<UvMapping> uv_maps =
         attach_base_color_textures(m, read, limits, out.materials, out.warnings);
+    // Joints need the global transform of nodes that the scene may not place (a skeleton can
+    // live outside the scene's roots), so every node's is computed from every root.
+    std::vector<Transform> node_world(m.nodes.size());
+    if (!m.skins.empty()) {
+        auto everything = place_nodes(m, root_nodes(m));
+        if (!everything)
+            return everything.status();
+        for (const Placed& p : *everything)
+            node_world[static_cast<std::size_t>(p.node)] = p.world;
+    }
     std::vector<bool> built(m.meshes.size(), false);
-    if (Status st = instance_meshes(m, *placed, name, limits, uv_maps, built, out); !st.ok())
+    if (Status st = instance_meshes(m, *placed, name, limits, uv_maps, node_world, built, out);
+        !st.ok())
         return st;
     // Meshes no node instances are still checked (references, accessor types, index ranges),
     // so a file is accepted or refused as a whole, as the glTF-Validator judges it; their

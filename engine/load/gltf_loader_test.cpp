@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/load/model_loader.h"
+#include "engine/testing/png.h"
 
 namespace raycastd::engine {
 namespace {
@@ -518,16 +519,201 @@ TEST(GltfLoader, HugeByteLengthIsRefusedBeforeAnyAllocation) {
         load_model(glb(bin_json, d.bin()), ModelFormat::glb, no_resources(), "t.glb").ok());
 }
 
-TEST(GltfLoader, SkinnedMeshStaysInBindPose) {
+// glTF 2.0 §3.7.3.3: vertex v moves by Σ w·(global(joint)·inverseBind); the skinned node's own
+// transform (here a translation by 9) plays no part.
+TEST(GltfLoader, SkinnedMeshIsPosedByItsJoints) {
     Doc d;
-    d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
-    auto m = load(
-        d.json(R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
-               R"("skins":[{"joints":[1]}],"nodes":[{"mesh":0,"skin":0,"translation":[9,9,9]},{}],)"
-               R"("scenes":[{"nodes":[0,1]}])"));
+    const int pos = d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::vector<std::uint8_t> joints = {0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0};
+    const int j = d.accessor(d.view(d.add(joints), joints.size()), 5121, 3, "VEC4");
+    // Vertex 0: all on joint 0; vertex 1: half joint 0, half joint 1; vertex 2: no weight.
+    const std::vector<float> weights = {1, 0, 0, 0, 0.5f, 0.5f, 0, 0, 0, 0, 0, 0};
+    const int w = d.accessor(d.view(d.add(weights), weights.size() * 4), 5126, 3, "VEC4");
+    auto m =
+        load(d.json(R"("meshes":[{"primitives":[{"attributes":{"POSITION":)" + std::to_string(pos) +
+                    R"(,"JOINTS_0":)" + std::to_string(j) + R"(,"WEIGHTS_0":)" + std::to_string(w) +
+                    R"(}}]}],)"
+                    R"("skins":[{"joints":[1,2]}],)"
+                    R"("nodes":[{"mesh":0,"skin":0,"translation":[9,9,9]},)"
+                    R"({"translation":[0,5,0]},{"translation":[0,0,4]}],)"
+                    R"("scenes":[{"nodes":[0,1,2]}])"));
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    const auto& p = m->parts[0].mesh.positions;
+    EXPECT_EQ(p[0], Vec3d(0, 5, 0));
+    EXPECT_EQ(p[1], Vec3d(1, 2.5, 2));
+    EXPECT_EQ(p[2], Vec3d(0, 1, 0));  // no weight: its bind pose
+    EXPECT_TRUE(m->warnings.empty()) << m->warnings[0];
+}
+
+// An inverse bind matrix undoes the joint's bind placement: a joint still where it was bound
+// leaves the mesh where it is.
+TEST(GltfLoader, InverseBindMatricesCancelTheBindPose) {
+    Doc d;
+    const int pos = d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::vector<std::uint8_t> joints(12, 0);
+    const int j = d.accessor(d.view(d.add(joints), joints.size()), 5121, 3, "VEC4");
+    const std::vector<float> weights = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    const int w = d.accessor(d.view(d.add(weights), weights.size() * 4), 5126, 3, "VEC4");
+    const std::vector<float> ibm = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -3, 0, 0, 1};
+    const int b = d.accessor(d.view(d.add(ibm), ibm.size() * 4), 5126, 1, "MAT4");
+    const std::string doc = d.json(
+        R"("meshes":[{"primitives":[{"attributes":{"POSITION":)" + std::to_string(pos) +
+        R"(,"JOINTS_0":)" + std::to_string(j) + R"(,"WEIGHTS_0":)" + std::to_string(w) +
+        R"(}}]}],"skins":[{"joints":[1],"inverseBindMatrices":)" + std::to_string(b) +
+        R"(}],"nodes":[{"mesh":0,"skin":0},{"translation":[3,0,0]}],"scenes":[{"nodes":[0,1]}])");
+    auto m = load(doc);
     ASSERT_TRUE(m.ok()) << m.status().message;
     EXPECT_EQ(m->parts[0].mesh.positions[1], Vec3d(1, 0, 0));
-    EXPECT_FALSE(m->warnings.empty());
+    // A vertex naming a joint the skin does not have is refused (glTF-Validator:
+    // ACCESSOR_JOINTS_INDEX_OOB).
+    std::string bad = doc;
+    bad.replace(bad.find(R"("joints":[1])"), 12, R"("joints":[])");
+    EXPECT_FALSE(load(bad).ok());
+}
+
+/// A texture document: a 2 × 2 image (red, green / blue, white) as `image` (the JSON of
+/// /images/0), on material 0 with `texture_info` extra members, a triangle with TEXCOORD_0
+/// (0,0), (1,0), (0,1) and TEXCOORD_1 all (0.75, 0.75).
+std::string textured_doc(Doc& d, const std::string& image, const std::string& texture_info = "",
+                         const std::string& sampler = "{}") {
+    const int pos = d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::vector<float> uv0 = {0, 0, 1, 0, 0, 1},
+                             uv1 = {0.75f, 0.75f, 0.75f, 0.75f, 0.75f, 0.75f};
+    const int t0 = d.accessor(d.view(d.add(uv0), 24), 5126, 3, "VEC2");
+    const int t1 = d.accessor(d.view(d.add(uv1), 24), 5126, 3, "VEC2");
+    return d.json(R"("meshes":[{"primitives":[{"attributes":{"POSITION":)" + std::to_string(pos) +
+                  R"(,"TEXCOORD_0":)" + std::to_string(t0) + R"(,"TEXCOORD_1":)" +
+                  std::to_string(t1) +
+                  R"(},"material":0}]}],)"
+                  R"("materials":[{"pbrMetallicRoughness":{"baseColorFactor":[1,1,0.5,1],)"
+                  R"("baseColorTexture":{"index":0)" +
+                  texture_info +
+                  R"(}}}],)"
+                  R"("textures":[{"source":0,"sampler":0}],"samplers":[)" +
+                  sampler +
+                  "],"
+                  R"("images":[)" +
+                  image + R"(],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}])");
+}
+
+const std::vector<std::uint8_t> kQuad = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+
+TEST(GltfLoader, BaseColorTextureFromADataUri) {
+    Doc d;
+    const std::string image =
+        R"({"uri":"data:image/png;base64,)" + base64(testing::png(2, 2, kQuad)) + R"("})";
+    auto m = load(textured_doc(d, image, "", R"({"magFilter":9728,"wrapS":33071,"wrapT":33648})"));
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    ASSERT_TRUE(m->warnings.empty()) << m->warnings[0];
+    const Material& mat = m->materials[0];
+    ASSERT_TRUE(mat.texture);
+    EXPECT_EQ(mat.diffuse, Vec3d(1, 1, 0.5));  // the factor stays; the texel multiplies it
+    EXPECT_EQ(mat.texture->image->width, 2);
+    EXPECT_EQ(mat.texture->image->rgb, kQuad);
+    EXPECT_TRUE(mat.texture->nearest);
+    EXPECT_EQ(mat.texture->wrap_s, TextureWrap::clamp_to_edge);
+    EXPECT_EQ(mat.texture->wrap_t, TextureWrap::mirrored_repeat);
+    const auto& uv = m->parts[0].mesh.corner_uvs;
+    ASSERT_EQ(uv.size(), 1u);
+    using Corner = std::array<float, 2>;
+    EXPECT_EQ(uv[0][1], (Corner{1, 0}));
+    EXPECT_EQ(uv[0][2], (Corner{0, 1}));
+    // Texel (0, 0) is red: the image's first row, first texel.
+    EXPECT_EQ(mat.texture->sample(0.25, 0.25), Vec3d(1, 0, 0));
+    EXPECT_EQ(mat.texture->sample(0.25, 0.75), Vec3d(0, 0, 1));
+}
+
+TEST(GltfLoader, TextureTransformAndTexCoordSet) {
+    Doc d;
+    const std::string image =
+        R"({"uri":"data:image/png;base64,)" + base64(testing::png(2, 2, kQuad)) + R"("})";
+    // KHR_texture_transform: u' = sx·u + ox, v' = sy·v + oy without rotation.
+    auto m = load(textured_doc(
+        d, image,
+        R"(,"extensions":{"KHR_texture_transform":{"offset":[0.5,0.25],"scale":[0.5,2]}})"));
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    using Corner = std::array<float, 2>;
+    const auto& uv = m->parts[0].mesh.corner_uvs;
+    ASSERT_EQ(uv.size(), 1u);
+    EXPECT_EQ(uv[0][0], (Corner{0.5f, 0.25f}));
+    EXPECT_EQ(uv[0][1], (Corner{1.0f, 0.25f}));
+    EXPECT_EQ(uv[0][2], (Corner{0.5f, 2.25f}));
+    // A rotation by π/2 maps (1, 0) to (cos, −sin) = (0, −1); texCoord 1 picks TEXCOORD_1.
+    Doc d2;
+    auto r = load(textured_doc(
+        d2, image, R"(,"extensions":{"KHR_texture_transform":{"rotation":1.5707963267948966}})"));
+    ASSERT_TRUE(r.ok()) << r.status().message;
+    EXPECT_NEAR(r->parts[0].mesh.corner_uvs[0][1][0], 0.0f, 1e-7f);
+    EXPECT_NEAR(r->parts[0].mesh.corner_uvs[0][1][1], -1.0f, 1e-7f);
+    Doc d3;
+    auto s = load(textured_doc(d3, image, R"(,"texCoord":1)"));
+    ASSERT_TRUE(s.ok()) << s.status().message;
+    EXPECT_EQ(s->parts[0].mesh.corner_uvs[0][1], (Corner{0.75f, 0.75f}));
+}
+
+TEST(GltfLoader, TextureImagesFromABufferViewAndFromAFile) {
+    const std::string png = testing::png(2, 2, kQuad);
+    Doc d;
+    const int view = d.view(d.add(std::vector<char>(png.begin(), png.end())), png.size());
+    auto m = load(textured_doc(
+        d, R"({"bufferView":)" + std::to_string(view) + R"(,"mimeType":"image/png"})"));
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    ASSERT_TRUE(m->materials[0].texture);
+    EXPECT_EQ(m->materials[0].texture->image->rgb, kQuad);
+
+    std::vector<std::string> asked;
+    ResourceReader files = [&](const std::string& uri) -> Result<std::string> {
+        asked.push_back(uri);
+        if (uri == "tex dir/a b.png")
+            return png;
+        return Status::error(Code::not_found, uri + " not found");
+    };
+    Doc d2;
+    auto f = load(textured_doc(d2, R"({"uri":"tex%20dir/a%20b.png"})"), files);
+    ASSERT_TRUE(f.ok()) << f.status().message;
+    ASSERT_TRUE(f->materials[0].texture) << (f->warnings.empty() ? "" : f->warnings[0]);
+    EXPECT_EQ(f->materials[0].texture->image->rgb, kQuad);
+    EXPECT_EQ(asked, std::vector<std::string>{"tex dir/a b.png"});
+    // Outside the model's directory tree: refused before the reader is asked.
+    Doc d3;
+    asked.clear();
+    auto out = load(textured_doc(d3, R"({"uri":"/etc/passwd"})"), files);
+    ASSERT_TRUE(out.ok()) << out.status().message;
+    EXPECT_FALSE(out->materials[0].texture);
+    EXPECT_TRUE(asked.empty());
+}
+
+// A texture that cannot be used costs the texture, never the model: a warning, and the
+// material keeps its factor alone.
+TEST(GltfLoader, UnusableTexturesAreWarnings) {
+    struct Case {
+        std::string what, image, expect;
+        std::size_t max_pixels;
+    };
+    const std::string png = testing::png(2, 2, kQuad);
+    std::string truncated = png.substr(0, 40);
+    const std::vector<Case> cases = {
+        {"missing file", R"({"uri":"nowhere.png"})", "nowhere.png", 1u << 24},
+        {"not an image", R"({"uri":"data:image/png;base64,)" + base64("GIF89a......") + R"("})",
+         "not a PNG or JPEG", 1u << 24},
+        {"truncated", R"({"uri":"data:image/png;base64,)" + base64(truncated) + R"("})",
+         "does not decode", 1u << 24},
+        {"over the pixel limit", R"({"uri":"data:image/png;base64,)" + base64(png) + R"("})",
+         "--max-texture-pixels", 3},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.what);
+        Doc d;
+        LoadLimits limits;
+        limits.max_texture_pixels = c.max_pixels;
+        auto m =
+            load_model(textured_doc(d, c.image), ModelFormat::gltf, no_resources(), "t", limits);
+        ASSERT_TRUE(m.ok()) << m.status().message;
+        EXPECT_FALSE(m->materials[0].texture);
+        ASSERT_EQ(m->warnings.size(), 1u);
+        EXPECT_NE(m->warnings[0].find(c.expect), std::string::npos) << m->warnings[0];
+        EXPECT_NE(m->warnings[0].find("base colour alone"), std::string::npos) << m->warnings[0];
+    }
 }
 
 TEST(GltfLoader, TriangleLimitIsEnforced) {

@@ -59,8 +59,8 @@ struct ModelPart {
     /// polygons of the other formats fan-triangulated as (v0, vi, vi+1). Vertices are kept as
     /// the file lists them (unreferenced ones included), except that STL, which stores every
     /// corner separately, has exactly equal corners merged. glTF morph targets are applied at
-    /// their default weights; skins are not applied (the mesh stays in its bind pose, with a
-    /// warning). normals is per-vertex when every primitive of the part has normals, else
+    /// their default weights; skinned meshes are posed by their joints in the
+    /// file's rest pose (linear blend skinning, no animation). normals is per-vertex when every primitive of the part has normals, else
     /// empty (never computed). triangle_material is empty when no triangle of the part names a
     /// material; otherwise it has one index per triangle into LoadedModel::materials, and
     /// triangles without a material of their own use an appended grey "default" material.
