@@ -303,5 +303,81 @@ TEST(ModelCorpus, SniffingRecognisesCorpusFiles) {
     }
 }
 
+// The three BoxTextured variants keep the PNG beside the file, inside the GLB's BIN chunk and
+// in a data: URI; each gives the same texture and the same texture coordinates.
+TEST(ModelCorpus, BoxTexturedVariantsGiveOneTexture) {
+    REQUIRE_MODELS();
+    std::vector<LoadedModel> variants;
+    for (const char* rel :
+         {"BoxTextured/glTF/BoxTextured.gltf", "BoxTextured/glTF-Binary/BoxTextured.glb",
+          "BoxTextured/glTF-Embedded/BoxTextured.gltf"}) {
+        SCOPED_TRACE(rel);
+        auto m = load_rel(rel);
+        ASSERT_TRUE(m.ok()) << m.status().message;
+        EXPECT_TRUE(m->warnings.empty()) << m->warnings[0];
+        ASSERT_FALSE(m->materials.empty());
+        ASSERT_TRUE(m->materials[0].texture);
+        ASSERT_EQ(m->parts[0].mesh.corner_uvs.size(), m->parts[0].mesh.size());
+        variants.push_back(std::move(*m));
+    }
+    for (std::size_t k = 1; k < variants.size(); ++k) {
+        EXPECT_EQ(variants[k].materials[0].texture->image->rgb,
+                  variants[0].materials[0].texture->image->rgb);
+        EXPECT_EQ(variants[k].parts[0].mesh.corner_uvs, variants[0].parts[0].mesh.corner_uvs);
+    }
+}
+
+// The Duck's texture is yellow: averaged over its texture coordinates, red and green are well
+// above blue (in linear light).
+TEST(ModelCorpus, DuckIsTexturedYellow) {
+    REQUIRE_MODELS();
+    auto m = load_rel("Duck/glTF-Binary/Duck.glb");
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    const TriangleMesh& mesh = m->parts[0].mesh;
+    ASSERT_EQ(mesh.corner_uvs.size(), mesh.size());
+    const Material& mat = m->materials[mesh.triangle_material[0]];
+    ASSERT_TRUE(mat.texture);
+    Vec3d sum;
+    for (const auto& corners : mesh.corner_uvs) {
+        for (const auto& uv : corners)
+            sum += mat.texture->sample(uv[0], uv[1]);
+    }
+    const Vec3d mean = sum / (3.0 * static_cast<double>(mesh.size()));
+    EXPECT_GT(mean.x, 3 * mean.z);
+    EXPECT_GT(mean.y, 2 * mean.z);
+}
+
+// The Fox is skinned (24 joints); posed by them it stands on its feet: its bounds are tallest
+// along +Y from y ≈ 0, and longest along z, not lying on its side as its bind-pose mesh does.
+TEST(ModelCorpus, SkinnedFoxStands) {
+    REQUIRE_MODELS();
+    auto m = load_rel("Fox/glTF/Fox.gltf");
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    EXPECT_TRUE(m->warnings.empty()) << m->warnings[0];
+    Bounds3 b;
+    for (const auto& part : m->parts)
+        b.extend(part.mesh.bounds());
+    const Vec3d size = b.diagonal();
+    EXPECT_NEAR(b.lo.y, 0.0, 1.0);
+    EXPECT_GT(size.y, 2 * size.x);
+    EXPECT_GT(size.z, size.y);
+    ASSERT_TRUE(m->materials[0].texture);
+}
+
+// spider.obj's MTL names its JPEG maps with Windows paths (".\wal67ar_small.jpg"); the four
+// materials its faces use (of five in the MTL) are all textured.
+TEST(ModelCorpus, SpiderObjIsTexturedThroughItsMtl) {
+    REQUIRE_MODELS();
+    auto m = load_rel("spider/spider.obj");
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    EXPECT_TRUE(m->warnings.empty()) << m->warnings[0];
+    std::size_t textured = 0;
+    for (const Material& mat : m->materials)
+        textured += mat.texture ? 1 : 0;
+    EXPECT_EQ(m->materials.size(), 4u);
+    EXPECT_EQ(textured, 4u);
+    EXPECT_EQ(m->parts[0].mesh.corner_uvs.size(), m->parts[0].mesh.size());
+}
+
 }  // namespace
 }  // namespace raycastd::engine

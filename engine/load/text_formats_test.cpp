@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/load/model_loader.h"
+#include "engine/testing/png.h"
 
 namespace raycastd::engine {
 namespace {
@@ -123,6 +124,63 @@ TEST(ObjReader, MaterialsFromMtlThroughReader) {
     EXPECT_EQ(m->materials[0].diffuse, Vec3d(0.5, 0.5, 0.5));
     EXPECT_EQ(m->materials[0].ambient, Vec3d(0.2, 0.2, 0.2));
     EXPECT_FALSE(m->warnings.empty());  // "nowhere" is not defined
+}
+
+// map_Kd through the reader, relative to the MTL's own directory; OBJ's v runs up, ours down
+// (v ↦ 1 − v, after the map's -s scale and -o offset); -clamp on clamps both axes. The second
+// material has no map, and its faces get (0, 0) corners.
+TEST(ObjReader, DiffuseMapsAndTextureCoordinates) {
+    const std::string png = testing::png(2, 1, {255, 0, 0, 0, 0, 255});
+    std::vector<std::string> asked;
+    ResourceReader reader = [&](const std::string& uri) -> Result<std::string> {
+        asked.push_back(uri);
+        if (uri == "m/a.mtl")
+            return std::string(
+                "newmtl tex\nKd 1 1 1\nmap_Kd -s 2 1 1 -o 0.5 0 0 -clamp on .\\t x.png\n"
+                "newmtl plain\nKd 0.5 0.5 0.5\n");
+        if (uri == "m/t x.png")
+            return png;
+        return Status::error(Code::not_found, uri);
+    };
+    auto m = load(
+        "mtllib m/a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+        "usemtl tex\nf 1/1 2/2 3/3\nusemtl plain\nf 1/1 2/2 3/3\n",
+        ModelFormat::obj, reader);
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    EXPECT_TRUE(m->warnings.empty()) << m->warnings[0];
+    EXPECT_EQ(asked, (std::vector<std::string>{"m/a.mtl", "m/t x.png"}));
+    ASSERT_EQ(m->materials.size(), 2u);
+    ASSERT_TRUE(m->materials[0].texture);
+    EXPECT_FALSE(m->materials[1].texture);
+    EXPECT_EQ(m->materials[0].texture->wrap_s, TextureWrap::clamp_to_edge);
+    EXPECT_EQ(m->materials[0].texture->image->rgb,
+              (std::vector<std::uint8_t>{255, 0, 0, 0, 0, 255}));
+    using Corner = std::array<float, 2>;
+    const auto& uv = m->parts[0].mesh.corner_uvs;
+    ASSERT_EQ(uv.size(), 2u);
+    EXPECT_EQ(uv[0][0], (Corner{0.5f, 1.0f}));  // (2·0 + 0.5, 1 − 0)
+    EXPECT_EQ(uv[0][1], (Corner{2.5f, 1.0f}));
+    EXPECT_EQ(uv[0][2], (Corner{0.5f, 0.0f}));
+    EXPECT_EQ(uv[1][1], (Corner{1.0f, 1.0f}));  // the untextured material: no -s, -o
+}
+
+// A texture index out of range costs the texture coordinates, not the face; a map that cannot
+// be read costs the texture, not the material.
+TEST(ObjReader, BadTextureIndexAndMissingMapAreWarnings) {
+    ResourceReader reader = [&](const std::string& uri) -> Result<std::string> {
+        if (uri == "a.mtl")
+            return std::string("newmtl tex\nmap_Kd gone.png\n");
+        return Status::error(Code::not_found, uri + " not found");
+    };
+    auto m = load("mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl tex\nf 1/1 2/7 3/1\n",
+                  ModelFormat::obj, reader);
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    EXPECT_EQ(m->parts[0].mesh.size(), 1u);
+    EXPECT_TRUE(m->parts[0].mesh.corner_uvs.empty());
+    EXPECT_FALSE(m->materials[0].texture);
+    ASSERT_EQ(m->warnings.size(), 2u);
+    EXPECT_NE(m->warnings[0].find("gone.png"), std::string::npos) << m->warnings[0];
+    EXPECT_NE(m->warnings[1].find("texture index"), std::string::npos) << m->warnings[1];
 }
 
 TEST(ObjReader, RefusesAbsoluteAndSchemeMtllib) {

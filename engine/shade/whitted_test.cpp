@@ -254,5 +254,60 @@ TEST(Whitted, MeshesWithoutNormalsAreShadedWithComputedOnes) {
     EXPECT_LT(length(w.shading_normal(*cube) - Vec3d{0, 0, -1}), 1e-6);
 }
 
+TEST(Whitted, TextureColourMultipliesDiffuseAndAmbient) {
+    // A quad at z = 5 (two triangles) whose texture is a red texel left of u = 0.5 and a blue
+    // one right of it (nearest), and a scene without lights: ambient 1.0 alone, so the colour
+    // is ka · texel, exactly. The corner (u, v) are interpolated with the hit's barycentrics.
+    auto image = std::make_shared<TextureImage>();
+    image->width = 2;
+    image->height = 1;
+    image->rgb = {255, 0, 0, 0, 0, 255};
+    auto texture = std::make_shared<Texture>();
+    texture->image = image;
+    texture->nearest = true;
+    Scene s;
+    s.materials.push_back(Material{});
+    Material m;
+    m.ambient = {0.5, 1.0, 1.0};
+    m.texture = texture;
+    s.materials.push_back(m);
+    auto mesh = std::make_shared<TriangleMesh>();
+    mesh->positions = {{-1, -1, 5}, {1, -1, 5}, {1, 1, 5}, {-1, 1, 5}};
+    mesh->triangles = {{0, 1, 2}, {0, 2, 3}};
+    // x = −1 → u = 0, x = +1 → u = 1; v = 0 along the top.
+    mesh->corner_uvs = {{{{0, 1}, {1, 1}, {1, 0}}}, {{{0, 1}, {1, 0}, {0, 0}}}};
+    Object o;
+    o.kind = ObjectKind::mesh;
+    o.material = 1;
+    o.mesh = mesh;
+    s.objects.push_back(o);
+    auto engine = prepare(std::move(s));
+    ASSERT_TRUE(engine->scene().features().textures);
+    const Whitted w(*engine, WhittedOptions{});
+    auto colour_at = [&](double x, double y) {
+        Ray r;
+        r.origin = {x, y, 0};
+        r.direction = {0, 0, 1};
+        RayCounts counts;
+        return w.radiance(r, counts);
+    };
+    EXPECT_EQ(colour_at(-0.5, 0.3), Vec3d(0.5, 0, 0));
+    EXPECT_EQ(colour_at(-0.5, -0.7), Vec3d(0.5, 0, 0));
+    EXPECT_EQ(colour_at(0.5, 0.6), Vec3d(0, 0, 1));
+    EXPECT_EQ(colour_at(0.5, -0.6), Vec3d(0, 0, 1));
+    // Without texture coordinates the texture is not sampled: the material's own colour.
+    Scene plain = engine->scene();
+    auto bare = std::make_shared<TriangleMesh>(*mesh);
+    bare->corner_uvs.clear();
+    plain.objects[0].mesh = bare;
+    auto untextured = prepare(std::move(plain));
+    EXPECT_FALSE(untextured->scene().features().textures);
+    Ray r;
+    r.origin = {0.5, 0.6, 0};
+    r.direction = {0, 0, 1};
+    RayCounts counts;
+    EXPECT_EQ(Whitted(*untextured, WhittedOptions{}).radiance(r, counts), Vec3d(0.5, 1, 1));
+}
+
 }  // namespace
 }  // namespace raycastd::engine
