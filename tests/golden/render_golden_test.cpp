@@ -130,12 +130,14 @@ TEST_F(Golden, GltfDuck) {
     check("duck", "duck", Json{{"width", 160}, {"height", 120}, {"spp", 4}});
 }
 
-TEST_F(Golden, BareDuckIsShaded) {
+TEST_F(Golden, BareDuckIsShadedAndYellow) {
     // The Duck as a new user posts it: the .glb alone, no lights, the render's defaults but the
     // size. Lighting auto gives it the headlight, so it is shaded by its normals, not a flat
-    // silhouette (issue 16). Beyond the golden, a statistical check that holds whatever the
-    // golden: among the model's pixels the brightness spreads (p90 − p10 of the luma, 8-bit, is
-    // over 60; a flat silhouette gives ~0) and there are many distinct colours.
+    // silhouette, and its base-colour texture makes it yellow with an orange beak (issue 16).
+    // Beyond the golden, statistical checks that hold whatever the golden: among the model's
+    // pixels the brightness spreads (p90 − p10 of the luma, 8-bit, is over 60; a flat
+    // silhouette gives ~0), there are many distinct colours, and red and green are well above
+    // blue (a grey duck has them equal).
     const std::string glb = kModels + "/Duck/glTF-Binary/Duck.glb";
     if (!std::filesystem::exists(glb)) {
         GTEST_SKIP() << "models not found at " << kModels;
@@ -146,13 +148,17 @@ TEST_F(Golden, BareDuckIsShaded) {
         return;  // the golden was rewritten, or the check above failed already
     std::vector<double> luma;
     std::set<int> colours;
+    double red = 0, green = 0, blue = 0;
     for (std::size_t i = 0; i < last_.rgb.size(); i += 3) {
         const int r = last_.rgb[i], g = last_.rgb[i + 1], b = last_.rgb[i + 2];
         if (r + g + b <= 12)
             continue;  // background (black)
         luma.push_back(0.2126 * r + 0.7152 * g + 0.0722 * b);
         colours.insert((r << 16) | (g << 8) | b);
+        red += r, green += g, blue += b;
     }
+    EXPECT_GT(red, 2.5 * blue);
+    EXPECT_GT(green, 2 * blue);
     ASSERT_GT(luma.size(), last_.rgb.size() / 3 / 20) << "the duck covers under 5% of the image";
     std::sort(luma.begin(), luma.end());
     const double spread = luma[luma.size() * 9 / 10] - luma[luma.size() / 10];
@@ -170,6 +176,44 @@ TEST_F(Golden, BareObjWithoutNormalsIsSmoothWithCreases) {
     }
     check_body(read_file(obj), "model/obj", "fandisk_bare",
                Json{{"width", 160}, {"height", 120}, {"spp", 4}});
+}
+
+TEST_F(Golden, TexturedObj) {
+    // spider.obj through its MTL's map_Kd JPEGs (Windows paths), the headlight and the default
+    // camera, posted as a scene document so that its files resolve in the scene root.
+    if (!std::filesystem::exists(kModels + "/spider/spider.obj")) {
+        GTEST_SKIP() << "models not found at " << kModels;
+    }
+    check_body(R"({"objects":[{"type":"mesh","uri":"models/spider/spider.obj"}]})",
+               "application/json", "spider_textured",
+               Json{{"width", 160}, {"height", 120}, {"spp", 4}});
+}
+
+TEST_F(Golden, SkinnedFoxStands) {
+    // Fox.gltf is skinned: posed by its 24 joints it stands, its bounds' height along +Y and
+    // its feet at y ≈ 0 (unskinned, its mesh lies on its side). Seen side-on, textured.
+    if (!std::filesystem::exists(kModels + "/Fox/glTF/Fox.gltf")) {
+        GTEST_SKIP() << "models not found at " << kModels;
+    }
+    const std::string doc = R"({"objects":[{"type":"mesh","uri":"models/Fox/glTF/Fox.gltf"}]})";
+    auto reg = server_->client()->Post("/v1/scenes", doc, "application/json");
+    ASSERT_TRUE(reg);
+    ASSERT_LT(reg->status, 300) << reg->body;
+    const Json info = Json::parse(reg->body);
+    const std::vector<double> lo = info.at("bounds").at("min"), hi = info.at("bounds").at("max");
+    EXPECT_NEAR(lo[1], 0.0, 1.0);
+    EXPECT_GT(hi[1] - lo[1], 2 * (hi[0] - lo[0]));
+    EXPECT_TRUE(info.at("warnings").empty()) << info.at("warnings").dump();
+    EXPECT_TRUE(info.at("features").at("textures").get<bool>());
+    check_body(doc, "application/json", "fox_skinned",
+               Json{{"width", 160},
+                    {"height", 120},
+                    {"spp", 4},
+                    {"camera",
+                     {{"position", {160, 60, 0}},
+                      {"look_at", {0, 35, -10}},
+                      {"up", {0, 1, 0}},
+                      {"fov_y_deg", 45}}}});
 }
 
 TEST_F(Golden, GltfDuckNormals) {
