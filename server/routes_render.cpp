@@ -1,5 +1,7 @@
 // POST /v1/scenes/{id}/render, GET/DELETE /v1/jobs/{job}, GET /v1/jobs/{job}/image.
 
+#include <chrono>
+#include <cstdio>
 #include <memory>
 
 #include "engine/render/render.h"
@@ -33,11 +35,18 @@ engine::Result<JobOutput> render_output(const engine::QueryEngine& engine, const
     note_rays(metrics, RayKind::reflected, r.precision, r.counts.reflected);
     note_rays(metrics, RayKind::refracted, r.precision, r.counts.refracted);
     JobOutput out;
+    const auto encode_start = std::chrono::steady_clock::now();
     out.body = engine::encode_image(r.image, req.format, engine::is_data_mode(req.options.shading));
+    const double encode_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - encode_start)
+            .count();
     out.content_type = engine::mime_type(req.format);
-    char ms[32];
+    char ms[32], breakdown[96];
     std::snprintf(ms, sizeof ms, "%.3f", r.render_ms);
+    // X-Render-Ms stays one number (clients parse it); where the time went is beside it.
+    std::snprintf(breakdown, sizeof breakdown, "trace=%.3f, encode=%.3f", r.render_ms, encode_ms);
     out.headers = {{"X-Render-Ms", ms},
+                   {"X-Render-Breakdown", breakdown},
                    {"X-Rays", rays_header(r.counts)},
                    {"X-Precision", engine::to_string(r.precision)}};
     return out;
@@ -70,6 +79,8 @@ std::string job_body(const JobInfo& j) {
         for (const auto& [k, v] : j.output->headers) {
             if (k == "X-Render-Ms")
                 w.raw(",\"render_ms\":").raw(v);
+            if (k == "X-Render-Breakdown")
+                w.raw(",\"render_breakdown\":").string(v);
             if (k == "X-Rays")
                 w.raw(",\"rays\":").string(v);
         }

@@ -2,6 +2,7 @@
 // raycastd binary.
 
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -90,6 +91,14 @@ TEST_F(RenderApi, PngWithTimingAndRayCounts) {
     ASSERT_EQ(res->status, 200) << res->body;
     EXPECT_EQ(res->get_header_value("Content-Type"), "image/png");
     EXPECT_GE(std::stod(res->get_header_value("X-Render-Ms")), 0.0);
+    // "trace=T, encode=E": T is X-Render-Ms itself, E the PNG encode after it.
+    double trace = -1, encode = -1;
+    ASSERT_EQ(std::sscanf(res->get_header_value("X-Render-Breakdown").c_str(),
+                          "trace=%lf, encode=%lf", &trace, &encode),
+              2)
+        << res->get_header_value("X-Render-Breakdown");
+    EXPECT_DOUBLE_EQ(trace, std::stod(res->get_header_value("X-Render-Ms")));
+    EXPECT_GE(encode, 0.0);
     const std::string rays = res->get_header_value("X-Rays");
     const auto n = parse_rays(rays);
     ASSERT_EQ(n.size(), 4u) << rays;
