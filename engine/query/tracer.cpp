@@ -36,6 +36,20 @@ void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) 
     out.swap(result.hits);
 }
 
+void Tracer::occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
+    if (own_bvh_) {
+        out.assign(rays.size(), Hit{});
+        own_bvh_->any_range(rays.data(), rays.size(), precision_, out.data());
+        return;
+    }
+    QueryOptions q;
+    q.precision = precision_;
+    q.mode = Mode::any;
+    QueryResult result;
+    engine_.intersect(rays, q, result);
+    out.swap(result.hits);
+}
+
 bool Tracer::occluded(const Ray& ray) const {
     if (own_bvh_)
         return own_bvh_->any(ray, precision_);

@@ -49,6 +49,10 @@ class Tracer {
     /// the exact path), or on the tracer's own BVH its float traversal at the precision asked
     /// (refined then confirms a float miss by scanning the scene's at most 16 triangles).
     bool occluded(const Ray& ray) const;
+    /// occluded() for a batch: out[i].valid() says whether rays[i] is blocked (out is resized).
+    /// Runs of 16 coherent rays go through Embree's occlusion packets (rtcOccluded16) where
+    /// that is faster; at `refined` a float miss is confirmed as for single rays.
+    void occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
 
   private:
     const QueryEngine& engine_;

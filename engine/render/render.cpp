@@ -121,10 +121,16 @@ void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, R
     counts.primary += rays.size();
     const int w = x1 - x0;
     std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-        sums[static_cast<std::size_t>(where[i][1] * w + where[i][0])] +=
-            f.shade(rays[i], hits[i], counts);
+    std::vector<Vec3d> colors;
+    if (f.opt.shading == ShadingMode::phong) {
+        f.whitted.shade_hits(rays, hits, colors, counts);  // shadow rays in packets
+    } else {
+        colors.resize(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            colors[i] = f.shade(rays[i], hits[i], counts);
     }
+    for (std::size_t i = 0; i < rays.size(); ++i)
+        sums[static_cast<std::size_t>(where[i][1] * w + where[i][0])] += colors[i];
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
             image.set(x, y,

@@ -169,19 +169,77 @@ struct Whitted::Surface {
     bool camera_hit;  ///< depth 1: the camera ray's own hit
 };
 
-Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
-                     TreeBuild* tree) const {
+Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth,
+                                  Material& scratch) const {
     const std::uint32_t mi = material_of(hit);
-    Material scratch;
     const Material& m = textured(hit, scene().materials[mi], scratch);
     const Vec3d d = normalize(ray.direction);
     const Vec3d ng = face_towards_ray(hit.normal, d);
     Vec3d n = shading_normal(hit);
     if (dot(n, ng) < 0.0)
         n = -n;
-    const Surface sp{hit,           m,  mi, d,
-                     ray.at(hit.t), ng, n,  hit_point_error(ray, hit, tracer_.float_frame()),
-                     depth == 1};
+    return Surface{hit,           m,  mi, d,
+                   ray.at(hit.t), ng, n,  hit_point_error(ray, hit, tracer_.float_frame()),
+                   depth == 1};
+}
+
+void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
+                         std::vector<Vec3d>& out, RayCounts& counts) const {
+    const std::size_t n = rays.size();
+    out.assign(n, options_.background);
+    const std::size_t lights = plan_.shadow_lights.size();
+    if (!options_.batch_shadow_rays || lights == 0) {
+        for (std::size_t i = 0; i < n; ++i) {
+            if (hits[i].valid())
+                out[i] = shade_hit(rays[i], hits[i], counts);
+        }
+        return;
+    }
+    // Reserved up front: each Surface refers to its scratch material.
+    std::vector<Material> scratch(n);
+    std::vector<Surface> surfaces;
+    surfaces.reserve(n);
+    std::vector<std::size_t> hit_of;  // surfaces[h] is the hit of rays[hit_of[h]]
+    hit_of.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!hits[i].valid())
+            continue;
+        surfaces.push_back(surface(rays[i], hits[i], 1, scratch[i]));
+        hit_of.push_back(i);
+    }
+    // Light by light, so that the rays of neighbouring hits to one light sit side by side.
+    std::vector<Ray> shadow;
+    std::vector<std::size_t> slot;  // shadow[j] answers blocked[slot[j]]
+    shadow.reserve(surfaces.size() * lights);
+    slot.reserve(surfaces.size() * lights);
+    for (std::size_t k = 0; k < lights; ++k) {
+        const Light& light = scene().lights[plan_.shadow_lights[k]];
+        for (std::size_t h = 0; h < surfaces.size(); ++h) {
+            if (auto r = shadow_ray(surfaces[h], light)) {
+                shadow.push_back(*r);
+                slot.push_back(h * lights + k);
+            }
+        }
+    }
+    std::vector<Hit> occluders;
+    tracer_.occluded_batch(shadow, occluders);
+    counts.shadow += shadow.size();
+    std::vector<std::uint8_t> blocked(surfaces.size() * lights, 0);
+    for (std::size_t j = 0; j < shadow.size(); ++j)
+        blocked[slot[j]] = occluders[j].valid() ? 1 : 0;
+    for (std::size_t h = 0; h < surfaces.size(); ++h) {
+        bool lit = false;
+        Vec3d color = direct(surfaces[h], counts, nullptr, lit, &blocked[h * lights]);
+        if (options_.max_depth > 1)
+            color += indirect(surfaces[h], 1, counts, nullptr, 0);
+        out[hit_of[h]] = color;
+    }
+}
+
+Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
+                     TreeBuild* tree) const {
+    Material scratch;
+    const Surface sp = surface(ray, hit, depth, scratch);
 
     // Node k of the tree is written before its children so that labels run depth-first; the
     // vector may grow during the recursion, so the node is addressed by index, never by reference.
@@ -190,7 +248,7 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
         TreeNode node;
         node.hit = hit;
         node.point = sp.p;
-        node.normal = n;
+        node.normal = sp.n;
         tree->out.nodes.push_back(std::move(node));
     }
     bool lit = false;
@@ -205,10 +263,21 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
     return color;
 }
 
-Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit) const {
+std::optional<Ray> Whitted::shadow_ray(const Surface& sp, const Light& light) const {
+    const bool point = light.type == LightType::point;
+    const Vec3d l = normalize(point ? light.position - sp.p : -light.direction);
+    if (!(dot(sp.n, l) > 0.0))
+        return std::nullopt;
+    return point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
+                 : spawn_ray(sp.p, sp.p_err, sp.ng, l);
+}
+
+Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
+                      const std::uint8_t* traced) const {
     const Scene& s = scene();
     Vec3d color = sp.m.emissive + phong_ambient(sp.m, plan_.ambient);
-    for (std::uint32_t li : plan_.shadow_lights) {
+    for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
+        const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
         const bool point = light.type == LightType::point;
         const Vec3d l = normalize(point ? light.position - sp.p : -light.direction);
@@ -216,18 +285,19 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
         rec.light = li;
         rec.facing = dot(sp.n, l) > 0.0;
         if (rec.facing) {
-            const Ray shadow = point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
-                                     : spawn_ray(sp.p, sp.p_err, sp.ng, l);
-            ++counts.shadow;
             bool blocked;
-            if (node) {
+            if (traced) {
+                blocked = traced[k] != 0;
+            } else if (node) {
+                ++counts.shadow;
                 // The tree names the blocker, so it asks for the closest one.
-                const std::optional<Hit> b = closest(shadow);
+                const std::optional<Hit> b = closest(*shadow_ray(sp, light));
                 blocked = b.has_value();
                 if (b)
                     rec.blocked_by = b->object;
             } else {
-                blocked = occluded(shadow);
+                ++counts.shadow;
+                blocked = occluded(*shadow_ray(sp, light));
             }
             if (!blocked) {
                 lit = true;

@@ -50,6 +50,9 @@ struct WhittedOptions {
     /// answers by brute force gets a BVH of its own (renders: millions of rays). Off for a
     /// single ray tree, where exact brute force is the cheapest.
     bool bvh_for_small_scenes = false;
+    /// shade_hits() traces the camera hits' shadow rays as one batch (Embree packets); off, it
+    /// shades hit by hit as shade_hit() does (the tests compare the two).
+    bool batch_shadow_rays = true;
 };
 
 /// Rays traced, by kind.
@@ -139,6 +142,14 @@ class Whitted {
     Vec3d radiance(const Ray& ray, RayCounts& counts) const;
     /// The same, shading a camera hit already found (counts.primary is the caller's).
     Vec3d shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) const;
+    /// shade_hit() for each of a batch of camera hits, into out[0..n) (a miss: the background),
+    /// with their shadow rays traced together: light by light, in the order of the hits, so
+    /// that neighbouring hits' rays to one light form coherent runs of 16, which the tracer
+    /// answers as Embree occlusion packets (Tracer::occluded_batch). Reflected and refracted
+    /// rays, and the shadow rays below them, are traced one at a time as before. The colours
+    /// are shade_hit()'s, up to which path decided a shadow ray (equal at `exact`).
+    void shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
+                    std::vector<Vec3d>& out, RayCounts& counts) const;
     /// The ray tree of one ray, with the blocking object of each shadow ray named;
     /// Code::cancelled once `cancel` has fired (it is asked once per node).
     Result<RayTree> tree(const Ray& ray, const CancelToken& cancel = {}) const;
@@ -166,9 +177,18 @@ class Whitted {
     Vec3d trace(const Ray& ray, int depth, RayCounts& counts, TreeBuild* tree, int* slot) const;
     Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
                 TreeBuild* tree) const;
+    /// The hit made ready for shading; `scratch` holds a textured copy of its material, and
+    /// must outlive the Surface.
+    Surface surface(const Ray& ray, const Hit& hit, int depth, Material& scratch) const;
+    /// The shadow ray from a surface point to a point or directional light, or nullopt when
+    /// the light is behind the shading normal (no ray is traced then).
+    std::optional<Ray> shadow_ray(const Surface& sp, const Light& light) const;
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
-    Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit) const;
+    /// `blocked`, when given, holds whether the shadow ray to plan().shadow_lights[k] is
+    /// blocked, already traced (and counted) by the caller; else direct() traces them.
+    Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
+                 const std::uint8_t* blocked = nullptr) const;
     /// The headlight's diffuse and specular terms (zero when it is behind N or, below the camera
     /// hit, its shadow ray is blocked).
     Vec3d headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) const;
