@@ -9,8 +9,9 @@
 // raw Embree tracing the Duck scene's primary rays (bench/raw_embree.h), the ceiling for rays.
 //
 //   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
-//                [--scenes tutorial_like,duck] [--precisions refined,fast]
+//                [--scenes tutorial_like,duck] [--precisions refined,fast] [--single-shadow-rays]
 // --write-pov writes each scene's .pov (1024×768) into DIR and renders nothing.
+// --single-shadow-rays adds rows with the camera hits' shadow rays traced one by one (no packets).
 
 #include <algorithm>
 #include <chrono>
@@ -42,6 +43,9 @@ struct Args {
     std::string write_pov;
     std::string scenes = "tutorial_like,duck";  ///< which scenes to render
     std::string precisions = "refined,fast";    ///< at which precisions
+    /// Also render each case with the camera hits' shadow rays traced one at a time (the
+    /// renderer before they were batched into packets), to measure what the batching gives.
+    bool single_shadow_rays = false;
 };
 
 std::string read_file(const std::string& path) {
@@ -180,6 +184,8 @@ int main(int argc, char** argv) {
             a.write_pov = argv[++i];
         } else if (s == "--smoke") {
             a.smoke = true;
+        } else if (s == "--single-shadow-rays") {
+            a.single_shadow_rays = true;
         } else if (s == "--scenes" && i + 1 < argc) {
             a.scenes = argv[++i];
         } else if (s == "--precisions" && i + 1 < argc) {
@@ -188,7 +194,7 @@ int main(int argc, char** argv) {
             std::cerr
                 << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n"
                    "                    [--scenes tutorial_like,duck] [--precisions "
-                   "refined,fast]\n";
+                   "refined,fast] [--single-shadow-rays]\n";
             return 2;
         }
     }
@@ -224,8 +230,13 @@ int main(int argc, char** argv) {
             if (a.povray != "none" && !a.smoke) {
                 pov = run_povray(a, bench::to_pov(engine->scene(), cam, w, h, 5), w, h, spp);
             }
-            for (auto p : {engine::Precision::fast, engine::Precision::refined}) {
-                if (!listed(a.precisions, engine::to_string(p)))
+            for (auto [p, batch] : std::vector<std::pair<engine::Precision, bool>>{
+                     {engine::Precision::fast, true},
+                     {engine::Precision::fast, false},
+                     {engine::Precision::refined, true},
+                     {engine::Precision::refined, false}}) {
+                if (!listed(a.precisions, engine::to_string(p)) ||
+                    (!batch && !a.single_shadow_rays))
                     continue;
                 engine::RenderOptions o;
                 o.width = w;
@@ -233,6 +244,7 @@ int main(int argc, char** argv) {
                 o.spp = spp;
                 o.whitted.max_depth = 5;
                 o.whitted.precision = p;
+                o.whitted.batch_shadow_rays = batch;
                 std::vector<double> ms;
                 engine::RenderResult r;
                 for (int k = 0; k < a.runs; ++k) {
@@ -241,11 +253,13 @@ int main(int argc, char** argv) {
                 }
                 const double m = median(ms);
                 std::string precision = engine::to_string(r.precision);
-                if (p == engine::Precision::fast)
+                if (p == engine::Precision::fast && batch)
                     precision += " (default)";
+                if (!batch)
+                    precision += ", single shadow rays";
                 rows.push_back(
                     {name, precision, spp, m, r.counts.total() / m / 1e3, pov, r.counts});
-                if (name == "duck" && spp == 4 && p == engine::Precision::fast)
+                if (name == "duck" && spp == 4 && p == engine::Precision::fast && batch)
                     write_preview(a, r.image, extra);
                 if (a.smoke)
                     break;
