@@ -20,6 +20,17 @@
 
 namespace raycastd::engine::gltf {
 
+/// The value of a hexadecimal digit, −1 for any other character (URI percent-escapes).
+inline int hex_digit(char c) {
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
+    return -1;
+}
+
 /// How a material's texture coordinates are read: the TEXCOORD_<texcoord> set, mapped by the
 /// KHR_texture_transform affine map `matrix` (row-major 2×3: u' = m0·u + m1·v + m2,
 /// v' = m3·u + m4·v + m5). texcoord −1: the material is not textured, so its primitives need

@@ -10,6 +10,7 @@
 // us (gltf_textures.cpp). nlohmann/json, tinygltf's own parser, is used beforehand to list
 // those URIs and, after a failed parse, to name an unsupported required extension.
 
+#include <algorithm>
 #include <map>
 #include <set>
 #include <sstream>
@@ -135,15 +136,7 @@ Result<Glb> check_glb(std::string_view bytes, std::string_view name,
 /// The URI as tinygltf hands it to the file-system callbacks: its dlib::urldecode turns "%xx"
 /// into the byte and, unlike RFC 3986, '+' into a space.
 std::string tinygltf_urldecode(std::string_view uri) {
-    auto hex = [](char c) -> int {
-        if (c >= '0' && c <= '9')
-            return c - '0';
-        if (c >= 'a' && c <= 'f')
-            return c - 'a' + 10;
-        if (c >= 'A' && c <= 'F')
-            return c - 'A' + 10;
-        return 0;
-    };
+    auto hex = [](char c) { return std::max(gltf::hex_digit(c), 0); };  // dlib reads junk as 0
     std::string out;
     for (std::size_t i = 0; i < uri.size(); ++i) {
         if (uri[i] == '+') {

@@ -36,15 +36,7 @@ TextureWrap to_wrap(int mode) {
 /// RFC 3986 §2.1 percent-decoding; glTF URIs are RFC 3986 URI references (§3.1). A malformed
 /// escape is kept as it is (the file will then not be found, which is reported).
 std::string percent_decode(std::string_view uri) {
-    auto hex = [](char c) -> int {
-        if (c >= '0' && c <= '9')
-            return c - '0';
-        if (c >= 'a' && c <= 'f')
-            return c - 'a' + 10;
-        if (c >= 'A' && c <= 'F')
-            return c - 'A' + 10;
-        return -1;
-    };
+    const auto hex = hex_digit;
     std::string out;
     for (std::size_t i = 0; i < uri.size(); ++i) {
         if (uri[i] == '%' && i + 2 < uri.size() && hex(uri[i + 1]) >= 0 && hex(uri[i + 2]) >= 0) {
