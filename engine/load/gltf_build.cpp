@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "engine/load/gltf_internal.h"
+#include "engine/math/float_bounds.h"
 
 namespace raycastd::engine::gltf {
 
@@ -43,8 +44,9 @@ struct LocalMesh {
     bool any_uvs = false;
     /// Skin influences, kInfluences per vertex (JOINTS_0/WEIGHTS_0, then JOINTS_1/WEIGHTS_1),
     /// weight 0 in unused slots; empty when no primitive has JOINTS_0.
-    std::vector<std::uint32_t> joints;
-    std::vector<double> weights;
+    /// (glTF allows only unsigned byte and short joint indices, §3.7.3.2.)
+    std::vector<std::uint16_t> joints;
+    std::vector<float> weights;
 };
 
 /// Influences kept per vertex: two JOINTS_n/WEIGHTS_n sets of four (glTF 2.0 §3.7.3.3 allows
@@ -312,8 +314,9 @@ Status add_corner_uvs(const tinygltf::Model& m, const tinygltf::Primitive& prim,
             for (std::size_t c = 0; c < 3; ++c) {
                 const std::size_t v = out.triangles[t][c] - base;
                 const double u0 = uv[2 * v], v0 = uv[2 * v + 1];
-                corners[c] = {static_cast<float>(k[0] * u0 + k[1] * v0 + k[2]),
-                              static_cast<float>(k[3] * u0 + k[4] * v0 + k[5])};
+                // to_float: a transform's scale can take a coordinate past float's range.
+                corners[c] = {to_float(k[0] * u0 + k[1] * v0 + k[2]),
+                              to_float(k[3] * u0 + k[4] * v0 + k[5])};
             }
         }
         out.corner_uvs.push_back(corners);
@@ -359,10 +362,11 @@ Status add_influences(const tinygltf::Model& m, const tinygltf::Primitive& prim,
             for (std::size_t k = 0; k < 4; ++k) {
                 const double j = (*joints)[4 * v + k], w = (*weights)[4 * v + k];
                 const std::size_t slot = (before + v) * kInfluences + 4 * set + k;
-                if (!(j >= 0.0) || j > std::numeric_limits<std::uint32_t>::max())
+                if (!(j >= 0.0) || j > std::numeric_limits<std::uint16_t>::max())
                     return fail(where + "/attributes/" + js + " has an invalid joint index");
-                out.joints[slot] = static_cast<std::uint32_t>(j);
-                out.weights[slot] = std::isfinite(w) && w > 0.0 ? w : 0.0;
+                out.joints[slot] = static_cast<std::uint16_t>(j);
+                // Weights are floats or normalized integers in [0, 1] (§3.7.3.2).
+                out.weights[slot] = std::isfinite(w) && w > 0.0 ? static_cast<float>(w) : 0.0f;
             }
         }
     }
@@ -466,27 +470,61 @@ Result<LocalMesh> build_local_mesh(const tinygltf::Model& m, std::size_t mesh,
 
 /// Places a local mesh in the world. A mirroring transform (negative determinant) reverses
 /// each triangle so front faces stay counter-clockwise (glTF 2.0 §3.7.2.1).
-/// `skin` (when not null) gives every vertex a transform of its own, the skinned mesh's
-/// (skin_transforms()); then the mirroring test is made per triangle, on its first vertex's.
+using JointMatrix = std::array<std::array<double, 4>, 4>;
+
+/// Vertex v's skinning transform: Σₖ wₖ · joints[jₖ] over its influences, with the weights
+/// divided by their sum (quantized weights rarely sum to exactly 1); the identity, its bind
+/// pose, for a vertex without weight. skin_transforms() has checked every joint index.
+Transform blend(const LocalMesh& local, const std::vector<JointMatrix>& joints, std::size_t v) {
+    JointMatrix sum{};
+    double total = 0.0;
+    for (std::size_t k = 0; k < kInfluences; ++k) {
+        const double w = local.weights[v * kInfluences + k];
+        if (w == 0.0)
+            continue;
+        const JointMatrix& j = joints[local.joints[v * kInfluences + k]];
+        for (std::size_t r = 0; r < 4; ++r) {
+            for (std::size_t c = 0; c < 4; ++c)
+                sum[r][c] += w * j[r][c];
+        }
+        total += w;
+    }
+    if (!(total > 0.0))
+        return Transform();
+    for (auto& row : sum) {
+        for (double& e : row)
+            e /= total;
+    }
+    return Transform(sum);
+}
+
+/// `skin` (when not null) holds the joint matrices of a skinned mesh (skin_transforms()):
+/// each vertex then moves by its own blend of them, computed as it is placed, and the
+/// mirroring test is made per triangle, on its first vertex's transform.
 ModelPart instance(const LocalMesh& local, const Transform& world,
-                   const std::vector<Transform>* skin, std::string name,
+                   const std::vector<JointMatrix>* skin, std::string name,
                    const std::function<std::uint32_t()>& default_material) {
     ModelPart part;
     part.name = std::move(name);
     TriangleMesh& mesh = part.mesh;
-    auto at = [&](std::size_t v) -> const Transform& { return skin ? (*skin)[v] : world; };
+    const bool skinned = skin && local.joints.size() == local.positions.size() * kInfluences;
+    std::vector<char> mirrors(skinned ? local.positions.size() : 0);
     mesh.positions.reserve(local.positions.size());
-    for (std::size_t v = 0; v < local.positions.size(); ++v)
-        mesh.positions.push_back(at(v).apply_point(local.positions[v]));
     mesh.normals.reserve(local.normals.size());
-    for (std::size_t v = 0; v < local.normals.size(); ++v)
-        mesh.normals.push_back(Vec3f(at(v).apply_normal(local.normals[v])));
+    for (std::size_t v = 0; v < local.positions.size(); ++v) {
+        const Transform t = skinned ? blend(local, *skin, v) : skin ? Transform() : world;
+        mesh.positions.push_back(t.apply_point(local.positions[v]));
+        if (!local.normals.empty())
+            mesh.normals.push_back(Vec3f(t.apply_normal(local.normals[v])));
+        if (skinned)
+            mirrors[v] = t.determinant3() < 0.0;
+    }
     mesh.triangles = local.triangles;
     mesh.corner_uvs = local.corner_uvs;
-    const bool world_mirrors = world.determinant3() < 0.0;
+    const bool world_mirrors = !skin && world.determinant3() < 0.0;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
         auto& tri = mesh.triangles[t];
-        if (skin ? at(tri[0]).determinant3() >= 0.0 : !world_mirrors)
+        if (!(skinned ? mirrors[tri[0]] != 0 : world_mirrors))
             continue;
         std::swap(tri[1], tri[2]);
         if (!mesh.corner_uvs.empty())
@@ -501,15 +539,14 @@ ModelPart instance(const LocalMesh& local, const Transform& world,
     return part;
 }
 
-/// Linear blend skinning in the default pose (glTF 2.0 §3.7.3.3): the joint matrix of joint j
-/// is globalTransform(joint j) · inverseBindMatrix j, and vertex v moves by
-/// Σₖ wₖ · jointMatrix(jₖ) over its influences. Weights are divided by their sum (quantized
-/// weights rarely sum to exactly 1); a vertex without weight keeps the identity, its bind pose.
-/// The skinned node's own transform plays no part (§3.7.3.1). `node_world` holds every node's
-/// global transform in the file's rest pose (no animation is played).
-Result<std::vector<Transform>> skin_transforms(const tinygltf::Model& m, int skin_index,
-                                               const std::vector<Transform>& node_world,
-                                               const LocalMesh& local) {
+/// The joint matrices of a skin in the default pose (glTF 2.0 §3.7.3.3, linear blend
+/// skinning): joint j's is globalTransform(joint j) · inverseBindMatrix j, and a vertex moves by
+/// the blend of its joints' (blend()). The skinned node's own transform plays no part
+/// (§3.7.3.1). `node_world` holds every node's global transform in the file's rest pose (no
+/// animation is played). Every joint index `local` uses with a weight is checked here.
+Result<std::vector<JointMatrix>> skin_transforms(const tinygltf::Model& m, int skin_index,
+                                                 const std::vector<Transform>& node_world,
+                                                 const LocalMesh& local) {
     const tinygltf::Skin& skin = m.skins[static_cast<std::size_t>(skin_index)];
     const std::string where = "/skins/" + std::to_string(skin_index);
     std::vector<double> ibm;
@@ -521,7 +558,7 @@ Result<std::vector<Transform>> skin_transforms(const tinygltf::Model& m, int ski
             return fail(where + "/inverseBindMatrices has fewer matrices than the skin has joints");
         ibm = std::move(*read);
     }
-    std::vector<std::array<std::array<double, 4>, 4>> joint(skin.joints.size());
+    std::vector<JointMatrix> joints(skin.joints.size());
     for (std::size_t j = 0; j < skin.joints.size(); ++j) {
         if (!in_range(skin.joints[j], m.nodes.size())) {
             return fail(where + "/joints/" + std::to_string(j) + " is not a node of the file");
@@ -533,41 +570,18 @@ Result<std::vector<Transform>> skin_transforms(const tinygltf::Model& m, int ski
                       ibm.begin() + static_cast<std::ptrdiff_t>(16 * j + 16), cm.begin());
             inverse_bind = Transform::from_column_major(cm);
         }
-        joint[j] = (node_world[static_cast<std::size_t>(skin.joints[j])] * inverse_bind).rows();
+        const Transform joint = node_world[static_cast<std::size_t>(skin.joints[j])] * inverse_bind;
+        if (!joint.is_finite())
+            return fail(where + "/joints/" + std::to_string(j) + ": joint matrix overflows");
+        joints[j] = joint.rows();
     }
-    const std::size_t n = local.positions.size();
-    std::vector<Transform> out(n);
-    if (local.joints.size() != n * kInfluences)
-        return out;  // the mesh carries no influences: every vertex keeps its bind pose
-    for (std::size_t v = 0; v < n; ++v) {
-        std::array<std::array<double, 4>, 4> sum{};
-        double total = 0.0;
-        for (std::size_t k = 0; k < kInfluences; ++k) {
-            const double w = local.weights[v * kInfluences + k];
-            if (w == 0.0)
-                continue;
-            const std::uint32_t j = local.joints[v * kInfluences + k];
-            if (j >= joint.size()) {
-                return fail(where + ": a vertex names joint " + std::to_string(j) +
-                            ", but the skin has " + std::to_string(joint.size()));
-            }
-            for (std::size_t r = 0; r < 4; ++r) {
-                for (std::size_t c = 0; c < 4; ++c)
-                    sum[r][c] += w * joint[j][r][c];
-            }
-            total += w;
+    for (std::size_t k = 0; k < local.joints.size(); ++k) {
+        if (local.weights[k] != 0.0f && local.joints[k] >= joints.size()) {
+            return fail(where + ": a vertex names joint " + std::to_string(local.joints[k]) +
+                        ", but the skin has " + std::to_string(joints.size()));
         }
-        if (!(total > 0.0))
-            continue;
-        for (auto& row : sum) {
-            for (double& e : row)
-                e /= total;
-        }
-        out[v] = Transform(sum);
-        if (!out[v].is_finite())
-            return fail(where + ": a skinned vertex's transform overflows");
     }
-    return out;
+    return joints;
 }
 
 std::string part_name(const tinygltf::Model& m, const tinygltf::Node& node,
@@ -653,7 +667,7 @@ Status instance_meshes(const tinygltf::Model& m, const std::vector<Placed>& plac
                                      " triangles or " + std::to_string(limits.max_vertices) +
                                      " vertices after instancing");
         }
-        std::optional<std::vector<Transform>> skin;
+        std::optional<std::vector<JointMatrix>> skin;
         if (node.skin != -1) {
             auto posed = skin_transforms(m, node.skin, node_world, *local);
             if (!posed)

@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "engine/load/loaders.h"
+#include "engine/math/float_bounds.h"
 #include "engine/load/text_scan.h"
 
 namespace raycastd::engine::detail {
@@ -340,7 +341,7 @@ class ObjReader {
                 u = map->scale[0] * u + map->offset[0];
                 v = map->scale[1] * v + map->offset[1];
             }
-            return {static_cast<float>(u), static_cast<float>(1.0 - v)};
+            return {to_float(u), to_float(1.0 - v)};  // vt may lie past float's range
         };
         for (std::size_t i = 1; i <= added; ++i)
             corner_uvs_.push_back({corner(0), corner(i), corner(i + 1)});
