@@ -9,9 +9,9 @@
 // raw Embree tracing the Duck scene's primary rays (bench/raw_embree.h), the ceiling for rays.
 //
 //   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
-//                [--scenes tutorial_like,duck] [--precisions refined,fast] [--single-shadow-rays]
+//                [--scenes tutorial_like,duck] [--precisions refined,fast] [--single-rays]
 // --write-pov writes each scene's .pov (1024×768) into DIR and renders nothing.
-// --single-shadow-rays adds rows with the camera hits' shadow rays traced one by one (no packets).
+// --single-rays adds rows with every ray traced one at a time (no batches, no packets).
 
 #include <algorithm>
 #include <chrono>
@@ -43,9 +43,9 @@ struct Args {
     std::string write_pov;
     std::string scenes = "tutorial_like,duck";  ///< which scenes to render
     std::string precisions = "refined,fast";    ///< at which precisions
-    /// Also render each case with the camera hits' shadow rays traced one at a time (the
-    /// renderer before they were batched into packets), to measure what the batching gives.
-    bool single_shadow_rays = false;
+    /// Also render each case with every ray traced one at a time (the renderer before rays
+    /// were traced generation by generation in packets), to measure what the batching gives.
+    bool single_rays = false;
 };
 
 std::string read_file(const std::string& path) {
@@ -184,8 +184,8 @@ int main(int argc, char** argv) {
             a.write_pov = argv[++i];
         } else if (s == "--smoke") {
             a.smoke = true;
-        } else if (s == "--single-shadow-rays") {
-            a.single_shadow_rays = true;
+        } else if (s == "--single-rays") {
+            a.single_rays = true;
         } else if (s == "--scenes" && i + 1 < argc) {
             a.scenes = argv[++i];
         } else if (s == "--precisions" && i + 1 < argc) {
@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
             std::cerr
                 << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n"
                    "                    [--scenes tutorial_like,duck] [--precisions "
-                   "refined,fast] [--single-shadow-rays]\n";
+                   "refined,fast] [--single-rays]\n";
             return 2;
         }
     }
@@ -235,8 +235,7 @@ int main(int argc, char** argv) {
                      {engine::Precision::fast, false},
                      {engine::Precision::refined, true},
                      {engine::Precision::refined, false}}) {
-                if (!listed(a.precisions, engine::to_string(p)) ||
-                    (!batch && !a.single_shadow_rays))
+                if (!listed(a.precisions, engine::to_string(p)) || (!batch && !a.single_rays))
                     continue;
                 engine::RenderOptions o;
                 o.width = w;
@@ -244,7 +243,7 @@ int main(int argc, char** argv) {
                 o.spp = spp;
                 o.whitted.max_depth = 5;
                 o.whitted.precision = p;
-                o.whitted.batch_shadow_rays = batch;
+                o.whitted.trace_in_batches = batch;
                 std::vector<double> ms;
                 engine::RenderResult r;
                 for (int k = 0; k < a.runs; ++k) {
@@ -256,7 +255,7 @@ int main(int argc, char** argv) {
                 if (p == engine::Precision::fast && batch)
                     precision += " (default)";
                 if (!batch)
-                    precision += ", single shadow rays";
+                    precision += ", single rays";
                 rows.push_back(
                     {name, precision, spp, m, r.counts.total() / m / 1e3, pov, r.counts});
                 if (name == "duck" && spp == 4 && p == engine::Precision::fast && batch)

@@ -123,7 +123,7 @@ void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, R
     std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
     std::vector<Vec3d> colors;
     if (f.opt.shading == ShadingMode::phong) {
-        f.whitted.shade_hits(rays, hits, colors, counts);  // shadow rays in packets
+        f.whitted.shade_hits(rays, hits, colors, counts);  // generation by generation, in packets
     } else {
         colors.resize(rays.size());
         for (std::size_t i = 0; i < rays.size(); ++i)

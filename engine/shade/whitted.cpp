@@ -185,16 +185,21 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth,
 
 void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                          std::vector<Vec3d>& out, RayCounts& counts) const {
-    const std::size_t n = rays.size();
-    out.assign(n, options_.background);
-    const std::size_t lights = plan_.shadow_lights.size();
-    if (!options_.batch_shadow_rays || lights == 0) {
-        for (std::size_t i = 0; i < n; ++i) {
+    if (!options_.trace_in_batches) {
+        out.assign(rays.size(), options_.background);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
             if (hits[i].valid())
                 out[i] = shade_hit(rays[i], hits[i], counts);
         }
         return;
     }
+    shade_batch(rays, hits, 1, out, counts);
+}
+
+void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& hits, int depth,
+                          std::vector<Vec3d>& out, RayCounts& counts) const {
+    const std::size_t n = rays.size();
+    out.assign(n, options_.background);
     // Reserved up front: each Surface refers to its scratch material.
     std::vector<Material> scratch(n);
     std::vector<Surface> surfaces;
@@ -204,10 +209,12 @@ void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& h
     for (std::size_t i = 0; i < n; ++i) {
         if (!hits[i].valid())
             continue;
-        surfaces.push_back(surface(rays[i], hits[i], 1, scratch[i]));
+        surfaces.push_back(surface(rays[i], hits[i], depth, scratch[i]));
         hit_of.push_back(i);
     }
-    // Light by light, so that the rays of neighbouring hits to one light sit side by side.
+    // Shadow rays light by light, so that the rays of neighbouring hits to one light sit side
+    // by side.
+    const std::size_t lights = plan_.shadow_lights.size();
     std::vector<Ray> shadow;
     std::vector<std::size_t> slot;  // shadow[j] answers blocked[slot[j]]
     shadow.reserve(surfaces.size() * lights);
@@ -221,17 +228,59 @@ void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& h
             }
         }
     }
-    std::vector<Hit> occluders;
-    tracer_.occluded_batch(shadow, occluders);
-    counts.shadow += shadow.size();
     std::vector<std::uint8_t> blocked(surfaces.size() * lights, 0);
-    for (std::size_t j = 0; j < shadow.size(); ++j)
-        blocked[slot[j]] = occluders[j].valid() ? 1 : 0;
+    if (!shadow.empty()) {
+        std::vector<Hit> occluders;
+        tracer_.occluded_batch(shadow, occluders);
+        counts.shadow += shadow.size();
+        for (std::size_t j = 0; j < shadow.size(); ++j)
+            blocked[slot[j]] = occluders[j].valid() ? 1 : 0;
+    }
+    std::vector<Vec3d> direct_color(surfaces.size());
     for (std::size_t h = 0; h < surfaces.size(); ++h) {
         bool lit = false;
-        Vec3d color = direct(surfaces[h], counts, nullptr, lit, &blocked[h * lights]);
-        if (options_.max_depth > 1)
-            color += indirect(surfaces[h], 1, counts, nullptr, 0);
+        direct_color[h] =
+            direct(surfaces[h], counts, nullptr, lit, lights ? &blocked[h * lights] : nullptr);
+    }
+    // The next generation: every reflected ray of this one as a batch, then every refracted
+    // ray, each shaded by the same function one level deeper. Summed in indirect()'s order
+    // (reflection, then refraction, then onto the direct light), so that the colours are
+    // shade_hit()'s to the last bit wherever the rays' answers are.
+    std::vector<Vec3d> indirect_color(surfaces.size());
+    if (depth < options_.max_depth) {
+        std::vector<Ray> next[2];
+        std::vector<std::size_t> owner[2];
+        for (std::size_t h = 0; h < surfaces.size(); ++h) {
+            const SecondaryRays sec = secondary_rays(surfaces[h]);
+            if (sec.reflected) {
+                next[0].push_back(*sec.reflected);
+                owner[0].push_back(h);
+            }
+            if (sec.refracted) {
+                next[1].push_back(*sec.refracted);
+                owner[1].push_back(h);
+            }
+        }
+        counts.reflected += next[0].size();
+        counts.refracted += next[1].size();
+        for (int kind = 0; kind < 2; ++kind) {
+            if (next[kind].empty())
+                continue;
+            std::vector<Hit> next_hits;
+            closest_batch(next[kind], next_hits);
+            std::vector<Vec3d> next_color;
+            shade_batch(next[kind], next_hits, depth + 1, next_color, counts);
+            for (std::size_t j = 0; j < next[kind].size(); ++j) {
+                const Material& m = surfaces[owner[kind][j]].m;
+                indirect_color[owner[kind][j]] +=
+                    next_color[j] * (kind == 0 ? m.reflectivity : m.transparency);
+            }
+        }
+    }
+    for (std::size_t h = 0; h < surfaces.size(); ++h) {
+        Vec3d color = direct_color[h];
+        if (depth < options_.max_depth)
+            color += indirect_color[h];
         out[hit_of[h]] = color;
     }
 }
@@ -332,31 +381,42 @@ Vec3d Whitted::headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) 
     return phong_light(sp.m, sp.n, l, -sp.d, h.intensity, plan_.specular[sp.material]).sum();
 }
 
-Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
-                        std::size_t k) const {
-    Vec3d color;
+Whitted::SecondaryRays Whitted::secondary_rays(const Surface& sp) const {
+    SecondaryRays out;
     // Leaving a transparent object: its internal reflection is not traced (the tutorial).
     const bool leaving_glass = sp.m.transparency > 0.0 && !sp.hit.front_face;
-    if (plan_.reflection && sp.m.reflectivity > 0.0 && !leaving_glass) {
-        ++counts.reflected;
-        const Ray r = spawn_ray(sp.p, sp.p_err, sp.ng, reflect(sp.d, sp.n));
-        int child = -1;
-        color += trace(r, depth + 1, counts, tree, &child) * sp.m.reflectivity;
-        if (tree)
-            tree->out.nodes[k].reflected = child;
-    }
+    if (plan_.reflection && sp.m.reflectivity > 0.0 && !leaving_glass)
+        out.reflected = spawn_ray(sp.p, sp.p_err, sp.ng, reflect(sp.d, sp.n));
     if (plan_.refraction && sp.m.transparency > 0.0) {
         const double eta = sp.hit.front_face ? 1.0 / sp.m.ior : sp.m.ior;
         if (const std::optional<Vec3d> t = refract(sp.d, sp.n, eta)) {
-            ++counts.refracted;
-            const Ray r = spawn_ray(sp.p, sp.p_err, sp.ng, *t);
-            int child = -1;
-            color += trace(r, depth + 1, counts, tree, &child) * sp.m.transparency;
-            if (tree)
-                tree->out.nodes[k].refracted = child;
-        } else if (tree) {
-            tree->out.nodes[k].total_internal_reflection = true;
+            out.refracted = spawn_ray(sp.p, sp.p_err, sp.ng, *t);
+        } else {
+            out.total_internal_reflection = true;
         }
+    }
+    return out;
+}
+
+Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
+                        std::size_t k) const {
+    Vec3d color;
+    const SecondaryRays sec = secondary_rays(sp);
+    if (sec.reflected) {
+        ++counts.reflected;
+        int child = -1;
+        color += trace(*sec.reflected, depth + 1, counts, tree, &child) * sp.m.reflectivity;
+        if (tree)
+            tree->out.nodes[k].reflected = child;
+    }
+    if (sec.refracted) {
+        ++counts.refracted;
+        int child = -1;
+        color += trace(*sec.refracted, depth + 1, counts, tree, &child) * sp.m.transparency;
+        if (tree)
+            tree->out.nodes[k].refracted = child;
+    } else if (sec.total_internal_reflection && tree) {
+        tree->out.nodes[k].total_internal_reflection = true;
     }
     return color;
 }

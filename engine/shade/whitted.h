@@ -50,9 +50,9 @@ struct WhittedOptions {
     /// answers by brute force gets a BVH of its own (renders: millions of rays). Off for a
     /// single ray tree, where exact brute force is the cheapest.
     bool bvh_for_small_scenes = false;
-    /// shade_hits() traces the camera hits' shadow rays as one batch (Embree packets); off, it
-    /// shades hit by hit as shade_hit() does (the tests compare the two).
-    bool batch_shadow_rays = true;
+    /// shade_hits() traces each generation of rays as a batch (Embree packets); off, it shades
+    /// hit by hit as shade_hit() does (the tests and bench_render --single-rays compare them).
+    bool trace_in_batches = true;
 };
 
 /// Rays traced, by kind.
@@ -143,11 +143,13 @@ class Whitted {
     /// The same, shading a camera hit already found (counts.primary is the caller's).
     Vec3d shade_hit(const Ray& ray, const Hit& hit, RayCounts& counts) const;
     /// shade_hit() for each of a batch of camera hits, into out[0..n) (a miss: the background),
-    /// with their shadow rays traced together: light by light, in the order of the hits, so
-    /// that neighbouring hits' rays to one light form coherent runs of 16, which the tracer
-    /// answers as Embree occlusion packets (Tracer::occluded_batch). Reflected and refracted
-    /// rays, and the shadow rays below them, are traced one at a time as before. The colours
-    /// are shade_hit()'s, up to which path decided a shadow ray (equal at `exact`).
+    /// traced generation by generation (a wavefront): the hits' shadow rays together, light by
+    /// light in the order of the hits, so that neighbouring hits' rays to one light form
+    /// coherent runs of 16 that the tracer answers as Embree occlusion packets
+    /// (Tracer::occluded_batch); then all their reflected rays as one closest-hit batch, and
+    /// all their refracted rays as another, whose hits are shaded the same way one level
+    /// deeper. The colours are shade_hit()'s, up to which path decided a ray (equal at
+    /// `exact`).
     void shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                     std::vector<Vec3d>& out, RayCounts& counts) const;
     /// The ray tree of one ray, with the blocking object of each shadow ray named;
@@ -171,7 +173,13 @@ class Whitted {
     const Material& textured(const Hit& hit, const Material& stored, Material& scratch) const;
 
   private:
-    struct Surface;    // a hit made ready for shading (whitted.cpp)
+    struct Surface;  // a hit made ready for shading (whitted.cpp)
+    /// The rays a surface point sends on: the mirror ray unless it leaves glass, the refracted
+    /// ray unless there is total internal reflection.
+    struct SecondaryRays {
+        std::optional<Ray> reflected, refracted;
+        bool total_internal_reflection = false;
+    };
     struct TreeBuild;  // a ray tree being built, and its token (whitted.cpp)
 
     Vec3d trace(const Ray& ray, int depth, RayCounts& counts, TreeBuild* tree, int* slot) const;
@@ -180,6 +188,10 @@ class Whitted {
     /// The hit made ready for shading; `scratch` holds a textured copy of its material, and
     /// must outlive the Surface.
     Surface surface(const Ray& ray, const Hit& hit, int depth, Material& scratch) const;
+    /// shade_hits() at `depth` (1: camera hits).
+    void shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& hits, int depth,
+                     std::vector<Vec3d>& out, RayCounts& counts) const;
+    SecondaryRays secondary_rays(const Surface& sp) const;
     /// The shadow ray from a surface point to a point or directional light, or nullopt when
     /// the light is behind the shading normal (no ray is traced then).
     std::optional<Ray> shadow_ray(const Surface& sp, const Light& light) const;
