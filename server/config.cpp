@@ -31,6 +31,9 @@ usage: raycastd [options]
                           thread, at least 64)
   --memory-budget-mb N    resident scene memory before least-recently-used eviction (default 4096)
   --body-budget-mb N      request bodies being received at once before 503 busy (default 2048)
+  --answer-budget-mb N    answers being built or written at once before 503 busy (default 2048)
+  --job-budget-mb N       finished async render images kept; past it the oldest finished
+                          jobs are forgotten (default 512)
   --header-timeout-s N    a request's line and headers must arrive within N s (default 10)
   --idle-timeout-s N      a keep-alive connection may wait N s for its next request (default 5)
   --token T               writes (POST /v1/scenes, DELETE /v1/scenes/ID) need the header
@@ -127,6 +130,16 @@ const std::map<std::string, NumberSetter>& number_options() {
              c.limits.body_budget_bytes = n << 20;
              return {};
          }},
+        {"--answer-budget-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.answer_budget_bytes = n << 20;
+             return {};
+         }},
+        {"--job-budget-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.job_budget_bytes = n << 20;
+             return {};
+         }},
         {"--header-timeout-s",
          [](Config& c, const std::string& a, std::size_t n) -> std::string {
              if (n == 0 || n > 3600)
@@ -183,6 +196,8 @@ const std::vector<std::string>& env_flags() {
                                                    "--max-concurrent",
                                                    "--memory-budget-mb",
                                                    "--body-budget-mb",
+                                                   "--answer-budget-mb",
+                                                   "--job-budget-mb",
                                                    "--header-timeout-s",
                                                    "--idle-timeout-s",
                                                    "--request-timeout-s",

@@ -20,8 +20,12 @@ struct Limits {
     std::size_t max_concurrent = 0;                ///< work requests in flight (0: 2 × threads)
     std::size_t memory_budget_bytes = 4ull << 30;  ///< resident scenes before LRU eviction
     std::size_t body_budget_bytes = 2ull << 30;    ///< request bodies in flight (503 busy above)
-    std::size_t header_timeout_s = 10;             ///< a request head must arrive within this
-    std::size_t idle_timeout_s = 5;  ///< a keep-alive connection's wait for its next request
+    /// Answers being built or written at once (App::charge_answer; 503 busy above).
+    std::size_t answer_budget_bytes = 2ull << 30;
+    /// Finished async render images kept; past it the oldest finished jobs are forgotten.
+    std::size_t job_budget_bytes = 512ull << 20;
+    std::size_t header_timeout_s = 10;  ///< a request head must arrive within this
+    std::size_t idle_timeout_s = 5;     ///< a keep-alive connection's wait for its next request
     /// Longest a render, trace, batch or stateless scene build may work before 503 timeout
     /// (server/request_cancel.h); 0: no limit.
     std::size_t request_timeout_s = 0;

@@ -48,6 +48,22 @@ TEST(Config, EveryNumericFlagOfTheHelpIsAccepted) {
     EXPECT_GE(seen, 13);  // the test reads the help it checks
 }
 
+TEST(Config, AnswerAndJobBudgets) {
+    std::string msg;
+    bool error = false;
+    auto d = parse({}, msg, error);
+    ASSERT_TRUE(d);
+    EXPECT_EQ(d->limits.answer_budget_bytes, 2ull << 30);
+    EXPECT_EQ(d->limits.job_budget_bytes, 512ull << 20);
+    auto c = parse({"--answer-budget-mb", "3", "--job-budget-mb", "5"}, msg, error);
+    ASSERT_TRUE(c) << msg;
+    EXPECT_EQ(c->limits.answer_budget_bytes, 3u << 20);
+    EXPECT_EQ(c->limits.job_budget_bytes, 5u << 20);
+    ::setenv("RAYCASTD_ANSWER_BUDGET_MB", "7", 1);
+    EXPECT_EQ(parse({}, msg, error)->limits.answer_budget_bytes, 7u << 20);
+    ::unsetenv("RAYCASTD_ANSWER_BUDGET_MB");
+}
+
 TEST(Config, HelpAndErrors) {
     std::string msg;
     bool error = false;
