@@ -530,6 +530,8 @@ void App::add_registry_info(Json& info) const {
 }
 
 bool App::start(std::string& error) {
+    if (!reserve_descriptors(static_cast<std::size_t>(threads_), error))
+        return false;
     if (!registry_->open(error))
         return false;
     for (const std::string& path : config_.demo) {

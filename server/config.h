@@ -52,6 +52,20 @@ struct Config {
     bool health_check = false;
 };
 
+/// The most --max-connections may ask for. Connections are served a thread each; their sockets
+/// are only ever waited on with poll(2), ours and cpp-httplib's (Debian's libcpp-httplib 0.11.4
+/// is built with CPPHTTPLIB_USE_POLL: it imports poll and not select), so a descriptor past
+/// FD_SETSIZE (1024) is served like any other (HttpServer.ServesADescriptorPastFdSetsize).
+constexpr std::size_t kMaxConnections = 16384;
+/// Descriptors kept besides one per connection: the listening socket, data-dir and scene
+/// files, Embree's and TBB's, stdio.
+constexpr std::size_t kReservedDescriptors = 256;
+
+/// Makes sure the process may open `connections` + kReservedDescriptors descriptors, raising
+/// its soft RLIMIT_NOFILE up to the hard one when needed. False, with `error` naming both
+/// figures, when the hard limit is too low.
+bool reserve_descriptors(std::size_t connections, std::string& error);
+
 /// Whether `host` names only this machine (127.0.0.0/8, ::1, localhost): a server bound
 /// elsewhere without a token lets anyone on the network register and delete scenes.
 bool is_loopback_host(const std::string& host);
