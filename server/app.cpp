@@ -174,6 +174,7 @@ void send_json(httplib::Response& res, std::string body, int status) {
 
 App::App(Config config)
     : config_(std::move(config)),
+      answers_(config_.limits.answer_budget_bytes),
       http_(connection_limits(config_)),
       models_(config_.limits, config_.scene_root) {
     registry_ = std::make_unique<SceneRegistry>(
@@ -281,14 +282,26 @@ void App::add_gauges() {
     metrics_.add_gauge("process_resident_memory_bytes", "gauge",
                        "Resident set size of the process (/proc/self/statm).",
                        [] { return static_cast<double>(resident_memory_bytes()); });
+    metrics_.add_gauge("raycastd_answer_bytes", "gauge",
+                       "Bytes of answers being built or written (--answer-budget-mb bounds it).",
+                       [this] { return static_cast<double>(answers_.used()); });
+    metrics_.add_gauge("raycastd_answer_budget_bytes", "gauge",
+                       "The answers' budget (--answer-budget-mb); one answer alone may exceed it.",
+                       [this] { return static_cast<double>(answers_.limit()); });
+    metrics_.add_gauge("raycastd_body_bytes", "gauge",
+                       "Bytes of request bodies being received or served (by Content-Length).",
+                       [this] { return static_cast<double>(http_.stats().body_bytes_in_flight); });
+    metrics_.add_gauge("raycastd_body_budget_bytes", "gauge",
+                       "The request bodies' budget (--body-budget-mb).",
+                       [this] { return static_cast<double>(config_.limits.body_budget_bytes); });
     metrics_.add_gauge("raycastd_requests_in_flight", "gauge",
                        "Work requests holding a --max-concurrent slot.",
                        [this] { return static_cast<double>(in_flight_.load()); });
     metrics_.add_gauge("raycastd_connections_open", "gauge", "Client connections open.",
                        [this] { return static_cast<double>(http_.stats().open_connections); });
     metrics_.add_gauge("raycastd_busy_rejections_total", "counter",
-                       "Requests refused 503 busy: over --max-concurrent, the render queue, or "
-                       "--body-budget-mb.",
+                       "Requests refused 503 busy: over --max-concurrent, the render queue, "
+                       "--body-budget-mb or --answer-budget-mb.",
                        [this] {
                            return static_cast<double>(metrics_.errors(ErrorCode::busy) +
                                                       http_.stats().busy_bodies);
@@ -438,6 +451,38 @@ void App::handle(const httplib::Request& req, httplib::Response& res, Work cost,
     } catch (const std::exception& e) {
         send_internal(req, res, e.what());
     }
+    charge_written_answer(res);
+}
+
+void App::charge_answer(std::uint64_t bytes) {
+    MemoryBudget::Lease& lease = HttpServer::answer_lease();
+    if (bytes < kSmallAnswerBytes) {
+        lease.release();
+        return;
+    }
+    if (!lease.bound())
+        lease = answers_.empty_lease();
+    if (!lease.resize(bytes)) {
+        throw ApiError(ErrorCode::busy, "answers in flight are at the server's limit of " +
+                                            std::to_string(answers_.limit() >> 20) +
+                                            " MiB (--answer-budget-mb); retry shortly");
+    }
+}
+
+void App::charge_written_answer(httplib::Response& res) {
+    // A streamed answer (a content provider) keeps the charge its route made for it.
+    if (res.content_provider_)
+        return;
+    const std::uint64_t bytes = res.body.size();
+    if (bytes < kSmallAnswerBytes && HttpServer::answer_lease().bytes() == 0)
+        return;
+    try {
+        charge_answer(bytes);
+    } catch (const ApiError& e) {
+        // The work is done, but holding its answer while a slow client reads it would take the
+        // budget over: it is dropped (the assignment frees it) for the error.
+        send_error(res, e);
+    }
 }
 
 std::shared_ptr<void> App::extend_work_slot() {
@@ -485,6 +530,8 @@ void App::add_registry_info(Json& info) const {
 }
 
 bool App::start(std::string& error) {
+    if (!reserve_descriptors(static_cast<std::size_t>(threads_), error))
+        return false;
     if (!registry_->open(error))
         return false;
     for (const std::string& path : config_.demo) {

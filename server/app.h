@@ -15,6 +15,7 @@
 #include "server/api_error.h"
 #include "server/config.h"
 #include "server/http/http_server.h"
+#include "server/memory_budget.h"
 #include "server/metrics.h"
 #include "server/model_source.h"
 #include "server/scene_registry.h"
@@ -62,9 +63,26 @@ class App {
     std::string allowed_methods(const std::string& path) const;
 
     /// Runs `work` and turns what it throws into the API's JSON error responses; heavy work
-    /// holds a work slot while it runs.
+    /// holds a work slot while it runs. Then the answer's body, when it is at least
+    /// kSmallAnswerBytes or a charge was made for it, is charged to the answer budget at its
+    /// exact size; an answer that does not fit is dropped and answered 503 busy instead.
     void handle(const httplib::Request& req, httplib::Response& res, Work cost,
                 const std::function<void()>& work);
+
+    /// Answers smaller than this are never charged nor refused: health, info, lookups and
+    /// small queries are always answered, and cost no shared atomic.
+    static constexpr std::uint64_t kSmallAnswerBytes = 64u << 10;
+    /// What a JSON answer is charged per ray or point before the work, until its exact size is
+    /// known: a closest hit with every field is ~250 bytes of JSON, a miss 15.
+    static constexpr std::uint64_t kJsonBytesPerItem = 256;
+    /// Inside work: the answer of the request served on this thread will hold `bytes` (an
+    /// estimate before the work, or its exact size), charged to --answer-budget-mb until the
+    /// answer has been written. Throws 503 busy when growing the charge would take the budget
+    /// over its limit while other answers hold part of it; below kSmallAnswerBytes nothing is
+    /// charged.
+    void charge_answer(std::uint64_t bytes);
+    /// The answers' budget (--answer-budget-mb), for GET /metrics.
+    const MemoryBudget& answer_budget() const { return answers_; }
 
     /// Inside heavy work: one more work slot, held until the last copy of the token goes, for
     /// work that outlives the handler (a streamed answer traces its last chunks while it is
@@ -116,8 +134,13 @@ class App {
     /// The gauges of GET /metrics that read the registry, connections and work slots.
     void add_gauges();
 
+    /// The charge of the answer `work` left in `res` (handle()); a 503 busy in place of one that
+    /// does not fit.
+    void charge_written_answer(httplib::Response& res);
+
     Config config_;
-    Metrics metrics_;  ///< before http_: the routes' wrappers use it while http_ serves
+    Metrics metrics_;       ///< before http_: the routes' wrappers use it while http_ serves
+    MemoryBudget answers_;  ///< before http_, whose threads hold leases of it
     HttpServer http_;
     int threads_ = 0;
     std::size_t max_concurrent_ = 0;

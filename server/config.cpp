@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cstdlib>
 #include <cstring>
 #include <map>
 #include <vector>
+
+#include <sys/resource.h>
 
 namespace raycastd::server {
 
@@ -17,8 +20,9 @@ usage: raycastd [options]
 
   --host ADDR             address to listen on (default 127.0.0.1)
   --port N                port (default 8080; 0 picks a free port and prints it)
-  --max-connections N     connections served at once, a thread each (default 512); idle
-                          ones give their thread up to new clients (--threads: the same)
+  --max-connections N     connections served at once, a thread each (default 512, at most
+                          16384; each needs a file descriptor: ulimit -n); idle ones give
+                          their thread up to new clients (--threads: the same)
   --scene-root DIR        mesh "uri"s resolve inside DIR only (default .)
   --data-dir DIR          persist registered scenes in DIR (default: memory only)
   --demo FILE             register the scene document FILE at start-up (repeatable)
@@ -33,6 +37,9 @@ usage: raycastd [options]
                           thread, at least 64)
   --memory-budget-mb N    resident scene memory before least-recently-used eviction (default 4096)
   --body-budget-mb N      request bodies being received at once before 503 busy (default 2048)
+  --answer-budget-mb N    answers being built or written at once before 503 busy (default 2048)
+  --job-budget-mb N       finished async render images kept; past it the oldest finished
+                          jobs are forgotten (default 512)
   --header-timeout-s N    a request's line and headers must arrive within N s (default 10)
   --idle-timeout-s N      a keep-alive connection may wait N s for its next request (default 5)
   --token T               writes (POST /v1/scenes, DELETE /v1/scenes/ID) need the header
@@ -64,8 +71,10 @@ bool to_size(const char* s, std::size_t& out) {
 }
 
 std::string set_threads(Config& c, const std::string& a, std::size_t n) {
-    if (n > 900)
-        return a + " must be at most 900";
+    // A thread each: past this, threads (and their stacks) rather than descriptors run out.
+    // Descriptors are checked against RLIMIT_NOFILE at start-up (reserve_descriptors).
+    if (n > kMaxConnections)
+        return a + " must be at most " + std::to_string(kMaxConnections);
     c.threads = static_cast<int>(n);
     return {};
 }
@@ -85,8 +94,7 @@ const std::map<std::string, NumberSetter>& number_options() {
              c.port = static_cast<int>(n);
              return {};
          }},
-        // --threads is --max-connections under its old name. cpp-httplib refuses descriptors
-        // past FD_SETSIZE (1024) with a 500.
+        // --threads is --max-connections under its old name.
         {"--threads", &set_threads},
         {"--max-connections", &set_threads},
         {"--max-body-mb",
@@ -134,6 +142,16 @@ const std::map<std::string, NumberSetter>& number_options() {
              c.limits.body_budget_bytes = n << 20;
              return {};
          }},
+        {"--answer-budget-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.answer_budget_bytes = n << 20;
+             return {};
+         }},
+        {"--job-budget-mb",
+         [](Config& c, const std::string&, std::size_t n) -> std::string {
+             c.limits.job_budget_bytes = n << 20;
+             return {};
+         }},
         {"--header-timeout-s",
          [](Config& c, const std::string& a, std::size_t n) -> std::string {
              if (n == 0 || n > 3600)
@@ -160,6 +178,30 @@ const std::map<std::string, NumberSetter>& number_options() {
 }
 
 }  // namespace
+
+bool reserve_descriptors(std::size_t connections, std::string& error) {
+    const rlim_t need = static_cast<rlim_t>(connections + kReservedDescriptors);
+    rlimit lim{};
+    if (::getrlimit(RLIMIT_NOFILE, &lim) != 0 || lim.rlim_cur >= need)
+        return true;
+    if (lim.rlim_max != RLIM_INFINITY && lim.rlim_max < need) {
+        error = "--max-connections " + std::to_string(connections) + " needs " +
+                std::to_string(need) + " file descriptors, and this process may open at most " +
+                std::to_string(lim.rlim_max) +
+                " (ulimit -Hn); lower --max-connections or raise "
+                "the limit";
+        return false;
+    }
+    // The soft limit may be raised up to the hard one without privileges (setrlimit(2)).
+    lim.rlim_cur = need;
+    if (::setrlimit(RLIMIT_NOFILE, &lim) != 0) {
+        error = "cannot raise the file descriptor limit to " + std::to_string(need) +
+                " for --max-connections " + std::to_string(connections) + ": " +
+                std::strerror(errno);
+        return false;
+    }
+    return true;
+}
 
 bool is_loopback_host(const std::string& host) {
     return host == "localhost" || host == "::1" || host == "[::1]" || host.rfind("127.", 0) == 0;
@@ -191,6 +233,8 @@ const std::vector<std::string>& env_flags() {
                                                    "--max-concurrent",
                                                    "--memory-budget-mb",
                                                    "--body-budget-mb",
+                                                   "--answer-budget-mb",
+                                                   "--job-budget-mb",
                                                    "--header-timeout-s",
                                                    "--idle-timeout-s",
                                                    "--request-timeout-s",

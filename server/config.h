@@ -21,8 +21,12 @@ struct Limits {
     std::size_t max_concurrent = 0;                ///< work requests in flight (0: 2 × threads)
     std::size_t memory_budget_bytes = 4ull << 30;  ///< resident scenes before LRU eviction
     std::size_t body_budget_bytes = 2ull << 30;    ///< request bodies in flight (503 busy above)
-    std::size_t header_timeout_s = 10;             ///< a request head must arrive within this
-    std::size_t idle_timeout_s = 5;  ///< a keep-alive connection's wait for its next request
+    /// Answers being built or written at once (App::charge_answer; 503 busy above).
+    std::size_t answer_budget_bytes = 2ull << 30;
+    /// Finished async render images kept; past it the oldest finished jobs are forgotten.
+    std::size_t job_budget_bytes = 512ull << 20;
+    std::size_t header_timeout_s = 10;  ///< a request head must arrive within this
+    std::size_t idle_timeout_s = 5;     ///< a keep-alive connection's wait for its next request
     /// Longest a render, trace, batch or stateless scene build may work before 503 timeout
     /// (server/request_cancel.h); 0: no limit.
     std::size_t request_timeout_s = 0;
@@ -48,6 +52,20 @@ struct Config {
     /// HEALTHCHECK, whose runtime image has no curl.
     bool health_check = false;
 };
+
+/// The most --max-connections may ask for. Connections are served a thread each; their sockets
+/// are only ever waited on with poll(2), ours and cpp-httplib's (Debian's libcpp-httplib 0.11.4
+/// is built with CPPHTTPLIB_USE_POLL: it imports poll and not select), so a descriptor past
+/// FD_SETSIZE (1024) is served like any other (HttpServer.ServesADescriptorPastFdSetsize).
+constexpr std::size_t kMaxConnections = 16384;
+/// Descriptors kept besides one per connection: the listening socket, data-dir and scene
+/// files, Embree's and TBB's, stdio.
+constexpr std::size_t kReservedDescriptors = 256;
+
+/// Makes sure the process may open `connections` + kReservedDescriptors descriptors, raising
+/// its soft RLIMIT_NOFILE up to the hard one when needed. False, with `error` naming both
+/// figures, when the hard limit is too low.
+bool reserve_descriptors(std::size_t connections, std::string& error);
 
 /// Whether `host` names only this machine (127.0.0.0/8, ::1, localhost): a server bound
 /// elsewhere without a token lets anyone on the network register and delete scenes.

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 namespace raycastd::server {
 namespace {
@@ -46,6 +47,54 @@ TEST(Config, EveryNumericFlagOfTheHelpIsAccepted) {
         EXPECT_TRUE(parse({flag, "1"}, msg, error)) << flag << ": " << msg;
     }
     EXPECT_GE(seen, 13);  // the test reads the help it checks
+}
+
+TEST(Config, AnswerAndJobBudgets) {
+    std::string msg;
+    bool error = false;
+    auto d = parse({}, msg, error);
+    ASSERT_TRUE(d);
+    EXPECT_EQ(d->limits.answer_budget_bytes, 2ull << 30);
+    EXPECT_EQ(d->limits.job_budget_bytes, 512ull << 20);
+    auto c = parse({"--answer-budget-mb", "3", "--job-budget-mb", "5"}, msg, error);
+    ASSERT_TRUE(c) << msg;
+    EXPECT_EQ(c->limits.answer_budget_bytes, 3u << 20);
+    EXPECT_EQ(c->limits.job_budget_bytes, 5u << 20);
+    ::setenv("RAYCASTD_ANSWER_BUDGET_MB", "7", 1);
+    EXPECT_EQ(parse({}, msg, error)->limits.answer_budget_bytes, 7u << 20);
+    ::unsetenv("RAYCASTD_ANSWER_BUDGET_MB");
+}
+
+TEST(Config, MaxConnectionsIsBoundByThreadsNotFdSetsize) {
+    std::string msg;
+    bool error = false;
+    auto c = parse({"--max-connections", "4096"}, msg, error);
+    ASSERT_TRUE(c) << msg;
+    EXPECT_EQ(c->threads, 4096);
+    EXPECT_TRUE(parse({"--max-connections", std::to_string(kMaxConnections)}, msg, error));
+    EXPECT_FALSE(parse({"--max-connections", std::to_string(kMaxConnections + 1)}, msg, error));
+    EXPECT_TRUE(error);
+}
+
+TEST(Config, ReserveDescriptorsRaisesTheSoftLimitUpToTheHardOne) {
+    rlimit before{};
+    ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &before), 0);
+    if (before.rlim_max != RLIM_INFINITY && before.rlim_max < 2048 + kReservedDescriptors)
+        GTEST_SKIP() << "the hard descriptor limit is " << before.rlim_max;
+    rlimit low = before;
+    low.rlim_cur = 1024;
+    ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &low), 0);
+    std::string error;
+    EXPECT_TRUE(reserve_descriptors(2048, error)) << error;
+    rlimit now{};
+    ::getrlimit(RLIMIT_NOFILE, &now);
+    EXPECT_EQ(now.rlim_cur, 2048 + kReservedDescriptors);
+    if (before.rlim_max != RLIM_INFINITY) {
+        // More than the hard limit allows: refused, naming both figures.
+        EXPECT_FALSE(reserve_descriptors(before.rlim_max, error));
+        EXPECT_NE(error.find(std::to_string(before.rlim_max)), std::string::npos) << error;
+    }
+    ::setrlimit(RLIMIT_NOFILE, &before);
 }
 
 TEST(Config, HelpAndErrors) {

@@ -23,6 +23,11 @@ struct JobQueue::Job {
 
 namespace {
 
+/// Bytes a finished job's output holds (0 without one).
+std::uint64_t output_bytes(const std::shared_ptr<const JobOutput>& out) {
+    return out ? out->body.size() : 0;
+}
+
 std::string new_job_id() {
     // Unguessable enough that one client cannot stumble on another's job.
     static std::mutex mu;
@@ -51,8 +56,10 @@ const char* to_string(JobState s) {
     return "failed";
 }
 
-JobQueue::JobQueue(std::size_t max_pending, std::size_t max_kept)
-    : max_pending_(std::max<std::size_t>(1, max_pending)), max_kept_(max_kept) {
+JobQueue::JobQueue(std::size_t max_pending, std::size_t max_kept, std::uint64_t max_kept_bytes)
+    : max_pending_(std::max<std::size_t>(1, max_pending)),
+      max_kept_(max_kept),
+      max_kept_bytes_(max_kept_bytes) {
     worker_ = std::thread([this] { run(); });
 }
 
@@ -123,6 +130,7 @@ void JobQueue::run() {
         } else {
             job->state = JobState::done;
             job->output = std::move(output);
+            kept_bytes_ += output_bytes(job->output);
         }
         job->work = nullptr;  // releases the scene it held
         --pending_;
@@ -134,13 +142,20 @@ void JobQueue::run() {
 
 JobQueue::Counts JobQueue::counts() const {
     std::lock_guard<std::mutex> lock(mu_);
-    return {pending_ - running_, running_};
+    return {pending_ - running_, running_, kept_bytes_, evicted_};
 }
 
 void JobQueue::trim_finished() {
-    while (finished_.size() > max_kept_) {
-        jobs_.erase(finished_.front());
+    // The newest finished job stays whatever its size: its client is about to ask for it.
+    while (finished_.size() > max_kept_ ||
+           (kept_bytes_ > max_kept_bytes_ && finished_.size() > 1)) {
+        auto it = jobs_.find(finished_.front());
+        if (it != jobs_.end()) {
+            kept_bytes_ -= output_bytes(it->second->output);
+            jobs_.erase(it);
+        }
         finished_.pop_front();
+        ++evicted_;
     }
 }
 
@@ -196,6 +211,7 @@ std::optional<JobState> JobQueue::cancel_or_remove(const std::string& id) {
         return JobState::cancelled;
     }
     const JobState state = j.state;
+    kept_bytes_ -= output_bytes(j.output);
     jobs_.erase(it);
     finished_.erase(std::find(finished_.begin(), finished_.end(), id));
     return state;

@@ -2,14 +2,18 @@
 // JobQueue: long renders run in the background ("async": true). One worker thread takes jobs in
 // order (each render already spreads over every core through TBB, so running two at once only
 // splits the machine); at most `max_pending` jobs may wait or run (more is 503 busy). Finished
-// jobs keep their output until deleted or until more than `max_kept` have finished (the oldest
-// finished goes first). Progress is the render's own count of tiles done. Each job has its own
-// CancelToken (engine/cancel.h), fired by cancel_or_remove (DELETE /v1/jobs/{id}) and by the
-// destructor; a job is not tied to the client that submitted it, and has no time limit.
+// jobs keep their output until deleted, or until more than `max_kept` have finished or their
+// images together take more than `max_kept_bytes` (--job-budget-mb): then the oldest finished
+// jobs are forgotten first (GET says job_not_found), but the newest one always stays, whatever
+// the size of its image, so that the client polling for it can fetch it. Progress is the render's
+// own count of tiles done. Each job has its own CancelToken (engine/cancel.h), fired by
+// cancel_or_remove (DELETE /v1/jobs/{id}) and by the destructor; a job is not tied to the client
+// that submitted it, and has no time limit.
 
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <functional>
 #include <map>
@@ -57,7 +61,8 @@ class JobQueue {
     using Work = std::function<JobOutput(engine::RenderProgress& progress,
                                          const engine::CancelToken& cancel)>;
 
-    JobQueue(std::size_t max_pending, std::size_t max_kept);
+    JobQueue(std::size_t max_pending, std::size_t max_kept,
+             std::uint64_t max_kept_bytes = UINT64_MAX);
     /// Cancels what is queued or running and waits for the worker.
     ~JobQueue();
     JobQueue(const JobQueue&) = delete;
@@ -75,8 +80,10 @@ class JobQueue {
 
     struct Counts {
         std::size_t queued = 0, running = 0;
+        std::uint64_t image_bytes = 0;  ///< of the finished jobs' outputs kept now
+        std::uint64_t evicted = 0;      ///< finished jobs forgotten to keep within the limits
     };
-    /// Jobs waiting and rendering now (for GET /metrics).
+    /// Jobs waiting and rendering now, and the finished ones' memory (for GET /metrics).
     Counts counts() const;
 
   private:
@@ -86,6 +93,7 @@ class JobQueue {
 
     const std::size_t max_pending_;
     const std::size_t max_kept_;
+    const std::uint64_t max_kept_bytes_;
     mutable std::mutex mu_;
     std::condition_variable cv_;
     std::map<std::string, std::shared_ptr<Job>> jobs_;
@@ -93,6 +101,8 @@ class JobQueue {
     std::deque<std::string> finished_;  ///< ids in the order they finished
     std::size_t pending_ = 0;           ///< queued + running
     std::size_t running_ = 0;           ///< 0 or 1: one worker renders
+    std::uint64_t kept_bytes_ = 0;      ///< output bytes of the finished jobs in jobs_
+    std::uint64_t evicted_ = 0;
     bool stopping_ = false;
     std::thread worker_;
 };

@@ -139,6 +139,44 @@ TEST(JobQueue, OldFinishedJobsAreDropped) {
     EXPECT_TRUE(q.info(ids[3]));
 }
 
+/// A job whose output is `bytes` bytes of image.
+JobQueue::Work image_of(std::size_t bytes) {
+    return [bytes](engine::RenderProgress&, const engine::CancelToken&) {
+        return JobOutput{std::string(bytes, 'p'), "image/png", {}};
+    };
+}
+
+TEST(JobQueue, FinishedImagesOverTheByteBudgetForgetTheOldestFirst) {
+    JobQueue q(8, 32, 250);
+    std::vector<std::string> ids;
+    for (int i = 0; i < 3; ++i) {
+        ids.push_back(*q.submit(image_of(100)));
+        wait_finished(q, ids.back());
+    }
+    // 300 bytes would be over 250: the oldest goes, the two newest stay.
+    EXPECT_FALSE(q.info(ids[0]));
+    ASSERT_TRUE(q.info(ids[1]));
+    EXPECT_EQ(q.info(ids[1])->output->body.size(), 100u);
+    EXPECT_TRUE(q.info(ids[2]));
+    EXPECT_EQ(q.counts().image_bytes, 200u);
+    EXPECT_EQ(q.counts().evicted, 1u);
+    // Deleting a finished job gives its bytes back.
+    EXPECT_EQ(q.cancel_or_remove(ids[1]), JobState::done);
+    EXPECT_EQ(q.counts().image_bytes, 100u);
+}
+
+TEST(JobQueue, TheNewestImageStaysWhateverItsSize) {
+    JobQueue q(8, 32, 250);
+    const std::string small = *q.submit(image_of(10));
+    wait_finished(q, small);
+    const std::string big = *q.submit(image_of(1000));
+    wait_finished(q, big);
+    EXPECT_FALSE(q.info(small)) << "older jobs make room for the newest";
+    ASSERT_TRUE(q.info(big));
+    EXPECT_EQ(q.info(big)->state, JobState::done);
+    EXPECT_EQ(q.counts().image_bytes, 1000u);
+}
+
 TEST(JobQueue, DestructorStopsARunningJob) {
     std::atomic<bool> gate{true};
     auto q = std::make_unique<JobQueue>(2, 2);

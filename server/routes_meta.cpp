@@ -30,7 +30,10 @@ void install_meta_routes(App& app) {
                   {"max_texture_pixels", c.limits.max_texture_pixels},
                   {"max_triangles", c.limits.max_triangles},
                   {"max_concurrent", app.max_concurrent()},
-                  {"memory_budget_bytes", c.limits.memory_budget_bytes}}},
+                  {"memory_budget_bytes", c.limits.memory_budget_bytes},
+                  {"body_budget_bytes", c.limits.body_budget_bytes},
+                  {"answer_budget_bytes", c.limits.answer_budget_bytes},
+                  {"job_budget_bytes", c.limits.job_budget_bytes}}},
                 {"requests_in_flight", app.requests_in_flight()},
                 {"memory_resident_bytes", resident_memory_bytes()},
             };

@@ -16,14 +16,21 @@ namespace {
 
 /// Answers a parsed JSON request over `engine`, stopping when `cancel` fires
 /// (server/request_cancel.h).
-void answer_json(const engine::QueryEngine& engine, PointsRequest req, const RequestCancel& cancel,
-                 Metrics& metrics, httplib::Response& res) {
+void answer_json(App& app, const engine::QueryEngine& engine, PointsRequest req,
+                 const RequestCancel& cancel, httplib::Response& res) {
+    Metrics& metrics = app.metrics();
+    // Charged before the work on an estimate; App::handle charges the exact size once written.
+    app.charge_answer(req.points.size() * App::kJsonBytesPerItem);
     std::vector<engine::PointAnswer> answers;
     req.options.cancel = cancel.token();
     cancel.check(engine::query_points(engine, req.points, req.options, answers));
     metrics.count_points(req.options.query, req.points.size());
     send_json(res, write_points_response(engine.scene(), req.options.query, answers));
 }
+
+/// Bytes of the largest binary points record: closest in float64 (px py pz distance u v and the
+/// two uint32 ids).
+constexpr std::uint64_t kMaxPointRecordBytes = 6 * 8 + 2 * 4;
 
 /// The query string of the binary form: ?query=&dtype=&max_distance=.
 struct BinaryPointsQuery {
@@ -53,12 +60,14 @@ BinaryPointsQuery parse_binary_points_query(const httplib::Request& req) {
     return q;
 }
 
-void answer_binary(const engine::QueryEngine& engine, const httplib::Request& req,
-                   std::size_t max_points, const RequestCancel& cancel, Metrics& metrics,
-                   httplib::Response& res) {
+void answer_binary(App& app, const engine::QueryEngine& engine, const httplib::Request& req,
+                   const RequestCancel& cancel, httplib::Response& res) {
+    Metrics& metrics = app.metrics();
     BinaryPointsQuery q = parse_binary_points_query(req);
     std::vector<engine::Vec3d> points;
-    decode_points(req.body, q.dtype, max_points, points);
+    decode_points(req.body, q.dtype, app.config().limits.max_points, points);
+    // The largest record (closest, float64: 7 numbers and two ids) until the exact size is known.
+    app.charge_answer(points.size() * kMaxPointRecordBytes);
     std::vector<engine::PointAnswer> answers;
     q.options.cancel = cancel.token();
     cancel.check(engine::query_points(engine, points, q.options, answers));
@@ -84,8 +93,9 @@ void install_points_routes(App& app) {
             const Json body = parse_json(req.body);
             auto engine = cancel.guard(
                 [&] { return app.models().build_stateless_scene(body, cancel.token()); });
-            answer_json(*engine, parse_points_request(body, "", app.config().limits.max_points),
-                        cancel, app.metrics(), res);
+            answer_json(app, *engine,
+                        parse_points_request(body, "", app.config().limits.max_points), cancel,
+                        res);
         });
     });
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/points)", [&app](const httplib::Request& req,
@@ -93,13 +103,14 @@ void install_points_routes(App& app) {
         app.handle(req, res, Work::heavy, [&] {
             const RequestCancel cancel = RequestCancel::for_current_request(app.config().limits);
             auto engine = app.scene_or_404(req.matches[1]);
-            const std::size_t max_points = app.config().limits.max_points;
             if (is_binary(req)) {
-                answer_binary(*engine, req, max_points, cancel, app.metrics(), res);
+                answer_binary(app, *engine, req, cancel, res);
                 return;
             }
-            answer_json(*engine, parse_points_request(parse_json(req.body), "", max_points), cancel,
-                        app.metrics(), res);
+            answer_json(
+                app, *engine,
+                parse_points_request(parse_json(req.body), "", app.config().limits.max_points),
+                cancel, res);
         });
     });
 }

@@ -102,11 +102,23 @@ ApiError job_not_found(const std::string& id) {
 void install_render_routes(App& app) {
     // The queue lives as long as the routes that use it (the App's server); its destructor
     // cancels what is still running and joins its worker.
-    auto jobs = std::make_shared<JobQueue>(app.max_concurrent(), kJobsKept);
+    auto jobs = std::make_shared<JobQueue>(app.max_concurrent(), kJobsKept,
+                                           app.config().limits.job_budget_bytes);
     app.metrics().add_gauge("raycastd_jobs_queued", "gauge", "Async render jobs waiting.",
                             [jobs] { return static_cast<double>(jobs->counts().queued); });
     app.metrics().add_gauge("raycastd_jobs_running", "gauge", "Async render jobs rendering.",
                             [jobs] { return static_cast<double>(jobs->counts().running); });
+    app.metrics().add_gauge(
+        "raycastd_job_image_bytes", "gauge",
+        "Bytes of finished async render images kept (--job-budget-mb bounds it).",
+        [jobs] { return static_cast<double>(jobs->counts().image_bytes); });
+    app.metrics().add_gauge(
+        "raycastd_job_budget_bytes", "gauge", "The finished job images' budget (--job-budget-mb).",
+        [&app] { return static_cast<double>(app.config().limits.job_budget_bytes); });
+    app.metrics().add_gauge(
+        "raycastd_jobs_evicted_total", "counter",
+        "Finished jobs forgotten, oldest first, to keep within 32 jobs and --job-budget-mb.",
+        [jobs] { return static_cast<double>(jobs->counts().evicted); });
 
     app.on_post(R"(/v1/scenes/([A-Za-z0-9_]+)/render)", [&app, jobs](const httplib::Request& req,
                                                                      httplib::Response& res) {
@@ -116,6 +128,11 @@ void install_render_routes(App& app) {
             const Json body = req.body.empty() ? Json() : parse_json(req.body);
             const RenderRequest r = parse_render_request(body, app.config().limits.max_pixels);
             if (!r.async) {
+                // The image being rendered (3 floats a pixel) and its encoding, charged before
+                // the work; App::handle charges the encoded size once it is known.
+                app.charge_answer(static_cast<std::uint64_t>(r.options.width) *
+                                  static_cast<std::uint64_t>(r.options.height) *
+                                  (3 * sizeof(float) + 4));
                 const auto out = render_output(*engine, r, nullptr, cancel.token(), app.metrics());
                 send_output(res, cancel.check(out));
                 return;

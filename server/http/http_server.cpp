@@ -23,12 +23,15 @@ using Clock = std::chrono::steady_clock;
 /// The socket of the request being served on this thread (ClientProbe), −1 elsewhere.
 thread_local int t_current_sock = -1;
 
+/// The answer lease of the request being served on this thread (HttpServer::answer_lease).
+thread_local MemoryBudget::Lease t_answer_lease;
+
 /// Reads are taken from the socket this many bytes at a time (cpp-httplib reads heads a byte
 /// at a time and bodies 4 KiB at a time, so the stream buffers).
 constexpr std::size_t kReadChunk = 64u << 10;
 
-/// A large body leaves glibc holding the freed pages; above this size they are handed back
-/// (malloc_trim) after the request, so twelve 100 MB uploads do not leave 1.7 GB resident.
+/// A large body or answer leaves glibc holding the freed pages; above this size they are handed
+/// back (malloc_trim) after the request, so twelve 100 MB uploads do not leave 1.7 GB resident.
 constexpr std::uint64_t kTrimAfterBodyBytes = 32u << 20;
 
 /// poll() for `events` until `deadline`; the revents (0 on timeout).
@@ -236,7 +239,8 @@ class HttpServer::ConnStream : public httplib::Stream {
 
 // ---------------------------------------------------------------------------------------------
 
-HttpServer::HttpServer(ConnectionLimits limits) : limits_(std::move(limits)) {
+HttpServer::HttpServer(ConnectionLimits limits)
+    : limits_(std::move(limits)), bodies_(limits_.body_budget_bytes) {
     const std::size_t threads = limits_.max_connections;
     new_task_queue = [this, threads] {
         return new ConnectionThreads(
@@ -259,15 +263,19 @@ ClientProbe HttpServer::current_client() {
     return ClientProbe(t_current_sock);
 }
 
+MemoryBudget::Lease& HttpServer::answer_lease() {
+    return t_answer_lease;
+}
+
 HttpServer::Stats HttpServer::stats() const {
     Stats s;
     s.open_connections = registry_.size();
     s.idle_connections = registry_.evictable();
     s.evictions = registry_.evictions();
     s.refused_heads = refused_heads_.load();
-    s.busy_bodies = busy_bodies_.load();
+    s.busy_bodies = bodies_.refusals();
     s.timeouts = timeouts_.load();
-    s.body_bytes_in_flight = body_bytes_.load();
+    s.body_bytes_in_flight = bodies_.used();
     return s;
 }
 
@@ -329,11 +337,10 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         }
         // The body budget: admitted when it fits, or when nothing else is in flight.
         const std::uint64_t body = head.content_length;
+        MemoryBudget::Lease body_lease;
         if (body > 0) {
-            const std::uint64_t before = body_bytes_.fetch_add(body);
-            if (before > 0 && before + body > limits_.body_budget_bytes) {
-                body_bytes_.fetch_sub(body);
-                busy_bodies_.fetch_add(1);
+            auto granted = bodies_.try_acquire(body);
+            if (!granted) {
                 write_error(strm, 503, ErrorCode::busy,
                             "request bodies in flight are at the server's limit of " +
                                 std::to_string(limits_.body_budget_bytes >> 20) +
@@ -341,6 +348,7 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
                             1);
                 return;
             }
+            body_lease = std::move(*granted);
         }
         registry_.set_phase(h, ConnPhase::active);
         const auto body_time = std::chrono::milliseconds(static_cast<long long>(
@@ -353,6 +361,9 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         t_current_sock = strm.socket();
         const bool ok = process_request(strm, last, closed, nullptr);
         t_current_sock = -1;
+        // The answer has been written (or given up on): its memory is free.
+        const std::uint64_t answered = t_answer_lease.bytes();
+        t_answer_lease = MemoryBudget::Lease();
         // A handler may answer before it has read the whole body (503 busy on a streamed
         // binary batch): the rest of the body would then be read as the next request. Such a
         // connection ends here (its answer said nothing of keep-alive that the client may rely
@@ -362,11 +373,9 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         if (body_unread)
             strm.linger = true;
         strm.set_read_deadline(Clock::time_point::max());
-        if (body > 0) {
-            body_bytes_.fetch_sub(body);
-            if (body >= kTrimAfterBodyBytes)
-                ::malloc_trim(0);
-        }
+        body_lease.release();
+        if (std::max(body, answered) >= kTrimAfterBodyBytes)
+            ::malloc_trim(0);
         if (strm.timed_out())
             timeouts_.fetch_add(1);
         if (!ok || closed || last || body_unread)

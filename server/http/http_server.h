@@ -15,7 +15,8 @@
 //     connection instead of a hang or a guess;
 //   * a budget on request bodies in flight: a body that would take it over is refused with
 //     503 busy and Retry-After before a byte of it is read, so many large uploads at once
-//     cannot exhaust memory;
+//     cannot exhaust memory; the answer lease a handler takes (answer_lease(), App's answer
+//     budget) is held until its answer has been written, then released here;
 //   * a form-urlencoded Content-Type (what `curl -d` sends) is read as a plain body: the
 //     library caps such bodies at 8 KiB (a compile-time constant of the Debian build), and no
 //     raycastd endpoint takes a form;
@@ -34,6 +35,7 @@
 
 #include "server/http/connections.h"
 #include "server/http/request_head.h"
+#include "server/memory_budget.h"
 
 namespace raycastd::server {
 
@@ -91,6 +93,10 @@ class HttpServer : public httplib::Server {
     const ConnectionLimits& limits() const { return limits_; }
     /// The probe for the request served on the calling thread (a default probe elsewhere).
     static ClientProbe current_client();
+    /// The answer lease of the request served on the calling thread (App::charge_answer): the
+    /// connection loop releases it once that request's answer has been written (or has
+    /// failed), streamed answers included. Unbound, and unused, on other threads.
+    static MemoryBudget::Lease& answer_lease();
     /// "rq_<n>": a fresh id for a response's X-Request-Id.
     std::string next_request_id() { return "rq_" + std::to_string(next_id_.fetch_add(1)); }
 
@@ -118,9 +124,8 @@ class HttpServer : public httplib::Server {
     ConnectionLimits limits_;
     ConnectionRegistry registry_;
     std::atomic<std::uint64_t> next_id_{1};
-    std::atomic<std::uint64_t> body_bytes_{0};
-    std::atomic<std::size_t> bodies_{0};
-    std::atomic<std::uint64_t> refused_heads_{0}, busy_bodies_{0}, timeouts_{0};
+    MemoryBudget bodies_;  ///< request bodies by Content-Length, from head to answer
+    std::atomic<std::uint64_t> refused_heads_{0}, timeouts_{0};
 };
 
 }  // namespace raycastd::server

@@ -5,8 +5,11 @@
 #include <thread>
 #include <vector>
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
+#include <sys/resource.h>
+#include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -278,6 +281,37 @@ TEST(HttpServer, AHandlerSeesItsClientGo) {
     for (int i = 0; i < 100 && !s.slow_saw_gone_; ++i)
         std::this_thread::sleep_for(20ms);
     EXPECT_TRUE(s.slow_saw_gone_);
+}
+
+// cpp-httplib built without CPPHTTPLIB_USE_POLL answers a connection whose descriptor is past
+// FD_SETSIZE with a 500 (it cannot select() on it); Debian's is built with it, and our own loop
+// polls, so --max-connections is not held under 1024.
+TEST(HttpServer, ServesADescriptorPastFdSetsize) {
+    rlimit lim{};
+    ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &lim), 0);
+    constexpr rlim_t kWanted = FD_SETSIZE + 64;
+    if (lim.rlim_cur < kWanted) {
+        if (lim.rlim_max != RLIM_INFINITY && lim.rlim_max < kWanted)
+            GTEST_SKIP() << "this process may open only " << lim.rlim_max << " descriptors";
+        rlimit raised = lim;
+        raised.rlim_cur = kWanted;
+        ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &raised), 0);
+    }
+    Served s(ConnectionLimits{});
+    // Fill the descriptors below FD_SETSIZE, so that the server's next accept() gets one past it.
+    std::vector<int> fillers;
+    while (fillers.empty() || (fillers.back() >= 0 && fillers.back() < FD_SETSIZE))
+        fillers.push_back(::open("/dev/null", O_RDONLY));
+    const int c = connect_to(s.port());
+    send_all(c, "GET /health HTTP/1.1\r\nHost: x\r\n\r\n");
+    const std::string a = read_answer(c);
+    ::close(c);
+    for (int fd : fillers)
+        ::close(fd);
+    EXPECT_GT(c, FD_SETSIZE) << "the server's socket is the one after the client's";
+    EXPECT_EQ(status_of(a), 200) << a;
+    EXPECT_NE(a.find("{\"status\":\"ok\"}"), std::string::npos) << a;
+    ::setrlimit(RLIMIT_NOFILE, &lim);
 }
 
 TEST(HttpServer, StopsWithConnectionsStillOpen) {

@@ -73,7 +73,9 @@ void send_records(httplib::Response& res, engine::Precision precision, engine::M
 
 void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q,
                          std::shared_ptr<Scratch> scratch, std::size_t max_rays,
-                         const RequestCancel& cancel, httplib::Response& res) {
+                         const RequestCancel& cancel,
+                         const std::function<void(std::uint64_t)>& charge_answer,
+                         httplib::Response& res) {
     Scratch& s = *scratch;
     const engine::Mode mode = q.options.mode;
     // An abandoned batch frees its buffers rather than pooling them.
@@ -84,6 +86,7 @@ void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q
     if (mode == engine::Mode::closest || mode == engine::Mode::any) {
         // Records in, records out, a block at a time (intersect_records).
         const std::size_t n = ray_count(s.body.size(), q.dtype, max_rays);
+        charge_answer(n * answer_record_bytes(mode, q.dtype));
         s.out.resize(n * answer_record_bytes(mode, q.dtype));
         const std::size_t bad =
             intersect_records(engine, s.body, q.dtype, q.options, 0, n, s.out.data());
@@ -94,9 +97,12 @@ void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q
         note_rays(ray_kind(mode), engine.effective_precision(q.options.precision), n);
     } else {
         decode_rays(s.body, q.dtype, max_rays, s.rays);
+        // At least a count per ray; `all` adds its hits, charged once they are encoded.
+        charge_answer(s.rays.size() * answer_record_bytes(engine::Mode::count, q.dtype));
         if (!engine.intersect(s.rays, q.options, s.result).ok())
             stopped();  // the only Status intersect() returns: its token fired
         encode_results(s.result, mode, q.dtype, s.rays.size(), s.out);
+        charge_answer(s.out.size());
         note_rays(ray_kind(mode), engine.effective_precision(q.options.precision), s.rays.size());
     }
     const std::size_t bytes = s.out.size();

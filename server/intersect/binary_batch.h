@@ -7,6 +7,8 @@
 // intersect_records, so both paths answer byte for byte alike.
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <memory>
 #include <string_view>
 
@@ -52,8 +54,13 @@ void send_records(httplib::Response& res, engine::Precision precision, engine::M
 /// max_rays); the answer streams from scratch->out, and the response keeps `scratch` until it
 /// has been written. q.options.cancel must be `cancel`'s token: once it fires the tracing
 /// stops, the scratch is freed rather than pooled, and what `cancel` says is thrown.
+/// `charge_answer` (App::charge_answer) is told the answer's bytes before they are allocated
+/// (closest, any, count: known from the ray count) and again once encoded (all), and throws to
+/// refuse them.
 void answer_binary_batch(const engine::QueryEngine& engine, const BinaryQuery& q,
                          std::shared_ptr<Scratch> scratch, std::size_t max_rays,
-                         const RequestCancel& cancel, httplib::Response& res);
+                         const RequestCancel& cancel,
+                         const std::function<void(std::uint64_t)>& charge_answer,
+                         httplib::Response& res);
 
 }  // namespace raycastd::server

@@ -265,12 +265,49 @@ TEST(BinaryBatch, NoRaysIsAnEmptyBodyNotAProvider) {
         auto scratch = acquire_scratch();
         scratch->body.clear();
         httplib::Response res;
-        answer_binary_batch(*e, q, std::move(scratch), 16,
-                            RequestCancel::for_current_request(Limits{}), res);
+        answer_binary_batch(
+            *e, q, std::move(scratch), 16, RequestCancel::for_current_request(Limits{}),
+            [](std::uint64_t) {}, res);
         EXPECT_EQ(res.status, 200) << engine::to_string(mode);
         EXPECT_TRUE(res.body.empty());
         EXPECT_FALSE(res.content_provider_) << engine::to_string(mode);
         EXPECT_EQ(res.get_header_value("Content-Type"), "application/octet-stream");
+    }
+}
+
+// Each answer is charged to the answer budget before its buffer is allocated (closest/any/count:
+// the exact size from the ray count), and `all` again at its encoded size; a refused charge
+// leaves no answer.
+TEST(BinaryBatch, ChargesTheAnswerBeforeAllocatingIt) {
+    const auto e = scene(true);
+    const std::string body = ray_body(1000, 5);
+    for (engine::Mode mode :
+         {engine::Mode::closest, engine::Mode::any, engine::Mode::count, engine::Mode::all}) {
+        BinaryQuery q;
+        q.options.mode = mode;
+        auto scratch = acquire_scratch();
+        scratch->body = body;
+        std::vector<std::uint64_t> charges;
+        httplib::Response res;
+        answer_binary_batch(
+            *e, q, scratch, 1u << 20, RequestCancel::for_current_request(Limits{}),
+            [&](std::uint64_t bytes) { charges.push_back(bytes); }, res);
+        ASSERT_FALSE(charges.empty()) << engine::to_string(mode);
+        EXPECT_EQ(charges.back(), scratch->out.size()) << engine::to_string(mode);
+        if (mode != engine::Mode::all) {
+            EXPECT_EQ(charges.front(), 1000 * answer_record_bytes(mode, Dtype::float32));
+        }
+        // Refused: the error goes out, and no answer buffer was filled.
+        auto refused = acquire_scratch();
+        refused->body = body;
+        refused->out.clear();
+        httplib::Response busy;
+        EXPECT_THROW(answer_binary_batch(
+                         *e, q, refused, 1u << 20, RequestCancel::for_current_request(Limits{}),
+                         [](std::uint64_t) { throw ApiError(ErrorCode::busy, "over"); }, busy),
+                     ApiError);
+        EXPECT_TRUE(refused->out.empty()) << engine::to_string(mode);
+        EXPECT_FALSE(busy.content_provider_);
     }
 }
 

@@ -25,8 +25,10 @@ namespace {
 
 /// Answers a parsed JSON request, the engine answering into `result` (stopping when `cancel`
 /// fires).
-void answer_json(const engine::QueryEngine& engine, const IntersectRequest& req,
+void answer_json(App& app, const engine::QueryEngine& engine, const IntersectRequest& req,
                  const RequestCancel& cancel, engine::QueryResult& result, httplib::Response& res) {
+    // Charged before the work on an estimate; App::handle charges the exact size once written.
+    app.charge_answer(req.rays.size() * App::kJsonBytesPerItem);
     engine::QueryOptions options = req.options;
     options.cancel = cancel.token();
     cancel.check(engine.intersect(req.rays, options, result));
@@ -36,10 +38,11 @@ void answer_json(const engine::QueryEngine& engine, const IntersectRequest& req,
 }
 
 /// Reads `body` with the DOM reader and answers it over `engine` into `result`.
-void answer_json_document(const engine::QueryEngine& engine, const Json& body, std::size_t max_rays,
+void answer_json_document(App& app, const engine::QueryEngine& engine, const Json& body,
                           const RequestCancel& cancel, engine::QueryResult& result,
                           httplib::Response& res) {
-    answer_json(engine, parse_intersect_request(body, "", max_rays), cancel, result, res);
+    answer_json(app, engine, parse_intersect_request(body, "", app.config().limits.max_rays),
+                cancel, result, res);
 }
 
 /// Frees `scratch` instead of pooling it when the request's work was cancelled: an abandoned
@@ -116,6 +119,9 @@ void answer_registered(App& app, const httplib::Request& req, httplib::Response&
     auto scratch = acquire_scratch();
     scratch->body.clear();
     auto stream = plan_streamed(app, req, scratch, cancel);
+    // Refused before a byte of the body is read: the connection then closes (http_server.h).
+    if (stream)
+        app.charge_answer(stream->answer_bytes());
     read_body(read, limits.max_body_bytes, scratch->body, stream.get());
     if (stream) {
         // A client gone mid-upload, or the time limit passed while the body arrived.
@@ -133,7 +139,9 @@ void answer_registered(App& app, const httplib::Request& req, httplib::Response&
     if (is_binary(req)) {
         BinaryQuery q = parse_binary_query(req);
         q.options.cancel = cancel.token();
-        answer_binary_batch(*engine, q, std::move(scratch), limits.max_rays, cancel, res);
+        answer_binary_batch(
+            *engine, q, std::move(scratch), limits.max_rays, cancel,
+            [&app](std::uint64_t bytes) { app.charge_answer(bytes); }, res);
         return;
     }
     IntersectRequest& scanned = scratch->parsed;
@@ -142,11 +150,10 @@ void answer_registered(App& app, const httplib::Request& req, httplib::Response&
     scanned.fields = {};
     try {
         if (scan_intersect_request(scratch->body, limits.max_rays, scanned)) {
-            answer_json(*engine, scanned, cancel, scratch->result, res);
+            answer_json(app, *engine, scanned, cancel, scratch->result, res);
             return;
         }
-        answer_json_document(*engine, parse_json(scratch->body), limits.max_rays, cancel,
-                             scratch->result, res);
+        answer_json_document(app, *engine, parse_json(scratch->body), cancel, scratch->result, res);
     } catch (...) {
         discard_if_cancelled(*scratch, cancel);
         throw;
@@ -166,8 +173,7 @@ void answer_stateless(App& app, const httplib::Request& req, httplib::Response& 
         cancel.guard([&] { return app.models().build_stateless_scene(body, cancel.token()); });
     const auto scratch = acquire_scratch();
     try {
-        answer_json_document(*engine, body, app.config().limits.max_rays, cancel, scratch->result,
-                             res);
+        answer_json_document(app, *engine, body, cancel, scratch->result, res);
     } catch (...) {
         discard_if_cancelled(*scratch, cancel);
         throw;
