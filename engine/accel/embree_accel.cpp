@@ -507,10 +507,11 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
 
     embree::take_error("");  // start clean on this thread
     impl->native.reset(rtcNewScene(device));
-    // ROBUST: Embree's watertight traversal and triangle test, for refined (and fast's all and
-    // count). refined re-decides every float miss, but a float ray that leaks through an open
-    // mesh can meet a farther front face, which it would accept (Fuzz.RegressionCases, with
-    // this flag off). fast's closest and any trace a non-robust copy (build_fast).
+    // ROBUST: Embree's watertight traversal and triangle test over refined's widened triangles
+    // (embree/fat_triangles.h; also fast's all and count). Without it the widened triangles
+    // passed the stress suites too, but rays aimed at edges were rejected, and so re-decided,
+    // more often (docs/numerics.md). fast's closest and any trace a non-robust BVH of the
+    // unwidened triangles (build_fast).
     rtcSetSceneFlags(impl->native.get(), RTC_SCENE_FLAG_ROBUST);
     const double widen_by = embree::kWidenPads * impl->pad;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
