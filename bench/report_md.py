@@ -278,6 +278,63 @@ def ratio(
     return row["mrays_s"] / base["mrays_s"] if base["mrays_s"] else None
 
 
+def checks_table(mesh: list[str], checks: list[tuple]) -> list[str]:
+    """A targets table: one row per (label, value per workload, goal, unit), met when every
+    measured value reaches the goal."""
+    out = [
+        "| target | " + " | ".join(mesh) + " | met |",
+        "|---|" + "---:|" * len(mesh) + "---|",
+    ]
+    for label, values, goal, unit in checks:
+        cells = [("—" if v is None else f"{v:.2f}{unit}") for v in values]
+        known = [v for v in values if v is not None]
+        met = (
+            "—" if not known else ("yes" if all(v >= goal for v in known) else "**no**")
+        )
+        out.append(f"| {label} | " + " | ".join(cells) + f" | {met} |")
+    return out
+
+
+def targets_table_17(results: dict) -> list[str]:
+    """Issue 17: the default precision against the peers (in-process, double rays in, full hits
+    out, as QueryEngine::intersect answers)."""
+    rows = results["rows"]
+    mesh = [w for w in ("A", "B") if w in results["meta"]["workloads"]]
+    open3d = ("open3d", "cast_rays")
+
+    def ratios(rays: str, precision: str, against=CEILING) -> list[float | None]:
+        who = ("engine", "QueryEngine::intersect", precision)
+        return [ratio(rows, w, rays, *who, against=against) for w in mesh]
+
+    checks = [
+        (
+            "`refined` ≥ 1.0× Open3D `cast_rays`, coherent",
+            ratios("coherent", "refined", open3d),
+            1.0,
+            "×",
+        ),
+        (
+            "`refined` ≥ 1.0× Open3D `cast_rays`, incoherent",
+            ratios("incoherent", "refined", open3d),
+            1.0,
+            "×",
+        ),
+        (
+            "`exact` ≥ 0.5× `rtcIntersect1`, coherent",
+            ratios("coherent", "exact"),
+            0.5,
+            "×",
+        ),
+        (
+            "`exact` ≥ 0.5× `rtcIntersect1`, incoherent",
+            ratios("incoherent", "exact"),
+            0.5,
+            "×",
+        ),
+    ]
+    return checks_table(mesh, checks)
+
+
 def targets_table(results: dict) -> list[str]:
     rows = results["rows"]
     mesh = [w for w in ("A", "B") if w in results["meta"]["workloads"]]
@@ -348,17 +405,7 @@ def targets_table(results: dict) -> list[str]:
             " Mrays/s",
         ),
     ]
-    out = [
-        "| target | " + " | ".join(mesh) + " | met |",
-        "|---|" + "---:|" * len(mesh) + "---|",
-    ]
-    for label, values, goal, unit in checks:
-        cells = [("—" if v is None else f"{v:.2f}{unit}") for v in values]
-        known = [v for v in values if v is not None]
-        met = (
-            "—" if not known else ("yes" if all(v >= goal for v in known) else "**no**")
-        )
-        out.append(f"| {label} | " + " | ".join(cells) + f" | {met} |")
+    out = checks_table(mesh, checks)
     req_s = load.get("req_s")
     cells = [f"{req_s:,.0f} req/s" if req_s is not None else "—"] + [""] * (
         len(mesh) - 1
@@ -371,6 +418,19 @@ def targets_table(results: dict) -> list[str]:
     )
     return out
 
+
+# Why issue 17's targets stand where they do (docs/numerics.md, the refined bullet, has the
+# measurements behind it).
+ISSUE_17_NOTE = (
+    "`refined` now traces once: its triangles are widened in their planes beyond what float "
+    "rounding can move a ray, and a hit filter decides every float candidate in double, so a "
+    "float miss no longer needs the exact BVH (docs/numerics.md). What still separates it from "
+    "Open3D, which is raw float Embree, is that double decision of each candidate and of the "
+    "answer (Woop's test, the double-double plane crossing, the normal, the double triangle "
+    "read from memory: 90 ns of refined's 180 on A's camera rays and 70 of 250 on its random "
+    "rays in single-thread CPU time), ROBUST traversal (10-15%) and the clipped, normalised ray "
+    "set-up. `exact` is unchanged: every candidate is Embree user geometry decided in double."
+)
 
 # --- the document --------------------------------------------------------------------------------
 
@@ -566,7 +626,7 @@ def render(results: dict, accuracy: str) -> str:
         "",
         *targets_table(results),
         "",
-        "\"Binary HTTP ≥ 2× Open3D on coherent rays\" is beyond what this machine can do with "
+        '"Binary HTTP ≥ 2× Open3D on coherent rays" is beyond what this machine can do with '
         "the contract's 32-byte records: it asks for 2 × 12–17 Mrays/s, while a 1M-ray float32 "
         "request against a scene its rays never reach (no tracing at all: 32 MB up and 32 MB "
         "down over loopback, the checks, decoding and encoding) takes 0.072 s with curl, "
@@ -587,6 +647,12 @@ def render(results: dict, accuracy: str) -> str:
         "the ceiling's own 32-byte float records and writes its t, object and primitive, "
         "through per-thread block buffers that stay in cache. The server's binary path calls "
         "the latter.",
+        "",
+        "## Targets of issue 17",
+        "",
+        *targets_table_17(results),
+        "",
+        ISSUE_17_NOTE,
         "",
         "## Closest hit on each whole ray set (1M rays in the full run)",
         "",

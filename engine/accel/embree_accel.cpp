@@ -6,6 +6,7 @@
 #include <embree3/rtcore.h>
 
 #include "engine/accel/embree/device.h"
+#include "engine/accel/embree/fat_triangles.h"
 #include "engine/accel/embree/float_ray.h"
 #include "engine/accel/embree/impl.h"
 #include "engine/accel/embree/packets.h"
@@ -77,15 +78,23 @@ void Impl::build_fast() const {
     // fast is Embree's plain float traversal, what a program of one's own calling rtcIntersect
     // gets, and its speed is the point of asking for it: without ROBUST it is 10-20% faster on
     // random rays (bench_intersect's "ROBUST" rows). The price is leaks through shared edges and
-    // vertices (docs/accuracy.md counts them). refined keeps the ROBUST scene: with this one it
-    // took the far side of a leak through an open mesh for the answer (Fuzz.RegressionCases).
-    // The geometries are shared, not copied (an Embree geometry may be attached to several
-    // scenes); only the BVH is built again.
+    // vertices (docs/accuracy.md counts them). refined keeps the ROBUST scene, whose triangles
+    // are widened (fat_triangles.h): fast's are the float triangles as they are, in geometries
+    // of their own; the spheres' user geometries are shared (an Embree geometry may be attached
+    // to several scenes).
     RTCDevice device = shared_device();
     take_error("");
     SceneHandle s(rtcNewScene(device));
-    for (std::uint32_t i = 0; i < scene->objects.size(); ++i)
-        rtcAttachGeometryByID(s.get(), rtcGetGeometry(native.get(), i), i);
+    for (std::uint32_t i = 0; i < scene->objects.size(); ++i) {
+        const Object& o = scene->objects[i];
+        if (o.kind == ObjectKind::sphere) {
+            rtcAttachGeometryByID(s.get(), rtcGetGeometry(native.get(), i), i);
+            continue;
+        }
+        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, center);
+        rtcCommitGeometry(g.get());
+        rtcAttachGeometryByID(s.get(), g.get(), i);
+    }
     rtcCommitScene(s.get());
     fast_status = take_error("building the fast BVH");
     fast = std::move(s);  // written once, under call_once, before any query reads it
@@ -204,35 +213,20 @@ bool fast_any(const Impl& a, const Ray& ray) {
     return occluded1(s, c, f);
 }
 
-/// Every float hit on the ROBUST BVH (fast's own would leak more), recomputed in double.
+/// Every hit on the ROBUST BVH (fast's own would leak more): its fat triangles' candidates are
+/// decided in double by their hit filter (fat_triangles.cpp), the spheres by fast's kernel.
 void fast_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>& out) {
     RayContext c(a);
     c.collect = &out;
     FloatRay f;
-    if (!prepare_ray(a, ray, RayStart::at_entry, c, f))
+    if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
         return;
     c.fast = true;
-    c.rtc.filter = collect_filter;
-    intersect1(a.native.get(), c, f);  // every float hit goes to c.collect (collect_filter)
-    // Float hits on triangles are recomputed in double. Which triangles of a shared edge the
-    // float test reports is its own business, so "on an edge" is judged with a float-sized
-    // tolerance on the barycentrics, and such hits of one object that agree in t merge.
-    constexpr double kEdgeTolerance = 1e-5;
+    intersect1(a.native.get(), c, f);  // every double hit goes to c.collect
     for (Hit& h : out) {
         const Object& o = a.scene->objects[h.object];
-        if (o.kind == ObjectKind::sphere)
-            continue;
-        const Triangle tri = o.mesh->triangle(h.primitive);
-        const double fu = h.u, fv = h.v;
-        auto d = triangle_plane_hit(tri, ray, want_normal);
-        if (d) {
-            const std::uint32_t object = h.object, prim = h.primitive;
-            h = *d;
-            h.object = object;
-            h.primitive = prim;
-        }
-        h.on_edge = fu <= kEdgeTolerance || fv <= kEdgeTolerance || 1.0 - fu - fv <= kEdgeTolerance;
-        h.t_err = std::max(h.t_err, gamma_float(12) * (a.float_scale / c.len + std::abs(h.t)));
+        if (want_normal && o.kind != ObjectKind::sphere)
+            h.normal = triangle_normal(o.mesh->triangle(h.primitive));
     }
     sort_and_merge_edge_duplicates(out);
 }
@@ -284,16 +278,19 @@ void fast_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) {
             [&](const Ray& ray, RayContext& c, FloatRay& f) {
                 return prepare_fast_native_ray(a, ray, c, f);
             },
-            [](std::size_t) { return false; }, out + i);
+            [](std::size_t, const RayContext&) { return false; }, out + i);
     }
 }
 
 // ---------------------------------------------------------------------------------------------
-// refined (embree_accel.h). The exact path decides whenever the float answer is in doubt, and
-// the ray counts as escalated: a float miss (Embree's float test can leak at a shared vertex:
-// about 1 in 2,000 rays aimed exactly at vertices), a double test that misses the primitive, or
-// a back face (a ray entering a closed mesh that slips through a vertex in float meets the exit
-// face first).
+// refined (embree_accel.h). One traversal of the native BVH, whose fat triangles' candidates
+// the hit filter decides in double (fat_triangles.h): a double hit found there is refined's
+// answer, and a float miss is a miss. The exact path decides instead, and the ray counts as
+// escalated, where that argument does not hold: the filter rejected a candidate on the way (the
+// ray passed within the widening of an edge), the float ray's start point is farther from the
+// double one than the argument allows (a far origin), or the scene is not certified (a
+// sliver); in such a scene a back face found first is re-decided too (a ray entering a closed
+// mesh that slips through a vertex in float meets the exit face first).
 
 /// refined confirms a float miss. Where the scene has no more than this many triangles, and
 /// the ray is within the boxes' padding, it scans them instead of the exact BVH: the native
@@ -303,6 +300,26 @@ constexpr std::size_t kConfirmByScanMaxTriangles = 16;
 
 bool can_confirm_by_scan(const Impl& a, const RayContext& c) {
     return a.triangles <= kConfirmByScanMaxTriangles && exact_ray_within_padding(a, c);
+}
+
+/// Whether a float miss of the ray set up in `c` on the native BVH is a miss (see above).
+bool miss_is_certain(const Impl& a, const RayContext& c) {
+    return a.certified_misses && !c.rejected() && exact_ray_within_padding(a, c);
+}
+
+/// Whether the hit c.best found on the native BVH set up in `c` is refined's answer: the filter
+/// rejected nothing before it (a candidate rejected at the same crossing, within the float
+/// ray's margin, is the neighbour of the triangle hit there), and in a scene that is not
+/// certified, or after a rejection, it is a front face (a back face first: the ray may have
+/// slipped in through an edge; found by the fuzzer on a ray grazing an icosahedron at 0.015°,
+/// tests/stress/regressions/triangle-t-259-ulps.txt).
+bool rejected_before_best(const RayContext& c) {
+    return static_cast<double>(c.rejected_tf) < static_cast<double>(c.best_tf) - c.margin;
+}
+bool hit_is_certain(const Impl& a, const RayContext& c) {
+    if (c.best->front_face)
+        return !rejected_before_best(c);
+    return a.certified_misses && !c.rejected();
 }
 
 /// The closest triangle hit, every triangle of the scene tested in double (spheres skipped:
@@ -317,62 +334,75 @@ std::optional<Hit> closest_triangle_scan(const Impl& a, const Ray& ray, bool wan
     return best;
 }
 
-/// refined's answer from what the native traversal found (sphere_hit: the sphere callback's);
-/// `escalated` is set when the exact path had to decide.
-std::optional<Hit> refined_answer(const Impl& a, const Ray& ray, const NativeHit& nh,
-                                  const std::optional<Hit>& sphere_hit, bool want_normal,
-                                  bool& escalated) {
-    if (nh.geom == RTC_INVALID_GEOMETRY_ID) {
-        escalated = true;
-        return exact_closest(a, ray, want_normal);
+/// refined's answer from a traversal of the native BVH set up in `c` (c.best: the double hit
+/// its callbacks accepted); `escalated` is set when the exact path had to decide.
+std::optional<Hit> refined_answer(const Impl& a, const Ray& ray, const RayContext& c,
+                                  bool want_normal, bool& escalated) {
+    if (c.best) {
+        const Object& o = a.scene->objects[c.best->object];
+        if (o.kind == ObjectKind::sphere && !rejected_before_best(c))
+            return kept_sphere_hit(o, ray, c.best, want_normal);
+        if (o.kind != ObjectKind::sphere && hit_is_certain(a, c)) {
+            Hit h = *c.best;
+            if (want_normal)
+                h.normal = triangle_normal(o.mesh->triangle(h.primitive));
+            return h;
+        }
+    } else if (miss_is_certain(a, c)) {
+        return std::nullopt;
+    } else if (can_confirm_by_scan(a, c)) {
+        return closest_triangle_scan(a, ray, want_normal);
     }
-    const Object& o = a.scene->objects[nh.geom];
-    if (o.kind == ObjectKind::sphere)
-        return kept_sphere_hit(o, ray, sphere_hit, want_normal);
-    auto d = intersect_triangle(o.mesh->triangle(nh.prim), ray, want_normal);
-    if (!d || !d->front_face) {
-        escalated = true;
-        return exact_closest(a, ray, want_normal);
-    }
-    Hit h = *d;
-    h.object = nh.geom;
-    h.primitive = nh.prim;
-    return h;
+    escalated = true;
+    return exact_closest(a, ray, want_normal);
+}
+
+/// refined's float ray: started a margin before the segment (as the exact BVH's), so that a
+/// candidate at exactly tmin lies inside it; the hit filter's double test enforces the range.
+bool prepare_refined_ray(const Impl& a, const Ray& ray, RayContext& c, FloatRay& f) {
+    return prepare_ray(a, ray, RayStart::backed_off, c, f);
 }
 
 std::optional<Hit> refined_closest(const Impl& a, const Ray& ray, bool want_normal,
                                    bool& escalated) {
     RayContext c(a);
     FloatRay f;
-    if (!prepare_ray(a, ray, RayStart::at_entry, c, f))
+    if (!prepare_refined_ray(a, ray, c, f))
         return std::nullopt;
-    const RTCRayHit rh = intersect1(a.native.get(), c, f);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID && can_confirm_by_scan(a, c))
-        return closest_triangle_scan(a, ray, want_normal);
-    return refined_answer(a, ray, native_hit(rh, 0), c.best, want_normal, escalated);
+    intersect1(a.native.get(), c, f);
+    return refined_answer(a, ray, c, want_normal, escalated);
 }
 
-bool refined_any(const Impl& a, const Ray& ray) {
-    RayContext c(a);
-    FloatRay f;
-    if (!prepare_ray(a, ray, RayStart::at_entry, c, f))
+/// refined's `any` after the native occlusion query found nothing.
+bool refined_confirm_no_hit(const Impl& a, const Ray& ray, const RayContext& c) {
+    if (miss_is_certain(a, c))
         return false;
-    if (occluded1(a.native.get(), c, f))
-        return true;
-    // As in closest: a float miss is confirmed before refined says so.
     if (can_confirm_by_scan(a, c))
         return closest_triangle_scan(a, ray, false).has_value();
     return exact_any(a, ray);
 }
 
-// A refined ray in doubt pays both traversals, plus the double recompute, and random rays mostly
-// are (73% of bench_intersect's incoherent rays miss). So once a group of 16 had a ray escalate,
-// the next group goes to the exact path directly, which answers refined's question at least as
-// well in one traversal; that group's answers say whether to switch back. Measured on workload
-// A's incoherent rays (bench_intersect --modes closest --precisions refined): switching at > 1/2,
-// > 1/8 and > 0 of a group escalated gave 1.7, 2.0 and 4.0 Mrays/s, with camera rays unchanged
-// (10.2). The groups are fixed by the caller's blocks (QueryEngine::kBlockRays), so the choice,
-// and hence the answer to a near-tie, does not depend on the threads.
+bool refined_any(const Impl& a, const Ray& ray) {
+    RayContext c(a);
+    FloatRay f;
+    if (!prepare_refined_ray(a, ray, c, f))
+        return false;
+    if (occluded1(a.native.get(), c, f))
+        return true;
+    return refined_confirm_no_hit(a, ray, c);
+}
+
+// In a scene that is not certified, a refined ray in doubt pays both traversals, plus the
+// double recompute, and random rays mostly are (73% of bench_intersect's incoherent rays miss).
+// So there, once a group of 16 had a ray escalate, the next group goes to the exact path
+// directly, which answers refined's question at least as well in one traversal; that group's
+// answers say whether to switch back. Measured on workload A's incoherent rays before the fat
+// triangles (bench_intersect --modes closest --precisions refined): switching at > 1/2, > 1/8
+// and > 0 of a group escalated gave 1.7, 2.0 and 4.0 Mrays/s, with camera rays unchanged
+// (10.2). In a certified scene escalations are rare (rays within the widening of a silhouette
+// that miss) and every group takes the native BVH. The groups are fixed by the caller's blocks
+// (QueryEngine::kBlockRays), so the choice, and hence the answer to a near-tie, does not depend
+// on the threads.
 
 void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool want_normal,
                            Hit* out) {
@@ -400,18 +430,17 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
             closest_packet(
                 a, a.native.get(), rays + i, m,
                 [&](const Ray& ray, RayContext& c, FloatRay& f) {
-                    return prepare_ray(a, ray, RayStart::at_entry, c, f);
+                    return prepare_refined_ray(a, ray, c, f);
                 },
-                [&](std::size_t k, const RayContext&, const NativeHit& nh) {
+                [&](std::size_t k, const RayContext& c, const NativeHit&) {
                     bool escalated = false;
-                    auto h =
-                        refined_answer(a, rays[i + k], nh, std::nullopt, want_normal, escalated);
+                    auto h = refined_answer(a, rays[i + k], c, want_normal, escalated);
                     escalations += escalated;
                     return h;
                 },
                 out + i);
         }
-        exact_first = escalations > 0;
+        exact_first = !a.certified_misses && escalations > 0;
     }
 }
 
@@ -432,15 +461,15 @@ void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) 
             any_packet(
                 a, a.native.get(), rays + i, m,
                 [&](const Ray& ray, RayContext& c, FloatRay& f) {
-                    return prepare_ray(a, ray, RayStart::at_entry, c, f);
+                    return prepare_refined_ray(a, ray, c, f);
                 },
-                [&](std::size_t k) {
-                    ++escalations;
-                    return exact_any(a, rays[i + k]);
+                [&](std::size_t k, const RayContext& c) {
+                    escalations += !miss_is_certain(a, c);
+                    return refined_confirm_no_hit(a, rays[i + k], c);
                 },
                 out + i);
         }
-        exact_first = escalations > 0;
+        exact_first = !a.certified_misses && escalations > 0;
     }
 }
 
@@ -478,13 +507,13 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
 
     embree::take_error("");  // start clean on this thread
     impl->native.reset(rtcNewScene(device));
-    // ROBUST: Embree's watertight traversal and triangle test, for refined (and fast's all and
-    // count). refined re-decides every float miss, but a float ray that leaks through an open
-    // mesh can meet a farther front face, which it would accept (Fuzz.RegressionCases, with
-    // this flag off). fast's closest and any trace a non-robust copy (build_fast).
-    rtcSetSceneFlags(
-        impl->native.get(),
-        static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    // ROBUST: Embree's watertight traversal and triangle test over refined's widened triangles
+    // (embree/fat_triangles.h; also fast's all and count). Without it the widened triangles
+    // passed the stress suites too, but rays aimed at edges were rejected, and so re-decided,
+    // more often (docs/numerics.md). fast's closest and any trace a non-robust BVH of the
+    // unwidened triangles (build_fast).
+    rtcSetSceneFlags(impl->native.get(), RTC_SCENE_FLAG_ROBUST);
+    const double widen_by = embree::kWidenPads * impl->pad;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         impl->geoms.push_back(embree::GeomData{impl.get(), i});
@@ -493,7 +522,10 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
             g = embree::make_user_geometry(device, &impl->geoms.back(), 1);
             ++impl->spheres;
         } else {
-            g = embree::make_triangle_geometry(device, *o.mesh, impl->center);
+            bool capped = false;
+            g = embree::make_fat_triangle_geometry(device, *o.mesh, impl->center, widen_by,
+                                                   &impl->geoms.back(), capped);
+            impl->certified_misses = impl->certified_misses && !capped;
             impl->triangles += o.mesh->size();
             impl->triangle_objects.push_back(i);
         }
@@ -557,7 +589,11 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
         case Precision::fast:
             return embree::fast_any(*impl_, ray);
         case Precision::refined:
-            return embree::refined_any(*impl_, ray);
+            // A scene that is not certified confirms every float miss on the exact BVH, and
+            // most shadow rays reach their light: the exact path is then one traversal instead
+            // of two for an unblocked ray, with an answer at least as good.
+            return impl_->certified_misses ? embree::refined_any(*impl_, ray)
+                                           : embree::exact_any(*impl_, ray);
         case Precision::exact:
             return embree::exact_any(*impl_, ray);
     }
@@ -599,9 +635,10 @@ std::size_t EmbreeAccel::memory_bytes() const {
                         a.spheres * embree::kBytesPerUserPrimitive;
     if (a.exact_ready)
         bytes += (a.triangles + a.spheres) * embree::kBytesPerUserPrimitive;
-    if (a.fast_ready)
-        bytes +=
-            a.triangles * embree::kBytesPerTriangle + a.spheres * embree::kBytesPerUserPrimitive;
+    if (a.fast_ready)  // its own BVH and float triangles (vertices shared there: ~half a vertex
+                       // a triangle, and the index triple)
+        bytes += a.triangles * (embree::kBytesPerTriangle + 6 + 3 * sizeof(unsigned)) +
+                 a.spheres * embree::kBytesPerUserPrimitive;
     return bytes;
 }
 

@@ -6,11 +6,12 @@
 //            BVH of its own built by the first fast query (the geometries are shared); spheres
 //            are user geometry running the engine's double sphere test; t and the normal from
 //            Embree's float hit. Batches of 16 go through Embree's packets. Not watertight.
-//   refined  float traversal on the ROBUST (watertight) BVH built with the accelerator; the
-//            primitive Embree found is re-intersected in double. A float
-//            miss is confirmed on the exact BVH (Embree's float test can leak at a shared
-//            vertex), and all/count run on the exact BVH, so refined never leaks. In a batch,
-//            rays that would need that confirmation anyway go to the exact path directly.
+//   refined  one float traversal of the ROBUST (watertight) BVH built with the accelerator,
+//            whose triangles are widened in their planes by more than the float rounding can
+//            move a ray (embree/fat_triangles.h); a hit filter decides every float candidate
+//            by the double watertight test, so a float miss is a miss. The exact path decides
+//            where that argument does not hold (the filter rejected a candidate before the
+//            answer, a far origin, a scene with slivers); all/count run on the exact BVH.
 //   exact    a second BVH whose triangles are user geometry: Embree's float boxes (padded to
 //            cover the float rounding of the ray and of the boxes) only cull; every candidate is
 //            decided by the double watertight test and the closest is chosen by the API's tie
@@ -22,7 +23,8 @@
 //
 // The parts, one concept a file, in engine/accel/embree/: device (the shared RTCDevice, errors
 // → Status, RAII handles), impl.h (the BVHs, RayContext, NativeHit), float_ray (clipping, the
-// float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks), packets
+// float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks),
+// fat_triangles (refined's widened triangles and their hit filter), packets
 // (16-wide traversal, the one coherence test), point_query (closest points through
 // rtcPointQuery). embree_accel.cpp holds the builds and, for each query, one function per
 // precision.
@@ -66,9 +68,9 @@ class EmbreeAccel {
     /// any() for rays[0..n): out[i].valid() says whether ray i hits anything (nothing else is
     /// filled in). Groups of 16 go through Embree's occlusion packets where they can.
     void any_range(const Ray* rays, std::size_t n, Precision precision, Hit* out) const;
-    /// Every hit, sorted, shared edges merged (see linear_accel.h). fast: Embree's float hits,
-    /// recomputed in double and merged with a float-sized edge tolerance; refined and exact:
-    /// every candidate decided in double.
+    /// Every hit, sorted, shared edges merged (see linear_accel.h). fast: the candidates of
+    /// refined's widened float triangles, each decided in double (spheres by fast's kernel);
+    /// refined and exact: every candidate of the exact BVH decided in double.
     void all(const Ray& ray, Precision precision, bool want_normal, std::vector<Hit>& out) const;
 
     /// The closest surface point to p within max_distance, decided in double by the kernels of

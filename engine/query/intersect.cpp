@@ -186,7 +186,7 @@ std::optional<Hit> QueryEngine::closest(const Ray& ray, Precision precision,
 bool QueryEngine::occluded(const Ray& ray, Precision precision) const {
     if (!accel_)
         return linear_any(*scene_, ray);
-    return accel_->any(ray, precision == Precision::refined ? Precision::exact : precision);
+    return accel_->any(ray, precision);
 }
 
 FloatFrame QueryEngine::float_frame(Precision precision) const {

@@ -79,10 +79,8 @@ class QueryEngine {
     /// ray must be valid.
     std::optional<Hit> closest(const Ray& ray, Precision precision, bool want_normal) const;
     /// Whether anything lies along `ray` in [tmin, tmax] (a shadow ray's question) at
-    /// `precision`. refined is answered on the exact path: refined trusts a float hit but
-    /// confirms a float miss on the exact BVH, and most shadow rays reach their light, so the
-    /// exact path is one traversal instead of two for an unblocked ray, with an answer at least
-    /// as good. (A batch of `any` rays keeps refined: intersect().)
+    /// `precision` (EmbreeAccel::any: refined is one traversal whose misses need no
+    /// confirmation, except in a scene with slivers, where it takes the exact path).
     bool occluded(const Ray& ray, Precision precision) const;
     /// The float frame of the path that answers `precision` (math/float_frame.h): Embree's for
     /// fast and refined on a BVH, none (scale 0) where the answer is decided in double.

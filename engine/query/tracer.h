@@ -45,9 +45,8 @@ class Tracer {
     /// Closest hits (normals included) of a batch into out[0..n) (resized; a miss leaves an
     /// invalid Hit). Runs of 16 coherent rays go through Embree's packets where that is faster.
     void closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
-    /// Whether anything lies along `ray` within [tmin, tmax]: QueryEngine::occluded (refined on
-    /// the exact path), or on the tracer's own BVH its float traversal at the precision asked
-    /// (refined then confirms a float miss by scanning the scene's at most 16 triangles).
+    /// Whether anything lies along `ray` within [tmin, tmax]: QueryEngine::occluded, or the
+    /// tracer's own BVH at the precision asked (EmbreeAccel::any either way).
     bool occluded(const Ray& ray) const;
     /// occluded() for a batch: out[i].valid() says whether rays[i] is blocked (out is resized).
     /// Runs of 16 coherent rays go through Embree's occlusion packets (rtcOccluded16) where

@@ -66,8 +66,9 @@ TEST(Tracer, SingleRaysAnswerAsABatchOfOne) {
     }
 }
 
-// refined's shadow rays are answered on the exact path (QueryEngine::occluded).
-TEST(Tracer, RefinedShadowRaysTakeTheExactPath) {
+// refined's shadow rays (QueryEngine::occluded, one refined traversal since issue 17) agree
+// with exact's.
+TEST(Tracer, RefinedShadowRaysAgreeWithExact) {
     auto engine = build(testing::random_scene(13));
     ASSERT_FALSE(engine->brute_force());
     const std::vector<Ray> rays = some_rays(14, 2000);

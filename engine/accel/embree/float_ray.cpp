@@ -16,10 +16,14 @@ bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1) {
                 return false;
             continue;
         }
-        double ta = (lo - o) / d, tb = (hi - o) / d;
+        // One reciprocal rather than two divisions (the slab test was 7% of a refined batch,
+        // perf): (lo − o)·(1/d) rounds three times, which the widening below covers.
+        const double inv = 1.0 / d;
+        double ta = (lo - o) * inv, tb = (hi - o) * inv;
         if (ta > tb)
             std::swap(ta, tb);
-        // Widen by a few ulps: the divisions round, and a hit at the slab's edge must survive.
+        // Widen by a few ulps: the subtraction, reciprocal and product round (γ₃), and a hit at
+        // the slab's edge must survive.
         t0 = std::max(t0, ta - gamma(3) * std::abs(ta));
         t1 = std::min(t1, tb + gamma(3) * std::abs(tb));
     }
@@ -56,7 +60,7 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
         c.origin_err = 8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * far +
                        2.0 * kDoubleUnitRoundoff * length(org);
     }
-    const Vec3d dir = ray.direction / c.len;
+    const Vec3d dir = ray.direction * (1.0 / c.len);  // rounded to float next: one more u
     f.org_x = to_float(org.x);  // inside the bounds, which may exceed float's range
     f.org_y = to_float(org.y);
     f.org_z = to_float(org.z);

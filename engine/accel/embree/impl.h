@@ -22,9 +22,12 @@ namespace raycastd::engine::embree {
 /// The BVHs over one scene and the frame they share.
 struct Impl {
     const Scene* scene = nullptr;
-    SceneHandle native;  ///< float triangles + sphere user geometry, ROBUST (refined; fast's all)
-    /// The same geometries in a BVH without RTC_SCENE_FLAG_ROBUST, for fast's closest and any
-    /// (see build_fast); built by the first such query.
+    /// Fat float triangles (fat_triangles.h) + sphere user geometry, ROBUST: refined, fast's
+    /// all, and the point queries' culling.
+    SceneHandle native;
+    /// The float triangles as they are, and the same spheres, in a BVH without
+    /// RTC_SCENE_FLAG_ROBUST, for fast's closest and any (see build_fast); built by the first
+    /// such query.
     mutable SceneHandle fast;
     mutable std::atomic<bool> fast_ready{false};
     mutable std::once_flag fast_once;
@@ -41,6 +44,9 @@ struct Impl {
     double pad = 0;          ///< absolute padding of every box, in scene units (see build)
     double float_scale = 0;  ///< magnitude of scene coordinates, for the fast path's t_err
     std::size_t triangles = 0, spheres = 0;
+    /// Whether a float miss on `native` is a miss (fat_triangles.h): every triangle could be
+    /// widened fully. False: refined confirms its float misses on the exact path.
+    bool certified_misses = true;
     /// The objects that are triangles or meshes, in order (refined's scan of few triangles).
     std::vector<std::uint32_t> triangle_objects;
 
@@ -69,10 +75,21 @@ struct RayContext {
     double len = 1;            ///< |direction|: float t' (unit direction) ↔ t = shift + t'/len
     double margin = 0;         ///< slack added to tfar, in unit-direction length
     double origin_err = 0;     ///< bound on the double rounding of the float ray's start point
-    std::optional<Hit> best;   ///< closest so far (exact path), or the sphere hit (native BVHs)
+    /// Closest so far: the exact path's, or on `native` the last candidate accepted by float t
+    /// (a sphere's double hit, or a fat triangle's double hit from the hit filter).
+    std::optional<Hit> best;
     std::vector<Hit>* collect = nullptr;  ///< all/count: every hit goes here
     bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
     bool fast = false;   ///< precision fast: spheres by the plain-double kernel
+    /// Float t (Embree's units) of `best` on the native BVH.
+    float best_tf = std::numeric_limits<float>::infinity();
+    /// The smallest float t at which the hit filter rejected a candidate (the ray passed within
+    /// the widening of an edge of a triangle it does not hit in double); +inf if none. A miss,
+    /// or a hit beyond it, is then confirmed on the exact path.
+    float rejected_tf = std::numeric_limits<float>::infinity();
+    bool rejected() const { return rejected_tf < std::numeric_limits<float>::infinity(); }
+    /// A packet's context: the lanes' own contexts, indexed by the Embree ray id.
+    RayContext* lanes = nullptr;
 
     /// A packet lane's context (never handed to Embree: packets carry no user geometry).
     RayContext() = default;

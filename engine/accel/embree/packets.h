@@ -8,7 +8,8 @@
 //                   are filled straight from the double rays and answered straight from
 //                   Embree's hits;
 //   closest_packet  any float set-up (fast's clipped rays, refined's), each lane with its own
-//   any_packet      RayContext; the caller says how to prepare a lane and how to answer one.
+//   any_packet      RayContext (the packet's context points to them, for refined's hit filter);
+//                   the caller says how to prepare a lane and how to answer one.
 //
 // One coherence test decides the flag, evaluated in double on the rays (general packets) or in
 // float on the filled lanes (fast_packet), from the same template.
@@ -95,8 +96,12 @@ void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t 
     fill_lanes(a, rays, m, prepare, lanes, rh.ray, valid);
     for (std::size_t k = 0; k < kLanes; ++k)
         rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-    RTCIntersectContext ctx = packet_context(rays, m, a.float_scale);
-    rtcIntersect16(valid, scene, &ctx, &rh);
+    // The lanes travel in the context: refined's hit filter finds a lane's double ray and
+    // keeps its decision there (fat_triangles.cpp).
+    RayContext pc(a);
+    pc.rtc = packet_context(rays, m, a.float_scale);
+    pc.lanes = lanes;
+    rtcIntersect16(valid, scene, &pc.rtc, &rh);
     for (std::size_t k = 0; k < m; ++k) {
         if (!valid[k]) {
             out[k] = Hit{};  // the segment misses the scene's bounds: nothing can be hit
@@ -109,7 +114,7 @@ void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t 
 
 /// `any` answers (any_answer) of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one occlusion
 /// packet on `scene`, lanes as in closest_packet; a lane that met the bounds but found nothing
-/// is answered by confirm_miss(k).
+/// is answered by confirm_miss(k, its context).
 template <class Prepare, class ConfirmMiss>
 void any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Prepare&& prepare,
                 ConfirmMiss&& confirm_miss, Hit* out) {
@@ -117,12 +122,14 @@ void any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, P
     alignas(64) RTCRay16 r16;
     alignas(64) int valid[kLanes];
     fill_lanes(a, rays, m, prepare, lanes, r16, valid);
-    RTCIntersectContext ctx = packet_context(rays, m, a.float_scale);
-    rtcOccluded16(valid, scene, &ctx, &r16);
+    RayContext pc(a);
+    pc.rtc = packet_context(rays, m, a.float_scale);
+    pc.lanes = lanes;
+    rtcOccluded16(valid, scene, &pc.rtc, &r16);
     for (std::size_t k = 0; k < m; ++k) {
         bool hit = valid[k] && occluded_tfar(r16.tfar[k]);
         if (valid[k] && !hit)
-            hit = confirm_miss(k);
+            hit = confirm_miss(k, lanes[k]);
         out[k] = any_answer(hit);
     }
 }

@@ -88,6 +88,7 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
         rh->hit.primID = h.primitive;
         rh->hit.u = rh->hit.v = 0.0f;
         c.best = h;
+        c.best_tf = tf;
         return false;  // the nearer root came first: the far one cannot be closer
     });
 }
@@ -105,24 +106,6 @@ void user_occluded(const RTCOccludedFunctionNArguments* args) {
 }
 
 }  // namespace
-
-void collect_filter(const RTCFilterFunctionNArguments* args) {
-    RayContext& c = ctx_of(args->context);
-    if (args->N != 1 || !args->valid[0] || !c.collect)
-        return;
-    const auto* hit = reinterpret_cast<const RTCHit*>(args->hit);
-    const auto* ray = reinterpret_cast<const RTCRay*>(args->ray);
-    if (c.accel->scene->objects[hit->geomID].kind == ObjectKind::sphere)
-        return;  // user geom
-    Hit h;
-    h.object = hit->geomID;
-    h.primitive = hit->primID;
-    h.t = c.shift + static_cast<double>(ray->tfar) / c.len;
-    h.u = hit->u;
-    h.v = hit->v;
-    c.collect->push_back(h);
-    args->valid[0] = 0;
-}
 
 GeometryHandle make_user_geometry(RTCDevice device, GeomData* data, unsigned prims) {
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER));

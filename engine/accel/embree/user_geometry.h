@@ -7,8 +7,8 @@
 //   intersect  the sphere roots or the watertight triangle test in double: in the exact BVH the
 //              candidates compete by the API's `closer` order, in the native ones a sphere
 //              competes with Embree's float triangle hits by float t;
-//   occluded   any double hit in range;
-// and `collect_filter` records every float triangle hit of an `all` query on the native BVH.
+//   occluded   any double hit in range.
+// (The native BVH's triangles are decided in double by their hit filter: fat_triangles.h.)
 
 #include <cstdint>
 
@@ -29,10 +29,5 @@ struct GeomData {
 /// A user geometry of `prims` primitives of data's object (1 for a sphere), with the callbacks
 /// above; `data` must outlive it. Not yet committed.
 GeometryHandle make_user_geometry(RTCDevice device, GeomData* data, unsigned prims);
-
-/// Context filter for `all` on the native BVH: records each float triangle hit in the
-/// RayContext's `collect` list (t, u, v as Embree found them), then rejects it so that the
-/// traversal goes on to the next one. Spheres report through their own callback.
-void collect_filter(const RTCFilterFunctionNArguments* args);
 
 }  // namespace raycastd::engine::embree

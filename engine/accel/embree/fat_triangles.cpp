@@ -1,0 +1,122 @@
+#include "engine/accel/embree/fat_triangles.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/accel/embree/impl.h"
+#include "engine/math/float_bounds.h"
+
+namespace raycastd::engine::embree {
+
+namespace {
+
+/// Decides each float candidate Embree reports on a fat triangle by the double watertight test
+/// on the real triangle (intersect_triangle, which also enforces [tmin, tmax]): a double miss is
+/// rejected (the traversal goes on) and noted in the ray's context (rejected_tf); a double hit is
+/// accepted and becomes the context's `best` (closest), is recorded and rejected (`all`), or
+/// ends the traversal (`any`). Embree orders the candidates by float t, as before: which of two
+/// surfaces whose float t agree comes first stays a float decision (docs/numerics.md).
+void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
+    RayContext& c = ctx_of(args->context);
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    const TriangleMesh& mesh = *g->accel->scene->objects[g->object].mesh;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1)
+            continue;
+        // A packet's context carries its lanes; the ray id is the lane (fill_lanes).
+        RayContext& lane = c.lanes ? c.lanes[RTCRayN_id(args->ray, args->N, i)] : c;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        auto h = intersect_triangle(mesh.triangle(prim), *lane.ray, /*want_normal=*/false);
+        const float tf = RTCRayN_tfar(args->ray, args->N, i);  // the candidate's float t
+        if (!h) {
+            args->valid[i] = 0;
+            lane.rejected_tf = std::min(lane.rejected_tf, tf);
+            continue;
+        }
+        if (occlusion)
+            continue;
+        h->object = g->object;
+        h->primitive = prim;
+        if (lane.collect) {
+            lane.collect->push_back(*h);
+            args->valid[i] = 0;
+            continue;
+        }
+        lane.best = *h;
+        lane.best_tf = tf;
+    }
+}
+
+void intersect_filter(const RTCFilterFunctionNArguments* args) {
+    decide(args, /*occlusion=*/false);
+}
+
+void occluded_filter(const RTCFilterFunctionNArguments* args) {
+    decide(args, /*occlusion=*/true);
+}
+
+}  // namespace
+
+/// The three corners of `tri` (relative to the scene centre) with its edges moved out by w in
+/// its plane. Corner i lies on two edges with outward in-plane unit normals m₁, m₂; the moved
+/// edges meet at corner + x with x·m₁ = x·m₂ = w, i.e. x = w·(m₁ + m₂)/(1 + m₁·m₂), of length
+/// w/sin(α/2) (α the corner's angle; 1 + m₁·m₂ = 2 sin²(α/2) never cancels at an obtuse corner,
+/// unlike the bisector form −w(e₁ + e₂)/sin α). Corners sharper than kMinCornerSine are capped.
+void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped) {
+    const Vec3d p[3] = {tri.a, tri.b, tri.c};
+    const Vec3d n = cross(p[1] - p[0], p[2] - p[0]);
+    Vec3d m[3];  // m[i]: outward normal of the edge p[i] → p[i+1], in the plane
+    for (int i = 0; i < 3; ++i) {
+        const Vec3d e = p[(i + 1) % 3] - p[i];
+        Vec3d o = normalize(cross(e, n));
+        if (dot(o, p[(i + 2) % 3] - p[i]) > 0.0)
+            o = -o;
+        m[i] = o;
+    }
+    const double max_len = w / kMinCornerSine;
+    for (int i = 0; i < 3; ++i) {
+        const Vec3d& m1 = m[(i + 2) % 3];  // the edge arriving at corner i
+        const Vec3d& m2 = m[i];            // the edge leaving it
+        Vec3d x = (m1 + m2) * (w / (1.0 + dot(m1, m2)));
+        const double len = length(x);
+        if (!(len <= max_len)) {  // also a 0/0 at a corner of angle ~0
+            capped = true;
+            const double l = length(m1 + m2);
+            x = l > 0.0 ? (m1 + m2) * (max_len / l) : Vec3d{};
+        }
+        out[i] = p[i] + x;
+    }
+}
+
+GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
+                                          const Vec3d& center, double widen_by, GeomData* data,
+                                          bool& capped) {
+    GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
+    const std::size_t n = mesh.size();
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
+    if (!v || !idx)
+        return g;  // the error callback has recorded why; commit reports it
+    for (std::size_t i = 0; i < n; ++i) {
+        const Triangle t = mesh.triangle(i);
+        const Triangle rel{t.a - center, t.b - center, t.c - center};
+        Vec3d out[3] = {rel.a, rel.b, rel.c};
+        if (!is_degenerate(t))  // a degenerate triangle is never hit in double: left as it is
+            widen_triangle(rel, widen_by, out, capped);
+        for (std::size_t k = 0; k < 3; ++k) {
+            // to_float: see make_triangle_geometry.
+            v[9 * i + 3 * k + 0] = to_float(out[k].x);
+            v[9 * i + 3 * k + 1] = to_float(out[k].y);
+            v[9 * i + 3 * k + 2] = to_float(out[k].z);
+            idx[3 * i + k] = static_cast<unsigned>(3 * i + k);
+        }
+    }
+    rtcSetGeometryUserData(g.get(), data);
+    rtcSetGeometryIntersectFilterFunction(g.get(), intersect_filter);
+    rtcSetGeometryOccludedFilterFunction(g.get(), occluded_filter);
+    return g;
+}
+
+}  // namespace raycastd::engine::embree

@@ -1,0 +1,58 @@
+#pragma once
+// refined's float triangles: each mesh triangle widened in its own plane, traced by Embree's
+// watertight float kernel, every float candidate decided by the double watertight test in a hit
+// filter, so that one traversal both picks and decides (issue 17).
+//
+// Why widen. refined used to confirm every float miss on the exact BVH (a second traversal),
+// because a float miss can be wrong: the float ray and the float vertices are the double ones
+// rounded, and Embree's float test rounds again. All of that moves the float line, relative to
+// the float triangle, by less than Δ ≈ 16·u_f·S (S = Impl::float_scale: vertex and ray-origin
+// rounding u_f·S each, the unit direction's u_f over a segment of at most S, Embree's Plücker
+// edge functions a few u_f of the coordinates relative to the origin; Higham 2002, Lemma 3.1).
+// A triangle widened by w = kWidenPads·pad = 16Δ in its plane (its edges moved out by w, the
+// vertices to where the moved edges meet: w/sin(α/2) along the bisector of the angle α) then
+// contains the float line's crossing of the plane whenever the double line crosses the triangle
+// at an angle β to the plane with sin β ≥ Δ/w, i.e. β ≥ 3.6°. So the float traversal reports
+// every triangle the double ray hits, except where the ray grazes a triangle within ~Δ of one of
+// its edges, which the float near-tie bands of docs/accuracy.md already leave undecided; the
+// hit filter decides each reported candidate in double and rejects what the double test misses.
+// A float miss is then a miss, and needs no second traversal, unless the filter rejected a
+// candidate on the way (the ray passed within w of an edge: it goes to the exact path), or the
+// scene is not certified (below).
+//
+// A sliver's bisector offset w/sin(α/2) grows without bound. A corner sharper than 3.6°
+// (sin(α/2) < kMinCornerSine) is moved by at most w/kMinCornerSine, which no longer covers the
+// whole w-neighbourhood of the corner; a scene with any such triangle is not certified
+// (Impl::certified_misses = false) and refined confirms its float misses on the exact BVH as
+// before. Degenerate triangles (never hit in double) are left as they are.
+
+#include <embree3/rtcore.h>
+
+#include "engine/accel/embree/device.h"
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine::embree {
+
+struct GeomData;
+
+/// The in-plane widening of refined's triangles, in units of Impl::pad (8·u_f·S): 32 pads, 256
+/// u_f·S, 16× the float displacement Δ above (sin β ≥ 1/16: β ≥ 3.6°).
+constexpr double kWidenPads = 32.0;
+
+/// A corner sharper than this sine of half its angle is capped (the scene is not certified).
+constexpr double kMinCornerSine = 1.0 / 32.0;
+
+/// The corners of `tri` with its edges moved out by `w` in its plane (out[0..3) for a, b, c): each
+/// corner moves w/sin(α/2) along its bisector, at most w/kMinCornerSine (then `capped` is set).
+/// `tri` must not be degenerate.
+void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped);
+
+/// The float triangle geometry of `mesh` (coordinates relative to `center`) with each triangle
+/// widened by `widen` in its plane (three vertices of its own, so neighbours may overlap), the
+/// hit filters below attached, user data `data`. `capped` is set when a sliver could not be
+/// widened fully (see above). Not yet committed.
+GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
+                                          const Vec3d& center, double widen, GeomData* data,
+                                          bool& capped);
+
+}  // namespace raycastd::engine::embree
