@@ -60,12 +60,13 @@ struct ModelPart {
     /// the file lists them (unreferenced ones included), except that STL, which stores every
     /// corner separately, has exactly equal corners merged. glTF morph targets are applied at
     /// their default weights; skinned meshes are posed by their joints in the
-    /// file's rest pose (linear blend skinning, no animation). normals is per-vertex when every primitive of the part has normals, else
-    /// empty (never computed). triangle_material is empty when no triangle of the part names a
-    /// material; otherwise it has one index per triangle into LoadedModel::materials, and
-    /// triangles without a material of their own use an appended grey "default" material.
-    /// corner_uvs is filled when some triangle's material is textured and its primitive (glTF)
-    /// or its face (OBJ) gives texture coordinates, with (0, 0) for the other triangles.
+    /// file's rest pose (linear blend skinning, no animation). normals is per-vertex when every
+    /// primitive of the part has normals, else empty (never computed). triangle_material is empty
+    /// when no triangle of the part names a material; otherwise it has one index per triangle into
+    /// LoadedModel::materials, and triangles without a material of their own use an appended grey
+    /// "default" material. corner_uvs is filled when some triangle's material is textured and its
+    /// primitive (glTF) or its face (OBJ) gives texture coordinates, with (0, 0) for the other
+    /// triangles.
     TriangleMesh mesh;
 };
 

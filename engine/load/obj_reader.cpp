@@ -15,8 +15,8 @@
 #include <optional>
 
 #include "engine/load/loaders.h"
-#include "engine/math/float_bounds.h"
 #include "engine/load/text_scan.h"
+#include "engine/math/float_bounds.h"
 
 namespace raycastd::engine::detail {
 
