@@ -104,6 +104,7 @@ engine::LoadLimits load_limits(const Limits& limits) {
     // A mesh has at most about three vertices per triangle unless it is padding itself out.
     l.max_vertices = 3 * limits.max_triangles;
     l.max_texture_pixels = limits.max_texture_pixels;
+    l.max_texture_pixels_total = 4 * limits.max_texture_pixels;
     return l;
 }
 

@@ -688,24 +688,28 @@ TEST(GltfLoader, TextureImagesFromABufferViewAndFromAFile) {
 TEST(GltfLoader, UnusableTexturesAreWarnings) {
     struct Case {
         std::string what, image, expect;
-        std::size_t max_pixels;
+        std::size_t max_pixels = 1u << 24, max_total = 1u << 26;
     };
     const std::string png = testing::png(2, 2, kQuad);
     std::string truncated = png.substr(0, 40);
     const std::vector<Case> cases = {
-        {"missing file", R"({"uri":"nowhere.png"})", "nowhere.png", 1u << 24},
+        {"missing file", R"({"uri":"nowhere.png"})", "nowhere.png"},
         {"not an image", R"({"uri":"data:image/png;base64,)" + base64("GIF89a......") + R"("})",
-         "not a PNG or JPEG", 1u << 24},
+         "not a PNG or JPEG"},
         {"truncated", R"({"uri":"data:image/png;base64,)" + base64(truncated) + R"("})",
-         "does not decode", 1u << 24},
+         "does not decode"},
         {"over the pixel limit", R"({"uri":"data:image/png;base64,)" + base64(png) + R"("})",
          "--max-texture-pixels", 3},
+        // Within the one-image limit, past what the model's images may take together.
+        {"over the model's total", R"({"uri":"data:image/png;base64,)" + base64(png) + R"("})",
+         "together", 16, 3},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.what);
         Doc d;
         LoadLimits limits;
         limits.max_texture_pixels = c.max_pixels;
+        limits.max_texture_pixels_total = c.max_total;
         auto m =
             load_model(textured_doc(d, c.image), ModelFormat::gltf, no_resources(), "t", limits);
         ASSERT_TRUE(m.ok()) << m.status().message;

@@ -118,6 +118,7 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
     std::vector<UvMapping> mappings(m.materials.size());
     std::map<std::size_t, std::shared_ptr<const TextureImage>> decoded;  // by image index
     std::map<std::size_t, std::string> failed;                           // by image index
+    std::size_t decoded_pixels = 0;
     for (std::size_t i = 0; i < m.materials.size() && i < materials.size(); ++i) {
         const tinygltf::TextureInfo& info = m.materials[i].pbrMetallicRoughness.baseColorTexture;
         if (info.index < 0)
@@ -136,7 +137,7 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
         const auto source = static_cast<std::size_t>(tex.source);
         if (!decoded.count(source) && !failed.count(source)) {
             auto bytes = image_bytes(m, source, read);
-            auto image = bytes ? detail::decode_texture_image(*bytes, limits.max_texture_pixels)
+            auto image = bytes ? detail::decode_texture_image(*bytes, limits, decoded_pixels)
                                : Result<std::shared_ptr<const TextureImage>>(bytes.status());
             if (image)
                 decoded[source] = *image;

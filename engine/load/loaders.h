@@ -55,11 +55,14 @@ Status check_resource_uri(std::string_view uri);
 std::size_t add_fan(TriangleMesh& mesh, const std::vector<std::uint32_t>& poly);
 
 /// A PNG or JPEG texture image decoded to 8-bit sRGB RGB (texture_image.cpp). The width ×
-/// height its header declares is checked against `max_pixels` before anything is decoded.
-/// Errors (model_load_failed) carry a reason for the caller's warning: not PNG/JPEG, an
-/// unreadable header, over the limit, or pixels that do not decode.
+/// height its header declares is checked against limits.max_texture_pixels, and, with the
+/// `decoded` pixels of the model's images so far, against limits.max_texture_pixels_total,
+/// before anything is decoded; `decoded` grows by the image's pixels. Errors
+/// (model_load_failed) carry a reason for the caller's warning: not PNG/JPEG, an unreadable
+/// header, over a limit, or pixels that do not decode.
 Result<std::shared_ptr<const TextureImage>> decode_texture_image(std::string_view bytes,
-                                                                 std::size_t max_pixels);
+                                                                 const LoadLimits& limits,
+                                                                 std::size_t& decoded);
 
 /// Checks shared by every format once the parts are built: finite positions (model_load_failed
 /// naming the part and vertex), finite normals (dropped with a warning otherwise), the limits

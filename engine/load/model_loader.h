@@ -94,6 +94,9 @@ struct LoadLimits {
     /// Pixels of one texture image, checked from its header before it is decoded; a larger
     /// image is dropped with a warning (the material keeps its factor alone).
     std::size_t max_texture_pixels = 16'777'216;
+    /// Pixels of all the texture images of one model together (a file of many small PNGs can
+    /// each declare the most one image may have): images past it are dropped the same way.
+    std::size_t max_texture_pixels_total = 4 * 16'777'216;
 };
 
 /// Parses `bytes` as `format`. display_name names the parts and appears in messages (a file

@@ -354,7 +354,7 @@ class ObjReader {
         if (cached == textures_.end()) {
             Status allowed = check_resource_uri(map.uri);
             auto bytes = allowed.ok() ? read_(map.uri) : Result<std::string>(allowed);
-            auto image = bytes ? decode_texture_image(*bytes, limits_.max_texture_pixels)
+            auto image = bytes ? decode_texture_image(*bytes, limits_, decoded_pixels_)
                                : Result<std::shared_ptr<const TextureImage>>(bytes.status());
             if (!image) {
                 model_.warnings.push_back("map_Kd '" + map.uri + "': " + image.status().message +
@@ -483,6 +483,7 @@ class ObjReader {
     std::map<std::string, MtlEntry> library_;      ///< every material of every mtllib read
     std::vector<std::optional<DiffuseMap>> maps_;  ///< per model material: its usable map_Kd
     std::map<std::string, std::shared_ptr<const TextureImage>> textures_;  ///< by image URI
+    std::size_t decoded_pixels_ = 0;  ///< of the textures decoded so far
     std::map<std::string, std::uint32_t> used_;
     std::uint32_t material_ = kNone;
     std::size_t short_faces_ = 0;

@@ -28,7 +28,8 @@ bool is_jpeg(std::string_view b) {
 }  // namespace
 
 Result<std::shared_ptr<const TextureImage>> decode_texture_image(std::string_view bytes,
-                                                                 std::size_t max_pixels) {
+                                                                 const LoadLimits& limits,
+                                                                 std::size_t& decoded) {
     auto refuse = [](std::string why) {
         return Status::error(Code::model_load_failed, std::move(why));
     };
@@ -45,9 +46,16 @@ Result<std::shared_ptr<const TextureImage>> decode_texture_image(std::string_vie
                       (why ? std::string(": ") + why : ""));
     }
     const auto pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-    if (pixels > max_pixels) {
+    if (pixels > limits.max_texture_pixels) {
         return refuse(std::to_string(w) + "×" + std::to_string(h) + " image is over the limit of " +
-                      std::to_string(max_pixels) + " pixels (--max-texture-pixels)");
+                      std::to_string(limits.max_texture_pixels) + " pixels (--max-texture-pixels)");
+    }
+    if (pixels > limits.max_texture_pixels_total ||
+        decoded > limits.max_texture_pixels_total - pixels) {
+        return refuse(std::to_string(w) + "×" + std::to_string(h) +
+                      " image would take the model's textures past " +
+                      std::to_string(limits.max_texture_pixels_total) +
+                      " pixels together (4 × --max-texture-pixels)");
     }
     int dw = 0, dh = 0;
     stbi_uc* px = stbi_load_from_memory(data, size, &dw, &dh, &channels, 3);
@@ -60,6 +68,7 @@ Result<std::shared_ptr<const TextureImage>> decode_texture_image(std::string_vie
     image->height = dh;
     image->rgb.assign(px, px + static_cast<std::size_t>(dw) * static_cast<std::size_t>(dh) * 3);
     stbi_image_free(px);
+    decoded += pixels;
     return std::shared_ptr<const TextureImage>(std::move(image));
 }
 
