@@ -39,6 +39,9 @@ class Tracer {
     /// The float frame of that path: what a spawned ray's origin error must add (shade/spawn.h);
     /// scale 0 where the answer is decided in double.
     const FloatFrame& float_frame() const { return frame_; }
+    /// Whether this tracer traces through a BVH of its own (a scene of at most 16 primitives
+    /// that QueryEngine answers by brute force, BuildHint::many_rays).
+    bool own_bvh() const { return own_bvh_ != nullptr; }
 
     /// The closest hit along `ray`, or nullopt.
     std::optional<Hit> closest(const Ray& ray, bool want_normal) const;

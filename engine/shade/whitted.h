@@ -52,6 +52,8 @@ struct WhittedOptions {
     bool bvh_for_small_scenes = false;
     /// shade_hits() traces each generation of rays as a batch (Embree packets); off, it shades
     /// hit by hit as shade_hit() does (the tests and bench_render --single-rays compare them).
+    /// Scenes the tracer gives a BVH of its own (at most 16 primitives) are shaded hit by hit
+    /// either way (measured slower in batches, whitted.cpp).
     bool trace_in_batches = true;
 };
 
