@@ -83,6 +83,25 @@ std::string set_threads(Config& c, const std::string& a, std::size_t n) {
 /// A number-valued option: stores n in the config, or returns why n is refused.
 using NumberSetter = std::string (*)(Config&, const std::string& flag, std::size_t n);
 
+/// Stores n · 2^Shift in a Limits field (Shift 20: a flag in MB, a field in bytes).
+template <std::size_t Limits::*Field, unsigned Shift = 0>
+std::string set_limit(Config& c, const std::string&, std::size_t n) {
+    c.limits.*Field = n << Shift;
+    return {};
+}
+
+/// Stores n in a Limits field when Lo ≤ n ≤ Hi.
+template <std::size_t Limits::*Field, std::size_t Lo, std::size_t Hi>
+std::string set_limit_within(Config& c, const std::string& flag, std::size_t n) {
+    if (n < Lo || n > Hi) {
+        return flag + (Lo == 0
+                           ? " must be at most " + std::to_string(Hi)
+                           : " must be from " + std::to_string(Lo) + " to " + std::to_string(Hi));
+    }
+    c.limits.*Field = n;
+    return {};
+}
+
 /// The options that take a number, each with what it sets: one table, so that a flag is either
 /// known here or "unknown option" whatever its value (--max-points was once listed by --help but
 /// missing from a separate list of numeric flags, and refused).
@@ -98,82 +117,20 @@ const std::map<std::string, NumberSetter>& number_options() {
         // --threads is --max-connections under its old name.
         {"--threads", &set_threads},
         {"--max-connections", &set_threads},
-        {"--max-body-mb",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_body_bytes = n << 20;
-             return {};
-         }},
-        {"--max-rays",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_rays = n;
-             return {};
-         }},
-        {"--max-points",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_points = n;
-             return {};
-         }},
-        {"--max-pixels",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_pixels = n;
-             return {};
-         }},
-        {"--max-texture-pixels",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_texture_pixels = n;
-             return {};
-         }},
-        {"--max-triangles",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_triangles = n;
-             return {};
-         }},
-        {"--max-concurrent",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.max_concurrent = n;
-             return {};
-         }},
-        {"--memory-budget-mb",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.memory_budget_bytes = n << 20;
-             return {};
-         }},
-        {"--body-budget-mb",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.body_budget_bytes = n << 20;
-             return {};
-         }},
-        {"--answer-budget-mb",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.answer_budget_bytes = n << 20;
-             return {};
-         }},
-        {"--job-budget-mb",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             c.limits.job_budget_bytes = n << 20;
-             return {};
-         }},
-        {"--header-timeout-s",
-         [](Config& c, const std::string& a, std::size_t n) -> std::string {
-             if (n == 0 || n > 3600)
-                 return a + " must be from 1 to 3600";
-             c.limits.header_timeout_s = n;
-             return {};
-         }},
-        {"--idle-timeout-s",
-         [](Config& c, const std::string& a, std::size_t n) -> std::string {
-             if (n == 0 || n > 3600)
-                 return a + " must be from 1 to 3600";
-             c.limits.idle_timeout_s = n;
-             return {};
-         }},
-        {"--request-timeout-s",
-         [](Config& c, const std::string&, std::size_t n) -> std::string {
-             if (n > 86400)
-                 return "--request-timeout-s must be at most 86400";
-             c.limits.request_timeout_s = n;
-             return {};
-         }},
+        {"--max-body-mb", &set_limit<&Limits::max_body_bytes, 20>},
+        {"--max-rays", &set_limit<&Limits::max_rays>},
+        {"--max-points", &set_limit<&Limits::max_points>},
+        {"--max-pixels", &set_limit<&Limits::max_pixels>},
+        {"--max-texture-pixels", &set_limit<&Limits::max_texture_pixels>},
+        {"--max-triangles", &set_limit<&Limits::max_triangles>},
+        {"--max-concurrent", &set_limit<&Limits::max_concurrent>},
+        {"--memory-budget-mb", &set_limit<&Limits::memory_budget_bytes, 20>},
+        {"--body-budget-mb", &set_limit<&Limits::body_budget_bytes, 20>},
+        {"--answer-budget-mb", &set_limit<&Limits::answer_budget_bytes, 20>},
+        {"--job-budget-mb", &set_limit<&Limits::job_budget_bytes, 20>},
+        {"--header-timeout-s", &set_limit_within<&Limits::header_timeout_s, 1, 3600>},
+        {"--idle-timeout-s", &set_limit_within<&Limits::idle_timeout_s, 1, 3600>},
+        {"--request-timeout-s", &set_limit_within<&Limits::request_timeout_s, 0, 86400>},
     };
     return options;
 }
