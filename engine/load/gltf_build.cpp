@@ -335,8 +335,7 @@ Status add_influences(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     if (!skinned && out.joints.empty())
         return {};
     const std::size_t before = out.positions.size() - count;  // this primitive's first vertex
-    out.joints.resize(before * kInfluences, 0);               // earlier primitives without a skin
-    out.weights.resize(before * kInfluences, 0.0);
+    // Earlier primitives without a skin, and this one until it is read, get no influence.
     out.joints.resize(out.positions.size() * kInfluences, 0);
     out.weights.resize(out.positions.size() * kInfluences, 0.0);
     if (!skinned)

@@ -14,6 +14,13 @@ bool is_nonzero(const Vec3d& v) {
     return v.x > 0.0 || v.y > 0.0 || v.z > 0.0;
 }
 
+/// What the hit's barycentrics (u, v) make of values at the triangle's corners:
+/// (1 − u − v)·a + u·b + v·c (shading normals, texture coordinates).
+template <class T>
+T at_hit(const Hit& hit, const T& a, const T& b, const T& c) {
+    return a * (1.0 - hit.u - hit.v) + b * hit.u + c * hit.v;
+}
+
 }  // namespace
 
 ShadingPlan plan_shading(const Scene& s, const std::optional<Vec3d>& headlight) {
@@ -23,6 +30,7 @@ ShadingPlan plan_shading(const Scene& s, const std::optional<Vec3d>& headlight) 
         plan.refraction = plan.refraction || m.transparency > 0.0;
         plan.specular.push_back(is_nonzero(m.specular));
     }
+    plan.textures = s.features().textures;
     if (headlight) {
         // The headlight replaces the scene's lights entirely (docs/api.md, render `lighting`).
         plan.ambient = Vec3d{kHeadlightAmbient, kHeadlightAmbient, kHeadlightAmbient};
@@ -92,7 +100,7 @@ Vec3d Whitted::shading_normal(const Hit& hit) const {
     } else {
         return hit.normal;
     }
-    const Vec3d n = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
+    const Vec3d n = at_hit(hit, c[0], c[1], c[2]);
     const double len = length(n);
     if (!(len > 0.0) || !std::isfinite(len))
         return hit.normal;
@@ -107,9 +115,8 @@ const Material& Whitted::textured(const Hit& hit, const Material& stored, Materi
         return stored;
     // The hit's barycentrics interpolate the corners' (u, v) as they do the shading normal.
     const auto& c = o.mesh->corner_uvs[hit.primitive];
-    const double w = 1.0 - hit.u - hit.v;
-    const double u = w * c[0][0] + hit.u * c[1][0] + hit.v * c[2][0];
-    const double v = w * c[0][1] + hit.u * c[1][1] + hit.v * c[2][1];
+    const double u = at_hit<double>(hit, c[0][0], c[1][0], c[2][0]);
+    const double v = at_hit<double>(hit, c[0][1], c[1][1], c[2][1]);
     const Vec3d texel = stored.texture->sample(u, v);
     scratch = stored;
     scratch.diffuse = stored.diffuse * texel;
@@ -204,8 +211,9 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
                           std::vector<Vec3d>& out, RayCounts& counts) const {
     const std::size_t n = rays.size();
     out.assign(n, options_.background);
-    // Reserved up front: each Surface refers to its scratch material.
-    std::vector<Material> scratch(n);
+    // Reserved up front: each Surface refers to its scratch material, which only a textured
+    // material writes (one unused slot serves an untextured scene).
+    std::vector<Material> scratch(plan_.textures ? n : 1);
     std::vector<Surface> surfaces;
     surfaces.reserve(n);
     std::vector<std::size_t> hit_of;  // surfaces[h] is the hit of rays[hit_of[h]]
@@ -213,7 +221,7 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     for (std::size_t i = 0; i < n; ++i) {
         if (!hits[i].valid())
             continue;
-        surfaces.push_back(surface(rays[i], hits[i], depth, scratch[i]));
+        surfaces.push_back(surface(rays[i], hits[i], depth, scratch[plan_.textures ? i : 0]));
         hit_of.push_back(i);
     }
     // Shadow rays light by light, so that the rays of neighbouring hits to one light sit side
@@ -226,8 +234,9 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     for (std::size_t k = 0; k < lights; ++k) {
         const Light& light = scene().lights[plan_.shadow_lights[k]];
         for (std::size_t h = 0; h < surfaces.size(); ++h) {
-            if (auto r = shadow_ray(surfaces[h], light)) {
-                shadow.push_back(*r);
+            const Vec3d l = to_light(surfaces[h], light);
+            if (dot(surfaces[h].n, l) > 0.0) {  // direct()'s `facing`
+                shadow.push_back(shadow_ray(surfaces[h], light, l));
                 slot.push_back(h * lights + k);
             }
         }
@@ -316,13 +325,13 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
     return color;
 }
 
-std::optional<Ray> Whitted::shadow_ray(const Surface& sp, const Light& light) const {
-    const bool point = light.type == LightType::point;
-    const Vec3d l = normalize(point ? light.position - sp.p : -light.direction);
-    if (!(dot(sp.n, l) > 0.0))
-        return std::nullopt;
-    return point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
-                 : spawn_ray(sp.p, sp.p_err, sp.ng, l);
+Vec3d Whitted::to_light(const Surface& sp, const Light& light) {
+    return normalize(light.type == LightType::point ? light.position - sp.p : -light.direction);
+}
+
+Ray Whitted::shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const {
+    return light.type == LightType::point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
+                                          : spawn_ray(sp.p, sp.p_err, sp.ng, l);
 }
 
 Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
@@ -332,8 +341,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
     for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
-        const bool point = light.type == LightType::point;
-        const Vec3d l = normalize(point ? light.position - sp.p : -light.direction);
+        const Vec3d l = to_light(sp, light);
         ShadowRayRecord rec;
         rec.light = li;
         rec.facing = dot(sp.n, l) > 0.0;
@@ -344,13 +352,13 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
             } else if (node) {
                 ++counts.shadow;
                 // The tree names the blocker, so it asks for the closest one.
-                const std::optional<Hit> b = closest(*shadow_ray(sp, light));
+                const std::optional<Hit> b = closest(shadow_ray(sp, light, l));
                 blocked = b.has_value();
                 if (b)
                     rec.blocked_by = b->object;
             } else {
                 ++counts.shadow;
-                blocked = occluded(*shadow_ray(sp, light));
+                blocked = occluded(shadow_ray(sp, light, l));
             }
             if (!blocked) {
                 lit = true;

@@ -85,6 +85,7 @@ struct ShadingPlan {
     bool reflection = false;         ///< some material reflects
     bool refraction = false;         ///< some material is transparent
     std::vector<bool> specular;      ///< per material: ks ≠ 0
+    bool textures = false;           ///< Scene::features().textures: some hit samples a texture
 };
 
 /// Ambient intensity and directional intensity of the headlight (docs/api.md, render `lighting`).
@@ -194,9 +195,11 @@ class Whitted {
     void shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& hits, int depth,
                      std::vector<Vec3d>& out, RayCounts& counts) const;
     SecondaryRays secondary_rays(const Surface& sp) const;
-    /// The shadow ray from a surface point to a point or directional light, or nullopt when
-    /// the light is behind the shading normal (no ray is traced then).
-    std::optional<Ray> shadow_ray(const Surface& sp, const Light& light) const;
+    /// The unit direction from a surface point to a point or directional light.
+    static Vec3d to_light(const Surface& sp, const Light& light);
+    /// The shadow ray from a surface point to a light whose direction is `l` (to_light()); only
+    /// traced when the light is in front of the shading normal.
+    Ray shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const;
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
     /// `blocked`, when given, holds whether the shadow ray to plan().shadow_lights[k] is
