@@ -260,6 +260,23 @@ class ObjReader {
         return static_cast<std::uint32_t>(i);
     }
 
+    /// A face corner's vt or vn index, kNone when it is out of range: a bad index costs that
+    /// attribute (shading only), not the geometry; the first of each kind is a warning, and
+    /// `bad` records it.
+    std::uint32_t attribute_index(std::string_view s, std::size_t defined, bool& bad,
+                                  std::size_t line, std::string_view corner, const char* kind,
+                                  const char* dropped) {
+        if (auto i = resolve(s, defined))
+            return *i;
+        if (!bad) {
+            bad = true;
+            model_.warnings.push_back("line " + std::to_string(line) + ": " + kind + " index in '" +
+                                      std::string(corner) + "' is out of range; " + dropped +
+                                      " dropped");
+        }
+        return kNone;
+    }
+
     Status face(const std::vector<std::string_view>& t, std::size_t n) {
         poly_.clear();
         poly_uv_.clear();
@@ -279,27 +296,13 @@ class ObjReader {
             if (slash != std::string_view::npos) {
                 std::string_view rest = corner.substr(slash + 1);
                 const std::size_t slash2 = rest.find('/');
-                // A bad texture index costs the texture coordinates, not the geometry.
                 if (const std::string_view vt = rest.substr(0, slash2); !vt.empty()) {
-                    if (auto vti = resolve(vt, texcoords_.size())) {
-                        uv = *vti;
-                    } else if (!bad_uv_index_) {
-                        bad_uv_index_ = true;
-                        model_.warnings.push_back("line " + std::to_string(n) +
-                                                  ": texture index in '" + std::string(corner) +
-                                                  "' is out of range; texture coordinates dropped");
-                    }
+                    uv = attribute_index(vt, texcoords_.size(), bad_uv_index_, n, corner, "texture",
+                                         "texture coordinates");
                 }
                 if (slash2 != std::string_view::npos && slash2 + 1 < rest.size()) {
-                    // A bad normal index costs the normals (shading only), not the geometry.
-                    if (auto vn = resolve(rest.substr(slash2 + 1), normals_.size())) {
-                        normal = *vn;
-                    } else if (!bad_normal_index_) {
-                        bad_normal_index_ = true;
-                        model_.warnings.push_back("line " + std::to_string(n) +
-                                                  ": normal index in '" + std::string(corner) +
-                                                  "' is out of range; normals dropped");
-                    }
+                    normal = attribute_index(rest.substr(slash2 + 1), normals_.size(),
+                                             bad_normal_index_, n, corner, "normal", "normals");
                 }
             }
             poly_uv_.push_back(uv);
