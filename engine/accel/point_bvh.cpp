@@ -1,0 +1,412 @@
+#include "engine/accel/point_bvh.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "engine/accel/point_query.h"
+#include "engine/math/float_bounds.h"
+
+namespace raycastd::engine {
+
+namespace {
+
+/// Beyond this many float ulps (2⁻²⁰) a plane's normal is not taken as unit, nor an edge's normal
+/// as orthogonal to the plane's: the bound's factor 1/(1 + |c|)/|n|² then stays above 1 − 2⁻¹⁸.
+constexpr double kUnitTolerance = 1.0 / (1 << 20);
+/// The relative slack of the squared radii: the factor above, and the relative roundings of
+/// A₊² + B₊² in float (γ₃ of u_f): 2⁻¹⁸ + 3·2⁻²⁴ < 2⁻¹⁶.
+constexpr double kRadiusSlack = 1.0 + 1.0 / (1 << 16);
+/// Query points farther than this from the centre: A² would overflow float, so the float bounds
+/// could not cull; brute force in double answers instead.
+constexpr double kMaxFloatQuery = 1e18;
+constexpr float kInfF = std::numeric_limits<float>::infinity();
+
+/// max(|v.x|, |v.y|, |v.z|) (std::max: fmax is a call out of line).
+double max_abs(const Vec3d& v) {
+    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
+}
+double abs_sum(const Vec3d& v) {
+    return std::abs(v.x) + std::abs(v.y) + std::abs(v.z);
+}
+
+/// The smallest float ≥ v, +inf beyond float's range (float_up would convert out of range).
+float up_or_inf(double v) {
+    return v > std::numeric_limits<float>::max() ? kInfF : float_up(v);
+}
+/// The squared float radius that covers every distance ≤ r (+inf for r = +inf).
+float radius2(double r) {
+    return r < kInfinity ? up_or_inf(r * r * kRadiusSlack) : kInfF;
+}
+
+/// The double vector of a float-rounded unit vector, or nullopt when rounding (or the input)
+/// leaves it further than kUnitTolerance from unit length.
+std::optional<Vec3d> rounded_unit(const Vec3d& v) {
+    const double len = length(v);
+    if (!(len > 0.0) || !std::isfinite(len))
+        return std::nullopt;
+    const Vec3d u = v / len;
+    const Vec3d f{static_cast<float>(u.x), static_cast<float>(u.y), static_cast<float>(u.z)};
+    if (!(std::abs(length(f) - 1.0) <= kUnitTolerance))
+        return std::nullopt;
+    return f;
+}
+
+/// The smallest float o with m·v ≤ o for the three vertices, in exact arithmetic: each double dot
+/// product is off by at most γ₄·(Σ|m_i||v_i|) (Higham 2002 §3.1: three products and two sums,
+/// one more u for v's own rounding relative to the centre), which is added before rounding up.
+float offset_above(const Vec3d& m, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    double o = -kInfinity;
+    for (const Vec3d* v : {&a, &b, &c})
+        o = std::max(o, dot(m, *v) + gamma(4) * abs_sum(m) * max_abs(*v));
+    return float_up(o);
+}
+
+}  // namespace
+
+TrianglePlanes triangle_planes(const Vec3d& a, const Vec3d& b, const Vec3d& c, double slab) {
+    const TrianglePlanes none;
+    const auto n = rounded_unit(cross(b - a, c - a));
+    if (!n)
+        return none;
+    TrianglePlanes t;
+    // The plane through a, and the largest distance of a vertex from it (the float normal leans
+    // by up to u_f, the offset rounds), as for offset_above.
+    const double o = static_cast<float>(dot(*n, a));
+    double r = 0;
+    for (const Vec3d* v : {&a, &b, &c})
+        r = std::max(
+            r, std::abs(dot(*n, *v) - o) + gamma(4) * (abs_sum(*n) * max_abs(*v) + std::abs(o)));
+    if (!(r <= slab))
+        return none;
+    t.plane[0] = static_cast<float>(n->x);
+    t.plane[1] = static_cast<float>(n->y);
+    t.plane[2] = static_cast<float>(n->z);
+    t.plane[3] = static_cast<float>(o);
+    const Vec3d* v[3] = {&a, &b, &c};
+    for (int e = 0; e < 3; ++e) {
+        // (v1 − v0) × n points out of the triangle across the edge v0→v1 (counter-clockwise
+        // about n), away from the third vertex.
+        const auto m = rounded_unit(cross(*v[(e + 1) % 3] - *v[e], *n));
+        if (!m || !(std::abs(dot(*m, *n)) <= kUnitTolerance))
+            return none;
+        t.edges[e][0] = static_cast<float>(m->x);
+        t.edges[e][1] = static_cast<float>(m->y);
+        t.edges[e][2] = static_cast<float>(m->z);
+        t.edges[e][3] = offset_above(*m, a, b, c);
+    }
+    // The corner rule needs the double planes close to the true ones (every angle's sine above
+    // 1e-6: the normal's double rounding is then below u/1e-6 ≪ u_f) and the corner acute
+    // (cos ≥ 1e-3, decided with room in double).
+    const double area2 = length(cross(b - a, c - a));
+    for (int i = 0; i < 3; ++i) {
+        const Vec3d u1 = *v[(i + 1) % 3] - *v[i], u2 = *v[(i + 2) % 3] - *v[i];
+        const double l = length(u1) * length(u2);
+        const bool usable = area2 >= 1e-6 * l && dot(u1, u2) >= 1e-3 * l;
+        for (int k = 0; k < 3; ++k)
+            t.corner[i][k] =
+                usable ? static_cast<float>((*v[i])[k]) : std::numeric_limits<float>::quiet_NaN();
+    }
+    return t;
+}
+
+void set_lane(PlanePack& pack, int lane, const TrianglePlanes& t) {
+    for (int k = 0; k < 4; ++k) {
+        pack.plane[k][lane] = t.plane[k];
+        for (int e = 0; e < 3; ++e)
+            pack.edges[e][k][lane] = t.edges[e][k];
+    }
+    for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < 3; ++k)
+            pack.corner[i][k][lane] = t.corner[i][k];
+    }
+}
+
+namespace {
+
+// Four lanes in one SIMD register, through GCC's and Clang's vector extensions (SSE on x86-64,
+// NEON elsewhere): a lane loop with std::max stays scalar (its NaN rule is a branch).
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+
+F4 load4(const float* p) {
+    F4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+/// Lane by lane a > b ? a : b; b where either is NaN.
+F4 max4(F4 a, F4 b) {
+    const I4 m = a > b;
+    return reinterpret_cast<F4>((reinterpret_cast<I4>(a) & m) | (reinterpret_cast<I4>(b) & ~m));
+}
+F4 abs4(F4 a) {
+    return reinterpret_cast<F4>(reinterpret_cast<I4>(a) &
+                                I4{0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff});
+}
+F4 sqrt4(F4 a) {
+    return F4{std::sqrt(a[0]), std::sqrt(a[1]), std::sqrt(a[2]), std::sqrt(a[3])};
+}
+/// The four lanes' plane function r[0]·q.x + r[1]·q.y + r[2]·q.z − r[3].
+F4 plane4(const float (&r)[4][4], F4 qx, F4 qy, F4 qz) {
+    return load4(r[0]) * qx + load4(r[1]) * qy + load4(r[2]) * qz - load4(r[3]);
+}
+
+}  // namespace
+
+void lower_bounds2(const PlanePack& pack, const float q[3], float eps, float out[4]) {
+    const F4 qx = {q[0], q[0], q[0], q[0]}, qy = {q[1], q[1], q[1], q[1]},
+             qz = {q[2], q[2], q[2], q[2]}, e = {eps, eps, eps, eps}, zero = {};
+    // A₊ and B_e less ε; max_e B_e₊ (a NaN anywhere gives 0: tested, never culled).
+    const F4 a = max4(abs4(plane4(pack.plane, qx, qy, qz)) - e, zero);
+    const F4 be[3] = {plane4(pack.edges[0], qx, qy, qz) - e, plane4(pack.edges[1], qx, qy, qz) - e,
+                      plane4(pack.edges[2], qx, qy, qz) - e};
+    const F4 b = max4(max4(max4(be[0], be[1]), be[2]), zero);
+    // The corner rule: |q − v|² of the corner (at most one: their regions are disjoint) whose
+    // two edges both have B > 0; 0 where none has, or where its corner is NaN (not usable).
+    F4 v2 = zero;
+    for (int i = 0; i < 3; ++i) {
+        const F4 dx = qx - load4(pack.corner[i][0]), dy = qy - load4(pack.corner[i][1]),
+                 dz = qz - load4(pack.corner[i][2]);
+        const F4 d2 = dx * dx + dy * dy + dz * dz;
+        const I4 in = (be[(i + 2) % 3] > zero) & (be[i] > zero) & (d2 >= zero);
+        v2 = reinterpret_cast<F4>((reinterpret_cast<I4>(d2) & in) |
+                                  (reinterpret_cast<I4>(v2) & ~in));
+    }
+    // (|q − v| − ε)₊², by the vector square root (SSE sqrtps).
+    const F4 v = max4(sqrt4(v2) - e, zero);
+    const F4 r = max4(v * v, a * a + b * b);
+    std::memcpy(out, &r, sizeof r);
+}
+
+bool PointBvh::suits(const Scene& scene) {
+    if (scene.triangle_count() == 0 || scene.sphere_count() > kMaxSpheres)
+        return false;
+    const Bounds3 b = scene.bounds();
+    return max_abs(b.diagonal()) <= 1e30;  // relative to the centre, float holds every coordinate
+}
+
+PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().center()) {
+    std::vector<Item> items;
+    double largest = 0;
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        if (o.kind == ObjectKind::sphere) {
+            spheres_.push_back(i);
+            continue;
+        }
+        for (std::uint32_t k = 0; k < o.mesh->size(); ++k) {
+            if (is_degenerate(o.mesh->triangle(k)))
+                continue;  // never offered (closest_point_on_triangle gives no point)
+            const Triangle t = relative(i, k);
+            Item it{(t.a + t.b + t.c) / 3.0, {}, i, k};
+            for (const Vec3d& v : {t.a, t.b, t.c}) {
+                it.box.extend(v);
+                largest = std::max(largest, max_abs(v));
+            }
+            items.push_back(it);
+        }
+    }
+    scale_ = 2.0 * largest;
+    if (items.empty())
+        return;
+    nodes_.reserve(items.size() / 2 + 1);
+    packs_.reserve(items.size() / 4 + items.size() / 8 + 1);
+    build(0, static_cast<std::uint32_t>(items.size()), items);
+}
+
+Triangle PointBvh::relative(std::uint32_t object, std::uint32_t prim) const {
+    const Triangle t = scene_.objects[object].mesh->triangle(prim);
+    return {t.a - center_, t.b - center_, t.c - center_};
+}
+
+std::uint32_t PointBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items) {
+    const auto index = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.emplace_back();
+    Bounds3 box, centroids;
+    for (std::uint32_t i = begin; i < end; ++i) {
+        box.extend(items[i].box);
+        centroids.extend(items[i].centroid);
+    }
+    // Outward to float, after widening by the rounding of v − centre (u·|v|, twice for room).
+    for (std::size_t k = 0; k < 3; ++k) {
+        nodes_[index].lo[k] = float_down(box.lo[k] - 2 * kDoubleUnitRoundoff * std::abs(box.lo[k]));
+        nodes_[index].hi[k] = float_up(box.hi[k] + 2 * kDoubleUnitRoundoff * std::abs(box.hi[k]));
+    }
+    const std::uint32_t n = end - begin;
+    if (n <= 8) {
+        fill_leaf(index, begin, end, items);
+        return index;
+    }
+    // The median on the centroids' longest axis, moved to a multiple of 4 so that packs stay
+    // full (a range of 4k triangles splits into two such ranges).
+    const std::size_t axis = max_abs_dimension(centroids.diagonal());
+    const std::uint32_t half = std::clamp((n / 2 + 2) / 4 * 4, 4u, n - 4);
+    const std::uint32_t mid = begin + half;
+    std::nth_element(
+        items.begin() + begin, items.begin() + mid, items.begin() + end,
+        [axis](const Item& x, const Item& y) { return x.centroid[axis] < y.centroid[axis]; });
+    build(begin, mid, items);
+    const std::uint32_t right = build(mid, end, items);
+    nodes_[index].index = right;
+    return index;
+}
+
+void PointBvh::fill_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
+                         const std::vector<Item>& items) {
+    nodes_[node].index = static_cast<std::uint32_t>(packs_.size());
+    nodes_[node].count = end - begin;
+    // A vertex lies within 8 u_f·S of the float plane through a (the normal's and the offset's
+    // float rounding, with room): the slab folded into the query's margin.
+    const double slab = 8.0 * kFloatUnitRoundoff * scale_;
+    for (std::uint32_t i = begin; i < end; i += 4) {
+        Pack p;
+        for (int l = 0; l < 4; ++l) {
+            p.object[l] = p.prim[l] = kInvalidId;
+            if (i + l >= end)
+                continue;
+            const Item& it = items[i + l];
+            const Triangle t = relative(it.object, it.prim);
+            set_lane(p.planes, l, triangle_planes(t.a, t.b, t.c, slab));
+            p.object[l] = it.object;
+            p.prim[l] = it.prim;
+        }
+        packs_.push_back(p);
+    }
+}
+
+/// The squared radii of one query: `t2` for the triangles' bounds (the candidates' reach), `b2`
+/// for the boxes (the reach plus the rounding of the query point, ε).
+struct PointBvh::Reach {
+    double max_distance;
+    double eps;
+    float t2 = kInfF, b2 = kInfF;
+
+    void update(const PointCandidates& c) {
+        const double r = std::min(max_distance, c.cull_distance());
+        t2 = radius2(r);
+        b2 = radius2(r + eps);
+    }
+};
+
+namespace {
+
+/// The squared distance from q to the node's box (0 inside), in float: each term rounds
+/// relatively (γ₅ in all), inside kRadiusSlack.
+template <class Node>
+float box_distance2(const Node& n, const float q[3]) {
+    float d2 = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        const float g = std::max(std::max(n.lo[k] - q[k], q[k] - n.hi[k]), 0.0f);
+        d2 += g * g;
+    }
+    return d2;
+}
+
+}  // namespace
+
+void PointBvh::visit_leaf(const Node& node, const Vec3d& p, const float q[3], Reach& reach,
+                          PointCandidates& c) const {
+    const float eps = up_or_inf(reach.eps);
+    // The bounds of the leaf's triangles (at most 8), then the exact tests in increasing order of
+    // the bound: the first one found shrinks the reach for the others, which the bounds then cull.
+    struct Lane {
+        float lb2;
+        std::uint32_t object, prim;
+    };
+    Lane lanes[8];
+    int n = 0;
+    const std::uint32_t packs = (node.count + 3) / 4;
+    for (std::uint32_t k = 0; k < packs; ++k) {
+        const Pack& pack = packs_[node.index + k];
+        float lb2[4];
+        lower_bounds2(pack.planes, q, eps, lb2);
+        for (int l = 0; l < 4; ++l) {
+            // Written as "not beyond" so that a NaN bound is tested, never culled.
+            if (pack.object[l] != kInvalidId && !(lb2[l] > reach.t2))
+                lanes[n++] = {std::isnan(lb2[l]) ? 0.0f : lb2[l], pack.object[l], pack.prim[l]};
+        }
+    }
+    for (int i = 1; i < n; ++i) {  // insertion sort: at most 8
+        const Lane x = lanes[i];
+        int j = i;
+        for (; j > 0 && lanes[j - 1].lb2 > x.lb2; --j)
+            lanes[j] = lanes[j - 1];
+        lanes[j] = x;
+    }
+    for (int i = 0; i < n && !(lanes[i].lb2 > reach.t2); ++i) {
+        const Triangle t = scene_.objects[lanes[i].object].mesh->triangle(lanes[i].prim);
+        if (auto cp = closest_point_on_triangle(t, p)) {
+            offer_closest_point(*cp, lanes[i].object, lanes[i].prim, reach.max_distance, c);
+            reach.update(c);
+        }
+    }
+}
+
+std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_distance) const {
+    if (!is_finite(p))
+        return std::nullopt;
+    PointCandidates c;
+    for (std::uint32_t s : spheres_)
+        offer_primitive(scene_, s, 0, p, max_distance, c);
+    const Vec3d pc = p - center_;
+    if (!(max_abs(pc) <= kMaxFloatQuery))
+        return linear_closest_point(scene_, p, max_distance);
+    if (nodes_.empty())
+        return finish_closest_point(scene_, c);
+    const float q[3] = {static_cast<float>(pc.x), static_cast<float>(pc.y),
+                        static_cast<float>(pc.z)};
+    // ε of the file comment: the float evaluation of a plane (γ₄ of u_f times Σ|n_i q_i| + |o|,
+    // |n|₁ ≤ √3), the rounding of p − centre to q (√3 u_f |q|∞), the subtractions of the slab
+    // and of ε themselves (u_f of their operands), and the slab (8 u_f S): 40 u_f covers the sum
+    // (≈ 13 u_f |q|∞ + 14 u_f S) with room.
+    const double qmax =
+        std::max(std::abs(double(q[0])), std::max(std::abs(double(q[1])), std::abs(double(q[2]))));
+    Reach reach{max_distance, 40.0 * kFloatUnitRoundoff * (qmax + scale_)};
+    reach.update(c);
+    struct Entry {
+        std::uint32_t node;
+        float d2;
+    };
+    Entry stack[64];  // one entry a level: the median split's depth is log₂ of the triangles
+    int top = 0;
+    if (box_distance2(nodes_[0], q) > reach.b2)
+        return finish_closest_point(scene_, c);
+    std::uint32_t at = 0;
+    for (;;) {
+        const Node& n = nodes_[at];
+        if (n.count > 0) {
+            visit_leaf(n, p, q, reach, c);
+        } else {
+            // The nearer child first; the farther one waits with its distance.
+            std::uint32_t near = at + 1, far = n.index;
+            float dn = box_distance2(nodes_[near], q), df = box_distance2(nodes_[far], q);
+            if (df < dn) {
+                std::swap(near, far);
+                std::swap(dn, df);
+            }
+            if (!(dn > reach.b2)) {
+                if (!(df > reach.b2)) {
+                    assert(top < 64);
+                    stack[top++] = {far, df};
+                }
+                at = near;
+                continue;
+            }
+        }
+        while (top > 0 && stack[top - 1].d2 > reach.b2)
+            --top;
+        if (top == 0)
+            break;
+        at = stack[--top].node;
+    }
+    return finish_closest_point(scene_, c);
+}
+
+std::size_t PointBvh::memory_bytes() const {
+    return nodes_.capacity() * sizeof(Node) + packs_.capacity() * sizeof(Pack) +
+           spheres_.capacity() * sizeof(std::uint32_t) + sizeof(*this);
+}
+
+}  // namespace raycastd::engine

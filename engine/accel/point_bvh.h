@@ -1,0 +1,136 @@
+#pragma once
+// PointBvh: closest points over a scene's triangles without Embree's point query, for speed.
+//
+// Why: rtcPointQuery calls back for every triangle of each leaf whose box meets the query sphere
+// (200–1,000 per point on an 82k-triangle icosphere: the distance function is flat near its
+// minimum, so a whole cap of leaves is within a box's size of the nearest distance), and each
+// callback decided its triangle exactly in double. Here a compact binary BVH of our own is
+// walked nearest child first (children ordered by the distance to their float boxes), and each
+// leaf's triangles first get a conservative lower bound of their distance in float, four at a
+// time; only a triangle whose bound does not exceed the best distance so far (plus the ties'
+// margin, PointCandidates::cull_distance) is decided exactly in double by the kernel of
+// geometry/closest_point.h. The answer is the one brute force gives (same winner, same bits),
+// whatever the order: PointCandidates decides, the tree only culls.
+//
+// The lower bound (one triangle T with unit normal n and in-plane outward edge normals m_e, all
+// rounded to float): T lies in the slab |n·x − o| ≤ r and in each half-space m_e·x ≤ o_e, so for
+// any x in T and w = p − x, |n·w| ≥ A = |n·p − o| − r and m_e·w ≥ B_e = m_e·p − o_e. Projecting
+// w on span(n, m_e), whose Gram matrix is [[1, c], [c, 1]] with c = n·m_e:
+//   |w|² ≥ (a² − 2c·ab + b²)/(1 − c²) ≥ (a² + b²)/(1 + |c|)   (a = n·w, b = m_e·w),
+// hence d(p, T)² ≥ (A₊² + max_e B_e₊²)/(1 + |c|), the distance to the plane and to the farthest
+// edge line combined by Pythagoras (exact in the face and edge regions: Ericson, RTCD §5.1.5).
+// The plane alone would not do: seen from outside a convex surface the planes of the triangles
+// around the nearest one come closer, not farther. Past an acute corner v (p beyond both of its
+// edges' lines) that in-plane term is too weak (half the distance to v at 60°); there the nearest
+// point of T is v itself (the corner's Voronoi region, RTCD §5.1.5: for an angle ≤ 90° the
+// region beyond both lines is the corner's), so the bound is |p − v| — tested only where both
+// B's exceed ε, which puts the true p beyond both true lines whatever the float rounding did.
+// Float enters in named steps (point_bvh.cpp):
+// the planes are fitted in double and their offsets moved out over every vertex (so T is inside
+// them exactly), |c| and | |n| − 1 | are checked ≤ 2⁻²⁰ at build, and the query's float
+// evaluation and the rounding of p are covered by an absolute margin ε = 40·u_f·(|q|∞ + S)
+// (S: twice the largest coordinate relative to the centre), the remaining relative roundings by
+// the factor 1 + 2⁻¹⁶ on the squared radius. A triangle whose planes fail those checks (a
+// near-degenerate sliver) gets a bound of 0: it is always decided exactly.
+//
+// Memory: 64 B a triangle for the four planes, 36 B for the float corners, 8 B for its object and
+// primitive, and the nodes (32 B, one leaf per 4–8 triangles, two nodes a leaf): ~117 B a triangle,
+// built on a scene's first point query (QueryEngine::closest_point). Spheres are not in the tree: a
+// scene with at most kMaxSpheres of them has each one decided first (which also starts the search
+// with a small radius); with more, QueryEngine stays on Embree's point query.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "engine/geometry/closest_point.h"
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine {
+
+/// The four planes of one triangle as stored (relative to the scene's centre); all zero (every
+/// bound 0) for a triangle that fails the checks of the file comment.
+struct TrianglePlanes {
+    float plane[4] = {};     ///< n (unit, float) and o: T lies within `slab` of n·x = o
+    float edges[3][4] = {};  ///< m_e and o_e: T lies in m_e·x ≤ o_e (in-plane outward normals)
+    /// Corner i (between edges i−1 and i) rounded to float where it is acute and the triangle
+    /// well-shaped (the corner rule of the file comment); NaN where it is not.
+    float corner[3][3] = {};
+};
+
+/// Four triangles' planes, lane by lane (component-major, so that the bound vectorises).
+struct alignas(16) PlanePack {
+    float plane[4][4] = {};      ///< [n.x, n.y, n.z, o][lane]
+    float edges[3][4][4] = {};   ///< [edge][m.x, m.y, m.z, o][lane]
+    float corner[3][3][4] = {};  ///< [corner][x, y, z][lane]
+};
+
+/// Lane `lane` of `pack` set to t.
+void set_lane(PlanePack& pack, int lane, const TrianglePlanes& t);
+
+/// The squared lower bounds of the four lanes' triangles' distances from q (relative to the
+/// centre), each up to the factor 1 + 2⁻¹⁶ when eps is PointBvh's margin; 0 for zero planes.
+void lower_bounds2(const PlanePack& pack, const float q[3], float eps, float out[4]);
+
+/// The planes of the triangle (a, b, c), given relative to the centre; `slab` is the largest
+/// r = max |n·v − o| a triangle may have (beyond it, or when the checks of the file comment fail,
+/// the planes are invalid and all zero).
+TrianglePlanes triangle_planes(const Vec3d& a, const Vec3d& b, const Vec3d& c, double slab);
+
+class PointBvh {
+  public:
+    /// At most this many spheres are decided one by one before the tree is walked.
+    static constexpr std::size_t kMaxSpheres = 16;
+
+    /// Whether the tree can answer for `scene`: some triangle, at most kMaxSpheres spheres, and
+    /// coordinates (relative to the centre of the bounds) well within float's range.
+    static bool suits(const Scene& scene);
+
+    /// The tree over every non-degenerate triangle of `scene`, which must outlive it.
+    explicit PointBvh(const Scene& scene);
+
+    /// The closest surface point to p within max_distance (inclusive), the same answer as
+    /// linear_closest_point (accel/point_query.h); nullopt when nothing is that close or p is not
+    /// finite.
+    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
+
+    /// Bytes held by the tree.
+    std::size_t memory_bytes() const;
+
+  private:
+    struct Node {
+        float lo[3], hi[3];       ///< the box of the node's triangles, rounded outward
+        std::uint32_t index = 0;  ///< leaf: first pack; inner: the right child (left is next)
+        std::uint32_t count = 0;  ///< leaf: triangles (≥ 1); 0 for an inner node
+    };
+    /// Four triangles of a leaf (a leaf's last pack may have fewer).
+    struct Pack {
+        PlanePack planes;
+        std::uint32_t object[4], prim[4];  ///< padding lanes: kInvalidId
+    };
+    /// The squared search radii of one query, kept in step with its candidates.
+    struct Reach;
+    /// A triangle while the tree is built.
+    struct Item {
+        Vec3d centroid;
+        Bounds3 box;  ///< relative to the centre
+        std::uint32_t object, prim;
+    };
+    std::uint32_t build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items);
+    void fill_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
+                   const std::vector<Item>& items);
+    /// The triangle of (object, prim) relative to the centre.
+    Triangle relative(std::uint32_t object, std::uint32_t prim) const;
+    /// The lower bounds of a leaf's triangles, and the exact test of those still within reach.
+    void visit_leaf(const Node& node, const Vec3d& p, const float q[3], Reach& reach,
+                    PointCandidates& c) const;
+
+    const Scene& scene_;
+    Vec3d center_;
+    double scale_ = 0;  ///< S of the file comment
+    std::vector<Node> nodes_;
+    std::vector<Pack> packs_;
+    std::vector<std::uint32_t> spheres_;
+};
+
+}  // namespace raycastd::engine
