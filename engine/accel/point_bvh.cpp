@@ -23,6 +23,9 @@ constexpr double kRadiusSlack = 1.0 + 1.0 / (1 << 16);
 /// could not cull; brute force in double answers instead.
 constexpr double kMaxFloatQuery = 1e18;
 constexpr float kInfF = std::numeric_limits<float>::infinity();
+/// Nodes of at most this many triangles get oriented boxes (fitted to their vertices: each
+/// triangle is read once a level, log₂(64/4) + 1 times in all).
+constexpr std::uint32_t kOrientedTriangles = 64;
 
 /// max(|v.x|, |v.y|, |v.z|) (std::max: fmax is a call out of line).
 double max_abs(const Vec3d& v) {
@@ -200,7 +203,7 @@ PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().c
             if (is_degenerate(o.mesh->triangle(k)))
                 continue;  // never offered (closest_point_on_triangle gives no point)
             const Triangle t = relative(i, k);
-            Item it{(t.a + t.b + t.c) / 3.0, {}, i, k};
+            Item it{(t.a + t.b + t.c) / 3.0, {}, cross(t.b - t.a, t.c - t.a), i, k};
             for (const Vec3d& v : {t.a, t.b, t.c}) {
                 it.box.extend(v);
                 largest = std::max(largest, max_abs(v));
@@ -221,24 +224,95 @@ Triangle PointBvh::relative(std::uint32_t object, std::uint32_t prim) const {
     return {t.a - center_, t.b - center_, t.c - center_};
 }
 
+void PointBvh::fit(Node& node, const std::vector<Vec3d>& points, bool oriented,
+                   const Vec3d& normal_sum, double area_sum) {
+    // The frame: the triangles' mean normal where they are nearly flat (|Σ a_i n_i| ≥ ½ Σ a_i:
+    // a patch of a surface, whose box is then thin across it), else the world axes. The rows are
+    // rounded to float and kept only if still orthonormal within kUnitTolerance, so that
+    // |axes·w| ≤ (1 + 2⁻¹⁹)|w| (Gershgorin on axes·axesᵀ): the box distance in that frame then
+    // bounds the true one from below up to kRadiusSlack.
+    Vec3d r[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const double len = length(normal_sum);
+    if (oriented && len > 0 && len >= 0.5 * area_sum) {
+        const Vec3d z = normal_sum / len;
+        const Vec3d x = normalize(cross(std::abs(z.x) < 0.6 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0}, z));
+        const Vec3d f[3] = {x, cross(z, x), z};
+        Vec3d rounded[3];
+        bool ok = true;
+        for (int k = 0; k < 3; ++k)
+            rounded[k] = Vec3d(Vec3f(f[k]));
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j)
+                ok = ok && std::abs(dot(rounded[i], rounded[j]) - (i == j)) <= kUnitTolerance;
+        }
+        if (ok)
+            std::copy(rounded, rounded + 3, r);
+    }
+    // The centre: the middle of the points' extents in that frame, back in scene coordinates
+    // (any centre will do: the half-extents are measured from the float one).
+    Vec3d c;
+    for (int k = 0; k < 3; ++k) {
+        double lo = kInfinity, hi = -kInfinity;
+        for (const Vec3d& v : points) {
+            lo = std::min(lo, dot(r[k], v));
+            hi = std::max(hi, dot(r[k], v));
+        }
+        c += r[k] * (0.5 * (lo + hi));
+    }
+    for (int k = 0; k < 3; ++k)
+        node.centre[k] = static_cast<float>(c[static_cast<std::size_t>(k)]);
+    const Vec3d cf{node.centre[0], node.centre[1], node.centre[2]};
+    for (int k = 0; k < 3; ++k) {
+        // The double dot product's rounding (γ₄ with that of v − cf), and the points' own: each
+        // was computed as vertex − scene centre, within u·|v| a component (γ₂ for room).
+        double h = 0;
+        for (const Vec3d& v : points) {
+            const Vec3d d = v - cf;
+            h = std::max(h, std::abs(dot(r[k], d)) +
+                                abs_sum(r[k]) * (gamma(4) * max_abs(d) + gamma(2) * max_abs(v)));
+        }
+        node.half[k] = up_or_inf(h);
+        for (std::size_t j = 0; j < 3; ++j)
+            node.axes[k][j] = static_cast<float>(r[k][j]);
+    }
+}
+
 std::uint32_t PointBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items) {
     const auto index = static_cast<std::uint32_t>(nodes_.size());
     nodes_.emplace_back();
-    Bounds3 box, centroids;
+    Bounds3 centroids;
+    Vec3d normal_sum;
+    double area_sum = 0;
     for (std::uint32_t i = begin; i < end; ++i) {
-        box.extend(items[i].box);
         centroids.extend(items[i].centroid);
-    }
-    // Outward to float, after widening by the rounding of v − centre (u·|v|, twice for room).
-    for (std::size_t k = 0; k < 3; ++k) {
-        nodes_[index].lo[k] = float_down(box.lo[k] - 2 * kDoubleUnitRoundoff * std::abs(box.lo[k]));
-        nodes_[index].hi[k] = float_up(box.hi[k] + 2 * kDoubleUnitRoundoff * std::abs(box.hi[k]));
+        normal_sum += items[i].normal;
+        area_sum += length(items[i].normal);
     }
     const std::uint32_t n = end - begin;
-    if (n <= 8) {
+    if (n <= 8)
         fill_leaf(index, begin, end, items);
-        return index;
+    std::vector<Vec3d> points;
+    if (n <= kOrientedTriangles) {
+        // Small nodes, patches of a surface: an oriented box around their vertices, thin across
+        // the patch (an axis-aligned box of a tilted patch is as thick as the patch is wide, and
+        // from outside a convex surface that let a whole cap of leaves within reach).
+        for (std::uint32_t i = begin; i < end; ++i) {
+            const Triangle t = relative(items[i].object, items[i].prim);
+            points.insert(points.end(), {t.a, t.b, t.c});
+        }
+    } else {
+        // Larger ones: the world axes, around the triangles' boxes (refitting oriented boxes from
+        // the children's corners inflated them level by level: measured slower).
+        Bounds3 box;
+        for (std::uint32_t i = begin; i < end; ++i)
+            box.extend(items[i].box);
+        for (int m = 0; m < 8; ++m)
+            points.push_back({m & 1 ? box.hi.x : box.lo.x, m & 2 ? box.hi.y : box.lo.y,
+                              m & 4 ? box.hi.z : box.lo.z});
     }
+    fit(nodes_[index], points, n <= kOrientedTriangles, normal_sum, area_sum);
+    if (n <= 8)
+        return index;
     // The median on the centroids' longest axis, moved to a multiple of 4 so that packs stay
     // full (a range of 4k triangles splits into two such ranges).
     const std::size_t axis = max_abs_dimension(centroids.diagonal());
@@ -292,13 +366,18 @@ struct PointBvh::Reach {
 
 namespace {
 
-/// The squared distance from q to the node's box (0 inside), in float: each term rounds
-/// relatively (γ₅ in all), inside kRadiusSlack.
+/// The squared distance from q to the node's oriented box (0 inside), in float. Against the true
+/// point: |axes·(q − centre)| is off by at most ~8 u_f (|q|∞ + S) a component (the subtraction,
+/// the dot product's γ₃, p's rounding), inside ε (√3 of it: 14 u_f), and the rest rounds
+/// relatively, inside kRadiusSlack.
 template <class Node>
 float box_distance2(const Node& n, const float q[3]) {
+    const float d[3] = {q[0] - n.centre[0], q[1] - n.centre[1], q[2] - n.centre[2]};
     float d2 = 0.0f;
     for (int k = 0; k < 3; ++k) {
-        const float g = std::max(std::max(n.lo[k] - q[k], q[k] - n.hi[k]), 0.0f);
+        const float y = n.axes[k][0] * d[0] + n.axes[k][1] * d[1] + n.axes[k][2] * d[2];
+        // std::max keeps a NaN (its first argument): never culled.
+        const float g = std::max(std::abs(y) - n.half[k], 0.0f);
         d2 += g * g;
     }
     return d2;

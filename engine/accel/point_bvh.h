@@ -98,8 +98,11 @@ class PointBvh {
     std::size_t memory_bytes() const;
 
   private:
+    /// An oriented box around the node's triangles: {x : |axes_k·(x − centre)| ≤ half_k}.
     struct Node {
-        float lo[3], hi[3];       ///< the box of the node's triangles, rounded outward
+        float axes[3][3];  ///< rows, unit and orthogonal within 2⁻²⁰ (the world axes: a plain box)
+        float centre[3];
+        float half[3];            ///< half-extents along the axes, rounded up
         std::uint32_t index = 0;  ///< leaf: first pack; inner: the right child (left is next)
         std::uint32_t count = 0;  ///< leaf: triangles (≥ 1); 0 for an inner node
     };
@@ -113,10 +116,15 @@ class PointBvh {
     /// A triangle while the tree is built.
     struct Item {
         Vec3d centroid;
-        Bounds3 box;  ///< relative to the centre
+        Bounds3 box;   ///< relative to the centre
+        Vec3d normal;  ///< (b − a) × (c − a)
         std::uint32_t object, prim;
     };
     std::uint32_t build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items);
+    /// The node's box around `points` (relative to the centre, as computed), oriented along
+    /// normal_sum where `oriented` and the points are nearly flat.
+    static void fit(Node& node, const std::vector<Vec3d>& points, bool oriented,
+                    const Vec3d& normal_sum, double area_sum);
     void fill_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
                    const std::vector<Item>& items);
     /// The triangle of (object, prim) relative to the centre.
