@@ -263,6 +263,16 @@ std::shared_ptr<const re::QueryEngine> prepare(re::Scene s) {
     return e.ok() ? *e : nullptr;
 }
 
+/// Builds the engine's point BVH (its first closest-point query) and prints its time and bytes.
+void point_tree(const re::QueryEngine& e) {
+    const std::size_t before = e.memory_bytes();
+    const Timed t = timed([&] { (void)e.closest_point({0, 0, 0}, re::kInfinity); });
+    const double bytes = static_cast<double>(e.memory_bytes() - before);
+    std::printf(
+        "  point BVH built on first use in %.3f s (CPU %.3f s): %.1f MB, %.0f B a triangle\n",
+        t.wall, t.cpu, bytes / 1e6, bytes / static_cast<double>(e.scene().triangle_count()));
+}
+
 /// Points against A; returns the largest |signed distance − (|p| − 1)| (the icosphere is within
 /// 1 − cos of its edge's half angle of the unit sphere), for the smoke check.
 double points_on_a(const Sizes& s, const Peer& peer) {
@@ -271,6 +281,7 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     const auto pts = random_points(e->scene().bounds(), s.points);
     std::printf("points against A (icosphere, %zu triangles, sign %s):\n", a.triangles.size(),
                 re::to_string(e->topology()[0].sign));
+    point_tree(*e);
     run(*e, pts, re::PointQuery::closest, "(first: no warm-up)");
     const Run closest = run(*e, pts, re::PointQuery::closest, "");
     run(*e, pts, re::PointQuery::distance, "");
@@ -290,6 +301,7 @@ void winding_on_b(const Sizes& s) {
     const auto pts = random_points(e->scene().bounds(), s.points);
     std::printf("points against B minus one triangle (%zu triangles, sign %s):\n",
                 b.triangles.size(), re::to_string(e->topology()[0].sign));
+    point_tree(*e);
     const Timed tree = timed([&] { (void)e->winding_number(0, {0, 0, 0}); });
     std::printf("  winding-number tree built on first use in %.3f s\n", tree.wall);
     run(*e, pts, re::PointQuery::signed_distance, "(fast winding numbers)");

@@ -217,6 +217,8 @@ PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().c
     nodes_.reserve(items.size() / 2 + 1);
     packs_.reserve(items.size() / 4 + items.size() / 8 + 1);
     build(0, static_cast<std::uint32_t>(items.size()), items);
+    nodes_.shrink_to_fit();  // the reservations above are upper bounds
+    packs_.shrink_to_fit();
 }
 
 Triangle PointBvh::relative(std::uint32_t object, std::uint32_t prim) const {
