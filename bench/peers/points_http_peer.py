@@ -19,7 +19,9 @@ them), so the server sees exactly the in-process points. Prints one JSON object:
   {"workload": "A", "n": ..., "closest": {"seconds": ..., "server_cpu_seconds": ...,
    "mpoints_s": ..., "max_abs_diff": ...}, "signed": {...}}
 
-max_abs_diff compares the float32 distances of the answer with the in-process ones (float32 too).
+max_abs_diff compares the float32 distances of the answer with the in-process ones (float32 too):
+the PLY carries float32 vertices (bench_files' write_ply), so the server answers for the mesh
+rounded to float and differs from in-process by that rounding (~1e-7), not by the query.
 Must run under Debian's /usr/bin/python3 (numpy is a Debian package).
 """
 
