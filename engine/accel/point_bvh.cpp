@@ -6,6 +6,8 @@
 #include <cstring>
 #include <limits>
 
+#include <tbb/parallel_invoke.h>
+
 #include "engine/accel/point_query.h"
 #include "engine/math/float_bounds.h"
 
@@ -23,6 +25,26 @@ constexpr double kRadiusSlack = 1.0 + 1.0 / (1 << 16);
 /// could not cull; brute force in double answers instead.
 constexpr double kMaxFloatQuery = 1e18;
 constexpr float kInfF = std::numeric_limits<float>::infinity();
+/// Subtrees of at least this many triangles are built in parallel.
+constexpr std::uint32_t kParallelTriangles = 16384;
+
+/// Where a range of n > 8 triangles splits: the median, moved to a multiple of 4 so that packs
+/// stay full (a range of 4k triangles splits into two such ranges).
+std::uint32_t split_size(std::uint32_t n) {
+    return std::clamp((n / 2 + 2) / 4 * 4, 4u, n - 4);
+}
+
+/// The nodes and packs of the subtree over n triangles: they follow from n alone.
+struct Shape {
+    std::uint32_t nodes, packs;
+};
+Shape shape(std::uint32_t n) {
+    if (n <= 8)
+        return {1, (n + 3) / 4};
+    const Shape l = shape(split_size(n)), r = shape(n - split_size(n));
+    return {1 + l.nodes + r.nodes, l.packs + r.packs};
+}
+
 /// Nodes of at most this many triangles get oriented boxes (fitted to their vertices: each
 /// triangle is read once a level, log₂(64/4) + 1 times in all).
 constexpr std::uint32_t kOrientedTriangles = 64;
@@ -214,11 +236,11 @@ PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().c
     scale_ = 2.0 * largest;
     if (items.empty())
         return;
-    nodes_.reserve(items.size() / 2 + 1);
-    packs_.reserve(items.size() / 4 + items.size() / 8 + 1);
-    build(0, static_cast<std::uint32_t>(items.size()), items);
-    nodes_.shrink_to_fit();  // the reservations above are upper bounds
-    packs_.shrink_to_fit();
+    const auto n = static_cast<std::uint32_t>(items.size());
+    const Shape whole = shape(n);
+    nodes_.resize(whole.nodes);
+    packs_.resize(whole.packs);
+    build(0, n, items, 0, 0);
 }
 
 Triangle PointBvh::relative(std::uint32_t object, std::uint32_t prim) const {
@@ -279,9 +301,8 @@ void PointBvh::fit(Node& node, const std::vector<Vec3d>& points, bool oriented,
     }
 }
 
-std::uint32_t PointBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items) {
-    const auto index = static_cast<std::uint32_t>(nodes_.size());
-    nodes_.emplace_back();
+void PointBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items,
+                     std::uint32_t index, std::uint32_t pack) {
     Bounds3 centroids;
     Vec3d normal_sum;
     double area_sum = 0;
@@ -292,7 +313,7 @@ std::uint32_t PointBvh::build(std::uint32_t begin, std::uint32_t end, std::vecto
     }
     const std::uint32_t n = end - begin;
     if (n <= 8)
-        fill_leaf(index, begin, end, items);
+        fill_leaf(index, pack, begin, end, items);
     std::vector<Vec3d> points;
     if (n <= kOrientedTriangles) {
         // Small nodes, patches of a surface: an oriented box around their vertices, thin across
@@ -314,24 +335,31 @@ std::uint32_t PointBvh::build(std::uint32_t begin, std::uint32_t end, std::vecto
     }
     fit(nodes_[index], points, n <= kOrientedTriangles, normal_sum, area_sum);
     if (n <= 8)
-        return index;
-    // The median on the centroids' longest axis, moved to a multiple of 4 so that packs stay
-    // full (a range of 4k triangles splits into two such ranges).
+        return;
+    // The median on the centroids' longest axis, then the two halves (in parallel while large:
+    // each writes its own ranges of nodes_ and packs_, known from the sizes alone).
     const std::size_t axis = max_abs_dimension(centroids.diagonal());
-    const std::uint32_t half = std::clamp((n / 2 + 2) / 4 * 4, 4u, n - 4);
+    const std::uint32_t half = split_size(n);
     const std::uint32_t mid = begin + half;
     std::nth_element(
         items.begin() + begin, items.begin() + mid, items.begin() + end,
         [axis](const Item& x, const Item& y) { return x.centroid[axis] < y.centroid[axis]; });
-    build(begin, mid, items);
-    const std::uint32_t right = build(mid, end, items);
+    const Shape left = shape(half);
+    const std::uint32_t right = index + 1 + left.nodes;
     nodes_[index].index = right;
-    return index;
+    auto build_left = [&] { build(begin, mid, items, index + 1, pack); };
+    auto build_right = [&] { build(mid, end, items, right, pack + left.packs); };
+    if (n >= kParallelTriangles) {
+        tbb::parallel_invoke(build_left, build_right);
+    } else {
+        build_left();
+        build_right();
+    }
 }
 
-void PointBvh::fill_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
-                         const std::vector<Item>& items) {
-    nodes_[node].index = static_cast<std::uint32_t>(packs_.size());
+void PointBvh::fill_leaf(std::uint32_t node, std::uint32_t pack, std::uint32_t begin,
+                         std::uint32_t end, const std::vector<Item>& items) {
+    nodes_[node].index = pack;
     nodes_[node].count = end - begin;
     // A vertex lies within 8 u_f·S of the float plane through a (the normal's and the offset's
     // float rounding, with room): the slab folded into the query's margin.
@@ -348,7 +376,7 @@ void PointBvh::fill_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t 
             p.object[l] = it.object;
             p.prim[l] = it.prim;
         }
-        packs_.push_back(p);
+        packs_[pack++] = p;
     }
 }
 

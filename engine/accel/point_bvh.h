@@ -120,12 +120,15 @@ class PointBvh {
         Vec3d normal;  ///< (b − a) × (c − a)
         std::uint32_t object, prim;
     };
-    std::uint32_t build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items);
+    /// The subtree over items[begin, end) at nodes_[index] (pre-order), its leaves' packs from
+    /// packs_[pack] on.
+    void build(std::uint32_t begin, std::uint32_t end, std::vector<Item>& items,
+               std::uint32_t index, std::uint32_t pack);
     /// The node's box around `points` (relative to the centre, as computed), oriented along
     /// normal_sum where `oriented` and the points are nearly flat.
     static void fit(Node& node, const std::vector<Vec3d>& points, bool oriented,
                     const Vec3d& normal_sum, double area_sum);
-    void fill_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
+    void fill_leaf(std::uint32_t node, std::uint32_t pack, std::uint32_t begin, std::uint32_t end,
                    const std::vector<Item>& items);
     /// The triangle of (object, prim) relative to the centre.
     Triangle relative(std::uint32_t object, std::uint32_t prim) const;

@@ -135,6 +135,20 @@ TEST(PointBvh, AgreesWithBruteForceOnAnIcosphereRegionByRegion) {
     }
 }
 
+TEST(PointBvh, ATreeBuiltInParallelAgreesWithBruteForce) {
+    // 20,480 triangles: subtrees of 16,384 and more are built on two threads.
+    const Scene s = testing::scene_of({testing::icosphere_object(5, {0.1, 0.2, -0.3}, 1.5)});
+    const PointBvh tree(s);
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> pos(-2.5, 2.5);
+    for (int i = 0; i < 400; ++i) {
+        const Vec3d p{pos(rng), pos(rng), pos(rng)};
+        SCOPED_TRACE(i);
+        expect_same_point_hit(tree.closest_point(p, kInfinity),
+                              linear_closest_point(s, p, kInfinity));
+    }
+}
+
 TEST(PointBvh, TiesGoToTheLowerObjectThenTheLowerPrimitive) {
     // Mirrored triangles about z = 0 in objects 1 and 2 with a point on the mirror; the same
     // triangle twice in one mesh (primitives 12 and 13 of the cube's copy); far cubes so the
