@@ -133,9 +133,9 @@ def section(report: dict, o3d: dict, args) -> list:
         f"Targets: distance within 4 ulps: worst **{fmt(worst)} ulps** (points ≥ 0.1·scale off "
         f"the surface), **{fmt(worst_u)} u·scale** over all points (bound 16); sign errors "
         f"**{errors}** (target 0, closed meshes and hole cases), Open3D {o3d_errors}. "
-        "ns/point is the signed-distance batch on this 2-core machine (a far point is decided "
-        "by brute force in effect: from 10² scene sizes away float cannot tell the triangles "
-        "apart, see docs/numerics.md).",
+        "ns/point is the signed-distance batch on this 2-core machine (points beyond 64 S of "
+        "the centre are walked in double with balls around the nodes, which cull less than the "
+        "float walk's boxes: docs/numerics.md).",
         "",
         "Reproduce: `scripts/setup.sh --bench && bench/accuracy_points.py` (about a minute).",
         END,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include <tbb/parallel_invoke.h>
 
@@ -21,9 +22,13 @@ constexpr double kUnitTolerance = 1.0 / (1 << 20);
 /// The relative slack of the squared radii: the factor above, and the relative roundings of
 /// A₊² + B₊² in float (γ₃ of u_f): 2⁻¹⁸ + 3·2⁻²⁴ < 2⁻¹⁶.
 constexpr double kRadiusSlack = 1.0 + 1.0 / (1 << 16);
-/// Query points farther than this from the centre: A² would overflow float, so the float bounds
-/// could not cull; brute force in double answers instead.
-constexpr double kMaxFloatQuery = 1e18;
+/// Query points farther than this from the centre are answered by brute force: the double
+/// squares of the far walk would overflow (near 1e154).
+constexpr double kMaxQuery = 1e100;
+/// Query points farther than this many S from the centre are walked in double: float's ε grows
+/// with |q| and would stop culling (docs/accuracy.md's far suite: 0.29 ms a point in float
+/// against Embree's 0.045).
+constexpr double kFarQuery = 64.0;
 constexpr float kInfF = std::numeric_limits<float>::infinity();
 /// Subtrees of at least this many triangles are built in parallel.
 constexpr std::uint32_t kParallelTriangles = 16384;
@@ -205,11 +210,74 @@ void lower_bounds2(const PlanePack& pack, const float q[3], float eps, float out
     std::memcpy(out, &r, sizeof r);
 }
 
+void lower_bounds2(const PlanePack& pack, const double q[3], const BoundMargins& m, double out[4]) {
+    // The float version's steps lane by lane in double (the stored floats are exact in double),
+    // with the Gram bound kept whole: far away A ≈ |q| and the factor 1/(1 + |c|) of the float
+    // version (and |n| ≠ 1) would cost |c|·|q| ~ u_f |q| of the distance, more than the
+    // triangles' differences. Here the norms are exact to u and, for a ≥ A, b ≥ B ≥ 0,
+    //   a² − 2c·ab + b² ≥ A² + B² − 2c·AB − c²(A² + B²)
+    // (its least value on the boundary of that quadrant), over 1 − c² ≤ 1.
+    for (int l = 0; l < 4; ++l) {
+        auto plane = [&](const float(&r)[4][4]) {
+            return double(r[0][l]) * q[0] + double(r[1][l]) * q[1] + double(r[2][l]) * q[2] -
+                   double(r[3][l]);
+        };
+        auto normal = [&](const float(&r)[4][4]) { return Vec3d{r[0][l], r[1][l], r[2][l]}; };
+        const Vec3d n = normal(pack.plane);
+        const double nn = length(n);
+        // Zero planes (a sliver's): nn = 0 and a = NaN, which the caller tests.
+        const double a = std::max(std::abs(plane(pack.plane)) - m.plane, 0.0) / nn;
+        double best = a * a, be[3];
+        for (int e = 0; e < 3; ++e) {
+            be[e] = plane(pack.edges[e]);
+            const Vec3d me = normal(pack.edges[e]);
+            const double mm = length(me);
+            const double b = std::max(be[e] - m.plane, 0.0) / mm;
+            const double c = std::abs(dot(n, me)) / (nn * mm);
+            best = std::max(best, a * a + b * b - 2.0 * c * a * b - c * c * (a * a + b * b));
+        }
+        double v2 = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const double dx = q[0] - pack.corner[i][0][l], dy = q[1] - pack.corner[i][1][l],
+                         dz = q[2] - pack.corner[i][2][l];
+            const double d2 = dx * dx + dy * dy + dz * dz;
+            if (be[(i + 2) % 3] > m.region && be[i] > m.region && d2 >= 0.0)
+                v2 = d2;
+        }
+        const double v = std::max(std::sqrt(v2) - m.corner, 0.0);
+        out[l] = std::max(v * v, best);
+    }
+}
+
+BoundMargins float_margins(double qmax, double scale) {
+    // ε of the file comment: the float evaluation of a plane (γ₄ of u_f times Σ|n_i q_i| + |o|,
+    // |n|₁ ≤ √3), the rounding of p − centre to q (√3 u_f |q|∞), the subtractions of the slab
+    // and of ε themselves (u_f of their operands), and the slab (8 u_f S): 40 u_f covers the sum
+    // (≈ 13 u_f |q|∞ + 14 u_f S) with room. It also covers what the corner rule needs (below).
+    const double eps = 40.0 * kFloatUnitRoundoff * (qmax + scale);
+    return {eps, eps, eps};
+}
+
+BoundMargins double_margins(double qmax, double scale) {
+    BoundMargins m;
+    // The slab (8 u_f S), and the double evaluation with p − centre's rounding (γ₄ of u of
+    // |n|₁|q|∞ + |o| ≤ 1.8 |q|∞ + S, and u √3 |q|∞): 32 u (|q|∞ + S) with room.
+    m.plane = 8.0 * kFloatUnitRoundoff * scale + 32.0 * kDoubleUnitRoundoff * (qmax + scale);
+    // That p is beyond the true edge lines: the float edge normal is within u_f of the true one
+    // (1.5 u_f |q|∞ through p) and its offset within 2 u_f S of the true edge's.
+    m.region = m.plane + 4.0 * kFloatUnitRoundoff * (qmax + scale);
+    // The float corner is within u_f S of the vertex; the double |q − v| is accurate to a few u.
+    m.corner = kFloatUnitRoundoff * scale + 8.0 * kDoubleUnitRoundoff * (qmax + scale);
+    return m;
+}
+
 bool PointBvh::suits(const Scene& scene) {
     if (scene.triangle_count() == 0 || scene.sphere_count() > kMaxSpheres)
         return false;
     const Bounds3 b = scene.bounds();
-    return max_abs(b.diagonal()) <= 1e30;  // relative to the centre, float holds every coordinate
+    // Relative to the centre the float walk (points within 64 S) then squares distances below
+    // float's range (3.4e38).
+    return max_abs(b.diagonal()) <= 1e16;
 }
 
 PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().center()) {
@@ -381,16 +449,27 @@ void PointBvh::fill_leaf(std::uint32_t node, std::uint32_t pack, std::uint32_t b
 }
 
 /// The squared radii of one query: `t2` for the triangles' bounds (the candidates' reach), `b2`
-/// for the boxes (the reach plus the rounding of the query point, ε).
+/// for the boxes (the reach plus the margin of the planes' and boxes' evaluation).
+template <class T>
 struct PointBvh::Reach {
     double max_distance;
-    double eps;
-    float t2 = kInfF, b2 = kInfF;
+    BoundMargins m;
+    T t2 = std::numeric_limits<T>::infinity(), b2 = std::numeric_limits<T>::infinity();
 
     void update(const PointCandidates& c) {
         const double r = std::min(max_distance, c.cull_distance());
-        t2 = radius2(r);
-        b2 = radius2(r + eps);
+        t2 = squared(r);
+        b2 = squared(r + m.plane);
+    }
+    /// r² with kRadiusSlack, rounded up in float (+inf for r = +inf).
+    static T squared(double r) {
+        if constexpr (std::is_same_v<T, float>) {
+            return radius2(r);
+        } else {
+            // The far walk's roundings are all relative and in double (a few u): 2⁻⁴⁰ covers
+            // them; kRadiusSlack's 2⁻¹⁶ would be more than the triangles' differences far away.
+            return r < kInfinity ? r * r * (1.0 + std::ldexp(1.0, -40)) : kInfinity;
+        }
     }
 };
 
@@ -413,15 +492,37 @@ float box_distance2(const Node& n, const float q[3]) {
     return d2;
 }
 
+/// The far walk's node bound: the squared distance from q (double) to the ball around the
+/// node's box, |q − centre| − |h|₂ (1 + 2⁻¹⁸): the box's rows are orthonormal only within 2⁻²⁰,
+/// which in the box's frame would cost 2⁻²⁰ |q| (far away, more than the nodes' differences),
+/// while the ball around it is measured directly (its radius covers A⁻¹ = Aᵀ(AAᵀ)⁻¹).
+template <class Node>
+double box_distance2(const Node& n, const double q[3]) {
+    const double dx = q[0] - n.centre[0], dy = q[1] - n.centre[1], dz = q[2] - n.centre[2];
+    const double h0 = n.half[0], h1 = n.half[1], h2 = n.half[2];
+    const double r = std::sqrt(h0 * h0 + h1 * h1 + h2 * h2) * (1.0 + std::ldexp(1.0, -18));
+    // std::max keeps a NaN (its first argument): never culled.
+    const double g = std::max(std::sqrt(dx * dx + dy * dy + dz * dz) - r, 0.0);
+    return g * g;
+}
+
+/// The leaf bounds at float or double.
+void bounds(const PlanePack& pack, const float q[3], const BoundMargins& m, float out[4]) {
+    lower_bounds2(pack, q, up_or_inf(m.plane), out);
+}
+void bounds(const PlanePack& pack, const double q[3], const BoundMargins& m, double out[4]) {
+    lower_bounds2(pack, q, m, out);
+}
+
 }  // namespace
 
-void PointBvh::visit_leaf(const Node& node, const Vec3d& p, const float q[3], Reach& reach,
+template <class T>
+void PointBvh::visit_leaf(const Node& node, const Vec3d& p, const T q[3], Reach<T>& reach,
                           PointCandidates& c) const {
-    const float eps = up_or_inf(reach.eps);
     // The bounds of the leaf's triangles (at most 8), then the exact tests in increasing order of
     // the bound: the first one found shrinks the reach for the others, which the bounds then cull.
     struct Lane {
-        float lb2;
+        T lb2;
         std::uint32_t object, prim;
     };
     Lane lanes[8];
@@ -429,12 +530,12 @@ void PointBvh::visit_leaf(const Node& node, const Vec3d& p, const float q[3], Re
     const std::uint32_t packs = (node.count + 3) / 4;
     for (std::uint32_t k = 0; k < packs; ++k) {
         const Pack& pack = packs_[node.index + k];
-        float lb2[4];
-        lower_bounds2(pack.planes, q, eps, lb2);
+        T lb2[4];
+        bounds(pack.planes, q, reach.m, lb2);
         for (int l = 0; l < 4; ++l) {
             // Written as "not beyond" so that a NaN bound is tested, never culled.
             if (pack.object[l] != kInvalidId && !(lb2[l] > reach.t2))
-                lanes[n++] = {std::isnan(lb2[l]) ? 0.0f : lb2[l], pack.object[l], pack.prim[l]};
+                lanes[n++] = {std::isnan(lb2[l]) ? T(0) : lb2[l], pack.object[l], pack.prim[l]};
         }
     }
     for (int i = 1; i < n; ++i) {  // insertion sort: at most 8
@@ -460,28 +561,37 @@ std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_dista
     for (std::uint32_t s : spheres_)
         offer_primitive(scene_, s, 0, p, max_distance, c);
     const Vec3d pc = p - center_;
-    if (!(max_abs(pc) <= kMaxFloatQuery))
+    if (!(max_abs(pc) <= kMaxQuery))
         return linear_closest_point(scene_, p, max_distance);
     if (nodes_.empty())
         return finish_closest_point(scene_, c);
-    const float q[3] = {static_cast<float>(pc.x), static_cast<float>(pc.y),
-                        static_cast<float>(pc.z)};
-    // ε of the file comment: the float evaluation of a plane (γ₄ of u_f times Σ|n_i q_i| + |o|,
-    // |n|₁ ≤ √3), the rounding of p − centre to q (√3 u_f |q|∞), the subtractions of the slab
-    // and of ε themselves (u_f of their operands), and the slab (8 u_f S): 40 u_f covers the sum
-    // (≈ 13 u_f |q|∞ + 14 u_f S) with room.
-    const double qmax =
-        std::max(std::abs(double(q[0])), std::max(std::abs(double(q[1])), std::abs(double(q[2]))));
-    Reach reach{max_distance, 40.0 * kFloatUnitRoundoff * (qmax + scale_)};
+    const double qmax = max_abs(pc);
+    if (qmax > kFarQuery * scale_) {
+        const double q[3] = {pc.x, pc.y, pc.z};
+        Reach<double> reach{max_distance, double_margins(qmax, scale_)};
+        walk(p, q, reach, c);
+    } else {
+        const float q[3] = {static_cast<float>(pc.x), static_cast<float>(pc.y),
+                            static_cast<float>(pc.z)};
+        const double fmax = std::max(std::abs(double(q[0])),
+                                     std::max(std::abs(double(q[1])), std::abs(double(q[2]))));
+        Reach<float> reach{max_distance, float_margins(fmax, scale_)};
+        walk(p, q, reach, c);
+    }
+    return finish_closest_point(scene_, c);
+}
+
+template <class T>
+void PointBvh::walk(const Vec3d& p, const T q[3], Reach<T>& reach, PointCandidates& c) const {
     reach.update(c);
     struct Entry {
         std::uint32_t node;
-        float d2;
+        T d2;
     };
     Entry stack[64];  // one entry a level: the median split's depth is log₂ of the triangles
     int top = 0;
     if (box_distance2(nodes_[0], q) > reach.b2)
-        return finish_closest_point(scene_, c);
+        return;
     std::uint32_t at = 0;
     for (;;) {
         const Node& n = nodes_[at];
@@ -490,7 +600,7 @@ std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_dista
         } else {
             // The nearer child first; the farther one waits with its distance.
             std::uint32_t near = at + 1, far = n.index;
-            float dn = box_distance2(nodes_[near], q), df = box_distance2(nodes_[far], q);
+            T dn = box_distance2(nodes_[near], q), df = box_distance2(nodes_[far], q);
             if (df < dn) {
                 std::swap(near, far);
                 std::swap(dn, df);
@@ -510,7 +620,6 @@ std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_dista
             break;
         at = stack[--top].node;
     }
-    return finish_closest_point(scene_, c);
 }
 
 std::size_t PointBvh::memory_bytes() const {

@@ -31,7 +31,9 @@
 // evaluation and the rounding of p are covered by an absolute margin ε = 40·u_f·(|q|∞ + S)
 // (S: twice the largest coordinate relative to the centre), the remaining relative roundings by
 // the factor 1 + 2⁻¹⁶ on the squared radius. A triangle whose planes fail those checks (a
-// near-degenerate sliver) gets a bound of 0: it is always decided exactly.
+// near-degenerate sliver) gets a bound of 0: it is always decided exactly. Beyond 64 S from the
+// centre the walk is in double (point_bvh.cpp, docs/numerics.md: the same planes, the Gram bound
+// kept whole, balls around the nodes), since ε and the float frames' rounding grow with |q|.
 //
 // Memory: 64 B a triangle for the four planes, 36 B for the float corners, 8 B for its object and
 // primitive, and the nodes (32 B, one leaf per 4–8 triangles, two nodes a leaf): ~117 B a triangle,
@@ -68,9 +70,24 @@ struct alignas(16) PlanePack {
 /// Lane `lane` of `pack` set to t.
 void set_lane(PlanePack& pack, int lane, const TrianglePlanes& t);
 
+/// The margins of one query's bounds: `plane` for the planes' (and the boxes') evaluation and
+/// p's rounding, `region` for the corner rule's test that p is beyond both of a corner's edges,
+/// `corner` for the distance to the corner.
+struct BoundMargins {
+    double plane = 0, region = 0, corner = 0;
+};
+
+/// The margins for a query point at |q|∞ from the centre of a tree whose S is `scale`: in float
+/// (all three the ε of the file comment), or in double for a far point.
+BoundMargins float_margins(double qmax, double scale);
+BoundMargins double_margins(double qmax, double scale);
+
 /// The squared lower bounds of the four lanes' triangles' distances from q (relative to the
-/// centre), each up to the factor 1 + 2⁻¹⁶ when eps is PointBvh's margin; 0 for zero planes.
+/// centre), each up to the factor 1 + 2⁻¹⁶ with float_margins' ε; 0 for zero planes.
 void lower_bounds2(const PlanePack& pack, const float q[3], float eps, float out[4]);
+/// The same in double, for a far q (double_margins; from about 10⁴ scene sizes away float's
+/// rounding of q would reach the triangles' size and nothing would be culled).
+void lower_bounds2(const PlanePack& pack, const double q[3], const BoundMargins& m, double out[4]);
 
 /// The planes of the triangle (a, b, c), given relative to the centre; `slab` is the largest
 /// r = max |n·v − o| a triangle may have (beyond it, or when the checks of the file comment fail,
@@ -83,7 +100,7 @@ class PointBvh {
     static constexpr std::size_t kMaxSpheres = 16;
 
     /// Whether the tree can answer for `scene`: some triangle, at most kMaxSpheres spheres, and
-    /// coordinates (relative to the centre of the bounds) well within float's range.
+    /// a diagonal of at most 1e16 (the float walk squares distances of up to 64 S).
     static bool suits(const Scene& scene);
 
     /// The tree over every non-degenerate triangle of `scene`, which must outlive it.
@@ -112,6 +129,7 @@ class PointBvh {
         std::uint32_t object[4], prim[4];  ///< padding lanes: kInvalidId
     };
     /// The squared search radii of one query, kept in step with its candidates.
+    template <class T>
     struct Reach;
     /// A triangle while the tree is built.
     struct Item {
@@ -132,8 +150,12 @@ class PointBvh {
                    const std::vector<Item>& items);
     /// The triangle of (object, prim) relative to the centre.
     Triangle relative(std::uint32_t object, std::uint32_t prim) const;
+    /// The walk from the root with q (p relative to the centre) in float or, far away, double.
+    template <class T>
+    void walk(const Vec3d& p, const T q[3], Reach<T>& reach, PointCandidates& c) const;
     /// The lower bounds of a leaf's triangles, and the exact test of those still within reach.
-    void visit_leaf(const Node& node, const Vec3d& p, const float q[3], Reach& reach,
+    template <class T>
+    void visit_leaf(const Node& node, const Vec3d& p, const T q[3], Reach<T>& reach,
                     PointCandidates& c) const;
 
     const Scene& scene_;
