@@ -3,8 +3,9 @@
 //   bench_points            full size: registration of workload B (1,024,000 triangles, binary
 //                           PLY) with and without the topology; 1M query points against
 //                           workload A (the 81,920-triangle icosphere): closest points, signed
-//                           distance, occupancy; 1M points' signed distance against B with one
-//                           triangle removed (the winding-number path on 1M triangles)
+//                           distance, occupancy; 1M points in a shell about A (radii 0.99-1.01):
+//                           closest points and signed distance; 1M points' signed distance against
+//                           B with one triangle removed (the winding-number path on 1M triangles)
 //   bench_points --quick    small sizes (seconds)
 //   bench_points --registration-only   the registration part alone
 //   bench_points --smoke    tiny sizes, < 1 s; exits 1 if a signed distance disagrees with the
@@ -156,6 +157,18 @@ std::vector<re::Vec3d> random_points(const re::Bounds3& b, std::size_t n) {
     return out;
 }
 
+/// n points in a shell about the unit sphere (A's): uniform directions, radii uniform in
+/// [0.99, 1.01], rounded to float like random_points.
+std::vector<re::Vec3d> shell_points(std::size_t n) {
+    std::mt19937_64 rng(kPointSeed + 1);
+    std::normal_distribution<double> g;
+    std::uniform_real_distribution<double> r(0.99, 1.01);
+    std::vector<re::Vec3d> out(n);
+    for (auto& p : out)
+        p = re::Vec3d(re::Vec3f(re::normalize(re::Vec3d{g(rng), g(rng), g(rng)}) * r(rng)));
+    return out;
+}
+
 /// Where the peers' files go, and the peers (an empty script or binary: no such peer this run).
 struct Peer {
     std::string data_dir, shim, open3d_script, server, http_script;
@@ -181,10 +194,10 @@ Run run(const re::QueryEngine& e, const std::vector<re::Vec3d>& pts, re::PointQu
 }
 
 /// Writes A's mesh (arrays and PLY), the points and our distances for the peers.
-bool write_peer_files(const Peer& peer, const rb::Workload& a, const std::vector<re::Vec3d>& pts,
-                      const Run& dist, const Run& signed_dist) {
+bool write_peer_files(const Peer& peer, const std::string& name, const rb::Workload& a,
+                      const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist) {
     std::filesystem::create_directories(peer.data_dir);
-    const std::string stem = peer.data_dir + "/A";
+    const std::string stem = peer.data_dir + "/" + name;
     std::vector<float> p, d, sd;
     for (std::size_t i = 0; i < pts.size(); ++i) {
         p.insert(p.end(), {float(pts[i].x), float(pts[i].y), float(pts[i].z)});
@@ -233,24 +246,24 @@ void compare(const char* what, const char* key, const Run& ours, const nlohmann:
     std::printf("\n");
 }
 
-/// The peers on A's points, and the comparison table.
-void run_peers(const Peer& peer, const rb::Workload& a, const std::vector<re::Vec3d>& pts,
-               const Run& dist, const Run& signed_dist) {
+/// The peers on the points `name` (A's mesh), and the comparison table.
+void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
+               const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist) {
     if (peer.open3d_script.empty() && peer.server.empty())
         return;
-    if (!write_peer_files(peer, a, pts, dist, signed_dist)) {
+    if (!write_peer_files(peer, name, a, pts, dist, signed_dist)) {
         std::printf("  peers: cannot write their files to %s\n", peer.data_dir.c_str());
         return;
     }
     nlohmann::json http, o3d;
     if (!peer.server.empty()) {
         http = run_peer("/usr/bin/python3 " + peer.http_script + " --data-dir " + peer.data_dir +
-                            " --binary " + peer.server + " --workload A",
+                            " --binary " + peer.server + " --workload " + name,
                         "binary endpoint");
     }
     if (!peer.open3d_script.empty()) {
         o3d = run_peer("LD_PRELOAD=" + peer.shim + " /usr/bin/python3 " + peer.open3d_script +
-                           " --data-dir " + peer.data_dir + " --workload A",
+                           " --data-dir " + peer.data_dir + " --workload " + name,
                        "open3d");
     }
     std::printf("  side by side (wall; CPU of every thread of the process):\n");
@@ -287,10 +300,21 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     run(*e, pts, re::PointQuery::distance, "");
     const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
     run(*e, pts, re::PointQuery::occupancy, "");
-    run_peers(peer, a, pts, closest, sd);
+    run_peers(peer, "A", a, pts, closest, sd);
+    // A shell near the surface (issue 18's second point set): the nearest triangles are then
+    // close and many compete within the same distance.
+    const auto shell = shell_points(s.points);
+    std::printf("points in a shell about A (radii 0.99 … 1.01):\n");
+    const Run shell_closest = run(*e, shell, re::PointQuery::closest, "(shell)");
+    const Run shell_sd = run(*e, shell, re::PointQuery::signed_distance, "(shell, parity rays)");
+    run_peers(peer, "A_shell", a, shell, shell_closest, shell_sd);
     double worst = 0;
     for (std::size_t i = 0; i < pts.size(); ++i)
         worst = std::max(worst, std::abs(sd.answers[i].distance - (re::length(pts[i]) - 1.0)));
+    for (std::size_t i = 0; i < shell.size(); ++i) {
+        worst =
+            std::max(worst, std::abs(shell_sd.answers[i].distance - (re::length(shell[i]) - 1.0)));
+    }
     return worst;
 }
 

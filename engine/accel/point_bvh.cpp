@@ -66,9 +66,19 @@ double abs_sum(const Vec3d& v) {
 float up_or_inf(double v) {
     return v > std::numeric_limits<float>::max() ? kInfF : float_up(v);
 }
-/// The squared float radius that covers every distance ≤ r (+inf for r = +inf).
+/// The squared float radius that covers every distance ≤ r (+inf for r = +inf). Rounded to
+/// nearest after a factor 1 + 2⁻²² rather than by float_up (a call to nextafterf each time the
+/// reach shrinks): the nearest float to v(1 + 2⁻²²) is at least v(1 + 2⁻²²) − 2⁻²⁴v > v for a
+/// normal v; below float's normal range float_up decides.
 float radius2(double r) {
-    return r < kInfinity ? up_or_inf(r * r * kRadiusSlack) : kInfF;
+    if (!(r < kInfinity))
+        return kInfF;
+    const double v = r * r * kRadiusSlack;
+    if (v < std::numeric_limits<float>::min())
+        return float_up(v);
+    return v * (1.0 + 1.0 / (1 << 22)) > std::numeric_limits<float>::max()
+               ? kInfF
+               : static_cast<float>(v * (1.0 + 1.0 / (1 << 22)));
 }
 
 /// The double vector of a float-rounded unit vector, or nullopt when rounding (or the input)
@@ -339,6 +349,7 @@ void PointBvh::fit(Node& node, const std::vector<Vec3d>& points, bool oriented,
         }
         if (ok)
             std::copy(rounded, rounded + 3, r);
+        node.oriented = ok;
     }
     // The centre: the middle of the points' extents in that frame, back in scene coordinates
     // (any centre will do: the half-extents are measured from the float one).
@@ -480,9 +491,16 @@ namespace {
 /// the dot product's γ₃, p's rounding), inside ε (√3 of it: 14 u_f), and the rest rounds
 /// relatively, inside kRadiusSlack.
 template <class Node>
-float box_distance2(const Node& n, const float q[3]) {
+[[gnu::always_inline]] inline float box_distance2(const Node& n, const float q[3]) {
     const float d[3] = {q[0] - n.centre[0], q[1] - n.centre[1], q[2] - n.centre[2]};
     float d2 = 0.0f;
+    if (!n.oriented) {  // the world axes (the upper levels): the rows would multiply by 1 and 0
+        for (int k = 0; k < 3; ++k) {
+            const float g = std::max(std::abs(d[k]) - n.half[k], 0.0f);
+            d2 += g * g;
+        }
+        return d2;
+    }
     for (int k = 0; k < 3; ++k) {
         const float y = n.axes[k][0] * d[0] + n.axes[k][1] * d[1] + n.axes[k][2] * d[2];
         // std::max keeps a NaN (its first argument): never culled.

@@ -122,6 +122,7 @@ class PointBvh {
         float half[3];            ///< half-extents along the axes, rounded up
         std::uint32_t index = 0;  ///< leaf: first pack; inner: the right child (left is next)
         std::uint32_t count = 0;  ///< leaf: triangles (≥ 1); 0 for an inner node
+        bool oriented = false;    ///< axes are not the world's (box_distance2 skips them if so)
     };
     /// Four triangles of a leaf (a leaf's last pack may have fewer).
     struct Pack {
