@@ -50,6 +50,20 @@ Shape shape(std::uint32_t n) {
     return {1 + l.nodes + r.nodes, l.packs + r.packs};
 }
 
+/// Lane l of a Node4 set to binary node n's box, pointing at `child` (count > 0: a leaf's first
+/// pack).
+template <class Node4, class Node>
+void set_child(Node4& n4, int l, const Node& n, std::uint32_t child, std::uint32_t count) {
+    for (int k = 0; k < 3; ++k) {
+        for (int j = 0; j < 3; ++j)
+            n4.axes[k][j][l] = n.axes[k][j];
+        n4.centre[k][l] = n.centre[k];
+        n4.half[k][l] = n.half[k];
+    }
+    n4.child[l] = child;
+    n4.count[l] = count;
+}
+
 /// Nodes of at most this many triangles get oriented boxes (fitted to their vertices: each
 /// triangle is read once a level, log₂(64/4) + 1 times in all).
 constexpr std::uint32_t kOrientedTriangles = 64;
@@ -329,6 +343,44 @@ PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().c
     nodes_.resize(whole.nodes);
     packs_.resize(whole.packs);
     build(0, n, items, 0, 0);
+    // The walked tree: four children a node. A root that is a leaf becomes one lane.
+    if (nodes_[0].count > 0) {
+        nodes4_.emplace_back();
+        set_child(nodes4_[0], 0, nodes_[0], nodes_[0].index, nodes_[0].count);
+        for (int l = 1; l < 4; ++l)
+            nodes4_[0].child[l] = kInvalidId;
+    } else {
+        nodes4_.reserve(whole.nodes / 3 + 1);
+        collapse(0);
+    }
+    nodes4_.shrink_to_fit();  // the reservation is an upper bound
+    std::vector<Node>().swap(nodes_);
+}
+
+std::uint32_t PointBvh::collapse(std::uint32_t b) {
+    // The node's children, each inner one replaced by its own two while there is room.
+    std::uint32_t lanes[4] = {b + 1, nodes_[b].index, kInvalidId, kInvalidId};
+    int n = 2;
+    for (int i = 0; i < n && n < 4; ++i) {
+        while (n < 4 && nodes_[lanes[i]].count == 0) {
+            const std::uint32_t inner = lanes[i];
+            lanes[i] = inner + 1;
+            lanes[n++] = nodes_[inner].index;
+        }
+    }
+    const auto index = static_cast<std::uint32_t>(nodes4_.size());
+    nodes4_.emplace_back();
+    for (int l = 0; l < 4; ++l) {
+        if (l >= n) {
+            nodes4_[index].child[l] = kInvalidId;
+            continue;
+        }
+        const Node& c = nodes_[lanes[l]];
+        // The recursion may grow nodes4_: the lane is written through the index afterwards.
+        const std::uint32_t child = c.count > 0 ? c.index : collapse(lanes[l]);
+        set_child(nodes4_[index], l, c, child, c.count);
+    }
+    return index;
 }
 
 Triangle PointBvh::relative(std::uint32_t object, std::uint32_t prim) const {
@@ -359,7 +411,6 @@ void PointBvh::fit(Node& node, const std::vector<Vec3d>& points, bool oriented,
         }
         if (ok)
             std::copy(rounded, rounded + 3, r);
-        node.oriented = ok;
     }
     // The centre: the middle of the points' extents in that frame, back in scene coordinates
     // (any centre will do: the half-extents are measured from the float one).
@@ -496,42 +547,42 @@ struct PointBvh::Reach {
 
 namespace {
 
-/// The squared distance from q to the node's oriented box (0 inside), in float. Against the true
-/// point: |axes·(q − centre)| is off by at most ~8 u_f (|q|∞ + S) a component (the subtraction,
-/// the dot product's γ₃, p's rounding), inside ε (√3 of it: 14 u_f), and the rest rounds
-/// relatively, inside kRadiusSlack.
-template <class Node>
-[[gnu::always_inline]] inline float box_distance2(const Node& n, const float q[3]) {
-    const float d[3] = {q[0] - n.centre[0], q[1] - n.centre[1], q[2] - n.centre[2]};
-    float d2 = 0.0f;
-    if (!n.oriented) {  // the world axes (the upper levels): the rows would multiply by 1 and 0
-        for (int k = 0; k < 3; ++k) {
-            const float g = std::max(std::abs(d[k]) - n.half[k], 0.0f);
-            d2 += g * g;
-        }
-        return d2;
-    }
+/// The squared distances from q to the four lanes' oriented boxes (0 inside), in float, in one
+/// SIMD step (a world-axis lane's rows are 1 and 0: exact). Against the true point:
+/// |axes·(q − centre)| is off by at most ~8 u_f (|q|∞ + S) a component (the subtraction, the dot
+/// product's γ₃, p's rounding), inside ε (√3 of it: 14 u_f), and the rest rounds relatively,
+/// inside kRadiusSlack. A NaN gives 0 (max4): visited, never culled.
+template <class Node4>
+[[gnu::always_inline]] inline void box_distances2(const Node4& n, const float q[3], float out[4]) {
+    const F4 d[3] = {F4{q[0], q[0], q[0], q[0]} - load4(n.centre[0]),
+                     F4{q[1], q[1], q[1], q[1]} - load4(n.centre[1]),
+                     F4{q[2], q[2], q[2], q[2]} - load4(n.centre[2])};
+    F4 d2 = {};
     for (int k = 0; k < 3; ++k) {
-        const float y = n.axes[k][0] * d[0] + n.axes[k][1] * d[1] + n.axes[k][2] * d[2];
-        // std::max keeps a NaN (its first argument): never culled.
-        const float g = std::max(std::abs(y) - n.half[k], 0.0f);
+        const F4 y =
+            load4(n.axes[k][0]) * d[0] + load4(n.axes[k][1]) * d[1] + load4(n.axes[k][2]) * d[2];
+        const F4 g = max4(abs4(y) - load4(n.half[k]), F4{});
         d2 += g * g;
     }
-    return d2;
+    std::memcpy(out, &d2, sizeof d2);
 }
 
-/// The far walk's node bound: the squared distance from q (double) to the ball around the
-/// node's box, |q − centre| − |h|₂ (1 + 2⁻¹⁸): the box's rows are orthonormal only within 2⁻²⁰,
-/// which in the box's frame would cost 2⁻²⁰ |q| (far away, more than the nodes' differences),
-/// while the ball around it is measured directly (its radius covers A⁻¹ = Aᵀ(AAᵀ)⁻¹).
-template <class Node>
-double box_distance2(const Node& n, const double q[3]) {
-    const double dx = q[0] - n.centre[0], dy = q[1] - n.centre[1], dz = q[2] - n.centre[2];
-    const double h0 = n.half[0], h1 = n.half[1], h2 = n.half[2];
-    const double r = std::sqrt(h0 * h0 + h1 * h1 + h2 * h2) * (1.0 + std::ldexp(1.0, -18));
-    // std::max keeps a NaN (its first argument): never culled.
-    const double g = std::max(std::sqrt(dx * dx + dy * dy + dz * dz) - r, 0.0);
-    return g * g;
+/// The far walk's node bound, lane by lane: the squared distance from q (double) to the ball
+/// around the lane's box, |q − centre| − |h|₂ (1 + 2⁻¹⁸): the box's rows are orthonormal only
+/// within 2⁻²⁰, which in the box's frame would cost 2⁻²⁰ |q| (far away, more than the nodes'
+/// differences), while the ball around it is measured directly (its radius covers
+/// A⁻¹ = Aᵀ(AAᵀ)⁻¹).
+template <class Node4>
+void box_distances2(const Node4& n, const double q[3], double out[4]) {
+    for (int l = 0; l < 4; ++l) {
+        const double dx = q[0] - n.centre[0][l], dy = q[1] - n.centre[1][l],
+                     dz = q[2] - n.centre[2][l];
+        const double h0 = n.half[0][l], h1 = n.half[1][l], h2 = n.half[2][l];
+        const double r = std::sqrt(h0 * h0 + h1 * h1 + h2 * h2) * (1.0 + std::ldexp(1.0, -18));
+        // std::max keeps a NaN (its first argument): never culled.
+        const double g = std::max(std::sqrt(dx * dx + dy * dy + dz * dz) - r, 0.0);
+        out[l] = g * g;
+    }
 }
 
 /// The leaf bounds at float or double.
@@ -545,8 +596,8 @@ void bounds(const PlanePack& pack, const double q[3], const BoundMargins& m, dou
 }  // namespace
 
 template <class T>
-void PointBvh::visit_leaf(const Node& node, const Vec3d& p, const T q[3], Reach<T>& reach,
-                          PointCandidates& c) const {
+void PointBvh::visit_leaf(std::uint32_t first_pack, std::uint32_t count, const Vec3d& p,
+                          const T q[3], Reach<T>& reach, PointCandidates& c) const {
     // The bounds of the leaf's triangles (at most 8), then the exact tests in increasing order of
     // the bound: the first one found shrinks the reach for the others, which the bounds then cull.
     struct Lane {
@@ -555,9 +606,9 @@ void PointBvh::visit_leaf(const Node& node, const Vec3d& p, const T q[3], Reach<
     };
     Lane lanes[8];
     int n = 0;
-    const std::uint32_t packs = (node.count + 3) / 4;
+    const std::uint32_t packs = (count + 3) / 4;
     for (std::uint32_t k = 0; k < packs; ++k) {
-        const Pack& pack = packs_[node.index + k];
+        const Pack& pack = packs_[first_pack + k];
         T lb2[4];
         bounds(pack.planes, q, reach.m, lb2);
         for (int l = 0; l < 4; ++l) {
@@ -591,7 +642,7 @@ std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_dista
     const Vec3d pc = p - center_;
     if (!(max_abs(pc) <= kMaxQuery))
         return linear_closest_point(scene_, p, max_distance);
-    if (nodes_.empty())
+    if (nodes4_.empty())
         return finish_closest_point(scene_, c);
     const double qmax = max_abs(pc);
     if (qmax > kFarQuery * scale_) {
@@ -612,46 +663,56 @@ std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_dista
 template <class T>
 void PointBvh::walk(const Vec3d& p, const T q[3], Reach<T>& reach, PointCandidates& c) const {
     reach.update(c);
+    // A child waiting: a Node4 (count 0) or a leaf, with its squared box distance.
     struct Entry {
-        std::uint32_t node;
+        std::uint32_t child, count;
         T d2;
     };
-    Entry stack[64];  // one entry a level: the median split's depth is log₂ of the triangles
+    Entry stack[3 * 32 + 4];  // three entries a level at most; depth ≤ 32 (log₄ of 2³² · 2)
     int top = 0;
-    if (box_distance2(nodes_[0], q) > reach.b2)
-        return;
     std::uint32_t at = 0;
     for (;;) {
-        const Node& n = nodes_[at];
-        if (n.count > 0) {
-            visit_leaf(n, p, q, reach, c);
-        } else {
-            // The nearer child first; the farther one waits with its distance.
-            std::uint32_t near = at + 1, far = n.index;
-            T dn = box_distance2(nodes_[near], q), df = box_distance2(nodes_[far], q);
-            if (df < dn) {
-                std::swap(near, far);
-                std::swap(dn, df);
-            }
-            if (!(dn > reach.b2)) {
-                if (!(df > reach.b2)) {
-                    assert(top < 64);
-                    stack[top++] = {far, df};
-                }
-                at = near;
+        const Node4& n = nodes4_[at];
+        T d2[4];
+        box_distances2(n, q, d2);
+        // The children within reach, nearest first (at most four: insertion sort).
+        Entry near[4];
+        int m = 0;
+        for (int l = 0; l < 4; ++l) {
+            if (n.child[l] == kInvalidId || d2[l] > reach.b2)
+                continue;
+            Entry e{n.child[l], n.count[l], d2[l]};
+            int j = m++;
+            for (; j > 0 && near[j - 1].d2 > e.d2; --j)
+                near[j] = near[j - 1];
+            near[j] = e;
+        }
+        // The farther ones wait (pushed farthest first), the nearest is taken now; leaves are
+        // visited as they come.
+        for (int j = m - 1; j >= 0; --j) {
+            assert(top < int(sizeof stack / sizeof stack[0]));
+            stack[top++] = near[j];
+        }
+        bool descended = false;
+        while (top > 0) {
+            const Entry e = stack[--top];
+            if (e.d2 > reach.b2)
+                continue;
+            if (e.count > 0) {
+                visit_leaf(e.child, e.count, p, q, reach, c);
                 continue;
             }
-        }
-        while (top > 0 && stack[top - 1].d2 > reach.b2)
-            --top;
-        if (top == 0)
+            at = e.child;
+            descended = true;
             break;
-        at = stack[--top].node;
+        }
+        if (!descended)
+            return;
     }
 }
 
 std::size_t PointBvh::memory_bytes() const {
-    return nodes_.capacity() * sizeof(Node) + packs_.capacity() * sizeof(Pack) +
+    return nodes4_.capacity() * sizeof(Node4) + packs_.capacity() * sizeof(Pack) +
            spheres_.capacity() * sizeof(std::uint32_t) + sizeof(*this);
 }
 

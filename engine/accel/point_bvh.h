@@ -4,7 +4,8 @@
 // Why: rtcPointQuery calls back for every triangle of each leaf whose box meets the query sphere
 // (200–1,000 per point on an 82k-triangle icosphere: the distance function is flat near its
 // minimum, so a whole cap of leaves is within a box's size of the nearest distance), and each
-// callback decided its triangle exactly in double. Here a compact binary BVH of our own is
+// callback decided its triangle exactly in double. Here a BVH of our own (built binary, median
+// splits, then collapsed to four children a node, whose four boxes one SIMD step tests) is
 // walked nearest child first (children ordered by the distance to their float boxes), and each
 // leaf's triangles first get a conservative lower bound of their distance in float, four at a
 // time; only a triangle whose bound does not exceed the best distance so far (plus the ties'
@@ -36,10 +37,10 @@
 // kept whole, balls around the nodes), since ε and the float frames' rounding grow with |q|.
 //
 // Memory: 64 B a triangle for the four planes, 36 B for the float corners, 8 B for its object and
-// primitive, and the nodes (32 B, one leaf per 4–8 triangles, two nodes a leaf): ~117 B a triangle,
-// built on a scene's first point query (QueryEngine::closest_point). Spheres are not in the tree: a
-// scene with at most kMaxSpheres of them has each one decided first (which also starts the search
-// with a small radius); with more, QueryEngine stays on Embree's point query.
+// primitive, and the 4-wide nodes (272 B, one per ~20 triangles): 123–126 B a triangle
+// (bench_points), built on a scene's first point query (QueryEngine::closest_point). Spheres are
+// not in the tree: a scene with at most kMaxSpheres of them has each one decided first (which also
+// starts the search with a small radius); with more, QueryEngine stays on Embree's point query.
 
 #include <cstdint>
 #include <optional>
@@ -122,7 +123,15 @@ class PointBvh {
         float half[3];            ///< half-extents along the axes, rounded up
         std::uint32_t index = 0;  ///< leaf: first pack; inner: the right child (left is next)
         std::uint32_t count = 0;  ///< leaf: triangles (≥ 1); 0 for an inner node
-        bool oriented = false;    ///< axes are not the world's (box_distance2 skips them if so)
+    };
+    /// Four children of the walked tree, lane by lane: the binary tree collapsed two levels at a
+    /// time (a node and its grandchildren), so the walk tests four boxes in one SIMD step.
+    struct alignas(16) Node4 {
+        float axes[3][3][4];  ///< [row][component][lane]: each lane's box frame
+        float centre[3][4];
+        float half[3][4];
+        std::uint32_t child[4];  ///< inner: a Node4; leaf: its first pack; kInvalidId: no child
+        std::uint32_t count[4];  ///< leaf: its triangles; 0 for an inner child
     };
     /// Four triangles of a leaf (a leaf's last pack may have fewer).
     struct Pack {
@@ -156,13 +165,16 @@ class PointBvh {
     void walk(const Vec3d& p, const T q[3], Reach<T>& reach, PointCandidates& c) const;
     /// The lower bounds of a leaf's triangles, and the exact test of those still within reach.
     template <class T>
-    void visit_leaf(const Node& node, const Vec3d& p, const T q[3], Reach<T>& reach,
-                    PointCandidates& c) const;
+    void visit_leaf(std::uint32_t first_pack, std::uint32_t count, const Vec3d& p, const T q[3],
+                    Reach<T>& reach, PointCandidates& c) const;
+    /// The Node4 over binary node `b` (inner) and those below it; returns its index.
+    std::uint32_t collapse(std::uint32_t b);
 
     const Scene& scene_;
     Vec3d center_;
-    double scale_ = 0;  ///< S of the file comment
-    std::vector<Node> nodes_;
+    double scale_ = 0;         ///< S of the file comment
+    std::vector<Node> nodes_;  ///< the binary tree, while it is built
+    std::vector<Node4> nodes4_;
     std::vector<Pack> packs_;
     std::vector<std::uint32_t> spheres_;
 };
