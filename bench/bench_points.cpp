@@ -3,17 +3,22 @@
 //   bench_points            full size: registration of workload B (1,024,000 triangles, binary
 //                           PLY) with and without the topology; 1M query points against
 //                           workload A (the 81,920-triangle icosphere): closest points, signed
-//                           distance, occupancy; 1M points' signed distance against B with one
-//                           triangle removed (the winding-number path on 1M triangles)
+//                           distance, occupancy; 1M points in a shell about A (radii 0.99-1.01):
+//                           closest points and signed distance; 1M points' signed distance against
+//                           B with one triangle removed (the winding-number path on 1M triangles)
 //   bench_points --quick    small sizes (seconds)
 //   bench_points --registration-only   the registration part alone
 //   bench_points --smoke    tiny sizes, < 1 s; exits 1 if a signed distance disagrees with the
 //                           sphere it approximates (the CTest `bench_points_smoke`)
 //
-// When Debian's python3-open3d is installed (and not in --smoke), Open3D's
-// RaycastingScene.compute_closest_points and compute_signed_distance run on the same mesh and
-// points in the same run (bench/peers/open3d_points_peer.py, with the Embree mask shim
-// preloaded: its sign comes from rays, which hit nothing without it; PERFORMANCE.md).
+// Besides in-process (not in --smoke), the same mesh and points go through two peers in the same
+// run, and a table of the three closes the section on A:
+//   * raycastd's binary endpoint, POST /v1/scenes/{id}/points?dtype=float32, the server binary
+//     (build/release/server/raycastd) on loopback (bench/peers/points_http_peer.py): wall time
+//     from request to the answer's last byte, and the server process's CPU time;
+//   * when Debian's python3-open3d is installed, Open3D's RaycastingScene.compute_closest_points
+//     and compute_signed_distance (bench/peers/open3d_points_peer.py, with the Embree mask shim
+//     preloaded: its sign comes from rays, which hit nothing without it; PERFORMANCE.md).
 //
 // Registration is timed in its parts, each the median of 3 runs after a warm-up: parse
 // (load_model), validate, the Embree BVH (EmbreeAccel::build), the topology (compute_topology)
@@ -31,6 +36,8 @@
 #include <random>
 #include <sstream>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "bench/bench_files.h"
 #include "bench/timing.h"
@@ -150,56 +157,133 @@ std::vector<re::Vec3d> random_points(const re::Bounds3& b, std::size_t n) {
     return out;
 }
 
-/// Where the Open3D peer's files go, and the peer itself (empty: no peer in this run).
+/// n points in a shell about the unit sphere (A's): uniform directions, radii uniform in
+/// [0.99, 1.01], rounded to float like random_points.
+std::vector<re::Vec3d> shell_points(std::size_t n) {
+    std::mt19937_64 rng(kPointSeed + 1);
+    std::normal_distribution<double> g;
+    std::uniform_real_distribution<double> r(0.99, 1.01);
+    std::vector<re::Vec3d> out(n);
+    for (auto& p : out)
+        p = re::Vec3d(re::Vec3f(re::normalize(re::Vec3d{g(rng), g(rng), g(rng)}) * r(rng)));
+    return out;
+}
+
+/// Where the peers' files go, and the peers (an empty script or binary: no such peer this run).
 struct Peer {
-    std::string data_dir, shim, script;
+    std::string data_dir, shim, open3d_script, server, http_script;
 };
 
-/// Writes A's mesh, the points and our distances for the peer, runs it and prints its line.
-void run_open3d(const Peer& peer, const rb::Workload& a, const std::vector<re::Vec3d>& pts,
-                const std::vector<re::PointAnswer>& dist,
-                const std::vector<re::PointAnswer>& signed_dist) {
+/// One query's in-process figures.
+struct Run {
+    std::vector<re::PointAnswer> answers;
+    Timed t;
+};
+
+/// Times one query over the points; returns the answers and the times.
+Run run(const re::QueryEngine& e, const std::vector<re::Vec3d>& pts, re::PointQuery q,
+        const char* what) {
+    Run r;
+    r.t = timed([&] {
+        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}}, r.answers);
+    });
+    std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s\n",
+                re::to_string(q), what, pts.size(), r.t.wall, r.t.cpu,
+                pts.size() / r.t.wall * 1e-6);
+    return r;
+}
+
+/// Writes A's mesh (arrays and PLY), the points and our distances for the peers.
+bool write_peer_files(const Peer& peer, const std::string& name, const rb::Workload& a,
+                      const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist) {
     std::filesystem::create_directories(peer.data_dir);
-    const std::string stem = peer.data_dir + "/A";
+    const std::string stem = peer.data_dir + "/" + name;
     std::vector<float> p, d, sd;
     for (std::size_t i = 0; i < pts.size(); ++i) {
         p.insert(p.end(), {float(pts[i].x), float(pts[i].y), float(pts[i].z)});
-        d.push_back(float(dist[i].distance));
-        sd.push_back(float(signed_dist[i].distance));
+        d.push_back(float(dist.answers[i].distance));
+        sd.push_back(float(signed_dist.answers[i].distance));
     }
-    if (!rb::write_mesh_arrays(stem, a) ||
-        !rb::write_npy(stem + "_points.npy", p.data(), {pts.size(), 3}) ||
-        !rb::write_npy(stem + "_distance.npy", d.data(), {pts.size()}) ||
-        !rb::write_npy(stem + "_signed.npy", sd.data(), {pts.size()})) {
-        std::printf("  open3d: cannot write its files to %s\n", peer.data_dir.c_str());
-        return;
-    }
-    const std::string cmd = "LD_PRELOAD=" + peer.shim + " /usr/bin/python3 " + peer.script +
-                            " --data-dir " + peer.data_dir + " --workload A";
-    std::FILE* f = popen(cmd.c_str(), "r");
-    if (!f)
-        return;
-    char line[4096];
-    while (std::fgets(line, sizeof line, f))
-        std::printf("  open3d (same points, same run): %s", line);
-    pclose(f);
+    return rb::write_mesh_arrays(stem, a) && rb::write_ply(stem + ".ply", a) &&
+           rb::write_npy(stem + "_points.npy", p.data(), {pts.size(), 3}) &&
+           rb::write_npy(stem + "_distance.npy", d.data(), {pts.size()}) &&
+           rb::write_npy(stem + "_signed.npy", sd.data(), {pts.size()});
 }
 
-/// Times one query over the points; returns the answers.
-std::vector<re::PointAnswer> run(const re::QueryEngine& e, const std::vector<re::Vec3d>& pts,
-                                 re::PointQuery q, const char* what) {
-    std::vector<re::PointAnswer> out;
-    const Timed t = timed([&] {
-        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}}, out);
-    });
-    std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s\n",
-                re::to_string(q), what, pts.size(), t.wall, t.cpu, pts.size() / t.wall * 1e-6);
-    return out;
+/// Runs one peer's command and returns the JSON object it printed (null if none).
+nlohmann::json run_peer(const std::string& cmd, const char* name) {
+    std::FILE* f = popen(cmd.c_str(), "r");
+    if (!f)
+        return nullptr;
+    std::string out;
+    char line[4096];
+    while (std::fgets(line, sizeof line, f))
+        out += line;
+    pclose(f);
+    std::printf("  %s (same points, same run): %s", name, out.c_str());
+    auto j = nlohmann::json::parse(out, nullptr, /*allow_exceptions=*/false);
+    return j.is_object() ? j : nlohmann::json(nullptr);
+}
+
+/// The table of in-process, the binary endpoint and Open3D for one query ("closest" or
+/// "signed" in the peers' JSON); ratios are points/s against Open3D's.
+void compare(const char* what, const char* key, const Run& ours, const nlohmann::json& http,
+             const nlohmann::json& o3d) {
+    auto field = [&](const nlohmann::json& j, const char* f) {
+        return j.is_object() && j.contains(key) ? j[key].value(f, 0.0) : 0.0;
+    };
+    const double o3d_wall = field(o3d, "seconds"), o3d_cpu = field(o3d, "cpu_seconds");
+    const double http_wall = field(http, "seconds"), http_cpu = field(http, "server_cpu_seconds");
+    std::printf("  %-16s in-process %.3f s (CPU %.3f)", what, ours.t.wall, ours.t.cpu);
+    if (http_wall > 0)
+        std::printf("   binary endpoint %.3f s (server CPU %.3f)", http_wall, http_cpu);
+    if (o3d_wall > 0) {
+        std::printf("   Open3D %.3f s (CPU %.3f)   in-process %.2fx Open3D (CPU %.2fx)", o3d_wall,
+                    o3d_cpu, o3d_wall / ours.t.wall, o3d_cpu / ours.t.cpu);
+        if (http_wall > 0)
+            std::printf(", endpoint %.2fx (CPU %.2fx)", o3d_wall / http_wall, o3d_cpu / http_cpu);
+    }
+    std::printf("\n");
+}
+
+/// The peers on the points `name` (A's mesh), and the comparison table.
+void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
+               const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist) {
+    if (peer.open3d_script.empty() && peer.server.empty())
+        return;
+    if (!write_peer_files(peer, name, a, pts, dist, signed_dist)) {
+        std::printf("  peers: cannot write their files to %s\n", peer.data_dir.c_str());
+        return;
+    }
+    nlohmann::json http, o3d;
+    if (!peer.server.empty()) {
+        http = run_peer("/usr/bin/python3 " + peer.http_script + " --data-dir " + peer.data_dir +
+                            " --binary " + peer.server + " --workload " + name,
+                        "binary endpoint");
+    }
+    if (!peer.open3d_script.empty()) {
+        o3d = run_peer("LD_PRELOAD=" + peer.shim + " /usr/bin/python3 " + peer.open3d_script +
+                           " --data-dir " + peer.data_dir + " --workload " + name,
+                       "open3d");
+    }
+    std::printf("  side by side (wall; CPU of every thread of the process):\n");
+    compare("closest", "closest", dist, http, o3d);
+    compare("signed_distance", "signed", signed_dist, http, o3d);
 }
 
 std::shared_ptr<const re::QueryEngine> prepare(re::Scene s) {
     auto e = re::QueryEngine::build(std::make_shared<re::Scene>(std::move(s)));
     return e.ok() ? *e : nullptr;
+}
+
+/// Builds the engine's point BVH (its first closest-point query) and prints its time and bytes.
+void point_tree(const re::QueryEngine& e) {
+    const std::size_t before = e.memory_bytes();
+    const Timed t = timed([&] { (void)e.closest_point({0, 0, 0}, re::kInfinity); });
+    const double bytes = static_cast<double>(e.memory_bytes() - before);
+    std::printf(
+        "  point BVH built on first use in %.3f s (CPU %.3f s): %.1f MB, %.0f B a triangle\n",
+        t.wall, t.cpu, bytes / 1e6, bytes / static_cast<double>(e.scene().triangle_count()));
 }
 
 /// Points against A; returns the largest |signed distance − (|p| − 1)| (the icosphere is within
@@ -210,16 +294,27 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     const auto pts = random_points(e->scene().bounds(), s.points);
     std::printf("points against A (icosphere, %zu triangles, sign %s):\n", a.triangles.size(),
                 re::to_string(e->topology()[0].sign));
+    point_tree(*e);
     run(*e, pts, re::PointQuery::closest, "(first: no warm-up)");
-    run(*e, pts, re::PointQuery::closest, "");
-    const auto dist = run(*e, pts, re::PointQuery::distance, "");
-    const auto sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
+    const Run closest = run(*e, pts, re::PointQuery::closest, "");
+    run(*e, pts, re::PointQuery::distance, "");
+    const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
     run(*e, pts, re::PointQuery::occupancy, "");
-    if (!peer.script.empty())
-        run_open3d(peer, a, pts, dist, sd);
+    run_peers(peer, "A", a, pts, closest, sd);
+    // A shell near the surface (issue 18's second point set): the nearest triangles are then
+    // close and many compete within the same distance.
+    const auto shell = shell_points(s.points);
+    std::printf("points in a shell about A (radii 0.99 … 1.01):\n");
+    const Run shell_closest = run(*e, shell, re::PointQuery::closest, "(shell)");
+    const Run shell_sd = run(*e, shell, re::PointQuery::signed_distance, "(shell, parity rays)");
+    run_peers(peer, "A_shell", a, shell, shell_closest, shell_sd);
     double worst = 0;
     for (std::size_t i = 0; i < pts.size(); ++i)
-        worst = std::max(worst, std::abs(sd[i].distance - (re::length(pts[i]) - 1.0)));
+        worst = std::max(worst, std::abs(sd.answers[i].distance - (re::length(pts[i]) - 1.0)));
+    for (std::size_t i = 0; i < shell.size(); ++i) {
+        worst =
+            std::max(worst, std::abs(shell_sd.answers[i].distance - (re::length(shell[i]) - 1.0)));
+    }
     return worst;
 }
 
@@ -230,6 +325,7 @@ void winding_on_b(const Sizes& s) {
     const auto pts = random_points(e->scene().bounds(), s.points);
     std::printf("points against B minus one triangle (%zu triangles, sign %s):\n",
                 b.triangles.size(), re::to_string(e->topology()[0].sign));
+    point_tree(*e);
     const Timed tree = timed([&] { (void)e->winding_number(0, {0, 0, 0}); });
     std::printf("  winding-number tree built on first use in %.3f s\n", tree.wall);
     run(*e, pts, re::PointQuery::signed_distance, "(fast winding numbers)");
@@ -242,8 +338,10 @@ int main(int argc, char** argv) {
     Sizes s = kFull;
     bool registration_only = false;
     const std::filesystem::path here = std::filesystem::path(argv[0]).parent_path();
+    const std::string peers = std::string(RAYCASTD_SOURCE_DIR) + "/bench/peers/";
     Peer peer{(here / "points_peer_data").string(), (here / "libembree_mask_shim.so").string(),
-              std::string(RAYCASTD_SOURCE_DIR) + "/bench/peers/open3d_points_peer.py"};
+              peers + "open3d_points_peer.py",
+              (here.parent_path() / "server" / "raycastd").string(), peers + "points_http_peer.py"};
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--quick") {
@@ -258,10 +356,18 @@ int main(int argc, char** argv) {
         }
     }
     if (std::string(s.name) == kSmoke.name) {
-        peer.script.clear();  // the smoke run stays quick and self-contained
-    } else if (std::system("/usr/bin/python3 -c 'import open3d' >/dev/null 2>&1") != 0) {
-        std::printf("(python3-open3d is not installed: no Open3D peer in this run)\n");
-        peer.script.clear();
+        peer.open3d_script.clear();  // the smoke run stays quick and self-contained
+        peer.server.clear();
+    } else {
+        if (std::system("/usr/bin/python3 -c 'import open3d' >/dev/null 2>&1") != 0) {
+            std::printf("(python3-open3d is not installed: no Open3D peer in this run)\n");
+            peer.open3d_script.clear();
+        }
+        if (!std::filesystem::exists(peer.server)) {
+            std::printf("(%s is not built: no binary-endpoint rows in this run)\n",
+                        peer.server.c_str());
+            peer.server.clear();
+        }
     }
     std::printf("bench_points (%s)\n", s.name);
     registration(s);

@@ -39,6 +39,11 @@ void offer_primitive(const Scene& scene, std::uint32_t object, std::uint32_t pri
             return;
         cp = *t;
     }
+    offer_closest_point(cp, object, prim, max_distance, c);
+}
+
+void offer_closest_point(const ClosestPoint& cp, std::uint32_t object, std::uint32_t prim,
+                         double max_distance, PointCandidates& c) {
     if (!(cp.distance <= max_distance))
         return;
     PointHit h;

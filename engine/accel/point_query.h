@@ -19,6 +19,11 @@ namespace raycastd::engine {
 void offer_primitive(const Scene& scene, std::uint32_t object, std::uint32_t prim, const Vec3d& p,
                      double max_distance, PointCandidates& c);
 
+/// Offers cp, the closest point of primitive `prim` of `object`, to `c` when it is within
+/// max_distance (the step offer_primitive ends with; PointBvh computes cp itself).
+void offer_closest_point(const ClosestPoint& cp, std::uint32_t object, std::uint32_t prim,
+                         double max_distance, PointCandidates& c);
+
 /// The winner of `c` with its unit geometric normal filled in; nullopt when there is none.
 std::optional<PointHit> finish_closest_point(const Scene& scene, const PointCandidates& c);
 

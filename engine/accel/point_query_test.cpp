@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/accel/embree_accel.h"
+#include "engine/testing/expect_point_hit.h"
 #include "engine/testing/point_meshes.h"
 
 namespace raycastd::engine {
@@ -19,16 +20,7 @@ std::unique_ptr<EmbreeAccel> bvh(const Scene& s) {
     return a.ok() ? std::move(*a) : nullptr;
 }
 
-void expect_same(const std::optional<PointHit>& a, const std::optional<PointHit>& b) {
-    ASSERT_EQ(a.has_value(), b.has_value());
-    if (!a)
-        return;
-    EXPECT_EQ(a->object, b->object);
-    EXPECT_EQ(a->primitive, b->primitive);
-    EXPECT_EQ(a->distance, b->distance);
-    EXPECT_EQ(a->point, b->point);
-    EXPECT_EQ(a->normal, b->normal);
-}
+using testing::expect_same_point_hit;
 
 TEST(PointQuery, EmbreeAgreesWithBruteForce) {
     for (double offset : {0.0, 1e5}) {
@@ -43,7 +35,7 @@ TEST(PointQuery, EmbreeAgreesWithBruteForce) {
                 Vec3d{pos(rng), pos(rng), pos(rng)} * scale + Vec3d{offset, offset, offset};
             const double reach = i % 3 == 0 ? 1.5 : kInfinity;
             SCOPED_TRACE(i);
-            expect_same(a->closest_point(p, reach), linear_closest_point(s, p, reach));
+            expect_same_point_hit(a->closest_point(p, reach), linear_closest_point(s, p, reach));
         }
     }
 }
@@ -79,7 +71,7 @@ TEST(PointQuery, TiesGoToTheLowerObjectThenTheLowerPrimitive) {
             auto h = a->closest_point(p, kInfinity);
             ASSERT_TRUE(h);
             EXPECT_EQ(h->object, 1u);
-            expect_same(h, linear_closest_point(s, p, kInfinity));
+            expect_same_point_hit(h, linear_closest_point(s, p, kInfinity));
         }
     }
     // The cube's face z = 1 is triangles 2 and 3, sharing the diagonal (0,0,1)–(1,1,1)... in
@@ -113,9 +105,9 @@ TEST(PointQuery, MaxDistanceIsInclusiveAndSpheresAreExact) {
     auto a = bvh(s);
     ASSERT_TRUE(a);
     EXPECT_FALSE(a->closest_point({3, 0, 0}, 1.999));
-    expect_same(a->closest_point({3, 0, 0}, 2.0), h);
-    expect_same(a->closest_point({0.5, 0, 0}, kInfinity),
-                linear_closest_point(s, {0.5, 0, 0}, kInfinity));
+    expect_same_point_hit(a->closest_point({3, 0, 0}, 2.0), h);
+    expect_same_point_hit(a->closest_point({0.5, 0, 0}, kInfinity),
+                          linear_closest_point(s, {0.5, 0, 0}, kInfinity));
 }
 
 TEST(PointQuery, DegenerateTrianglesAreNotPartOfTheSurface) {

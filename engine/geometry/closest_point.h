@@ -10,8 +10,9 @@
 //   * an edge's point is computed from its two endpoints taken in a fixed (lexicographic) order,
 //     and a vertex's point is the vertex itself, so two triangles that share the edge or the
 //     vertex compute the same point and the same distance, bit for bit;
-//   * the face region's distance is the plane distance |n·(p − a)| / |n| (n = ab × ac), whose
-//     rounding follows |p − a| rather than the coordinates' magnitude.
+//   * the face region's distance is the plane distance |n·(p − a)| / |n| (n = ab × ac), and an
+//     edge's |w − e·t| (w = p − s₀, e = s₁ − s₀), whose rounding follows |p − a| and |e| rather
+//     than the coordinates' magnitude (|p − q| would carry q's rounding).
 // Sphere: q = c + r·(p − c)/|p − c|, distance ||p − c| − r| (exact up to the rounding of |p − c|).
 //
 // Error: each distance comes with `err`, a bound on its rounding error that is also the width of

@@ -8,10 +8,13 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "engine/geometry/solid_angle.h"
 #include "engine/mesh/test_models.h"
 #include "engine/testing/point_meshes.h"
+#include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
 namespace {
@@ -265,6 +268,31 @@ TEST(PointQueries, ClosedPublishedModelMatchesItsExactWindingNumber) {
         return;
     }
     GTEST_SKIP() << "no closed published model found at " << testing::models_dir();
+}
+
+// The point tree is built by the first closest-point query, which is a task of the batch's own
+// parallel loop, and a tree of 16,384 triangles or more builds its subtrees in parallel: a thread
+// waiting in that build must not take up another block of the batch, whose query would wait on
+// the build it is part of (PerObjectOnce isolates the build; per_object_once_test.cpp catches the
+// re-entry itself, which this test did not hang on in runs without the isolation). Here: the
+// tree built on 16 threads during a batch answers as one built before it; a fresh engine a run.
+TEST(PointQueries, TheTreeBuiltDuringABatchOnManyThreadsAnswersAsOneBuiltBefore) {
+    const Scene scene = testing::scene_of({testing::icosphere_object(5, {0.1, 0.2, -0.3}, 1.5)});
+    const std::vector<Vec3d> pts = random_points(scene.bounds(), 4096, 23);
+    const std::vector<PointAnswer> want = ask(*prepare(scene), pts, PointQuery::closest);
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 16);
+    tbb::task_arena arena(16);
+    std::size_t wrong = 0;
+    arena.execute([&] {
+        for (int run = 0; run < 6; ++run) {
+            const auto engine = prepare(scene);
+            const std::vector<PointAnswer> got = ask(*engine, pts, PointQuery::closest);
+            for (std::size_t i = 0; i < pts.size(); ++i)
+                wrong += got[i].hit.distance != want[i].hit.distance ||
+                         got[i].hit.primitive != want[i].hit.primitive;
+        }
+    });
+    EXPECT_EQ(wrong, 0u);
 }
 
 }  // namespace

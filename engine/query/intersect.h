@@ -22,6 +22,7 @@ namespace raycastd::engine {
 
 class EmbreeAccel;
 struct WindingTrees;     // query/point_entry.cpp
+struct PointTree;        // query/point_entry.cpp
 struct ComputedNormals;  // query/shading_normals.cpp
 
 /// A scene made ready for queries.
@@ -98,8 +99,9 @@ class QueryEngine {
     // on (query/point_entry.cpp). ----
 
     /// The closest surface point to p within max_distance (inclusive), in double (kernels of
-    /// geometry/closest_point.h; Embree's point query culls above 16 primitives), ties by the API's
-    /// rule; nullopt when nothing is that close. p must be finite.
+    /// geometry/closest_point.h), ties by the API's rule; nullopt when nothing is that close. p
+    /// must be finite. Above 16 primitives a tree culls: the point BVH of accel/point_bvh.h,
+    /// built on the first call (where it suits the scene), else Embree's point query.
     std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
     /// Each object's topology (engine/mesh/topology.h), computed at build (objects in parallel,
     /// before the BVH); the entry of a sphere is all zeros.
@@ -132,7 +134,7 @@ class QueryEngine {
     /// point_entry.cpp: each object's topology (objects in parallel) and the empty winding-tree
     /// slots; run by build() before the BVH.
     void prepare_points();
-    /// Bytes of the winding-number trees built so far.
+    /// Bytes of the winding-number trees and of the point BVH built so far.
     std::size_t point_memory_bytes() const;
     std::shared_ptr<const Scene> scene_;
     std::size_t scene_bytes_ = 0;  ///< scene_memory_bytes(), once
@@ -140,6 +142,7 @@ class QueryEngine {
     std::vector<MeshTopology> topology_;  ///< per object (point_entry.cpp)
     /// Built per object on first use; shared_ptr, whose deleter is made where the type is complete.
     std::shared_ptr<WindingTrees> winding_;
+    std::shared_ptr<PointTree> point_tree_;     ///< the same, one slot; null where it does not suit
     std::shared_ptr<ComputedNormals> normals_;  ///< the same, for computed_normals()
     /// shading_normals.cpp: the empty slots, made by build().
     void prepare_normals();

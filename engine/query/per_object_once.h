@@ -10,6 +10,8 @@
 #include <mutex>
 #include <vector>
 
+#include <tbb/task_arena.h>
+
 namespace raycastd::engine {
 
 /// T has memory_bytes().
@@ -23,7 +25,14 @@ class PerObjectOnce {
     template <class Build>
     const T& get(std::size_t i, Build&& build) {
         std::call_once(once_[i], [&] {
-            std::unique_ptr<const T> item = build();
+            // Isolated: the first caller is often a task of a parallel batch (for_each_point),
+            // and a builder that runs TBB work of its own (PointBvh's parallel subtrees) lets a
+            // thread waiting in it take any queued task, such as another block of the batch.
+            // That block would call get() again: on the thread that holds the flag it waits on
+            // itself, and on a thread that stole part of the build it waits for the holder,
+            // which waits for it (found in review; the same trap as QueryEngine's blocks,
+            // intersect.cpp). Threads that arrive meanwhile wait on the flag.
+            std::unique_ptr<const T> item = tbb::this_task_arena::isolate([&] { return build(); });
             bytes_ += item->memory_bytes();
             items_[i] = std::move(item);
         });

@@ -1,9 +1,10 @@
-// QueryEngine's point-query entries (intersect.h): closest points through the accelerator the
-// scene has, each object's topology, and the winding-number trees built on first use.
+// QueryEngine's point-query entries (intersect.h): closest points through the point BVH (or the
+// accelerator the scene has), each object's topology, and the trees built on first use.
 
 #include <tbb/parallel_for.h>
 
 #include "engine/accel/embree_accel.h"
+#include "engine/accel/point_bvh.h"
 #include "engine/accel/point_query.h"
 #include "engine/accel/winding_bvh.h"
 #include "engine/query/intersect.h"
@@ -16,7 +17,16 @@ struct WindingTrees : PerObjectOnce<WindingBvh> {
     using PerObjectOnce::PerObjectOnce;
 };
 
+/// The scene's one PointBvh (slot 0), built on the first closest-point query.
+struct PointTree : PerObjectOnce<PointBvh> {
+    PointTree() : PerObjectOnce(1) {}
+};
+
 std::optional<PointHit> QueryEngine::closest_point(const Vec3d& p, double max_distance) const {
+    if (accel_ && point_tree_) {
+        return point_tree_->get(0, [&] { return std::make_unique<const PointBvh>(*scene_); })
+            .closest_point(p, max_distance);
+    }
     if (accel_)
         return accel_->closest_point(p, max_distance);
     return linear_closest_point(*scene_, p, max_distance);
@@ -31,7 +41,8 @@ double QueryEngine::winding_number(std::uint32_t object, const Vec3d& p) const {
 }
 
 std::size_t QueryEngine::point_memory_bytes() const {
-    return winding_ ? winding_->memory_bytes() : 0;
+    return (winding_ ? winding_->memory_bytes() : 0) +
+           (point_tree_ ? point_tree_->memory_bytes() : 0);
 }
 
 void QueryEngine::prepare_points() {
@@ -42,6 +53,8 @@ void QueryEngine::prepare_points() {
             topology_[i] = compute_topology(*s.objects[i].mesh);
     });
     winding_ = std::make_shared<WindingTrees>(s.objects.size());
+    if (PointBvh::suits(s))
+        point_tree_ = std::make_shared<PointTree>();
 }
 
 }  // namespace raycastd::engine

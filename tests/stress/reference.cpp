@@ -9,6 +9,7 @@
 #include <quadmath.h>
 
 #include "engine/math/float_bounds.h"
+#include "tests/stress/quad_vec.h"
 
 namespace raycastd::stress {
 
@@ -19,26 +20,6 @@ using engine::Scene;
 using engine::Vec3d;
 
 namespace {
-
-/// Vectors of quads; only what the two formulas need.
-struct QVec {
-    Quad x = 0, y = 0, z = 0;
-};
-QVec q(const Vec3d& v) {
-    return {v.x, v.y, v.z};
-}
-QVec operator-(const QVec& a, const QVec& b) {
-    return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-Quad dot(const QVec& a, const QVec& b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-QVec cross(const QVec& a, const QVec& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-Quad norm(const QVec& a) {
-    return sqrtq(dot(a, a));
-}
 
 /// The sphere: Δ/4 = a·r² − |f × d|² (Lagrange's identity) with f = o − c exact in quad.
 void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& ray,
