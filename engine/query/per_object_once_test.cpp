@@ -49,23 +49,25 @@ TEST(PerObjectOnce, AThreadInsideTheBuildTakesNoOtherTaskOfTheLoopAround) {
         PerObjectOnce<Item> slots(1);
         auto build = [&] {
             inside_build = true;
-            tbb::parallel_for(tbb::blocked_range<int>(0, 64, 1), [](const tbb::blocked_range<int>&) {
-                std::this_thread::sleep_for(std::chrono::microseconds(300));
-            });
+            tbb::parallel_for(tbb::blocked_range<int>(0, 64, 1),
+                              [](const tbb::blocked_range<int>&) {
+                                  std::this_thread::sleep_for(std::chrono::microseconds(300));
+                              });
             inside_build = false;
             return std::make_unique<const Item>();
         };
         arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<int>(0, 256, 1), [&](const tbb::blocked_range<int>& r) {
-                if (inside_build) {
-                    ++reentered;
-                    return;
-                }
-                if (r.begin() == 0)
-                    slots.get(0, build);
-                else
-                    std::this_thread::sleep_for(std::chrono::microseconds(100));
-            });
+            tbb::parallel_for(tbb::blocked_range<int>(0, 256, 1),
+                              [&](const tbb::blocked_range<int>& r) {
+                                  if (inside_build) {
+                                      ++reentered;
+                                      return;
+                                  }
+                                  if (r.begin() == 0)
+                                      slots.get(0, build);
+                                  else
+                                      std::this_thread::sleep_for(std::chrono::microseconds(100));
+                              });
         });
     }
     EXPECT_EQ(reentered.load(), 0);

@@ -198,10 +198,11 @@ nlohmann::json run_suite(const Suite& s, const std::filesystem::path& dir) {
     for (const auto& t : mesh.triangles)
         tris.insert(tris.end(), t.begin(), t.end());
     // Through data(): `&v[0]` of an empty vector (`--points 0`, a mesh with no vertices) is UB.
-    write_raw(dir / (s.stem + "_vertices.f64"), reinterpret_cast<const double*>(mesh.positions.data()),
-              3 * mesh.positions.size());
+    write_raw(dir / (s.stem + "_vertices.f64"),
+              reinterpret_cast<const double*>(mesh.positions.data()), 3 * mesh.positions.size());
     write_raw(dir / (s.stem + "_triangles.u32"), tris.data(), tris.size());
-    write_raw(dir / (s.stem + "_points.f64"), reinterpret_cast<const double*>(s.points.data()), 3 * n);
+    write_raw(dir / (s.stem + "_points.f64"), reinterpret_cast<const double*>(s.points.data()),
+              3 * n);
     write_raw(dir / (s.stem + "_ref.f64"), ref.data(), ref.size());
     return {{"suite", s.name},
             {"stem", s.stem},
