@@ -182,10 +182,11 @@ struct Run {
 
 /// Times one query over the points; returns the answers and the times.
 Run run(const re::QueryEngine& e, const std::vector<re::Vec3d>& pts, re::PointQuery q,
-        const char* what) {
+        const char* what, bool spatial_order = true) {
     Run r;
     r.t = timed([&] {
-        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}}, r.answers);
+        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}, spatial_order},
+                               r.answers);
     });
     std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s\n",
                 re::to_string(q), what, pts.size(), r.t.wall, r.t.cpu,
@@ -297,6 +298,9 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     point_tree(*e);
     run(*e, pts, re::PointQuery::closest, "(first: no warm-up)");
     const Run closest = run(*e, pts, re::PointQuery::closest, "");
+    // The same points in the order given (the batch is otherwise taken in its spatial order:
+    // engine/points/batch.h), to measure what that order gains in this run.
+    run(*e, pts, re::PointQuery::closest, "(given order)", false);
     run(*e, pts, re::PointQuery::distance, "");
     const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
     run(*e, pts, re::PointQuery::occupancy, "");
@@ -306,7 +310,9 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     const auto shell = shell_points(s.points);
     std::printf("points in a shell about A (radii 0.99 … 1.01):\n");
     const Run shell_closest = run(*e, shell, re::PointQuery::closest, "(shell)");
+    run(*e, shell, re::PointQuery::closest, "(shell, given order)", false);
     const Run shell_sd = run(*e, shell, re::PointQuery::signed_distance, "(shell, parity rays)");
+    run(*e, shell, re::PointQuery::signed_distance, "(shell, parity, given order)", false);
     run_peers(peer, "A_shell", a, shell, shell_closest, shell_sd);
     double worst = 0;
     for (std::size_t i = 0; i < pts.size(); ++i)

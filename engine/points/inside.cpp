@@ -136,7 +136,8 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
 }  // namespace
 
 Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
-                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out) {
+                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out,
+                       const std::vector<std::uint32_t>& order) {
     const Scene& s = engine.scene();
     const std::vector<MeshTopology>& topo = engine.topology();
     std::vector<std::uint32_t> spheres, windings;
@@ -156,7 +157,7 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
     // The winding number is the largest over the objects; with only winding meshes it may be
     // negative (a mesh facing inwards), so it starts at the lowest value an object can give.
     const double no_winding = spheres.empty() && !any_parity ? -kInfinity : 0.0;
-    for_each_point(n, cancel, [&](std::size_t i) {
+    for_each_point(n, cancel, order, [&](std::size_t i) {
         out[i] = Occupancy{false, no_winding};
         if (on_surface(nearest[i])) {
             out[i] = Occupancy{true, 1.0};
@@ -177,7 +178,8 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
     };
     if (any_parity) {
         std::vector<std::size_t> which;
-        for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::size_t i = order.empty() ? k : order[k];
             if (open(i))
                 which.push_back(i);
         }
@@ -185,7 +187,7 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
     }
     if (cancel.fired())
         return cancel.status();
-    for_each_point(n, cancel, [&](std::size_t i) {
+    for_each_point(n, cancel, order, [&](std::size_t i) {
         if (!open(i) || windings.empty()) {
             if (out[i].winding == -kInfinity)
                 out[i].winding = 0.0;  // an empty scene winds nothing

@@ -19,6 +19,8 @@
 // The scene's answer: inside any object; its winding number is the largest of the objects'.
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "engine/cancel.h"
 #include "engine/query/intersect.h"
@@ -35,8 +37,11 @@ struct Occupancy {
 /// scene) are nearest[0..n), into out[0..n). `all_objects = false` (signed distance) stops at
 /// the first object that contains the point (the winding then is not the largest). ok, or
 /// Code::cancelled once `cancel` has fired (asked per block of points and by the parity rays).
+/// The points are taken in `order` (batch.h's spatial_order; empty: as they come), which changes
+/// no answer, only which points' rays and tree walks follow one another.
 Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
-                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out);
+                       std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out,
+                       const std::vector<std::uint32_t>& order = {});
 
 /// Whether `nearest` puts its query point on a surface (within the distance's error bound).
 inline bool on_surface(const PointHit& nearest) {

@@ -48,7 +48,9 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
     const bool signs =
         options.query == PointQuery::signed_distance || options.query == PointQuery::occupancy;
     const double reach = signs ? kInfinity : options.max_distance;
-    for_each_point(n, options.cancel, [&](std::size_t i) {
+    const std::vector<std::uint32_t> order =
+        options.spatial_order ? spatial_order(points.data(), n) : std::vector<std::uint32_t>{};
+    for_each_point(n, options.cancel, order, [&](std::size_t i) {
         auto h = engine.closest_point(points[i], reach);
         if (!h)
             return;
@@ -66,7 +68,7 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
     std::vector<Occupancy> occ(n);
     const Status st =
         classify_points(engine, points.data(), nearest.data(), n,
-                        options.query == PointQuery::occupancy, options.cancel, occ.data());
+                        options.query == PointQuery::occupancy, options.cancel, occ.data(), order);
     if (!st.ok())
         return st;
     for (std::size_t i = 0; i < n; ++i) {

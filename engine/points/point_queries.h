@@ -38,6 +38,10 @@ struct PointOptions {
     /// Asked once per block of 256 points (and by the parity rays' batch); once it fires, the
     /// rest is skipped and query_points answers Code::cancelled.
     CancelToken cancel{};
+    /// Whether a large batch is taken in its spatial order (batch.h: near points one after the
+    /// other, so the trees they walk stay in cache). The answers are the same either way; false
+    /// is for measuring what the order gains (bench_points' "given order" rows).
+    bool spatial_order = true;
 };
 
 /// One point's answer; which fields mean something depends on the query.
