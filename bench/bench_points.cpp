@@ -298,9 +298,8 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     point_tree(*e);
     run(*e, pts, re::PointQuery::closest, "(first: no warm-up)");
     const Run closest = run(*e, pts, re::PointQuery::closest, "");
-    // The same points in the order given (the batch is otherwise taken in its spatial order,
-    // engine/points/batch.h, each search hinted with the previous point's winner), to measure
-    // what the order gains in this run.
+    // The same points in the order given (the batch is otherwise taken in its spatial order:
+    // engine/points/batch.h), to measure what that order gains in this run.
     run(*e, pts, re::PointQuery::closest, "(given order)", false);
     run(*e, pts, re::PointQuery::distance, "");
     const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");

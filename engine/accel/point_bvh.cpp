@@ -538,8 +538,6 @@ template <class T>
 struct PointBvh::Reach {
     double max_distance;
     BoundMargins m;
-    /// The hint's triangle, already offered: its leaf skips it.
-    std::uint32_t seed_object = kInvalidId, seed_prim = kInvalidId;
     T t2 = std::numeric_limits<T>::infinity(), b2 = std::numeric_limits<T>::infinity();
 
     void update(const PointCandidates& c) {
@@ -627,8 +625,7 @@ void PointBvh::visit_leaf(std::uint32_t first_pack, std::uint32_t count, const V
         bounds(pack.planes, q, reach.m, lb2);
         for (int l = 0; l < 4; ++l) {
             // Written as "not beyond" so that a NaN bound is tested, never culled.
-            if (pack.object[l] != kInvalidId && !(lb2[l] > reach.t2) &&
-                !(pack.prim[l] == reach.seed_prim && pack.object[l] == reach.seed_object))
+            if (pack.object[l] != kInvalidId && !(lb2[l] > reach.t2))
                 lanes[n++] = {std::isnan(lb2[l]) ? T(0) : lb2[l], pack.object[l], pack.prim[l]};
         }
     }
@@ -648,26 +645,12 @@ void PointBvh::visit_leaf(std::uint32_t first_pack, std::uint32_t count, const V
     }
 }
 
-std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_distance,
-                                                const PointHit* hint) const {
+std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_distance) const {
     if (!is_finite(p))
         return std::nullopt;
     PointCandidates c;
     for (std::uint32_t s : spheres_)
         offer_primitive(scene_, s, 0, p, max_distance, c);
-    // The hint's triangle first: in a batch taken in spatial order the previous point's winner is
-    // usually this point's or a neighbour of it, so the walk starts with a reach of about the
-    // answer's distance and culls from the root down (bench_points: docs/points.md). Offering a
-    // primitive out of turn changes nothing: PointCandidates keeps the winner whatever the order.
-    std::uint32_t seed_object = kInvalidId, seed_prim = kInvalidId;
-    if (hint && hint->valid() && hint->object < scene_.objects.size()) {
-        const Object& o = scene_.objects[hint->object];
-        if (o.kind != ObjectKind::sphere && hint->primitive < o.mesh->size()) {
-            offer_primitive(scene_, hint->object, hint->primitive, p, max_distance, c);
-            seed_object = hint->object;
-            seed_prim = hint->primitive;
-        }
-    }
     const Vec3d pc = p - center_;
     if (!(max_abs(pc) <= kMaxQuery))
         return linear_closest_point(scene_, p, max_distance);
@@ -676,14 +659,14 @@ std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_dista
     const double qmax = max_abs(pc);
     if (qmax > kFarQuery * scale_ || scale_ < kTinyScale) {
         const double q[3] = {pc.x, pc.y, pc.z};
-        Reach<double> reach{max_distance, double_margins(qmax, scale_), seed_object, seed_prim};
+        Reach<double> reach{max_distance, double_margins(qmax, scale_)};
         walk(p, q, reach, c);
     } else {
         const float q[3] = {static_cast<float>(pc.x), static_cast<float>(pc.y),
                             static_cast<float>(pc.z)};
         const double fmax = std::max(std::abs(double(q[0])),
                                      std::max(std::abs(double(q[1])), std::abs(double(q[2]))));
-        Reach<float> reach{max_distance, float_margins(fmax, scale_), seed_object, seed_prim};
+        Reach<float> reach{max_distance, float_margins(fmax, scale_)};
         walk(p, q, reach, c);
     }
     return finish_closest_point(scene_, c);

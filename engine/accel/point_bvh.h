@@ -109,11 +109,8 @@ class PointBvh {
 
     /// The closest surface point to p within max_distance (inclusive), the same answer as
     /// linear_closest_point (accel/point_query.h); nullopt when nothing is that close or p is not
-    /// finite. A valid `hint` (any primitive of the scene, e.g. a nearby point's winner) is
-    /// decided first, so that the walk starts with its distance as the reach; the answer is the
-    /// same with or without it.
-    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance,
-                                          const PointHit* hint = nullptr) const;
+    /// finite.
+    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
 
     /// Bytes held by the tree.
     std::size_t memory_bytes() const;

@@ -186,52 +186,6 @@ TEST(PointBvh, TiesGoToTheLowerObjectThenTheLowerPrimitive) {
     }
 }
 
-// A hint (the previous point's winner in a batch) is decided first and skipped in its leaf: any
-// primitive as the hint, or a hint out of range, leaves the answer brute force's, bit for bit,
-// including ties, where the hint is the loser.
-TEST(PointBvh, AnyHintLeavesTheAnswerAsItIs) {
-    const Scene s = testing::random_scene(6);
-    ASSERT_TRUE(PointBvh::suits(s));
-    const PointBvh tree(s);
-    std::mt19937_64 rng(8);
-    std::uniform_real_distribution<double> pos(-9, 9);
-    std::uniform_int_distribution<std::uint32_t> object(0, std::uint32_t(s.objects.size()));
-    int hinted = 0;
-    PointHit previous;
-    for (int i = 0; i < 20000; ++i) {
-        const Vec3d p{pos(rng), pos(rng), pos(rng)};
-        PointHit hint = previous;  // usually the last answer; else any primitive, or none
-        if (i % 3 == 1) {
-            hint.object = object(rng);  // may be one past the last object
-            const std::uint32_t n = hint.object < s.objects.size()
-                                        ? std::uint32_t(s.objects[hint.object].primitive_count())
-                                        : 1;
-            hint.primitive = std::uniform_int_distribution<std::uint32_t>(0, n)(rng);
-        }
-        const double reach = i % 4 == 0 ? 1.0 : kInfinity;
-        SCOPED_TRACE(i);
-        const auto h = tree.closest_point(p, reach, &hint);
-        expect_same_point_hit(h, linear_closest_point(s, p, reach));
-        hinted += hint.valid();
-        previous = h ? *h : PointHit{};
-    }
-    EXPECT_GT(hinted, 10000);
-
-    // Mirrored triangles in objects 1 and 2, tied at z = 0: the loser as the hint.
-    Object upper = testing::mesh_object("up", {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}}, {{0, 1, 2}});
-    Object lower = testing::mesh_object("down", {{0, 0, -1}, {1, 0, -1}, {0, 1, -1}}, {{0, 2, 1}});
-    const Scene ties =
-        testing::scene_of({testing::cube_object(50, 51), upper, lower, testing::cube_object(5, 6)});
-    const PointBvh tie_tree(ties);
-    PointHit loser;
-    loser.object = 2;
-    loser.primitive = 0;
-    const auto h = tie_tree.closest_point({0.25, 0.25, 0}, kInfinity, &loser);
-    ASSERT_TRUE(h);
-    EXPECT_EQ(h->object, 1u);
-    expect_same_point_hit(h, linear_closest_point(ties, {0.25, 0.25, 0}, kInfinity));
-}
-
 TEST(PointBvh, SliversAreDecidedExactly) {
     // Needles and near-degenerate fans around a good triangle: their planes may be invalid (a
     // bound of 0), never wrong.

@@ -6,7 +6,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <type_traits>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -27,13 +26,8 @@ constexpr std::size_t kSpatialOrderMin = 4096;
 /// order) for fewer than kSpatialOrderMin points or bounds of no extent.
 std::vector<std::uint32_t> spatial_order(const Vec3d* points, std::size_t n);
 
-/// The `before` of a block's first point (for_each_point).
-constexpr std::size_t kNoPoint = static_cast<std::size_t>(-1);
-
 /// Calls f(i) for every i in [0, n), in parallel; each i at most once, in the order of `order`
-/// (a permutation of [0, n), e.g. spatial_order's; empty: 0, 1, …) block by block. An f that
-/// takes two indices gets f(i, before) with `before` the point taken just before i on the same
-/// block (whose work is done: f may read what it wrote), kNoPoint for a block's first.
+/// (a permutation of [0, n), e.g. spatial_order's; empty: 0, 1, …) block by block.
 /// `cancel` is asked once per block (engine/cancel.h); once it has fired, blocks not yet begun
 /// are skipped (the caller asks cancel.fired()).
 template <class F>
@@ -43,15 +37,8 @@ void for_each_point(std::size_t n, const CancelToken& cancel,
                       [&](const tbb::blocked_range<std::size_t>& r) {
                           if (cancel.cancelled())
                               return;
-                          std::size_t before = kNoPoint;
-                          for (std::size_t k = r.begin(); k != r.end(); ++k) {
-                              const std::size_t i = order.empty() ? k : std::size_t{order[k]};
-                              if constexpr (std::is_invocable_v<F&, std::size_t, std::size_t>)
-                                  f(i, before);
-                              else
-                                  f(i);
-                              before = i;
-                          }
+                          for (std::size_t k = r.begin(); k != r.end(); ++k)
+                              f(order.empty() ? k : std::size_t{order[k]});
                       });
 }
 

@@ -101,11 +101,8 @@ class QueryEngine {
     /// The closest surface point to p within max_distance (inclusive), in double (kernels of
     /// geometry/closest_point.h), ties by the API's rule; nullopt when nothing is that close. p
     /// must be finite. Above 16 primitives a tree culls: the point BVH of accel/point_bvh.h,
-    /// built on the first call (where it suits the scene), else Embree's point query. `hint`, a
-    /// nearby point's answer (a batch passes the previous point's), is the point BVH's first
-    /// candidate; it changes no answer, only how soon the search narrows.
-    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance,
-                                          const PointHit* hint = nullptr) const;
+    /// built on the first call (where it suits the scene), else Embree's point query.
+    std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
     /// Each object's topology (engine/mesh/topology.h), computed at build (objects in parallel,
     /// before the BVH); the entry of a sphere is all zeros.
     const std::vector<MeshTopology>& topology() const { return topology_; }

@@ -22,11 +22,10 @@ struct PointTree : PerObjectOnce<PointBvh> {
     PointTree() : PerObjectOnce(1) {}
 };
 
-std::optional<PointHit> QueryEngine::closest_point(const Vec3d& p, double max_distance,
-                                                   const PointHit* hint) const {
+std::optional<PointHit> QueryEngine::closest_point(const Vec3d& p, double max_distance) const {
     if (accel_ && point_tree_) {
         return point_tree_->get(0, [&] { return std::make_unique<const PointBvh>(*scene_); })
-            .closest_point(p, max_distance, hint);
+            .closest_point(p, max_distance);
     }
     if (accel_)
         return accel_->closest_point(p, max_distance);
