@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -23,7 +24,9 @@ constexpr std::size_t kSpatialOrderMin = 4096;
 /// other and walk the same nodes of a scene's trees, which then stay in cache (on 1M points in a
 /// shell about an 82k-triangle icosphere, whose point tree is 10 MB: docs/points.md). Points in
 /// one cell keep their order; points that are not finite come first. Empty (the batch's own
-/// order) for fewer than kSpatialOrderMin points or bounds of no extent.
+/// order) for fewer than kSpatialOrderMin or more than 2³² − 1 points, and for bounds of no
+/// extent or wider than a double holds. Memory: the 4 bytes a point returned, and as much again
+/// and 1 MB while it is computed.
 std::vector<std::uint32_t> spatial_order(const Vec3d* points, std::size_t n);
 
 /// Calls f(i) for every i in [0, n), in parallel; each i at most once, in the order of `order`

@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include "engine/points/inside.h"
 #include "engine/points/point_queries.h"
@@ -80,6 +82,55 @@ TEST(SpatialOrder, ForEachPointVisitsEachIndexOnceInTheGivenOrder) {
     for_each_point(n, CancelToken{}, order, [&](std::size_t i) { ++seen[i]; });
     for (std::size_t i = 0; i < n; ++i)
         ASSERT_EQ(seen[i].load(), 1) << i;
+    // On one thread the blocks run one after the other, first to last: exactly `order`.
+    std::vector<std::size_t> visits;
+    tbb::task_arena(1).execute([&] {
+        for_each_point(n, CancelToken{}, order, [&](std::size_t i) { visits.push_back(i); });
+    });
+    ASSERT_EQ(visits.size(), n);
+    for (std::size_t k = 0; k < n; ++k)
+        ASSERT_EQ(visits[k], order[k]) << k;
+}
+
+// The Z-order itself: 16³ points at the centres of the cells of a 16³ grid (and two corners),
+// shuffled, come out in the order of their Morton codes with x in the lowest bit (Morton 1966),
+// the code computed here bit by bit from the cell. spatial_order's grid for 4,098 points has 32
+// cells an axis: each point is then in cell 2x + 1, whose 5-bit code is the 4-bit one shifted
+// up by three bits (the finer Z-order nests in the coarser), so the order is the same.
+TEST(SpatialOrder, CellsComeInMortonOrderWithXLowest) {
+    std::vector<Vec3d> pts;
+    std::vector<std::uint32_t> code;
+    for (std::uint32_t z = 0; z < 16; ++z) {
+        for (std::uint32_t y = 0; y < 16; ++y) {
+            for (std::uint32_t x = 0; x < 16; ++x) {
+                pts.push_back({x + 0.5, y + 0.5, z + 0.5});
+                std::uint32_t c = 0;
+                for (int b = 0; b < 4; ++b)
+                    c |= (((x >> b) & 1u) << (3 * b)) | (((y >> b) & 1u) << (3 * b + 1)) |
+                         (((z >> b) & 1u) << (3 * b + 2));
+                code.push_back(c);
+            }
+        }
+    }
+    // Stretch the bounds to exactly [0, 16]³ so that each point sits in the middle of its cell.
+    pts.push_back({0, 0, 0});
+    code.push_back(0);
+    pts.push_back({16, 16, 16});
+    code.push_back(4095);  // on the upper face: clamped into the last cell
+    std::vector<std::size_t> shuffle(pts.size());
+    for (std::size_t i = 0; i < shuffle.size(); ++i)
+        shuffle[i] = i;
+    std::shuffle(shuffle.begin(), shuffle.end(), std::mt19937_64(5));
+    std::vector<Vec3d> shuffled;
+    std::vector<std::uint32_t> shuffled_code;
+    for (std::size_t i : shuffle) {
+        shuffled.push_back(pts[i]);
+        shuffled_code.push_back(code[i]);
+    }
+    const std::vector<std::uint32_t> order = spatial_order(shuffled.data(), shuffled.size());
+    ASSERT_EQ(order.size(), shuffled.size());
+    for (std::size_t k = 1; k < order.size(); ++k)
+        ASSERT_LE(shuffled_code[order[k - 1]], shuffled_code[order[k]]) << k;
 }
 
 // Every answer of a batch taken in its spatial order is the one the point gets alone: the
