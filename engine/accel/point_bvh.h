@@ -10,8 +10,9 @@
 // leaf's triangles first get a conservative lower bound of their distance in float, four at a
 // time; only a triangle whose bound does not exceed the best distance so far (plus the ties'
 // margin, PointCandidates::cull_distance) is decided exactly in double by the kernel of
-// geometry/closest_point.h. The answer is the one brute force gives (same winner, same bits),
-// whatever the order: PointCandidates decides, the tree only culls.
+// geometry/closest_point.h. The answer is the one brute force gives (same winner, same bits):
+// PointCandidates decides, the tree only culls (up to PointCandidates' one limit on the order,
+// geometry/closest_point.h: near-ties whose error bounds differ widely).
 //
 // The lower bound (one triangle T with unit normal n and in-plane outward edge normals m_e, all
 // rounded to float): T lies in the slab |n·x − o| ≤ r and in each half-space m_e·x ≤ o_e, so for

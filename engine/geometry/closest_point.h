@@ -73,11 +73,16 @@ inline bool clearly_closer(const PointHit& a, const PointHit& b) {
     return a.distance + a.err + b.err < b.distance;
 }
 
-/// Keeps the winner of a closest-point search whatever order the candidates come in: among the
-/// candidates whose distance ties the smallest one within their error bounds, the lowest
-/// (object, primitive). Candidates that can still tie are kept in a fixed buffer (no allocation
-/// per query); past kKeep of them (a point equidistant from many primitives, e.g. the apex of a
-/// fan, where vertex points tie bit for bit) the one with the highest ids is dropped.
+/// Keeps the winner of a closest-point search: among the candidates whose distance ties the
+/// smallest one within their error bounds, the lowest (object, primitive). Candidates that can
+/// still tie are kept in a fixed buffer (no allocation per query); past kKeep of them (a point
+/// equidistant from many primitives, e.g. the apex of a fan, where vertex points tie bit for bit)
+/// the one with the highest ids is dropped. The order of the candidates does not matter while the
+/// near-tied ones have error bounds of one size (each is 16 ulps of the largest coordinate of the
+/// point and the primitive): a candidate H refused beside the best A so far is not taken back when
+/// a closer B with a much larger bound (a primitive with far larger coordinates) would have tied
+/// with it, so H < A < B by ids, A before H, then B, gives A where the id order gives H. A fix is
+/// one bound per query (the scene's largest coordinate); not done yet.
 class PointCandidates {
   public:
     /// Offers one candidate.
