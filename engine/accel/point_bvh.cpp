@@ -8,6 +8,9 @@
 #include <type_traits>
 
 #include <tbb/parallel_invoke.h>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 #include "engine/accel/point_query.h"
 #include "engine/math/float_bounds.h"
@@ -196,15 +199,47 @@ F4 load4(const float* p) {
 }
 /// Lane by lane a > b ? a : b; b where either is NaN.
 F4 max4(F4 a, F4 b) {
+#if defined(__SSE__)
+    // maxps is exactly this rule (Intel SDM, MAXPS: the second operand where either is NaN).
+    return reinterpret_cast<F4>(
+        _mm_max_ps(reinterpret_cast<__m128>(a), reinterpret_cast<__m128>(b)));
+#else
     const I4 m = a > b;
     return reinterpret_cast<F4>((reinterpret_cast<I4>(a) & m) | (reinterpret_cast<I4>(b) & ~m));
+#endif
 }
 F4 abs4(F4 a) {
     return reinterpret_cast<F4>(reinterpret_cast<I4>(a) &
                                 I4{0x7fffffff, 0x7fffffff, 0x7fffffff, 0x7fffffff});
 }
 F4 sqrt4(F4 a) {
+#if defined(__SSE__)
+    return reinterpret_cast<F4>(_mm_sqrt_ps(reinterpret_cast<__m128>(a)));
+#else
     return F4{std::sqrt(a[0]), std::sqrt(a[1]), std::sqrt(a[2]), std::sqrt(a[3])};
+#endif
+}
+/// Bit l set where lane l of `in` is all ones (movmskps where SSE has it).
+unsigned lane_mask(I4 in) {
+#if defined(__SSE__)
+    return static_cast<unsigned>(_mm_movemask_ps(reinterpret_cast<__m128>(in)));
+#else
+    return unsigned(in[0] & 1) | unsigned(in[1] & 2) | unsigned(in[2] & 4) | unsigned(in[3] & 8);
+#endif
+}
+/// The lanes of four squared distances that are not beyond r2 (a NaN is not: visited, never
+/// culled) and whose id is not kInvalidId, as bits.
+unsigned within(const float d2[4], float r2, const std::uint32_t id[4]) {
+    I4 ids;
+    std::memcpy(&ids, id, sizeof ids);
+    const F4 r = {r2, r2, r2, r2};
+    return lane_mask(~(load4(d2) > r) & (ids != I4{-1, -1, -1, -1}));
+}
+unsigned within(const double d2[4], double r2, const std::uint32_t id[4]) {
+    unsigned mask = 0;
+    for (int l = 0; l < 4; ++l)
+        mask |= unsigned(id[l] != kInvalidId && !(d2[l] > r2)) << l;
+    return mask;
 }
 /// The four lanes' plane function r[0]·q.x + r[1]·q.y + r[2]·q.z − r[3].
 F4 plane4(const float (&r)[4][4], F4 qx, F4 qy, F4 qz) {
@@ -539,6 +574,8 @@ struct PointBvh::Reach {
     double max_distance;
     BoundMargins m;
     T t2 = std::numeric_limits<T>::infinity(), b2 = std::numeric_limits<T>::infinity();
+    /// m.plane rounded up to float, for the float leaf bounds (once a query, not a pack).
+    float eps = up_or_inf(m.plane);
 
     void update(const PointCandidates& c) {
         const double r = std::min(max_distance, c.cull_distance());
@@ -598,10 +635,10 @@ void box_distances2(const Node4& n, const double q[3], double out[4]) {
 }
 
 /// The leaf bounds at float or double.
-void bounds(const PlanePack& pack, const float q[3], const BoundMargins& m, float out[4]) {
-    float_bounds2(pack, q, up_or_inf(m.plane), out);
+void bounds(const PlanePack& pack, const float q[3], const BoundMargins&, float eps, float out[4]) {
+    float_bounds2(pack, q, eps, out);
 }
-void bounds(const PlanePack& pack, const double q[3], const BoundMargins& m, double out[4]) {
+void bounds(const PlanePack& pack, const double q[3], const BoundMargins& m, float, double out[4]) {
     lower_bounds2(pack, q, m, out);
 }
 
@@ -622,21 +659,26 @@ void PointBvh::visit_leaf(std::uint32_t first_pack, std::uint32_t count, const V
     for (std::uint32_t k = 0; k < packs; ++k) {
         const Pack& pack = packs_[first_pack + k];
         T lb2[4];
-        bounds(pack.planes, q, reach.m, lb2);
-        for (int l = 0; l < 4; ++l) {
-            // Written as "not beyond" so that a NaN bound is tested, never culled.
-            if (pack.object[l] != kInvalidId && !(lb2[l] > reach.t2))
-                lanes[n++] = {std::isnan(lb2[l]) ? T(0) : lb2[l], pack.object[l], pack.prim[l]};
+        bounds(pack.planes, q, reach.m, reach.eps, lb2);
+        // A NaN bound is tested, never culled (within).
+        for (unsigned mask = within(lb2, reach.t2, pack.object); mask != 0; mask &= mask - 1) {
+            const int l = __builtin_ctz(mask);
+            lanes[n++] = {std::isnan(lb2[l]) ? T(0) : lb2[l], pack.object[l], pack.prim[l]};
         }
     }
-    for (int i = 1; i < n; ++i) {  // insertion sort: at most 8
-        const Lane x = lanes[i];
-        int j = i;
-        for (; j > 0 && lanes[j - 1].lb2 > x.lb2; --j)
-            lanes[j] = lanes[j - 1];
-        lanes[j] = x;
-    }
-    for (int i = 0; i < n && !(lanes[i].lb2 > reach.t2); ++i) {
+    // Smallest bound first, equal bounds in lane order (a stable sort's order), by selection:
+    // usually the first test or two shrink the reach past the others, so sorting all of them
+    // (up to 8) would be mostly wasted.
+    for (unsigned left = (1u << n) - 1; left != 0;) {
+        int i = __builtin_ctz(left);
+        for (unsigned r = left & (left - 1); r != 0; r &= r - 1) {
+            const int k = __builtin_ctz(r);
+            if (lanes[k].lb2 < lanes[i].lb2)
+                i = k;
+        }
+        if (lanes[i].lb2 > reach.t2)
+            break;
+        left &= ~(1u << i);
         const Triangle t = scene_.objects[lanes[i].object].mesh->triangle(lanes[i].prim);
         if (auto cp = closest_point_on_triangle(t, p)) {
             offer_closest_point(*cp, lanes[i].object, lanes[i].prim, reach.max_distance, c);
@@ -682,44 +724,55 @@ void PointBvh::walk(const Vec3d& p, const T q[3], Reach<T>& reach, PointCandidat
     };
     Entry stack[3 * 32 + 4];  // three entries a level at most; depth ≤ 32 (log₄ of 2³² · 2)
     int top = 0;
-    std::uint32_t at = 0;
+    Entry at{0, 0, T(0)};  // the root
     for (;;) {
-        const Node4& n = nodes4_[at];
-        T d2[4];
-        box_distances2(n, q, d2);
-        // The children within reach, nearest first (at most four: insertion sort).
-        Entry near[4];
-        int m = 0;
-        for (int l = 0; l < 4; ++l) {
-            if (n.child[l] == kInvalidId || d2[l] > reach.b2)
-                continue;
-            Entry e{n.child[l], n.count[l], d2[l]};
-            int j = m++;
-            for (; j > 0 && near[j - 1].d2 > e.d2; --j)
-                near[j] = near[j - 1];
-            near[j] = e;
-        }
-        // The farther ones wait (pushed farthest first), the nearest is taken now; leaves are
-        // visited as they come.
-        for (int j = m - 1; j >= 0; --j) {
-            assert(top < int(sizeof stack / sizeof stack[0]));
-            stack[top++] = near[j];
-        }
-        bool descended = false;
-        while (top > 0) {
-            const Entry e = stack[--top];
-            if (e.d2 > reach.b2)
-                continue;
-            if (e.count > 0) {
-                visit_leaf(e.child, e.count, p, q, reach, c);
+        if (at.count > 0) {
+            visit_leaf(at.child, at.count, p, q, reach, c);
+        } else {
+            const Node4& n = nodes4_[at.child];
+            T d2[4];
+            box_distances2(n, q, d2);
+            // The lanes within reach, as bits.
+            unsigned mask = within(d2, reach.b2, n.child);
+            if (mask != 0) {
+                // Near the surface most nodes have one child within reach: taken at once. Two or
+                // more are ordered nearest first, equal distances in lane order (the order the
+                // exact tests then come in is the same as a stable sort's), the nearest taken
+                // now, the others pushed farthest first; leaves are visited as they come.
+                int l = __builtin_ctz(mask);
+                mask &= mask - 1;
+                if (mask == 0) {
+                    at = {n.child[l], n.count[l], d2[l]};
+                    continue;
+                }
+                Entry near[4];
+                near[0] = {n.child[l], n.count[l], d2[l]};
+                int m = 1;
+                for (; mask != 0; mask &= mask - 1) {
+                    l = __builtin_ctz(mask);
+                    const Entry e{n.child[l], n.count[l], d2[l]};
+                    int j = m++;
+                    for (; j > 0 && near[j - 1].d2 > e.d2; --j)
+                        near[j] = near[j - 1];
+                    near[j] = e;
+                }
+                for (int j = m - 1; j > 0; --j) {
+                    assert(top < int(sizeof stack / sizeof stack[0]));
+                    stack[top++] = near[j];
+                }
+                at = near[0];
                 continue;
             }
-            at = e.child;
-            descended = true;
-            break;
         }
-        if (!descended)
-            return;
+        // The next waiting child still within reach (the reach may have shrunk since it was
+        // pushed).
+        for (;;) {
+            if (top == 0)
+                return;
+            at = stack[--top];
+            if (!(at.d2 > reach.b2))
+                break;
+        }
     }
 }
 

@@ -163,15 +163,16 @@ bool near(const PointHit& h, const PointHit& best) {
 }  // namespace
 
 void PointCandidates::offer(const PointHit& h) {
-    if (best_ >= 0 && !near(h, kept_[best_]))
+    if (best_ >= 0 && !near(h, kept_[best_].hit))
         return;
-    const bool new_best = best_ < 0 || h.distance < kept_[best_].distance ||
-                          (h.distance == kept_[best_].distance && lower_ids(h, kept_[best_]));
+    const bool new_best =
+        best_ < 0 || h.distance < kept_[best_].hit.distance ||
+        (h.distance == kept_[best_].hit.distance && lower_ids(h, kept_[best_].hit));
     if (count_ == kKeep)
         make_room(h, new_best);
     if (count_ == kKeep)
         return;  // h has higher ids than every kept candidate that ties
-    kept_[count_] = h;
+    kept_[count_].hit = h;
     if (new_best)
         best_ = count_;
     ++count_;
@@ -179,13 +180,13 @@ void PointCandidates::offer(const PointHit& h) {
 
 void PointCandidates::make_room(const PointHit& h, bool new_best) {
     // First drop what the best (the new one, if h is) leaves out of reach.
-    const PointHit b = new_best ? h : kept_[best_];
+    const PointHit b = new_best ? h : kept_[best_].hit;
     int n = 0;
     for (int i = 0; i < count_; ++i) {
         if (i == best_)
-            best_ = near(kept_[i], b) ? n : -1;
-        if (near(kept_[i], b))
-            kept_[n++] = kept_[i];
+            best_ = near(kept_[i].hit, b) ? n : -1;
+        if (near(kept_[i].hit, b))
+            kept_[n++].hit = kept_[i].hit;
     }
     count_ = n;
     if (count_ < kKeep)
@@ -194,34 +195,34 @@ void PointCandidates::make_room(const PointHit& h, bool new_best) {
     // h's ids are higher still and h is not the new best.
     int worst = best_ == 0 ? 1 : 0;
     for (int i = 0; i < count_; ++i) {
-        if (i != best_ && lower_ids(kept_[worst], kept_[i]))
+        if (i != best_ && lower_ids(kept_[worst].hit, kept_[i].hit))
             worst = i;
     }
-    if (!new_best && lower_ids(kept_[worst], h))
+    if (!new_best && lower_ids(kept_[worst].hit, h))
         return;
     --count_;
     if (best_ == count_)
         best_ = worst;
-    kept_[worst] = kept_[count_];
+    kept_[worst].hit = kept_[count_].hit;
 }
 
 PointHit PointCandidates::winner() const {
     if (best_ < 0)
         return PointHit{};
-    const PointHit& b = kept_[best_];
+    const PointHit& b = kept_[best_].hit;
     int win = best_;
     for (int i = 0; i < count_; ++i) {
-        if (near(kept_[i], b) && lower_ids(kept_[i], kept_[win])) {
+        if (near(kept_[i].hit, b) && lower_ids(kept_[i].hit, kept_[win].hit)) {
             win = i;
         }
     }
-    return kept_[win];
+    return kept_[win].hit;
 }
 
 double PointCandidates::cull_distance() const {
     if (best_ < 0)
         return kInfinity;
-    return kept_[best_].distance + 4.0 * kept_[best_].err;
+    return kept_[best_].hit.distance + 4.0 * kept_[best_].hit.err;
 }
 
 }  // namespace raycastd::engine
