@@ -634,6 +634,16 @@ void box_distances2(const Node4& n, const double q[3], double out[4]) {
     }
 }
 
+/// Four bounds with a NaN replaced by 0.
+void nan_to_zero(float b[4]) {
+    const F4 v = max4(load4(b), F4{});  // max4's NaN rule
+    std::memcpy(b, &v, sizeof v);
+}
+void nan_to_zero(double b[4]) {
+    for (int l = 0; l < 4; ++l)
+        b[l] = std::isnan(b[l]) ? 0.0 : b[l];
+}
+
 /// The leaf bounds at float or double.
 void bounds(const PlanePack& pack, const float q[3], const BoundMargins&, float eps, float out[4]) {
     float_bounds2(pack, q, eps, out);
@@ -649,41 +659,37 @@ void PointBvh::visit_leaf(std::uint32_t first_pack, std::uint32_t count, const V
                           const T q[3], Reach<T>& reach, PointCandidates& c) const {
     // The bounds of the leaf's triangles (at most 8), then the exact tests in increasing order of
     // the bound: the first one found shrinks the reach for the others, which the bounds then cull.
-    struct Lane {
-        T lb2;
-        std::uint32_t object, prim;
-    };
-    Lane lanes[8];
-    int n = 0;
+    assert(count <= 8);
+    T lb2[8];
+    unsigned mask = 0;  // bit 4k + l: lane l of the k-th pack is within reach
     const std::uint32_t packs = (count + 3) / 4;
     for (std::uint32_t k = 0; k < packs; ++k) {
         const Pack& pack = packs_[first_pack + k];
-        T lb2[4];
-        bounds(pack.planes, q, reach.m, reach.eps, lb2);
-        // A NaN bound is tested, never culled (within).
-        for (unsigned mask = within(lb2, reach.t2, pack.object); mask != 0; mask &= mask - 1) {
-            const int l = __builtin_ctz(mask);
-            lanes[n++] = {std::isnan(lb2[l]) ? T(0) : lb2[l], pack.object[l], pack.prim[l]};
-        }
+        bounds(pack.planes, q, reach.m, reach.eps, lb2 + 4 * k);
+        // A NaN bound is tested first, never culled (within, and 0 here).
+        nan_to_zero(lb2 + 4 * k);
+        mask |= within(lb2 + 4 * k, reach.t2, pack.object) << (4 * k);
     }
     // Smallest bound first, equal bounds in lane order (a stable sort's order), by selection:
     // usually the first test or two shrink the reach past the others, so sorting all of them
-    // (up to 8) would be mostly wasted.
-    for (unsigned left = (1u << n) - 1; left != 0;) {
-        int i = __builtin_ctz(left);
-        for (unsigned r = left & (left - 1); r != 0; r &= r - 1) {
+    // would be mostly wasted.
+    while (mask != 0) {
+        int i = __builtin_ctz(mask);
+        for (unsigned r = mask & (mask - 1); r != 0; r &= r - 1) {
             const int k = __builtin_ctz(r);
-            if (lanes[k].lb2 < lanes[i].lb2)
+            if (lb2[k] < lb2[i])
                 i = k;
         }
-        if (lanes[i].lb2 > reach.t2)
+        if (lb2[i] > reach.t2)
             break;
-        left &= ~(1u << i);
-        const Triangle t = scene_.objects[lanes[i].object].mesh->triangle(lanes[i].prim);
-        if (auto cp = closest_point_on_triangle(t, p)) {
-            offer_closest_point(*cp, lanes[i].object, lanes[i].prim, reach.max_distance, c);
-            reach.update(c);
-        }
+        mask &= ~(1u << i);
+        const Pack& pack = packs_[first_pack + i / 4];
+        const std::uint32_t object = pack.object[i % 4], prim = pack.prim[i % 4];
+        // The tree holds no degenerate triangle (the constructor), and p is finite.
+        const Triangle t = scene_.objects[object].mesh->triangle(prim);
+        offer_closest_point(closest_point_on_valid_triangle(t, p), object, prim, reach.max_distance,
+                            c);
+        reach.update(c);
     }
 }
 

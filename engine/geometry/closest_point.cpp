@@ -124,6 +124,10 @@ ClosestPoint regions(const Triangle& t, const Vec3d& p) {
 std::optional<ClosestPoint> closest_point_on_triangle(const Triangle& tri, const Vec3d& p) {
     if (is_degenerate(tri) || !is_finite(p))
         return std::nullopt;
+    return closest_point_on_valid_triangle(tri, p);
+}
+
+ClosestPoint closest_point_on_valid_triangle(const Triangle& tri, const Vec3d& p) {
     ClosestPoint out = regions(tri, p);
     const double scale =
         std::max({max_abs(p), max_abs(tri.a), max_abs(tri.b), max_abs(tri.c), 1e-300});

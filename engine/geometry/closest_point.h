@@ -46,6 +46,10 @@ struct ClosestPoint {
 /// The closest point of the triangle to p and its distance; nullopt for a degenerate triangle
 /// ((b−a)×(c−a) exactly zero) and for non-finite p.
 std::optional<ClosestPoint> closest_point_on_triangle(const Triangle& tri, const Vec3d& p);
+/// The same for a triangle known not to be degenerate and a finite p, without checking them
+/// again (the point tree holds no degenerate triangle and checks p once a query: the checks were
+/// 4 % of a closest-point query's instructions on bench_points' shell).
+ClosestPoint closest_point_on_valid_triangle(const Triangle& tri, const Vec3d& p);
 
 /// The closest point of the sphere's surface to p; for p at the centre (every surface point is
 /// as close) the point at +x, c + (r, 0, 0).

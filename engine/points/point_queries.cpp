@@ -50,13 +50,19 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
     const double reach = signs ? kInfinity : options.max_distance;
     const std::vector<std::uint32_t> order =
         options.spatial_order ? spatial_order(points.data(), n) : std::vector<std::uint32_t>{};
-    for_each_point(n, options.cancel, order, [&](std::size_t i) {
-        auto h = engine.closest_point(points[i], reach);
-        if (!h)
-            return;
-        out[i].hit = as_reported(*h, points[i]);
-        out[i].distance = out[i].hit.distance;
-    });
+    for_each_point(
+        n, options.cancel, order,
+        [&](std::size_t i) {
+            auto h = engine.closest_point(points[i], reach);
+            if (!h)
+                return;
+            out[i].hit = as_reported(*h, points[i]);
+            out[i].distance = out[i].hit.distance;
+        },
+        [&](std::size_t i) {
+            __builtin_prefetch(&points[i]);
+            __builtin_prefetch(&out[i], 1);
+        });
     if (options.cancel.fired())
         return options.cancel.status();
     if (!signs)
