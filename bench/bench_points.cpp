@@ -4,15 +4,17 @@
 //                           PLY) with and without the topology; 1M query points against
 //                           workload A (the 81,920-triangle icosphere): closest points, signed
 //                           distance, occupancy; 1M points in a shell about A (radii 0.99-1.01):
-//                           closest points and signed distance; 1M points' signed distance against
-//                           B with one triangle removed (the winding-number path on 1M triangles)
+//                           closest points and signed distance; 1M uniform points against B
+//                           (closed, parity): closest points and signed distance; 1M points'
+//                           signed distance against B with one triangle removed (the
+//                           winding-number path on 1M triangles)
 //   bench_points --quick    small sizes (seconds)
 //   bench_points --registration-only   the registration part alone
 //   bench_points --smoke    tiny sizes, < 1 s; exits 1 if a signed distance disagrees with the
 //                           sphere it approximates (the CTest `bench_points_smoke`)
 //
 // Besides in-process (not in --smoke), the same mesh and points go through two peers in the same
-// run, and a table of the three closes the section on A:
+// run, and a table of the three closes the sections on A, its shell and B:
 //   * raycastd's binary endpoint, POST /v1/scenes/{id}/points?dtype=float32, the server binary
 //     (build/release/server/raycastd) on loopback (bench/peers/points_http_peer.py): wall time
 //     from request to the answer's last byte, and the server process's CPU time;
@@ -249,7 +251,8 @@ void compare(const char* what, const char* key, const Run& ours, const nlohmann:
 
 /// The peers on the points `name` (A's mesh), and the comparison table.
 void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
-               const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist) {
+               const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist,
+               int reps = 3) {
     if (peer.open3d_script.empty() && peer.server.empty())
         return;
     if (!write_peer_files(peer, name, a, pts, dist, signed_dist)) {
@@ -259,12 +262,14 @@ void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
     nlohmann::json http, o3d;
     if (!peer.server.empty()) {
         http = run_peer("/usr/bin/python3 " + peer.http_script + " --data-dir " + peer.data_dir +
-                            " --binary " + peer.server + " --workload " + name,
+                            " --binary " + peer.server + " --workload " + name + " --reps " +
+                            std::to_string(reps),
                         "binary endpoint");
     }
     if (!peer.open3d_script.empty()) {
         o3d = run_peer("LD_PRELOAD=" + peer.shim + " /usr/bin/python3 " + peer.open3d_script +
-                           " --data-dir " + peer.data_dir + " --workload " + name,
+                           " --data-dir " + peer.data_dir + " --workload " + name + " --reps " +
+                           std::to_string(reps),
                        "open3d");
     }
     std::printf("  side by side (wall; CPU of every thread of the process):\n");
@@ -324,6 +329,21 @@ double points_on_a(const Sizes& s, const Peer& peer) {
     return worst;
 }
 
+/// Points against the whole of B (closed: parity signs), side by side with the peers: the issue's
+/// second mesh, 1M triangles in 200 components. The peers time one call after their warm-up here
+/// (Open3D takes tens of seconds a call on it).
+void points_on_b(const Sizes& s, const Peer& peer) {
+    const rb::Workload b = rb::make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
+    auto e = prepare(rb::to_engine_scene(b));
+    const auto pts = random_points(e->scene().bounds(), s.points);
+    std::printf("points against B (%zu triangles, sign %s):\n", b.triangles.size(),
+                re::to_string(e->topology()[0].sign));
+    point_tree(*e);
+    const Run closest = run(*e, pts, re::PointQuery::closest, "");
+    const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
+    run_peers(peer, "B", b, pts, closest, sd, 1);
+}
+
 void winding_on_b(const Sizes& s) {
     rb::Workload b = rb::make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
     b.triangles.pop_back();  // a hole: the winding-number path
@@ -380,6 +400,7 @@ int main(int argc, char** argv) {
     if (registration_only)
         return 0;
     const double worst = points_on_a(s, peer);
+    points_on_b(s, peer);
     winding_on_b(s);
     // The icosphere of level l is within about (π/(5·2^l))²/2 of the unit sphere.
     const double tolerance = 0.5 * std::pow(M_PI / (5.0 * std::pow(2.0, s.ico_level)), 2) * 4;

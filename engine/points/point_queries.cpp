@@ -50,6 +50,8 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
     const double reach = signs ? kInfinity : options.max_distance;
     const std::vector<std::uint32_t> order =
         options.spatial_order ? spatial_order(points.data(), n) : std::vector<std::uint32_t>{};
+    if (n >= kSpatialOrderMin)
+        engine.build_point_tree();  // before the loop, so that every worker can help (intersect.h)
     for_each_point(
         n, options.cancel, order,
         [&](std::size_t i) {

@@ -13,6 +13,7 @@
 
 #include "engine/geometry/solid_angle.h"
 #include "engine/mesh/test_models.h"
+#include "engine/points/batch.h"
 #include "engine/testing/point_meshes.h"
 #include "engine/testing/scenes.h"
 
@@ -276,9 +277,11 @@ TEST(PointQueries, ClosedPublishedModelMatchesItsExactWindingNumber) {
 // the build it is part of (PerObjectOnce isolates the build; per_object_once_test.cpp catches the
 // re-entry itself, which this test did not hang on in runs without the isolation). Here: the
 // tree built on 16 threads during a batch answers as one built before it; a fresh engine a run.
+// The batch is below kSpatialOrderMin, so that query_points does not build the tree before its
+// loop (the next test).
 TEST(PointQueries, TheTreeBuiltDuringABatchOnManyThreadsAnswersAsOneBuiltBefore) {
     const Scene scene = testing::scene_of({testing::icosphere_object(5, {0.1, 0.2, -0.3}, 1.5)});
-    const std::vector<Vec3d> pts = random_points(scene.bounds(), 4096, 23);
+    const std::vector<Vec3d> pts = random_points(scene.bounds(), kSpatialOrderMin - 1, 23);
     const std::vector<PointAnswer> want = ask(*prepare(scene), pts, PointQuery::closest);
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 16);
     tbb::task_arena arena(16);
@@ -293,6 +296,26 @@ TEST(PointQueries, TheTreeBuiltDuringABatchOnManyThreadsAnswersAsOneBuiltBefore)
         }
     });
     EXPECT_EQ(wrong, 0u);
+}
+
+// A batch of kSpatialOrderMin points or more builds the point tree before its parallel loop
+// (QueryEngine::build_point_tree), a smaller one in its first query: seen with a token fired
+// before the batch, which skips every block of the loop but not what comes before it.
+TEST(PointQueries, ALargeBatchBuildsThePointTreeBeforeItsLoop) {
+    const Scene scene = testing::scene_of({testing::icosphere_object(4)});
+    for (const std::size_t n : {kSpatialOrderMin - 1, kSpatialOrderMin}) {
+        const auto e = prepare(scene);
+        const std::size_t before = e->memory_bytes();
+        PointOptions opt{PointQuery::closest, kInfinity, CancelToken::make()};
+        opt.cancel.cancel();
+        std::vector<PointAnswer> out;
+        const Status st = query_points(*e, random_points(scene.bounds(), int(n), 24), opt, out);
+        EXPECT_EQ(st.code, Code::cancelled);
+        if (n < kSpatialOrderMin)
+            EXPECT_EQ(e->memory_bytes(), before) << "a small batch built the tree before its loop";
+        else
+            EXPECT_GT(e->memory_bytes(), before + scene.triangle_count() * 64);
+    }
 }
 
 }  // namespace

@@ -103,6 +103,11 @@ class QueryEngine {
     /// must be finite. Above 16 primitives a tree culls: the point BVH of accel/point_bvh.h,
     /// built on the first call (where it suits the scene), else Embree's point query.
     std::optional<PointHit> closest_point(const Vec3d& p, double max_distance) const;
+    /// Builds the point BVH now, if the scene uses one and it is not built yet (as the first
+    /// closest_point would). A large batch calls it before its parallel loop: built inside the
+    /// loop's first task, the other workers waited on it rather than helping with its parallel
+    /// subtrees (bench_points: the first batch on A 2.9 s against 2.4 s for the next).
+    void build_point_tree() const;
     /// Each object's topology (engine/mesh/topology.h), computed at build (objects in parallel,
     /// before the BVH); the entry of a sphere is all zeros.
     const std::vector<MeshTopology>& topology() const { return topology_; }

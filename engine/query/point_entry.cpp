@@ -22,14 +22,25 @@ struct PointTree : PerObjectOnce<PointBvh> {
     PointTree() : PerObjectOnce(1) {}
 };
 
+namespace {
+
+const PointBvh& point_bvh(PointTree& tree, const Scene& scene) {
+    return tree.get(0, [&] { return std::make_unique<const PointBvh>(scene); });
+}
+
+}  // namespace
+
 std::optional<PointHit> QueryEngine::closest_point(const Vec3d& p, double max_distance) const {
-    if (accel_ && point_tree_) {
-        return point_tree_->get(0, [&] { return std::make_unique<const PointBvh>(*scene_); })
-            .closest_point(p, max_distance);
-    }
+    if (accel_ && point_tree_)
+        return point_bvh(*point_tree_, *scene_).closest_point(p, max_distance);
     if (accel_)
         return accel_->closest_point(p, max_distance);
     return linear_closest_point(*scene_, p, max_distance);
+}
+
+void QueryEngine::build_point_tree() const {
+    if (accel_ && point_tree_)
+        (void)point_bvh(*point_tree_, *scene_);
 }
 
 double QueryEngine::winding_number(std::uint32_t object, const Vec3d& p) const {
