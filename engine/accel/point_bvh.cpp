@@ -357,7 +357,8 @@ bool PointBvh::suits(const Scene& scene) {
     return size <= 1e16 && size >= 1e-30 && is_finite(b.center());
 }
 
-PointBvh::PointBvh(const Scene& scene) : scene_(scene), center_(scene.bounds().center()) {
+PointBvh::PointBvh(const Scene& scene)
+    : scene_(scene), center_(scene.bounds().center()), bounds_(scene.bounds()) {
     std::vector<Item> items;
     double largest = 0;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
@@ -696,7 +697,7 @@ void PointBvh::visit_leaf(std::uint32_t first_pack, std::uint32_t count, const V
 std::optional<PointHit> PointBvh::closest_point(const Vec3d& p, double max_distance) const {
     if (!is_finite(p))
         return std::nullopt;
-    PointCandidates c;
+    PointCandidates c(candidate_err_bound(p, bounds_));
     for (std::uint32_t s : spheres_)
         offer_primitive(scene_, s, 0, p, max_distance, c);
     const Vec3d pc = p - center_;

@@ -11,8 +11,8 @@
 // time; only a triangle whose bound does not exceed the best distance so far (plus the ties'
 // margin, PointCandidates::cull_distance) is decided exactly in double by the kernel of
 // geometry/closest_point.h. The answer is the one brute force gives (same winner, same bits):
-// PointCandidates decides, the tree only culls (up to PointCandidates' one limit on the order,
-// geometry/closest_point.h: near-ties whose error bounds differ widely).
+// PointCandidates decides, the tree only culls (the order it visits triangles in does not
+// change the winner: geometry/closest_point.h).
 //
 // The lower bound (one triangle T with unit normal n and in-plane outward edge normals m_e, all
 // rounded to float): T lies in the slab |n·x − o| ≤ r and in each half-space m_e·x ≤ o_e, so for
@@ -173,6 +173,7 @@ class PointBvh {
 
     const Scene& scene_;
     Vec3d center_;
+    Bounds3 bounds_;           ///< the scene's, for PointCandidates' error bound
     double scale_ = 0;         ///< S of the file comment
     std::vector<Node> nodes_;  ///< the binary tree, while it is built
     std::vector<Node4> nodes4_;

@@ -72,7 +72,7 @@ std::optional<PointHit> finish_closest_point(const Scene& scene, const PointCand
 
 std::optional<PointHit> linear_closest_point(const Scene& scene, const Vec3d& p,
                                              double max_distance) {
-    PointCandidates c;
+    PointCandidates c(candidate_err_bound(p, scene.bounds()));
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const auto n = static_cast<std::uint32_t>(scene.objects[i].primitive_count());
         for (std::uint32_t k = 0; k < n; ++k)

@@ -166,8 +166,19 @@ bool near(const PointHit& h, const PointHit& best) {
 
 }  // namespace
 
+double candidate_err_bound(const Vec3d& p, const Bounds3& scene) {
+    const double m = scene.empty() ? 0.0 : std::max(max_abs(scene.lo), max_abs(scene.hi));
+    // A triangle's scale is max(|p|, |a|, |b|, |c|) ≤ |p| + m; a sphere's |p| + |c| + r, whose
+    // |c_i| + r is a coordinate of its bounds up to the rounding of the two sums (a few ulps).
+    return kErrScale * std::max(max_abs(p) + m, 1e-300) * (1.0 + 8.0 * kDoubleUnitRoundoff);
+}
+
+bool PointCandidates::may_tie(const PointHit& h, const PointHit& b) const {
+    return h.distance <= b.distance + std::max(b.err, err_bound_) + h.err;
+}
+
 void PointCandidates::offer(const PointHit& h) {
-    if (best_ >= 0 && !near(h, kept_[best_].hit))
+    if (best_ >= 0 && !may_tie(h, kept_[best_].hit))
         return;
     const bool new_best =
         best_ < 0 || h.distance < kept_[best_].hit.distance ||
@@ -188,8 +199,8 @@ void PointCandidates::make_room(const PointHit& h, bool new_best) {
     int n = 0;
     for (int i = 0; i < count_; ++i) {
         if (i == best_)
-            best_ = near(kept_[i].hit, b) ? n : -1;
-        if (near(kept_[i].hit, b))
+            best_ = may_tie(kept_[i].hit, b) ? n : -1;
+        if (may_tie(kept_[i].hit, b))
             kept_[n++].hit = kept_[i].hit;
     }
     count_ = n;
@@ -226,7 +237,7 @@ PointHit PointCandidates::winner() const {
 double PointCandidates::cull_distance() const {
     if (best_ < 0)
         return kInfinity;
-    return kept_[best_].hit.distance + 4.0 * kept_[best_].hit.err;
+    return kept_[best_].hit.distance + 4.0 * std::max(kept_[best_].hit.err, err_bound_);
 }
 
 }  // namespace raycastd::engine

@@ -31,6 +31,7 @@
 
 #include "engine/geometry/sphere.h"
 #include "engine/geometry/triangle.h"
+#include "engine/math/bounds.h"
 
 namespace raycastd::engine {
 
@@ -78,25 +79,35 @@ inline bool clearly_closer(const PointHit& a, const PointHit& b) {
     return a.distance + a.err + b.err < b.distance;
 }
 
+/// A bound on the `err` of every primitive's closest point to p in a scene whose bounds are
+/// `scene` (γ₁₆ of max|p_i| + max|scene_i|, which is at least each triangle's and sphere's scale
+/// of the file comment, with room for the order of the sums); what PointCandidates takes.
+double candidate_err_bound(const Vec3d& p, const Bounds3& scene);
+
 /// Keeps the winner of a closest-point search: among the candidates whose distance ties the
 /// smallest one within their error bounds, the lowest (object, primitive). Candidates that can
 /// still tie are kept in a fixed buffer (no allocation per query); past kKeep of them (a point
 /// equidistant from many primitives, e.g. the apex of a fan, where vertex points tie bit for bit)
-/// the one with the highest ids is dropped. The order of the candidates does not matter while the
-/// near-tied ones have error bounds of one size (each is 16 ulps of the largest coordinate of the
-/// point and the primitive): a candidate H refused beside the best A so far is not taken back when
-/// a closer B with a much larger bound (a primitive with far larger coordinates) would have tied
-/// with it, so H < A < B by ids, A before H, then B, gives A where the id order gives H. A fix is
-/// one bound per query (the scene's largest coordinate); not done yet.
+/// the one with the highest ids is dropped.
+/// The winner does not depend on the order of the candidates (the order a tree visits them in):
+/// a candidate is refused, or dropped, only when no candidate still to come can tie with it,
+/// which takes a bound E on every candidate's err, given to the constructor (for a search over a
+/// scene, candidate_err_bound). With only the errors seen so far, a candidate H refused beside the
+/// best A so far would not be taken back when a closer B with a much larger bound (a primitive
+/// with far larger coordinates) came that ties with H: H < A < B by ids, offered A, H, B, gave A
+/// where the id order gives H (found in review; PointCandidates.TheWinnerDoesNotDependOnTheOrder).
 class PointCandidates {
   public:
+    /// `err_bound`: E above, at least the err of every candidate to be offered; 0 (only the errors
+    /// seen so far: the order can matter when they differ widely) for a caller without one.
+    explicit PointCandidates(double err_bound) : err_bound_(err_bound) {}
     /// Offers one candidate.
     void offer(const PointHit& h);
     /// The winner; an invalid PointHit when nothing was offered.
     PointHit winner() const;
     /// Beyond this distance no primitive can win or tie (for culling): the smallest distance so
-    /// far plus four times its error bound (a tying primitive's bound is of the same size: both
-    /// follow the magnitude of the coordinates); +inf while empty.
+    /// far plus four times the larger of its error bound and E (a tying primitive's bound is at
+    /// most E); +inf while empty.
     double cull_distance() const;
 
   private:
@@ -113,6 +124,11 @@ class PointCandidates {
     // Assigning to an inactive member starts its lifetime only for a trivial assignment.
     static_assert(std::is_trivially_copyable_v<PointHit>);
     Slot kept_[kKeep];
+    /// Whether h could still tie with the best at the end: not more than h's bound and the
+    /// larger of b's and E beyond b, the best so far (the final best is no farther than b and
+    /// its bound at most E).
+    bool may_tie(const PointHit& h, const PointHit& b) const;
+    double err_bound_ = 0;
     int count_ = 0;
     int best_ = -1;  ///< index in kept_ of the smallest distance
 };

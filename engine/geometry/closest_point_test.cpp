@@ -261,27 +261,82 @@ TEST(PointCandidates, TiesGoToTheLowerObjectThenPrimitiveInAnyOrder) {
                                   hit(0.9999999999999999, 3, 1), hit(1.5, 0, 0)};
     std::sort(hits.begin(), hits.end(), [](auto& a, auto& b) { return a.object < b.object; });
     do {
-        PointCandidates c;
+        PointCandidates c(0.0);
         for (const PointHit& h : hits)
             c.offer(h);
         EXPECT_EQ(c.winner().object, 1u);
         EXPECT_EQ(c.winner().primitive, 5u);
     } while (std::next_permutation(hits.begin(), hits.end(),
                                    [](auto& a, auto& b) { return a.object < b.object; }));
-    PointCandidates clear;
+    PointCandidates clear(0.0);
     clear.offer(hit(2.0, 0, 0));
     clear.offer(hit(1.0, 4, 4));  // closer by far more than the bounds: wins whatever its ids
     EXPECT_EQ(clear.winner().object, 4u);
-    EXPECT_FALSE(PointCandidates{}.winner().valid());
+    EXPECT_FALSE(PointCandidates(0.0).winner().valid());
+}
+
+// The case found in review: H < A < B by ids, A closer than H by more than their small bounds, B
+// closer still with a bound so large that H ties with it. By the API's rule
+// the lowest ids among the candidates that tie with the closest (B) win: H. With the bound E on
+// every candidate's err given, every order of the three gives H; with none (0), A, H, B gave A.
+TEST(PointCandidates, TheWinnerDoesNotDependOnTheOrder) {
+    PointHit h = hit(1.0, 0, 1), a = hit(1.0 - 1e-12, 0, 2), b = hit(1.0 - 2e-12, 0, 3);
+    h.err = a.err = 1e-15;
+    b.err = 1e-11;
+    ASSERT_TRUE(h.distance <= b.distance + b.err + h.err);   // H ties with B
+    ASSERT_FALSE(h.distance <= a.distance + a.err + h.err);  // but not with A
+    std::vector<PointHit> order = {h, a, b};
+    auto by_id = [](const PointHit& x, const PointHit& y) { return x.primitive < y.primitive; };
+    int orders = 0;
+    do {
+        PointCandidates c(b.err);
+        for (const PointHit& x : order)
+            c.offer(x);
+        EXPECT_EQ(c.winner().primitive, 1u)
+            << "order " << order[0].primitive << order[1].primitive << order[2].primitive;
+        ++orders;
+    } while (std::next_permutation(order.begin(), order.end(), by_id));
+    EXPECT_EQ(orders, 6);
+    // Without E the review's order still loses H (what the bound is for).
+    PointCandidates none(0.0);
+    for (const PointHit& x : {a, h, b})
+        none.offer(x);
+    EXPECT_EQ(none.winner().primitive, 2u);
+}
+
+TEST(PointCandidates, CullDistanceCoversTheBound) {
+    PointCandidates c(1e-9);
+    EXPECT_EQ(c.cull_distance(), kInfinity);
+    PointHit x = hit(1.0, 0, 0);
+    x.err = 1e-15;
+    c.offer(x);
+    EXPECT_GE(c.cull_distance(), 1.0 + 4e-9);
+}
+
+TEST(PointCandidates, TheErrBoundCoversEveryPrimitive) {
+    // A scene of a far sphere and a near triangle; the bound from its bounds covers both errs.
+    const Sphere far{{1e6, -3e5, 2.0}, 7.5};
+    const Triangle tri{{0.1, 0.2, 0.3}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.5}};
+    Bounds3 scene;
+    scene.extend(far.center - Vec3d{far.radius, far.radius, far.radius});
+    scene.extend(far.center + Vec3d{far.radius, far.radius, far.radius});
+    for (const Vec3d& v : {tri.a, tri.b, tri.c})
+        scene.extend(v);
+    for (const Vec3d& p : {Vec3d{0, 0, 0}, Vec3d{-4e7, 1, 1}, Vec3d{1e6, -3e5, 2.0}}) {
+        const double e = candidate_err_bound(p, scene);
+        EXPECT_GE(e, closest_point_on_sphere(far, p).err);
+        EXPECT_GE(e, closest_point_on_triangle(tri, p)->err);
+        EXPECT_LE(e, 4.0 * closest_point_on_sphere(far, p).err);  // not needlessly large
+    }
 }
 
 TEST(PointCandidates, ManyTiesKeepTheLowestIds) {
     // A fan's apex: 100 primitives at exactly the same distance, offered highest id first.
-    PointCandidates c;
+    PointCandidates c(0.0);
     for (std::uint32_t i = 100; i-- > 0;)
         c.offer(hit(1.0, 0, i));
     EXPECT_EQ(c.winner().primitive, 0u);
-    PointCandidates d;
+    PointCandidates d(0.0);
     for (std::uint32_t i = 0; i < 100; ++i)
         d.offer(hit(1.0, 0, i));
     d.offer(hit(0.5, 9, 9));

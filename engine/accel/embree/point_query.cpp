@@ -60,7 +60,9 @@ bool point_callback(RTCPointQueryFunctionArguments* args) {
 std::optional<PointHit> EmbreeAccel::closest_point(const Vec3d& p, double max_distance) const {
     const embree::Impl& a = *impl_;
     const Vec3d q = p - a.center;
-    PointContext c{&a, p, max_distance, length(q), {}};
+    // The padded bounds contain the scene's: a bound on every candidate's err all the same.
+    PointContext c{&a, p, max_distance, length(q),
+                   PointCandidates(candidate_err_bound(p, a.padded_bounds))};
     if (!(c.from_centre <= kMaxFloatQueryDistance))
         return linear_closest_point(*a.scene, p, max_distance);
     RTCPointQuery query;
