@@ -249,7 +249,7 @@ void compare(const char* what, const char* key, const Run& ours, const nlohmann:
     std::printf("\n");
 }
 
-/// The peers on the points `name` (A's mesh), and the comparison table.
+/// The peers on the points `name` and the mesh `a`, and the comparison table.
 void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
                const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist,
                int reps = 3) {

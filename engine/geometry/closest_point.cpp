@@ -1,6 +1,7 @@
 #include "engine/geometry/closest_point.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 #include "engine/math/float_bounds.h"
@@ -128,6 +129,7 @@ std::optional<ClosestPoint> closest_point_on_triangle(const Triangle& tri, const
 }
 
 ClosestPoint closest_point_on_valid_triangle(const Triangle& tri, const Vec3d& p) {
+    assert(!is_degenerate(tri) && is_finite(p));
     ClosestPoint out = regions(tri, p);
     const double scale =
         std::max({max_abs(p), max_abs(tri.a), max_abs(tri.b), max_abs(tri.c), 1e-300});
@@ -170,7 +172,9 @@ double candidate_err_bound(const Vec3d& p, const Bounds3& scene) {
     const double m = scene.empty() ? 0.0 : std::max(max_abs(scene.lo), max_abs(scene.hi));
     // A triangle's scale is max(|p|, |a|, |b|, |c|) ≤ |p| + m; a sphere's |p| + |c| + r, whose
     // |c_i| + r is a coordinate of its bounds up to the rounding of the two sums (a few ulps).
-    return kErrScale * std::max(max_abs(p) + m, 1e-300) * (1.0 + 8.0 * kDoubleUnitRoundoff);
+    // Scaled before the sum, which would overflow for coordinates near DBL_MAX.
+    const double slack = 1.0 + 8.0 * kDoubleUnitRoundoff;
+    return std::max(kErrScale * max_abs(p) + kErrScale * m, kErrScale * 1e-300) * slack;
 }
 
 bool PointCandidates::may_tie(const PointHit& h, const PointHit& b) const {
@@ -178,66 +182,63 @@ bool PointCandidates::may_tie(const PointHit& h, const PointHit& b) const {
 }
 
 void PointCandidates::offer(const PointHit& h) {
-    if (best_ >= 0 && !may_tie(h, kept_[best_].hit))
+    if (best_ >= 0 && !may_tie(h, at(best_)))
         return;
-    const bool new_best =
-        best_ < 0 || h.distance < kept_[best_].hit.distance ||
-        (h.distance == kept_[best_].hit.distance && lower_ids(h, kept_[best_].hit));
-    if (count_ == kKeep)
-        make_room(h, new_best);
-    if (count_ == kKeep)
-        return;  // h has higher ids than every kept candidate that ties
-    kept_[count_].hit = h;
+    const bool new_best = best_ < 0 || h.distance < at(best_).distance ||
+                          (h.distance == at(best_).distance && lower_ids(h, at(best_)));
+    // Every kKeep candidates, drop those that can no longer tie (a search rarely gets here).
+    if (size() >= kKeep && size() % kKeep == 0)
+        prune(new_best ? h : at(best_));
+    if (count_ < kKeep) {
+        // The slot's PointHit begins here (a placement new: PointHit's default member
+        // initialisers make its default constructor non-trivial, so assigning to the union's
+        // inactive member would not begin it).
+        ::new (static_cast<void*>(&kept_[count_].hit)) PointHit(h);
+        ++count_;
+    } else {
+        overflow_.push_back(h);
+    }
     if (new_best)
-        best_ = count_;
-    ++count_;
+        best_ = size() - 1;
 }
 
-void PointCandidates::make_room(const PointHit& h, bool new_best) {
-    // First drop what the best (the new one, if h is) leaves out of reach.
-    const PointHit b = new_best ? h : kept_[best_].hit;
+void PointCandidates::prune(const PointHit& b) {
+    // Keeps, in order, what may still tie with b (the best, or the candidate about to become it);
+    // slots [0, n) were all written before, so plain assignment suffices.
+    const int total = size();
     int n = 0;
-    for (int i = 0; i < count_; ++i) {
+    for (int i = 0; i < total; ++i) {
+        if (!may_tie(at(i), b)) {
+            if (i == best_)
+                best_ = -1;  // h is the new best: set by offer
+            continue;
+        }
         if (i == best_)
-            best_ = may_tie(kept_[i].hit, b) ? n : -1;
-        if (may_tie(kept_[i].hit, b))
-            kept_[n++].hit = kept_[i].hit;
+            best_ = n;
+        if (n != i)
+            at(n) = at(i);
+        ++n;
     }
-    count_ = n;
-    if (count_ < kKeep)
-        return;
-    // Still full: every candidate ties. The one with the highest ids (never the best) goes, unless
-    // h's ids are higher still and h is not the new best.
-    int worst = best_ == 0 ? 1 : 0;
-    for (int i = 0; i < count_; ++i) {
-        if (i != best_ && lower_ids(kept_[worst].hit, kept_[i].hit))
-            worst = i;
-    }
-    if (!new_best && lower_ids(kept_[worst].hit, h))
-        return;
-    --count_;
-    if (best_ == count_)
-        best_ = worst;
-    kept_[worst].hit = kept_[count_].hit;
+    count_ = std::min(n, kKeep);
+    overflow_.resize(static_cast<std::size_t>(std::max(n - kKeep, 0)));
 }
 
 PointHit PointCandidates::winner() const {
     if (best_ < 0)
         return PointHit{};
-    const PointHit& b = kept_[best_].hit;
+    const PointHit& b = at(best_);
     int win = best_;
-    for (int i = 0; i < count_; ++i) {
-        if (near(kept_[i].hit, b) && lower_ids(kept_[i].hit, kept_[win].hit)) {
+    for (int i = 0; i < size(); ++i) {
+        if (near(at(i), b) && lower_ids(at(i), at(win)))
             win = i;
-        }
     }
-    return kept_[win].hit;
+    return at(win);
 }
 
 double PointCandidates::cull_distance() const {
     if (best_ < 0)
         return kInfinity;
-    return kept_[best_].hit.distance + 4.0 * std::max(kept_[best_].hit.err, err_bound_);
+    return at(best_).distance + 4.0 * std::max(at(best_).err, err_bound_);
 }
 
 }  // namespace raycastd::engine

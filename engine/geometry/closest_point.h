@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <optional>
 #include <type_traits>
+#include <vector>
 
 #include "engine/geometry/sphere.h"
 #include "engine/geometry/triangle.h"
@@ -86,16 +87,19 @@ double candidate_err_bound(const Vec3d& p, const Bounds3& scene);
 
 /// Keeps the winner of a closest-point search: among the candidates whose distance ties the
 /// smallest one within their error bounds, the lowest (object, primitive). Candidates that can
-/// still tie are kept in a fixed buffer (no allocation per query); past kKeep of them (a point
-/// equidistant from many primitives, e.g. the apex of a fan, where vertex points tie bit for bit)
-/// the one with the highest ids is dropped.
+/// still tie are kept in a fixed buffer of kKeep (no allocation per query), and beyond it (a
+/// point equidistant from many primitives, e.g. the apex of a fan, where vertex points tie bit
+/// for bit) in a vector.
 /// The winner does not depend on the order of the candidates (the order a tree visits them in):
 /// a candidate is refused, or dropped, only when no candidate still to come can tie with it,
 /// which takes a bound E on every candidate's err, given to the constructor (for a search over a
-/// scene, candidate_err_bound). With only the errors seen so far, a candidate H refused beside the
-/// best A so far would not be taken back when a closer B with a much larger bound (a primitive
-/// with far larger coordinates) came that ties with H: H < A < B by ids, offered A, H, B, gave A
-/// where the id order gives H (found in review; PointCandidates.TheWinnerDoesNotDependOnTheOrder).
+/// scene, candidate_err_bound), and nothing is dropped for want of room. With only the errors
+/// seen so far, a candidate H refused beside the best A so far would not be taken back when a
+/// closer B with a much larger bound (a primitive with far larger coordinates) came that ties
+/// with H: H < A < B by ids, offered A, H, B, gave A where the id order gives H (found in review;
+/// PointCandidates.TheWinnerDoesNotDependOnTheOrder); and dropping the highest ids from a full
+/// buffer lost a true tie to candidates that E kept but did not tie in the end (review of the
+/// fix; PointCandidates.AFullBufferLosesNoTie).
 class PointCandidates {
   public:
     /// `err_bound`: E above, at least the err of every candidate to be offered; 0 (only the errors
@@ -111,26 +115,34 @@ class PointCandidates {
     double cull_distance() const;
 
   private:
-    /// Frees a place in the full buffer for h, if h can keep one.
-    void make_room(const PointHit& h, bool new_best);
-    static constexpr int kKeep = 16;
-    /// A kept candidate, written when offered: a PointHit's defaults written into all of them
-    /// would cost a 1.4 KB copy per query (measured: 3 % of a closest-point query's
-    /// instructions on bench_points' shell). Only kept_[0, count_) are read.
-    union Slot {
-        Slot() {}
-        PointHit hit;
-    };
-    // Assigning to an inactive member starts its lifetime only for a trivial assignment.
-    static_assert(std::is_trivially_copyable_v<PointHit>);
-    Slot kept_[kKeep];
+    /// Drops the candidates that can no longer tie with b.
+    void prune(const PointHit& b);
+    int size() const { return count_ + static_cast<int>(overflow_.size()); }
+    const PointHit& at(int i) const {
+        return i < kKeep ? kept_[i].hit : overflow_[static_cast<std::size_t>(i - kKeep)];
+    }
+    PointHit& at(int i) {
+        return i < kKeep ? kept_[i].hit : overflow_[static_cast<std::size_t>(i - kKeep)];
+    }
     /// Whether h could still tie with the best at the end: not more than h's bound and the
     /// larger of b's and E beyond b, the best so far (the final best is no farther than b and
     /// its bound at most E).
     bool may_tie(const PointHit& h, const PointHit& b) const;
+
+    static constexpr int kKeep = 16;
+    /// A kept candidate, begun when offered: a PointHit's defaults written into all of them
+    /// would cost a 1.4 KB copy per query (measured: 3 % of a closest-point query's
+    /// instructions on bench_points' shell). Only kept_[0, count_) hold one.
+    union Slot {
+        Slot() {}
+        PointHit hit;
+    };
+    static_assert(std::is_trivially_destructible_v<PointHit>);  // nothing for ~Slot to end
+    Slot kept_[kKeep];
+    std::vector<PointHit> overflow_;  ///< candidates beyond kKeep (empty: no allocation)
     double err_bound_ = 0;
-    int count_ = 0;
-    int best_ = -1;  ///< index in kept_ of the smallest distance
+    int count_ = 0;  ///< slots of kept_ in use
+    int best_ = -1;  ///< index (kept_, then overflow_) of the smallest distance
 };
 
 }  // namespace raycastd::engine

@@ -304,6 +304,27 @@ TEST(PointCandidates, TheWinnerDoesNotDependOnTheOrder) {
     EXPECT_EQ(none.winner().primitive, 2u);
 }
 
+// From the review of the fix above: with E wider than the candidates' own bounds, more than kKeep
+// of them may be kept that do not tie in the end; when the buffer dropped the highest ids to make
+// room, X (which ties with B and has the lower id) was lost in one order and not in the other.
+TEST(PointCandidates, AFullBufferLosesNoTie) {
+    std::vector<PointHit> all = {hit(1.0, 0, 17), hit(1.0 + 1e-15, 0, 16)};
+    for (std::uint32_t i = 1; i <= 15; ++i)
+        all.push_back(hit(1.0 + 5e-10, 0, i));
+    std::vector<PointHit> order = all;  // B, X, L1..L15
+    std::mt19937 rng(18);
+    for (int run = 0; run < 40; ++run) {
+        PointCandidates c(1e-9);
+        for (const PointHit& x : order)
+            c.offer(x);
+        EXPECT_EQ(c.winner().primitive, 16u) << "run " << run;
+        if (run == 0)
+            std::rotate(order.begin(), order.begin() + 1, order.end());  // X, L1..L15, B
+        else
+            std::shuffle(order.begin(), order.end(), rng);
+    }
+}
+
 TEST(PointCandidates, CullDistanceCoversTheBound) {
     PointCandidates c(1e-9);
     EXPECT_EQ(c.cull_distance(), kInfinity);

@@ -50,8 +50,10 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
     const double reach = signs ? kInfinity : options.max_distance;
     const std::vector<std::uint32_t> order =
         options.spatial_order ? spatial_order(points.data(), n) : std::vector<std::uint32_t>{};
-    if (n >= kSpatialOrderMin)
-        engine.build_point_tree();  // before the loop, so that every worker can help (intersect.h)
+    // Before the loop, so that every worker can help (intersect.h); not for a batch whose token
+    // has fired already (fired() reads the state: the loop's blocks do the checking).
+    if (n >= kSpatialOrderMin && !options.cancel.fired())
+        engine.build_point_tree();
     for_each_point(
         n, options.cancel, order,
         [&](std::size_t i) {
@@ -63,7 +65,9 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
         },
         [&](std::size_t i) {
             __builtin_prefetch(&points[i]);
+            // A PointAnswer spans two cache lines.
             __builtin_prefetch(&out[i], 1);
+            __builtin_prefetch(reinterpret_cast<const char*>(&out[i]) + 64, 1);
         });
     if (options.cancel.fired())
         return options.cancel.status();

@@ -4,6 +4,7 @@
 
 #include "engine/points/point_queries.h"
 
+#include <chrono>
 #include <cstdio>
 #include <random>
 
@@ -299,22 +300,28 @@ TEST(PointQueries, TheTreeBuiltDuringABatchOnManyThreadsAnswersAsOneBuiltBefore)
 }
 
 // A batch of kSpatialOrderMin points or more builds the point tree before its parallel loop
-// (QueryEngine::build_point_tree), a smaller one in its first query: seen with a token fired
-// before the batch, which skips every block of the loop but not what comes before it.
+// (QueryEngine::build_point_tree), a smaller one in its first query; a batch whose token fired
+// before it builds nothing. Seen with a token whose deadline has passed but that no check has
+// fired yet: every block of the loop fires it and stops, what comes before the loop still runs.
 TEST(PointQueries, ALargeBatchBuildsThePointTreeBeforeItsLoop) {
     const Scene scene = testing::scene_of({testing::icosphere_object(4)});
     for (const std::size_t n : {kSpatialOrderMin - 1, kSpatialOrderMin}) {
-        const auto e = prepare(scene);
-        const std::size_t before = e->memory_bytes();
-        PointOptions opt{PointQuery::closest, kInfinity, CancelToken::make()};
-        opt.cancel.cancel();
-        std::vector<PointAnswer> out;
-        const Status st = query_points(*e, random_points(scene.bounds(), int(n), 24), opt, out);
-        EXPECT_EQ(st.code, Code::cancelled);
-        if (n < kSpatialOrderMin)
-            EXPECT_EQ(e->memory_bytes(), before) << "a small batch built the tree before its loop";
-        else
-            EXPECT_GT(e->memory_bytes(), before + scene.triangle_count() * 64);
+        for (const bool fired_before : {false, true}) {
+            const auto e = prepare(scene);
+            const std::size_t before = e->memory_bytes();
+            PointOptions opt{
+                PointQuery::closest, kInfinity,
+                CancelToken::make(CancelToken::Clock::now() - std::chrono::seconds(1))};
+            if (fired_before)
+                opt.cancel.cancel();
+            ASSERT_EQ(opt.cancel.fired(), fired_before);
+            std::vector<PointAnswer> out;
+            const Status st = query_points(*e, random_points(scene.bounds(), int(n), 24), opt, out);
+            EXPECT_EQ(st.code, Code::cancelled);
+            const bool built = e->memory_bytes() > before + scene.triangle_count() * 64;
+            EXPECT_EQ(built, n >= kSpatialOrderMin && !fired_before)
+                << n << " points, fired before: " << fired_before;
+        }
     }
 }
 
