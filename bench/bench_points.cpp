@@ -5,7 +5,8 @@
 //                           workload A (the 81,920-triangle icosphere): closest points, signed
 //                           distance, occupancy; 1M points in a shell about A (radii 0.99-1.01):
 //                           closest points and signed distance; 1M uniform points against B
-//                           (closed, parity): closest points and signed distance; 1M points'
+//                           (closed, parity) and 1M within 0.01 of its surface: closest points
+//                           and signed distance; 1M points'
 //                           signed distance against B with one triangle removed (the
 //                           winding-number path on 1M triangles)
 //   bench_points --quick    small sizes (seconds)
@@ -168,6 +169,29 @@ std::vector<re::Vec3d> shell_points(std::size_t n) {
     std::vector<re::Vec3d> out(n);
     for (auto& p : out)
         p = re::Vec3d(re::Vec3f(re::normalize(re::Vec3d{g(rng), g(rng), g(rng)}) * r(rng)));
+    return out;
+}
+
+/// n points within 0.01 of a workload's surface (the shell of A's radii 0.99–1.01 for B's spheres
+/// of radius 0.5–1.5): a uniform triangle, a uniform point of it, moved along its normal by a
+/// uniform offset in [−0.01, 0.01]; rounded to float like random_points.
+std::vector<re::Vec3d> surface_shell_points(const rb::Workload& w, std::size_t n) {
+    std::mt19937_64 rng(kPointSeed + 2);
+    std::uniform_int_distribution<std::size_t> pick(0, w.triangles.size() - 1);
+    std::uniform_real_distribution<double> u(0.0, 1.0), off(-0.01, 0.01);
+    auto vertex = [&](std::uint32_t i) {
+        const auto& v = w.positions[i];
+        return re::Vec3d{v[0], v[1], v[2]};
+    };
+    std::vector<re::Vec3d> out(n);
+    for (auto& p : out) {
+        const auto& t = w.triangles[pick(rng)];
+        const re::Vec3d a = vertex(t[0]), b = vertex(t[1]), c = vertex(t[2]);
+        // Uniform on the triangle: (1 − √r₁, √r₁(1 − r₂), √r₁ r₂) (Osada et al. 2002, §4.2).
+        const double s1 = std::sqrt(u(rng)), r2 = u(rng);
+        const re::Vec3d x = a * (1.0 - s1) + b * (s1 * (1.0 - r2)) + c * (s1 * r2);
+        p = re::Vec3d(re::Vec3f(x + re::normalize(re::cross(b - a, c - a)) * off(rng)));
+    }
     return out;
 }
 
@@ -342,6 +366,11 @@ void points_on_b(const Sizes& s, const Peer& peer) {
     const Run closest = run(*e, pts, re::PointQuery::closest, "");
     const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
     run_peers(peer, "B", b, pts, closest, sd, 1);
+    const auto shell = surface_shell_points(b, s.points);
+    std::printf("points within 0.01 of B's surface:\n");
+    const Run shell_closest = run(*e, shell, re::PointQuery::closest, "(shell)");
+    const Run shell_sd = run(*e, shell, re::PointQuery::signed_distance, "(shell, parity rays)");
+    run_peers(peer, "B_shell", b, shell, shell_closest, shell_sd, 1);
 }
 
 void winding_on_b(const Sizes& s) {
