@@ -358,7 +358,7 @@ bool PointBvh::suits(const Scene& scene) {
 }
 
 PointBvh::PointBvh(const Scene& scene)
-    : scene_(scene), center_(scene.bounds().center()), bounds_(scene.bounds()) {
+    : scene_(scene), bounds_(scene.bounds()), center_(bounds_.center()) {
     std::vector<Item> items;
     double largest = 0;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {

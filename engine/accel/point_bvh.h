@@ -172,8 +172,8 @@ class PointBvh {
     std::uint32_t collapse(std::uint32_t b);
 
     const Scene& scene_;
-    Vec3d center_;
     Bounds3 bounds_;           ///< the scene's, for PointCandidates' error bound
+    Vec3d center_;             ///< bounds_'s centre
     double scale_ = 0;         ///< S of the file comment
     std::vector<Node> nodes_;  ///< the binary tree, while it is built
     std::vector<Node4> nodes4_;
