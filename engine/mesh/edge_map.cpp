@@ -202,6 +202,26 @@ std::size_t count_components(const WeldedTriangles& w) {
     return sets.roots();
 }
 
+std::vector<std::uint32_t> label_components(const WeldedTriangles& w, std::uint32_t* count) {
+    UnionFind sets(w.vertices);
+    for (const auto& t : w.triangles) {
+        sets.join(t[0], t[1]);
+        sets.join(t[1], t[2]);
+    }
+    // A root's label, given when its first triangle comes.
+    std::vector<std::uint32_t> label_of_root(w.vertices, kNoFace);
+    std::vector<std::uint32_t> out(w.triangles.size());
+    std::uint32_t n = 0;
+    for (std::size_t t = 0; t < w.triangles.size(); ++t) {
+        std::uint32_t& l = label_of_root[sets.find(w.triangles[t][0])];
+        if (l == kNoFace)
+            l = n++;
+        out[t] = l;
+    }
+    *count = n;
+    return out;
+}
+
 std::size_t count_boundary_components(const WeldedTriangles& w, const EdgeMap& e) {
     UnionFind sets(w.vertices);
     std::vector<std::uint8_t> on(w.vertices, 0);

@@ -47,6 +47,10 @@ std::size_t count_non_manifold_vertices(const WeldedTriangles& w, const EdgeMap&
 /// not), counted over the vertices the triangles use.
 std::size_t count_components(const WeldedTriangles& w);
 
+/// The same components, as a label for each triangle: 0, 1, ... in order of each component's
+/// first triangle; *count receives how many there are.
+std::vector<std::uint32_t> label_components(const WeldedTriangles& w, std::uint32_t* count);
+
 /// Connected boundaries: the boundary edges grouped by shared vertices. Equal to the number of
 /// boundary loops except where two loops touch at a vertex (counted once here); for the meshes
 /// whose half-edge structure is not built (topology.h).

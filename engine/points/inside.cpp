@@ -1,8 +1,12 @@
 #include "engine/points/inside.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
 
 #include "engine/points/batch.h"
+#include "engine/query/parity_pieces.h"
 
 namespace raycastd::engine {
 
@@ -21,49 +25,113 @@ struct RayVerdict {
     bool edge = false;
 };
 
-/// The crossings of each parity object along one ray's hits (sorted by t; any object).
-RayVerdict verdict(const Hit* begin, const Hit* end, const std::vector<std::uint8_t>& parity) {
-    RayVerdict v;
-    // Few objects are crossed by one ray: a small list of (object, crossings).
-    std::pair<std::uint32_t, std::uint32_t> counts[8];
-    int used = 0;
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> more;
-    for (const Hit* h = begin; h != end; ++h) {
-        if (!parity[h->object])
-            continue;
-        v.edge = v.edge || h->on_edge;
-        auto* slot =
-            std::find_if(counts, counts + used, [&](auto& c) { return c.first == h->object; });
-        if (slot != counts + used) {
-            ++slot->second;
-        } else if (used < 8) {
-            counts[used++] = {h->object, 1};
-        } else {
-            auto it = std::find_if(more.begin(), more.end(),
-                                   [&](auto& c) { return c.first == h->object; });
-            if (it != more.end()) {
-                ++it->second;
-            } else {
-                more.push_back({h->object, 1});
-            }
-        }
+/// The pieces (query/parity_pieces.h) whose boxes hold each point of a list: those of the j-th
+/// point are pieces[offsets[j] .. offsets[j + 1]), in increasing order, so grouped by object.
+struct PointPieces {
+    std::vector<std::uint32_t> offsets;
+    std::vector<std::uint32_t> pieces;
+    std::size_t count(std::size_t j) const { return offsets[j + 1] - offsets[j]; }
+    const std::uint32_t* begin(std::size_t j) const { return pieces.data() + offsets[j]; }
+    const std::uint32_t* end(std::size_t j) const { return pieces.data() + offsets[j + 1]; }
+};
+
+/// The pieces of each listed point, asked of the tree twice (to count, then to fill) so that
+/// the points can go in parallel without a list of their own each.
+PointPieces pieces_of(const ParityPieces& pp, const Vec3d* points,
+                      const std::vector<std::size_t>& which) {
+    PointPieces out;
+    out.offsets.assign(which.size() + 1, 0);
+    tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t j) {
+        std::uint32_t n = 0;
+        pp.tree.containing(points[which[j]], [&](std::uint32_t) { ++n; });
+        out.offsets[j + 1] = n;
+    });
+    for (std::size_t j = 0; j < which.size(); ++j)
+        out.offsets[j + 1] += out.offsets[j];
+    out.pieces.resize(out.offsets.back());
+    tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t j) {
+        std::uint32_t* at = out.pieces.data() + out.offsets[j];
+        pp.tree.containing(points[which[j]], [&](std::uint32_t k) { *at++ = k; });
+        std::sort(out.pieces.data() + out.offsets[j], at);
+    });
+    return out;
+}
+
+/// How far a ray from p along unit d must go to leave the boxes of the listed pieces: the
+/// largest of their exit parameters, each box widened first by 2⁻²⁰ of its largest coordinate
+/// or extent. Every crossing of a piece lies in its box, so at most the unwidened exit away,
+/// and the widening is some 10¹⁰ times what the exact path's rounding of a t can move it:
+/// none of those crossings is lost at the far end, and the end itself is outside every listed
+/// box, which is all mesh/components.h asks of it.
+double reach(const ParityPieces& pp, const Vec3d& p, const Vec3d& d, const std::uint32_t* first,
+             const std::uint32_t* last) {
+    double t_max = 0.0;
+    for (const std::uint32_t* k = first; k != last; ++k) {
+        const Bounds3& b = pp.bounds[*k];
+        const Vec3d e = b.diagonal();
+        const double size =
+            std::max({e.x, e.y, e.z, std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
+                      std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+        const double pad = std::ldexp(size, -20);
+        auto leave = [pad](double lo, double hi, double o, double dir) {
+            if (dir > 0)
+                return (hi + pad - o) / dir;
+            if (dir < 0)
+                return (lo - pad - o) / dir;
+            return kInfinity;
+        };
+        const double t = std::min({leave(b.lo.x, b.hi.x, p.x, d.x), leave(b.lo.y, b.hi.y, p.y, d.y),
+                                   leave(b.lo.z, b.hi.z, p.z, d.z)});
+        t_max = std::max(t_max, t);
     }
-    for (int k = 0; k < used; ++k)
-        v.odd = v.odd || (counts[k].second & 1u);
-    for (const auto& c : more)
-        v.odd = v.odd || (c.second & 1u);
+    return t_max;
+}
+
+/// The crossings of the listed pieces along one ray's hits (any order; any object): per object,
+/// the parity of the sum over its listed pieces (mesh/components.h); odd when some object's is.
+RayVerdict verdict(const Hit* begin, const Hit* end, const ParityPieces& pp,
+                   const std::uint32_t* first, const std::uint32_t* last) {
+    RayVerdict v;
+    const auto n = static_cast<std::size_t>(last - first);
+    // A point is in few boxes: counts on the stack for up to 16 of them.
+    std::uint32_t small[16] = {};
+    std::vector<std::uint32_t> large(n > 16 ? n : 0, 0);
+    std::uint32_t* counts = n > 16 ? large.data() : small;
+    for (const Hit* h = begin; h != end; ++h) {
+        if (pp.of_object[h->object].bounds.empty())
+            continue;  // not a parity mesh
+        const std::uint32_t k = pp.piece(h->object, h->primitive);
+        const std::uint32_t* at = std::lower_bound(first, last, k);
+        if (at == last || *at != k)
+            continue;  // a piece whose box does not hold the point: its crossings cancel
+        ++counts[at - first];
+        v.edge = v.edge || h->on_edge;
+    }
+    for (std::size_t a = 0; a < n;) {
+        std::uint32_t sum = 0;
+        std::size_t b = a;
+        for (; b < n && pp.object[first[b]] == pp.object[first[a]]; ++b)
+            sum += counts[b];
+        v.odd = v.odd || (sum & 1u);
+        a = b;
+    }
     return v;
 }
 
-/// Casts one ray per listed point (direction dir(i)) on the exact path and returns the verdicts
-/// (empty once `cancel` has fired).
+/// Casts one ray per listed point (direction dir(i)) on the exact path as far as its pieces'
+/// boxes reach and returns the verdicts (empty once `cancel` has fired).
 template <class Dir>
 std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
-                             const std::vector<std::size_t>& which, Dir&& dir,
-                             const std::vector<std::uint8_t>& parity, const CancelToken& cancel) {
+                             const std::vector<std::size_t>& which, const PointPieces& mine,
+                             const std::vector<std::size_t>& slot, Dir&& dir,
+                             const CancelToken& cancel) {
+    const ParityPieces& pp = engine.parity_pieces();
     std::vector<Ray> rays(which.size());
-    for (std::size_t j = 0; j < which.size(); ++j)
-        rays[j] = Ray{points[which[j]], dir(which[j]), 0.0, kInfinity};
+    tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t j) {
+        const Vec3d& p = points[which[j]];
+        const Vec3d d = dir(which[j]);
+        rays[j] = Ray{p, d, 0.0, reach(pp, p, d, mine.begin(slot[j]), mine.end(slot[j]))};
+    });
     QueryOptions opt;
     opt.mode = Mode::all;
     opt.precision = Precision::exact;
@@ -73,25 +141,44 @@ std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
     if (!engine.intersect(rays, opt, r).ok())
         return {};
     std::vector<RayVerdict> out(which.size());
-    for (std::size_t j = 0; j < which.size(); ++j) {
-        out[j] = verdict(r.hits.data() + r.offsets[j], r.hits.data() + r.offsets[j + 1], parity);
-    }
+    tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t j) {
+        out[j] = verdict(r.hits.data() + r.offsets[j], r.hits.data() + r.offsets[j + 1], pp,
+                         mine.begin(slot[j]), mine.end(slot[j]));
+    });
     return out;
 }
 
-/// Inside by crossing parity for the listed points: the first ray away from the nearest surface
+/// Inside by crossing parity for the listed points: only the pieces whose boxes hold a point
+/// count for it (none: outside, no ray); the first ray along the line to the nearest surface
 /// point, then the retries of the file comment for rays that met an edge.
 void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
-                   const std::vector<std::size_t>& which, const std::vector<std::uint8_t>& parity,
-                   const CancelToken& cancel, Occupancy* out) {
-    auto away = [&](std::size_t i) {
-        const Vec3d d = normalize(points[i] - nearest[i].point);
+                   const std::vector<std::size_t>& listed, const CancelToken& cancel,
+                   Occupancy* out) {
+    const PointPieces mine = pieces_of(engine.parity_pieces(), points, listed);
+    // The points some box holds, and the index of each in `mine`.
+    std::vector<std::size_t> which, slot;
+    for (std::size_t j = 0; j < listed.size(); ++j) {
+        if (mine.count(j) > 0) {
+            which.push_back(listed[j]);
+            slot.push_back(j);
+        }
+    }
+    // The first ray leaves the nearest surface the short way: straight away from it where p is
+    // on the side its normal points to (outside, when the mesh faces out), and straight through
+    // it where p is behind it, so that the ray reaches the end of its pieces' boxes after
+    // crossing one surface rather than the whole solid (B's shell: half the points are inside).
+    // Which way changes no answer, only the ray's length: every crossing on any ray from p is at
+    // least p's distance from the surface away, more than the rounding of a t.
+    auto short_way = [&](std::size_t i) {
+        const Vec3d off = points[i] - nearest[i].point;
+        const Vec3d d = normalize(dot(off, nearest[i].normal) < 0.0 ? -off : off);
         return d == Vec3d{} ? kRetryDirections[0] : d;
     };
-    const std::vector<RayVerdict> first = cast(engine, points, which, away, parity, cancel);
+    const std::vector<RayVerdict> first =
+        cast(engine, points, which, mine, slot, short_way, cancel);
     if (cancel.fired())
         return;
-    std::vector<std::size_t> again;
+    std::vector<std::size_t> again, again_slot;
     std::vector<int> votes;
     for (std::size_t j = 0; j < which.size(); ++j) {
         if (!first[j].edge) {
@@ -101,6 +188,7 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
             }
         } else {
             again.push_back(which[j]);
+            again_slot.push_back(slot[j]);
             votes.push_back(first[j].odd);
         }
     }
@@ -109,10 +197,10 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
             return;
         const bool last = &d == &kRetryDirections[1];
         const std::vector<RayVerdict> v = cast(
-            engine, points, again, [&](std::size_t) { return d; }, parity, cancel);
+            engine, points, again, mine, again_slot, [&](std::size_t) { return d; }, cancel);
         if (cancel.fired())
             return;
-        std::vector<std::size_t> next;
+        std::vector<std::size_t> next, next_slot;
         std::vector<int> next_votes;
         for (std::size_t j = 0; j < again.size(); ++j) {
             const int total = votes[j] + v[j].odd;
@@ -120,6 +208,7 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
             const bool inside = !v[j].edge ? v[j].odd : (last ? total >= 2 : false);
             if (v[j].edge && !last) {
                 next.push_back(again[j]);
+                next_slot.push_back(again_slot[j]);
                 next_votes.push_back(total);
                 continue;
             }
@@ -129,6 +218,7 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
             }
         }
         again.swap(next);
+        again_slot.swap(next_slot);
         votes.swap(next_votes);
     }
 }
@@ -141,18 +231,17 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
     const Scene& s = engine.scene();
     const std::vector<MeshTopology>& topo = engine.topology();
     std::vector<std::uint32_t> spheres, windings;
-    std::vector<std::uint8_t> parity(s.objects.size(), 0);
+    bool any_parity = false;
     for (std::uint32_t i = 0; i < s.objects.size(); ++i) {
         const Object& o = s.objects[i];
         if (o.kind == ObjectKind::sphere) {
             spheres.push_back(i);
         } else if (topo[i].sign == SignMethod::parity) {
-            parity[i] = 1;
+            any_parity = true;
         } else {
             windings.push_back(i);
         }
     }
-    const bool any_parity = std::find(parity.begin(), parity.end(), 1) != parity.end();
     // On a surface, then spheres: exact and cheap, point by point.
     // The winding number is the largest over the objects; with only winding meshes it may be
     // negative (a mesh facing inwards), so it starts at the lowest value an object can give.
@@ -183,7 +272,7 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
             if (open(i))
                 which.push_back(i);
         }
-        parity_inside(engine, points, nearest, which, parity, cancel, out);
+        parity_inside(engine, points, nearest, which, cancel, out);
     }
     if (cancel.fired())
         return cancel.status();

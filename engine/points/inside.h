@@ -6,14 +6,20 @@
 //   sphere         |p − c| < r, exactly as far as it matters (points within the bound of the
 //                  surface were decided above): winding 1 or 0;
 //   parity mesh    (MeshTopology::sign, closed and consistently oriented): the number of
-//                  crossings of a ray from p, odd inside. The rays go through QueryEngine on the
-//                  exact path (Mode::all, Precision::exact: the watertight double test, a crossing
-//                  of a shared edge or vertex counted once, a tangent touch twice), away from the
-//                  nearest surface point, so that every crossing is at least the point's distance
-//                  from it (more than the rounding of any t). A ray that crosses an edge or a
-//                  vertex of the mesh (a ray along a face's plane meets its edges) is cast again
-//                  along two fixed directions, and if those also touch edges the three vote;
-//                  winding 1 or 0;
+//                  crossings of a ray from p, odd inside. Only the mesh's connected components
+//                  whose boxes hold p count (mesh/components.h: a closed component adds an even
+//                  number of crossings to any path between two points outside its box), so a
+//                  point in no such box is outside with no ray, and a ray goes only as far as
+//                  the boxes of the point's components (query/parity_pieces.h). The rays go
+//                  through QueryEngine on the exact path (Mode::all, Precision::exact: the
+//                  watertight double test, a crossing of a shared edge or vertex counted once, a
+//                  tangent touch twice), along the line to the nearest surface point the short
+//                  way out (away from that surface on the side its normal points to, through it
+//                  from behind); every crossing on any ray from p is at least p's distance from
+//                  the surface away, more than the rounding of any t. A ray that crosses an edge
+//                  or a vertex of a counted component (a ray along a face's plane meets its
+//                  edges) is cast again along two fixed directions, and if those also touch
+//                  edges the three vote; winding 1 or 0;
 //   winding mesh   the generalized winding number (QueryEngine::winding_number: fast winding
 //                  numbers), inside where it is ≥ ½; a lone triangle encloses nothing.
 // The scene's answer: inside any object; its winding number is the largest of the objects'.

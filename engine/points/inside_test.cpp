@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/points/point_queries.h"
+#include "engine/query/parity_pieces.h"
 #include "engine/testing/point_meshes.h"
 
 namespace raycastd::engine {
@@ -141,6 +142,78 @@ TEST(Inside, ALoneTriangleEnclosesNothing) {
     EXPECT_GT(occ[0].winding, 0.49);
     EXPECT_TRUE(occ[1].inside);  // on the surface
     EXPECT_FALSE(occ[2].inside);
+}
+
+TEST(Inside, ComponentsOfOneMeshEachCountWhereTheirBoxesHoldThePoint) {
+    // One closed mesh of five spheres: a hollow ball (the sphere of radius 2 about the origin and
+    // one of radius 1 inside it), a lone sphere, and two that overlap. Crossing parity puts the
+    // shell between the hollow ball's surfaces inside, its cavity outside, and the lens where
+    // the two overlap outside (two surfaces around it): the test counts only the components
+    // whose boxes hold a point (mesh/components.h), so each of these asks for the sum over
+    // several pieces, and a point in no box for no ray at all. A sixth small ball straddles the
+    // corner of the big one's box, outside the big sphere: rays from points near that corner
+    // end inside it, crossing it once, and that crossing must not count for them.
+    struct Ball {
+        Vec3d c;
+        double r;
+    };
+    const std::vector<Ball> balls = {{{0, 0, 0}, 2.0}, {{0, 0, 0}, 1.0},   {{5, 0, 0}, 1.0},
+                                     {{0, 5, 0}, 1.0}, {{0.8, 5, 0}, 1.0}, {{1.9, 1.9, 0}, 0.4}};
+    auto mesh = std::make_shared<TriangleMesh>();
+    for (const Ball& b : balls) {
+        const Object o = testing::icosphere_object(3, b.c, b.r);
+        const auto base = static_cast<std::uint32_t>(mesh->positions.size());
+        mesh->positions.insert(mesh->positions.end(), o.mesh->positions.begin(),
+                               o.mesh->positions.end());
+        for (auto t : o.mesh->triangles)
+            mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    Object o;
+    o.name = "balls";
+    o.kind = ObjectKind::mesh;
+    o.mesh = mesh;
+    auto e = prepare(testing::scene_of({o}));
+    ASSERT_TRUE(e);
+    ASSERT_EQ(e->topology()[0].sign, SignMethod::parity);
+    ASSERT_EQ(e->topology()[0].components, 6u);
+
+    // The truth: how many balls hold p, for points clearly inside (0.98 r: a level-3 icosphere's
+    // faces are all beyond 0.99 r of its centre) or outside (beyond r) each of them.
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> ux(-3, 7), uy(-3, 7), uz(-3, 3);
+    std::vector<Vec3d> pts;
+    std::vector<int> want;
+    while (pts.size() < 25000) {
+        const Vec3d p{ux(rng), uy(rng), uz(rng)};
+        int in = 0;
+        bool clear = true;
+        for (const Ball& b : balls) {
+            const double d = length(p - b.c);
+            in += d < 0.98 * b.r;
+            clear = clear && (d < 0.98 * b.r || d > b.r);
+        }
+        if (clear) {
+            pts.push_back(p);
+            want.push_back(in % 2);
+        }
+    }
+    // Points of each kind were drawn: the shell, the cavity, the lens, the lone ball, outside.
+    auto count_in = [&](const Vec3d& c, double lo, double hi) {
+        return std::count_if(pts.begin(), pts.end(), [&](const Vec3d& p) {
+            const double d = length(p - c);
+            return d > lo && d < hi;
+        });
+    };
+    ASSERT_GT(count_in({0, 0, 0}, 1.0, 1.96), 50);
+    ASSERT_GT(count_in({0, 0, 0}, 0.0, 0.98), 10);
+    ASSERT_GT(count_in({0.4, 5, 0}, 0.0, 0.5), 10);
+    const std::vector<Occupancy> occ = classify(*e, pts);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        ASSERT_EQ(occ[i].inside, want[i] == 1)
+            << "point " << i << " (" << pts[i].x << ", " << pts[i].y << ", " << pts[i].z << ")";
+    }
+    // The pieces were built once, one per component, and are counted in the engine's memory.
+    EXPECT_EQ(e->parity_pieces().bounds.size(), 6u);
 }
 
 }  // namespace

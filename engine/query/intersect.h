@@ -23,6 +23,8 @@ namespace raycastd::engine {
 class EmbreeAccel;
 struct WindingTrees;     // query/point_entry.cpp
 struct PointTree;        // query/point_entry.cpp
+struct ParityPieces;     // query/parity_pieces.h
+struct ParitySlot;       // query/point_entry.cpp
 struct ComputedNormals;  // query/shading_normals.cpp
 
 /// A scene made ready for queries.
@@ -114,6 +116,9 @@ class QueryEngine {
     /// The generalized winding number of triangle object `object` at p, by fast winding numbers
     /// (accel/winding_bvh.h); the object's tree is built on its first such query.
     double winding_number(std::uint32_t object, const Vec3d& p) const;
+    /// The components of the parity meshes and the tree of their boxes (query/parity_pieces.h),
+    /// built on the first call (thread-safe) and kept with the engine (counted in memory_bytes).
+    const ParityPieces& parity_pieces() const;
 
     // ---- Shading (query/shading_normals.cpp). ----
 
@@ -148,6 +153,7 @@ class QueryEngine {
     /// Built per object on first use; shared_ptr, whose deleter is made where the type is complete.
     std::shared_ptr<WindingTrees> winding_;
     std::shared_ptr<PointTree> point_tree_;     ///< the same, one slot; null where it does not suit
+    std::shared_ptr<ParitySlot> parity_;        ///< the same, one slot
     std::shared_ptr<ComputedNormals> normals_;  ///< the same, for computed_normals()
     /// shading_normals.cpp: the empty slots, made by build().
     void prepare_normals();

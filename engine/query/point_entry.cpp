@@ -8,6 +8,7 @@
 #include "engine/accel/point_query.h"
 #include "engine/accel/winding_bvh.h"
 #include "engine/query/intersect.h"
+#include "engine/query/parity_pieces.h"
 #include "engine/query/per_object_once.h"
 
 namespace raycastd::engine {
@@ -21,6 +22,20 @@ struct WindingTrees : PerObjectOnce<WindingBvh> {
 struct PointTree : PerObjectOnce<PointBvh> {
     PointTree() : PerObjectOnce(1) {}
 };
+
+/// The scene's one ParityPieces (slot 0), built on the first query of the parity test.
+struct ParitySlot : PerObjectOnce<ParityPieces> {
+    ParitySlot() : PerObjectOnce(1) {}
+};
+
+std::size_t ParityPieces::memory_bytes() const {
+    std::size_t n = first.capacity() * sizeof(std::uint32_t) +
+                    object.capacity() * sizeof(std::uint32_t) +
+                    bounds.capacity() * sizeof(Bounds3) + tree.memory_bytes();
+    for (const MeshComponents& c : of_object)
+        n += sizeof(MeshComponents) + c.memory_bytes();
+    return n;
+}
 
 namespace {
 
@@ -51,9 +66,33 @@ double QueryEngine::winding_number(std::uint32_t object, const Vec3d& p) const {
         .winding_number(p);
 }
 
+const ParityPieces& QueryEngine::parity_pieces() const {
+    return parity_->get(0, [&] {
+        const Scene& s = *scene_;
+        auto out = std::make_unique<ParityPieces>();
+        out->of_object.resize(s.objects.size());
+        // The meshes in parallel: each is one weld and one union-find pass (mesh/components.h).
+        tbb::parallel_for(std::size_t(0), s.objects.size(), [&](std::size_t i) {
+            if (s.objects[i].kind != ObjectKind::sphere && topology_[i].sign == SignMethod::parity)
+                out->of_object[i] = find_components(*s.objects[i].mesh);
+        });
+        out->first.assign(s.objects.size(), 0);
+        for (std::uint32_t o = 0; o < s.objects.size(); ++o) {
+            out->first[o] = static_cast<std::uint32_t>(out->bounds.size());
+            for (const Bounds3& b : out->of_object[o].bounds) {
+                out->object.push_back(o);
+                out->bounds.push_back(b);
+            }
+        }
+        out->tree = BoxTree(out->bounds);
+        return std::unique_ptr<const ParityPieces>(std::move(out));
+    });
+}
+
 std::size_t QueryEngine::point_memory_bytes() const {
     return (winding_ ? winding_->memory_bytes() : 0) +
-           (point_tree_ ? point_tree_->memory_bytes() : 0);
+           (point_tree_ ? point_tree_->memory_bytes() : 0) +
+           (parity_ ? parity_->memory_bytes() : 0);
 }
 
 void QueryEngine::prepare_points() {
@@ -64,6 +103,7 @@ void QueryEngine::prepare_points() {
             topology_[i] = compute_topology(*s.objects[i].mesh);
     });
     winding_ = std::make_shared<WindingTrees>(s.objects.size());
+    parity_ = std::make_shared<ParitySlot>();
     if (PointBvh::suits(s))
         point_tree_ = std::make_shared<PointTree>();
 }
