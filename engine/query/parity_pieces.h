@@ -1,8 +1,8 @@
 #pragma once
 // What the crossing-parity test of engine/points/inside.cpp works with: the connected components
 // of each parity mesh (mesh/components.h says why a component whose box does not hold a point
-// can be left out of that point's count) and one BoxTree of their boxes over the whole scene, so
-// that a point asks the tree, not every object, which pieces can hold it. QueryEngine builds them
+// can be left out of that point's count) and one BoxGrid of their boxes over the whole scene, so
+// that a point asks the grid, not every object, which pieces can hold it. QueryEngine builds them
 // on the first query that reaches the parity test (point_entry.cpp): a scene never asked for a
 // signed distance or an occupancy does not pay for them.
 
@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/accel/box_tree.h"
+#include "engine/accel/box_grid.h"
 #include "engine/mesh/components.h"
 
 namespace raycastd::engine {
@@ -25,7 +25,7 @@ struct ParityPieces {
     /// The box of each piece (its component's).
     std::vector<Bounds3> bounds;
     /// Over `bounds`: which pieces' boxes hold a point.
-    BoxTree tree;
+    BoxGrid grid;
 
     /// The piece of triangle `primitive` of parity mesh `o`.
     std::uint32_t piece(std::uint32_t o, std::uint32_t primitive) const {

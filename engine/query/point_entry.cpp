@@ -31,7 +31,7 @@ struct ParitySlot : PerObjectOnce<ParityPieces> {
 std::size_t ParityPieces::memory_bytes() const {
     std::size_t n = first.capacity() * sizeof(std::uint32_t) +
                     object.capacity() * sizeof(std::uint32_t) +
-                    bounds.capacity() * sizeof(Bounds3) + tree.memory_bytes();
+                    bounds.capacity() * sizeof(Bounds3) + grid.memory_bytes();
     for (const MeshComponents& c : of_object)
         n += sizeof(MeshComponents) + c.memory_bytes();
     return n;
@@ -84,7 +84,7 @@ const ParityPieces& QueryEngine::parity_pieces() const {
                 out->bounds.push_back(b);
             }
         }
-        out->tree = BoxTree(out->bounds);
+        out->grid = BoxGrid(out->bounds);
         return std::unique_ptr<const ParityPieces>(std::move(out));
     });
 }
