@@ -28,6 +28,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <quadmath.h>
@@ -90,6 +91,59 @@ std::vector<re::Vec3d> on_surface(const re::TriangleMesh& m, std::size_t n) {
     return out;
 }
 
+/// One closed mesh of many components (the parity test counts each component only where its box
+/// holds the point, engine/mesh/components.h): 18 icospheres of level 2 and radius 0.35 at the
+/// integer points (0..2, 0..2, 0..1), and a hollow ball about (1, 1, 2.6), its outer surface of
+/// radius 0.5 facing out and its inner one of radius 0.3 facing in, so that the winding number
+/// the reference sums (1 in the ball's wall, 0 in its cavity) is the parity truth.
+struct Field {
+    re::Object object;
+    std::vector<std::pair<re::Vec3d, double>> spheres;  ///< centre and radius of each surface
+};
+
+Field sphere_field() {
+    Field f;
+    auto mesh = std::make_shared<re::TriangleMesh>();
+    auto add = [&](const re::Vec3d& c, double r, bool inward) {
+        const re::Object o = re::testing::icosphere_object(2, c, r);
+        const auto base = static_cast<std::uint32_t>(mesh->positions.size());
+        mesh->positions.insert(mesh->positions.end(), o.mesh->positions.begin(),
+                               o.mesh->positions.end());
+        for (auto t : o.mesh->triangles) {
+            if (inward)
+                std::swap(t[1], t[2]);
+            mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+        }
+        f.spheres.push_back({c, r});
+    };
+    for (int k = 0; k < 2; ++k)
+        for (int j = 0; j < 3; ++j)
+            for (int i = 0; i < 3; ++i)
+                add({double(i), double(j), double(k)}, 0.35, false);
+    add({1, 1, 2.6}, 0.5, false);
+    add({1, 1, 2.6}, 0.3, true);
+    f.object.name = "field";
+    f.object.kind = re::ObjectKind::mesh;
+    f.object.mesh = mesh;
+    return f;
+}
+
+/// n points near the field's surfaces: about a random sphere's centre at r(1 ± 10^x), x uniform
+/// in [−9, −2].
+std::vector<re::Vec3d> field_shell(const Field& f, std::size_t n, std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> g;
+    std::uniform_real_distribution<double> x(-9, -2), sign(-1, 1);
+    std::uniform_int_distribution<std::size_t> pick(0, f.spheres.size() - 1);
+    std::vector<re::Vec3d> out(n);
+    for (auto& p : out) {
+        const auto& [c, r] = f.spheres[pick(rng)];
+        const re::Vec3d dir = normalize(re::Vec3d{g(rng), g(rng), g(rng)});
+        p = c + dir * (r * (1.0 + (sign(rng) < 0 ? -1 : 1) * std::pow(10.0, x(rng))));
+    }
+    return out;
+}
+
 std::vector<Suite> suites(std::size_t n) {
     std::vector<Suite> s;
     const re::Object ico5 = re::testing::icosphere_object(5);
@@ -104,6 +158,11 @@ std::vector<Suite> suites(std::size_t n) {
         {"icosphere L4 at (1e5, −2e5, 3e5), uniform", "ico_offset", off, uniform(off, n, 4)});
     if (auto spot = re::testing::model_object("spot/spot.obj"))
         s.push_back({"spot.obj (closed model), uniform", "spot", *spot, uniform(*spot, n, 5)});
+    const Field field = sphere_field();
+    s.push_back({"20 icospheres in one mesh (a hollow ball among them), uniform", "field",
+                 field.object, uniform(field.object, n, 10)});
+    s.push_back({"20 icospheres in one mesh, shell 10⁻⁹…10⁻² off their spheres", "field_shell",
+                 field.object, field_shell(field, n, 11)});
     re::Object holes = re::testing::icosphere_object(4);
     auto m = std::make_shared<re::TriangleMesh>(*holes.mesh);
     m->triangles.erase(m->triangles.begin() + 100, m->triangles.begin() + 110);
