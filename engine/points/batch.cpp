@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include "engine/math/bounds.h"
 
 namespace raycastd::engine {
@@ -25,11 +29,21 @@ std::uint32_t morton(std::uint32_t x, std::uint32_t y, std::uint32_t z, int bits
 std::vector<std::uint32_t> spatial_order(const Vec3d* points, std::size_t n) {
     if (n < kSpatialOrderMin || n > UINT32_MAX)
         return {};
-    Bounds3 box;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (is_finite(points[i]))
-            box.extend(points[i]);
-    }
+    // The bounds and the codes over the threads (serial, the three passes took ~9% of a 1M-point
+    // batch's wall time on A's shell); the counting sort's scatter stays serial.
+    const Bounds3 box = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 16384), Bounds3{},
+        [&](const tbb::blocked_range<std::size_t>& r, Bounds3 b) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                if (is_finite(points[i]))
+                    b.extend(points[i]);
+            }
+            return b;
+        },
+        [](Bounds3 a, const Bounds3& b) {
+            a.extend(b);
+            return a;
+        });
     const Vec3d lo = box.lo, extent = box.diagonal();
     if (box.empty() || !is_finite(extent) || !(max_component(extent) > 0.0))
         return {};
@@ -44,12 +58,16 @@ std::vector<std::uint32_t> spatial_order(const Vec3d* points, std::size_t n) {
         return static_cast<std::uint32_t>(std::clamp(c, 0.0, cells - 1.0));
     };
     std::vector<std::uint32_t> code(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3d& p = points[i];
-        code[i] = is_finite(p) ? 1u + morton(cell(p.x, lo.x, extent.x), cell(p.y, lo.y, extent.y),
-                                             cell(p.z, lo.z, extent.z), bits)
-                               : 0u;
-    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                              const Vec3d& p = points[i];
+                              code[i] = is_finite(p) ? 1u + morton(cell(p.x, lo.x, extent.x),
+                                                                   cell(p.y, lo.y, extent.y),
+                                                                   cell(p.z, lo.z, extent.z), bits)
+                                                     : 0u;
+                          }
+                      });
     // A counting sort on the codes: linear and stable (points in one cell keep their order), and
     // no (code, index) pairs to build and sort.
     std::vector<std::uint32_t> start((std::size_t{1} << (3 * bits)) + 2, 0);

@@ -179,7 +179,7 @@ std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
 /// Inside by crossing parity for the listed points: only the pieces whose boxes hold a point
 /// count for it (none: outside, no ray); the first ray along the line to the nearest surface
 /// point, then the retries of the file comment for rays that met an edge.
-void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
+void parity_inside(const QueryEngine& engine, const Vec3d* points, NearestHits nearest,
                    const std::vector<std::size_t>& which, const CancelToken& cancel,
                    Occupancy* out) {
     // The first ray leaves the nearest surface the short way: straight away from it where p is
@@ -240,7 +240,7 @@ void parity_inside(const QueryEngine& engine, const Vec3d* points, const PointHi
 
 }  // namespace
 
-Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
+Status classify_points(const QueryEngine& engine, const Vec3d* points, NearestHits nearest,
                        std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out,
                        const std::vector<std::uint32_t>& order) {
     const Scene& s = engine.scene();
@@ -261,6 +261,13 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
     // The winding number is the largest over the objects; with only winding meshes it may be
     // negative (a mesh facing inwards), so it starts at the lowest value an object can give.
     const double no_winding = spheres.empty() && !any_parity ? -kInfinity : 0.0;
+    auto open = [&](std::size_t i) {
+        return nearest[i].valid() && !on_surface(nearest[i]) && (all_objects || !out[i].inside);
+    };
+    // Whether each point is still open after the spheres, for the parity list below: gathered
+    // here in parallel, so that the list is made from a byte a point rather than by a serial
+    // pass over the scattered hits (in a spatial order every read of a hit missed cache).
+    std::vector<std::uint8_t> still_open(any_parity ? n : 0);
     for_each_point(n, cancel, order, [&](std::size_t i) {
         out[i] = Occupancy{false, no_winding};
         if (on_surface(nearest[i])) {
@@ -276,15 +283,14 @@ Status classify_points(const QueryEngine& engine, const Vec3d* points, const Poi
                     return;
             }
         }
+        if (any_parity)
+            still_open[i] = open(i);
     });
-    auto open = [&](std::size_t i) {
-        return nearest[i].valid() && !on_surface(nearest[i]) && (all_objects || !out[i].inside);
-    };
-    if (any_parity) {
+    if (any_parity && !cancel.fired()) {
         std::vector<std::size_t> which;
         for (std::size_t k = 0; k < n; ++k) {
             const std::size_t i = order.empty() ? k : order[k];
-            if (open(i))
+            if (still_open[i])
                 which.push_back(i);
         }
         parity_inside(engine, points, nearest, which, cancel, out);

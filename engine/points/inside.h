@@ -33,6 +33,21 @@
 
 namespace raycastd::engine {
 
+/// The nearest hits of a batch wherever the caller keeps them: hit i at `first` plus i·stride
+/// bytes (query_points passes the hits inside its answers, rather than copying 1M of them).
+class NearestHits {
+  public:
+    NearestHits(const PointHit* first, std::size_t stride = sizeof(PointHit))
+        : first_(reinterpret_cast<const char*>(first)), stride_(stride) {}
+    const PointHit& operator[](std::size_t i) const {
+        return *reinterpret_cast<const PointHit*>(first_ + i * stride_);
+    }
+
+  private:
+    const char* first_;
+    std::size_t stride_;
+};
+
 /// One point's classification.
 struct Occupancy {
     bool inside = false;
@@ -45,7 +60,7 @@ struct Occupancy {
 /// Code::cancelled once `cancel` has fired (asked per block of points and by the parity rays).
 /// The points are taken in `order` (batch.h's spatial_order; empty: as they come), which changes
 /// no answer, only which points' rays and tree walks follow one another.
-Status classify_points(const QueryEngine& engine, const Vec3d* points, const PointHit* nearest,
+Status classify_points(const QueryEngine& engine, const Vec3d* points, NearestHits nearest,
                        std::size_t n, bool all_objects, const CancelToken& cancel, Occupancy* out,
                        const std::vector<std::uint32_t>& order = {});
 

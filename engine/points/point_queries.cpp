@@ -1,5 +1,8 @@
 #include "engine/points/point_queries.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "engine/points/batch.h"
 #include "engine/points/inside.h"
 
@@ -73,22 +76,25 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
         return options.cancel.status();
     if (!signs)
         return {};
-    std::vector<PointHit> nearest(n);
-    for (std::size_t i = 0; i < n; ++i)
-        nearest[i] = out[i].hit;
-    // classify_points reads the error bound: the reported hit keeps it (distance 0 ≤ err).
+    // classify_points reads the error bound: the reported hit keeps it (distance 0 ≤ err). It
+    // reads the hits where the answers hold them, and the answers are completed in parallel:
+    // serial, copying 1M hits out and the verdicts back took ~6% of a signed distance's wall
+    // time on A's shell.
     std::vector<Occupancy> occ(n);
-    const Status st =
-        classify_points(engine, points.data(), nearest.data(), n,
-                        options.query == PointQuery::occupancy, options.cancel, occ.data(), order);
+    const Status st = classify_points(
+        engine, points.data(), NearestHits(n > 0 ? &out[0].hit : nullptr, sizeof(PointAnswer)), n,
+        options.query == PointQuery::occupancy, options.cancel, occ.data(), order);
     if (!st.ok())
         return st;
-    for (std::size_t i = 0; i < n; ++i) {
-        out[i].inside = occ[i].inside;
-        out[i].winding = occ[i].winding;
-        if (occ[i].inside && out[i].distance > 0.0)
-            out[i].distance = -out[i].distance;
-    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                              out[i].inside = occ[i].inside;
+                              out[i].winding = occ[i].winding;
+                              if (occ[i].inside && out[i].distance > 0.0)
+                                  out[i].distance = -out[i].distance;
+                          }
+                      });
     return {};
 }
 
