@@ -8,7 +8,8 @@ namespace raycastd::engine {
 namespace {
 
 /// Cells a box on average (the grid's resolution), the entries a box at most before the grid is
-/// made coarser, and the most cells (4M: 16 MB of cell starts) whatever the count of boxes.
+/// made coarser, and the most cells (4M: 16 MB of cell starts) whatever the count of boxes (the
+/// axes' counts are rounded up, then halved until their product is within it).
 constexpr double kCellsPerBox = 8.0;
 constexpr std::size_t kMaxEntriesPerBox = 64;
 constexpr double kMaxCells = 4194304.0;
@@ -27,25 +28,34 @@ BoxGrid::BoxGrid(const std::vector<Bounds3>& boxes) : boxes_(boxes) {
         return;
     const Vec3d e = union_.diagonal();
     const double ext[3] = {e.x, e.y, e.z};
-    // A cell side s with Π (extent_i / s) ≈ the cells wanted; an axis the boxes do not spread
-    // along (a flat or a linear layout) counts as a thousandth of the largest extent.
+    // A cell side s with Π (extent_a / s) ≈ the cells wanted, in units of the largest extent (so
+    // that neither tiny nor huge coordinates underflow or overflow the volume); an axis the
+    // boxes do not spread along (a flat or a linear layout) counts as a thousandth of it.
     const double largest = std::max({e.x, e.y, e.z});
-    const double floor_ext = largest * 1e-3;
-    const double volume =
-        std::max(e.x, floor_ext) * std::max(e.y, floor_ext) * std::max(e.z, floor_ext);
     const double want = std::min(kCellsPerBox * static_cast<double>(live), kMaxCells);
-    const double side = largest > 0 ? std::cbrt(volume / want) : 1.0;
+    double rel_volume = 1.0;
+    for (double x : ext)
+        rel_volume *= largest > 0 ? std::max(x / largest, 1e-3) : 1.0;
+    const double rel_side = std::cbrt(rel_volume / want);  // in [1e-2 / want^⅓, 1]
     for (int a = 0; a < 3; ++a) {
         origin_[a] = a == 0 ? union_.lo.x : (a == 1 ? union_.lo.y : union_.lo.z);
-        res_[a] = ext[a] > 0
-                      ? static_cast<std::size_t>(std::clamp(std::ceil(ext[a] / side), 1.0, 4096.0))
-                      : 1;
+        // Cells along the axis; 1 where the quotient is not a number ≥ 1 (a zero or an overflowed
+        // extent: largest = inf gives inf / inf).
+        const double cells_a = largest > 0 ? std::ceil(ext[a] / largest / rel_side) : 1.0;
+        res_[a] = cells_a >= 1.0 ? static_cast<std::size_t>(std::min(cells_a, 4096.0)) : 1;
+    }
+    while (static_cast<double>(cells()) > kMaxCells) {
+        for (std::size_t& r : res_)
+            r = (r + 1) / 2;
     }
     // Coarser while the boxes would be entered too often (large or piled-up boxes).
     std::vector<std::size_t> range;  // per box and axis: first and last cell
     for (;;) {
-        for (int a = 0; a < 3; ++a)
-            scale_[a] = ext[a] > 0 ? static_cast<double>(res_[a]) / ext[a] : 0.0;
+        for (int a = 0; a < 3; ++a) {
+            // A finite, positive scale, or 0 (every point in cell 0 along that axis).
+            const double sc = static_cast<double>(res_[a]) / ext[a];
+            scale_[a] = ext[a] > 0 && std::isfinite(sc) ? sc : 0.0;
+        }
         range.assign(boxes_.size() * 6, 0);
         std::size_t entries = 0;
         for (std::size_t i = 0; i < boxes_.size(); ++i) {

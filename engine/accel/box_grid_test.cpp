@@ -67,12 +67,33 @@ TEST(BoxGrid, FlatLayoutsAndAwkwardCoordinates) {
         const Vec3d corner{boxes[k].lo.x, 0.3, 7};
         EXPECT_EQ(found(grid, corner), scan(boxes, corner)) << k;
     }
-    EXPECT_TRUE(found(grid, {1e8 + 1, 0.5, 7.000001}).empty());
+    EXPECT_TRUE(found(grid, {1e8 + 1, 0.5, 7.000001}).empty());  // outside the union
+    // Inside the union, between two boxes in y: in no box.
+    EXPECT_TRUE(found(grid, {boxes[3].lo.x + 0.05, 0.2, 7}).empty());
+    EXPECT_EQ(found(grid, {boxes[3].lo.x + 0.05, 0.3, 7}), (std::vector<std::uint32_t>{3}));
+}
+
+TEST(BoxGrid, TinyAndHugeCoordinates) {
+    // A union of 1e-200 across (its volume underflows) and one of 1e308 (its extent overflows):
+    // the grid stays small and answers as a scan does.
+    for (double unit : {1e-200, 3e307}) {
+        std::vector<Bounds3> boxes;
+        for (int k = -5; k < 5; ++k)
+            boxes.push_back(Bounds3{{k * unit, -unit, 0}, {(k + 0.5) * unit, unit, unit}});
+        const BoxGrid grid(boxes);
+        EXPECT_LE(grid.cells(), 4096u * 1024);
+        for (int k = -5; k < 5; ++k) {
+            for (const Vec3d& p : {Vec3d{k * unit, 0, 0}, Vec3d{(k + 0.25) * unit, unit, unit},
+                                   Vec3d{(k + 0.75) * unit, 0, 0}})
+                EXPECT_EQ(found(grid, p), scan(boxes, p)) << unit << " " << k;
+        }
+    }
 }
 
 TEST(BoxGrid, PiledUpBoxesMakeItCoarser) {
     // Nested boxes about one centre overlap every cell a fine grid would have: the grid is made
-    // coarser (here to one cell, a scan) rather than listing each box thousands of times.
+    // coarser (15³ cells at first, then 8³, then 4³ where the entries are within 64 a box)
+    // rather than listing each box thousands of times.
     std::vector<Bounds3> boxes;
     for (int k = 1; k <= 400; ++k) {
         const double r = k;
@@ -80,6 +101,7 @@ TEST(BoxGrid, PiledUpBoxesMakeItCoarser) {
     }
     boxes.push_back(Bounds3{});  // empty: holds nothing
     const BoxGrid grid(boxes);
+    EXPECT_EQ(grid.cells(), 64u);
     EXPECT_LT(grid.memory_bytes(), 400u * 64 * 4 + 401 * sizeof(Bounds3) + 1024);
     EXPECT_EQ(found(grid, {0, 0, 0}).size(), 400u);
     EXPECT_EQ(found(grid, {0, 0, 399.5}), (std::vector<std::uint32_t>{399}));

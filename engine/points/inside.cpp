@@ -55,21 +55,22 @@ struct HeldBy {
 };
 
 /// How far a ray from p along unit d must go to leave the boxes of the listed pieces: the
-/// largest of their exit parameters, each box widened first by 2⁻²⁰ of its largest coordinate
-/// or extent. Every crossing of a piece lies in its box, so at most the unwidened exit away,
-/// and the widening is some 10¹⁰ times what the exact path's rounding of a t can move it:
-/// none of those crossings is lost at the far end, and the end itself is outside every listed
-/// box, which is all mesh/components.h asks of it.
+/// largest of their exit parameters, each box widened first by 2⁻²⁰ of its largest extent plus
+/// 2⁻⁴⁰ of its largest coordinate. Every crossing of a piece lies in its box, so at most the
+/// unwidened exit away, and the widening is over 2¹⁰ times what the exact path's rounding of a
+/// t can move it (a few ulps of the coordinates): none of those crossings is lost at the far
+/// end, and the end itself is outside every listed box, which is all mesh/components.h asks of
+/// it. (The coordinates' share is kept small: a small component far from the origin would
+/// otherwise get a ray many times its size.)
 double reach(const ParityPieces& pp, const Vec3d& p, const Vec3d& d, const std::uint32_t* first,
              const std::uint32_t* last) {
     double t_max = 0.0;
     for (const std::uint32_t* k = first; k != last; ++k) {
         const Bounds3& b = pp.bounds[*k];
         const Vec3d e = b.diagonal();
-        const double size =
-            std::max({e.x, e.y, e.z, std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
-                      std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
-        const double pad = size * 0x1p-20;
+        const double coords = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
+                                        std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+        const double pad = std::max({e.x, e.y, e.z}) * 0x1p-20 + coords * 0x1p-40;
         auto leave = [pad](double lo, double hi, double o, double dir) {
             if (dir > 0)
                 return (hi + pad - o) / dir;
@@ -97,12 +98,16 @@ RayVerdict verdict(const Hit* begin, const Hit* end, const ParityPieces& pp,
     for (const Hit* h = begin; h != end; ++h) {
         if (pp.of_object[h->object].bounds.empty())
             continue;  // not a parity mesh
+        // Any parity mesh's edge counts, even one of a piece left out: the all-hits path merges
+        // hits of one object at one edge crossing into the hit of its lowest primitive, which
+        // may be of a piece left out while the dropped one was counted (two components meeting
+        // at an edge without sharing it); the ray is cast again rather than trusted.
+        v.edge = v.edge || h->on_edge;
         const std::uint32_t k = pp.piece(h->object, h->primitive);
         const std::uint32_t* at = std::lower_bound(first, last, k);
         if (at == last || *at != k)
             continue;  // a piece whose box does not hold the point: its crossings cancel
         ++counts[at - first];
-        v.edge = v.edge || h->on_edge;
     }
     for (std::size_t a = 0; a < n;) {
         std::uint32_t sum = 0;
@@ -182,6 +187,8 @@ std::vector<RayVerdict> cast(const QueryEngine& engine, const Vec3d* points,
 void parity_inside(const QueryEngine& engine, const Vec3d* points, NearestHits nearest,
                    const std::vector<std::size_t>& which, const CancelToken& cancel,
                    Occupancy* out) {
+    if (which.empty())
+        return;  // nothing to decide: the pieces are not built for nothing
     // The first ray leaves the nearest surface the short way: straight away from it where p is
     // on the side its normal points to (outside, when the mesh faces out), and straight through
     // it where p is behind it, so that the ray reaches the end of its pieces' boxes after

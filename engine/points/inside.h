@@ -37,15 +37,23 @@ namespace raycastd::engine {
 /// bytes (query_points passes the hits inside its answers, rather than copying 1M of them).
 class NearestHits {
   public:
-    NearestHits(const PointHit* first, std::size_t stride = sizeof(PointHit))
-        : first_(reinterpret_cast<const char*>(first)), stride_(stride) {}
+    /// Hits in an array of their own.
+    explicit NearestHits(const PointHit* first) : first_(reinterpret_cast<const char*>(first)) {}
+    /// The hits that are member `hit` of each element of an array of T (explicit, so that a
+    /// pointer into such an array cannot pass for an array of hits).
+    template <class T>
+    static NearestHits members(const T* first, PointHit T::*hit) {
+        NearestHits h(first ? &(first->*hit) : nullptr);
+        h.stride_ = sizeof(T);
+        return h;
+    }
     const PointHit& operator[](std::size_t i) const {
         return *reinterpret_cast<const PointHit*>(first_ + i * stride_);
     }
 
   private:
     const char* first_;
-    std::size_t stride_;
+    std::size_t stride_ = sizeof(PointHit);
 };
 
 /// One point's classification.

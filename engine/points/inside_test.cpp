@@ -31,9 +31,9 @@ std::vector<Occupancy> classify(const QueryEngine& e, const std::vector<Vec3d>& 
             nearest[i] = *h;
     }
     std::vector<Occupancy> out(pts.size());
-    EXPECT_TRUE(
-        classify_points(e, pts.data(), nearest.data(), pts.size(), all_objects, {}, out.data())
-            .ok());
+    EXPECT_TRUE(classify_points(e, pts.data(), NearestHits(nearest.data()), pts.size(), all_objects,
+                                {}, out.data())
+                    .ok());
     return out;
 }
 
@@ -212,8 +212,49 @@ TEST(Inside, ComponentsOfOneMeshEachCountWhereTheirBoxesHoldThePoint) {
         ASSERT_EQ(occ[i].inside, want[i] == 1)
             << "point " << i << " (" << pts[i].x << ", " << pts[i].y << ", " << pts[i].z << ")";
     }
-    // The pieces were built once, one per component, and are counted in the engine's memory.
+    // The pieces were built, one per component, and are counted in the engine's memory.
     EXPECT_EQ(e->parity_pieces().bounds.size(), 6u);
+    EXPECT_GE(e->memory_bytes(), e->parity_pieces().memory_bytes());
+}
+
+TEST(Inside, ManyNestedComponentsHoldingOnePoint) {
+    // 18 concentric spheres in one mesh: a point near the centre is in all 18 boxes (more than
+    // the seven pieces a point keeps in place, more than the 16 counts kept on the stack), and
+    // inside exactly when an odd number of the spheres surround it.
+    auto mesh = std::make_shared<TriangleMesh>();
+    const int kShells = 18;
+    for (int k = 1; k <= kShells; ++k) {
+        const Object o = testing::icosphere_object(2, {0, 0, 0}, double(k));
+        const auto base = static_cast<std::uint32_t>(mesh->positions.size());
+        mesh->positions.insert(mesh->positions.end(), o.mesh->positions.begin(),
+                               o.mesh->positions.end());
+        for (auto t : o.mesh->triangles)
+            mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    Object o;
+    o.name = "shells";
+    o.kind = ObjectKind::mesh;
+    o.mesh = mesh;
+    auto e = prepare(testing::scene_of({o}));
+    ASSERT_TRUE(e);
+    ASSERT_EQ(e->topology()[0].sign, SignMethod::parity);
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> g;
+    std::uniform_real_distribution<double> radius(0.0, kShells + 1.0);
+    std::vector<Vec3d> pts;
+    std::vector<int> want;
+    while (pts.size() < 3000) {
+        // A level-2 icosphere of radius k lies between 0.987 k and k from its centre: points
+        // within 2.5% below a radius are not drawn.
+        const double r = pts.size() < 300 ? radius(rng) * 0.05 : radius(rng);
+        if (r - std::floor(r) == 0 || r > 0.975 * (std::floor(r) + 1))
+            continue;
+        pts.push_back(normalize(Vec3d{g(rng), g(rng), g(rng)}) * r);
+        want.push_back((kShells - static_cast<int>(std::floor(r))) % 2);
+    }
+    const std::vector<Occupancy> occ = classify(*e, pts);
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        ASSERT_EQ(occ[i].inside, want[i] == 1) << "point " << i << " at radius " << length(pts[i]);
 }
 
 }  // namespace

@@ -82,7 +82,7 @@ Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
     // time on A's shell.
     std::vector<Occupancy> occ(n);
     const Status st = classify_points(
-        engine, points.data(), NearestHits(n > 0 ? &out[0].hit : nullptr, sizeof(PointAnswer)), n,
+        engine, points.data(), NearestHits::members(out.data(), &PointAnswer::hit), n,
         options.query == PointQuery::occupancy, options.cancel, occ.data(), order);
     if (!st.ok())
         return st;

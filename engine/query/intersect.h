@@ -116,7 +116,7 @@ class QueryEngine {
     /// The generalized winding number of triangle object `object` at p, by fast winding numbers
     /// (accel/winding_bvh.h); the object's tree is built on its first such query.
     double winding_number(std::uint32_t object, const Vec3d& p) const;
-    /// The components of the parity meshes and the tree of their boxes (query/parity_pieces.h),
+    /// The components of the parity meshes and the grid of their boxes (query/parity_pieces.h),
     /// built on the first call (thread-safe) and kept with the engine (counted in memory_bytes).
     const ParityPieces& parity_pieces() const;
 

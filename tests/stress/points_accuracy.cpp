@@ -96,13 +96,7 @@ std::vector<re::Vec3d> on_surface(const re::TriangleMesh& m, std::size_t n) {
 /// integer points (0..2, 0..2, 0..1), and a hollow ball about (1, 1, 2.6), its outer surface of
 /// radius 0.5 facing out and its inner one of radius 0.3 facing in, so that the winding number
 /// the reference sums (1 in the ball's wall, 0 in its cavity) is the parity truth.
-struct Field {
-    re::Object object;
-    std::vector<std::pair<re::Vec3d, double>> spheres;  ///< centre and radius of each surface
-};
-
-Field sphere_field() {
-    Field f;
+re::Object sphere_field() {
     auto mesh = std::make_shared<re::TriangleMesh>();
     auto add = [&](const re::Vec3d& c, double r, bool inward) {
         const re::Object o = re::testing::icosphere_object(2, c, r);
@@ -114,7 +108,6 @@ Field sphere_field() {
                 std::swap(t[1], t[2]);
             mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
         }
-        f.spheres.push_back({c, r});
     };
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 3; ++j)
@@ -122,24 +115,29 @@ Field sphere_field() {
                 add({double(i), double(j), double(k)}, 0.35, false);
     add({1, 1, 2.6}, 0.5, false);
     add({1, 1, 2.6}, 0.3, true);
-    f.object.name = "field";
-    f.object.kind = re::ObjectKind::mesh;
-    f.object.mesh = mesh;
-    return f;
+    re::Object o;
+    o.name = "field";
+    o.kind = re::ObjectKind::mesh;
+    o.mesh = mesh;
+    return o;
 }
 
-/// n points near the field's surfaces: about a random sphere's centre at r(1 ± 10^x), x uniform
-/// in [−9, −2].
-std::vector<re::Vec3d> field_shell(const Field& f, std::size_t n, std::uint64_t seed) {
+/// n points near the field's mesh: a uniform point of a random triangle moved along the
+/// triangle's unit normal by ±10^x, x uniform in [−9, −2] (off the mesh itself, not off the
+/// spheres it approximates, whose level-2 faces lie up to 1.3% of a radius inside them).
+std::vector<re::Vec3d> field_shell(const re::Object& field, std::size_t n, std::uint64_t seed) {
     std::mt19937_64 rng(seed);
-    std::normal_distribution<double> g;
-    std::uniform_real_distribution<double> x(-9, -2), sign(-1, 1);
-    std::uniform_int_distribution<std::size_t> pick(0, f.spheres.size() - 1);
+    const re::TriangleMesh& m = *field.mesh;
+    std::uniform_real_distribution<double> u(0, 1), x(-9, -2), sign(-1, 1);
+    std::uniform_int_distribution<std::size_t> pick(0, m.size() - 1);
     std::vector<re::Vec3d> out(n);
     for (auto& p : out) {
-        const auto& [c, r] = f.spheres[pick(rng)];
-        const re::Vec3d dir = normalize(re::Vec3d{g(rng), g(rng), g(rng)});
-        p = c + dir * (r * (1.0 + (sign(rng) < 0 ? -1 : 1) * std::pow(10.0, x(rng))));
+        const re::Triangle t = m.triangle(pick(rng));
+        // Uniform on the triangle: (1 − √r₁, √r₁(1 − r₂), √r₁ r₂) (Osada et al. 2002, §4.2).
+        const double s1 = std::sqrt(u(rng)), r2 = u(rng);
+        const re::Vec3d on = t.a * (1.0 - s1) + t.b * (s1 * (1.0 - r2)) + t.c * (s1 * r2);
+        const re::Vec3d normal = normalize(cross(t.b - t.a, t.c - t.a));
+        p = on + normal * ((sign(rng) < 0 ? -1 : 1) * std::pow(10.0, x(rng)));
     }
     return out;
 }
@@ -158,11 +156,11 @@ std::vector<Suite> suites(std::size_t n) {
         {"icosphere L4 at (1e5, −2e5, 3e5), uniform", "ico_offset", off, uniform(off, n, 4)});
     if (auto spot = re::testing::model_object("spot/spot.obj"))
         s.push_back({"spot.obj (closed model), uniform", "spot", *spot, uniform(*spot, n, 5)});
-    const Field field = sphere_field();
-    s.push_back({"20 icospheres in one mesh (a hollow ball among them), uniform", "field",
-                 field.object, uniform(field.object, n, 10)});
-    s.push_back({"20 icospheres in one mesh, shell 10⁻⁹…10⁻² off their spheres", "field_shell",
-                 field.object, field_shell(field, n, 11)});
+    const re::Object field = sphere_field();
+    s.push_back({"20 icospheres in one mesh (a hollow ball among them), uniform", "field", field,
+                 uniform(field, n, 10)});
+    s.push_back({"20 icospheres in one mesh, 10⁻⁹…10⁻² off their triangles", "field_shell", field,
+                 field_shell(field, n, 11)});
     re::Object holes = re::testing::icosphere_object(4);
     auto m = std::make_shared<re::TriangleMesh>(*holes.mesh);
     m->triangles.erase(m->triangles.begin() + 100, m->triangles.begin() + 110);
