@@ -153,25 +153,10 @@ TEST(Inside, ComponentsOfOneMeshEachCountWhereTheirBoxesHoldThePoint) {
     // several pieces, and a point in no box for no ray at all. A sixth small ball straddles the
     // corner of the big one's box, outside the big sphere: rays from points near that corner
     // end inside it, crossing it once, and that crossing must not count for them.
-    struct Ball {
-        Vec3d c;
-        double r;
-    };
-    const std::vector<Ball> balls = {{{0, 0, 0}, 2.0}, {{0, 0, 0}, 1.0},   {{5, 0, 0}, 1.0},
-                                     {{0, 5, 0}, 1.0}, {{0.8, 5, 0}, 1.0}, {{1.9, 1.9, 0}, 0.4}};
-    auto mesh = std::make_shared<TriangleMesh>();
-    for (const Ball& b : balls) {
-        const Object o = testing::icosphere_object(3, b.c, b.r);
-        const auto base = static_cast<std::uint32_t>(mesh->positions.size());
-        mesh->positions.insert(mesh->positions.end(), o.mesh->positions.begin(),
-                               o.mesh->positions.end());
-        for (auto t : o.mesh->triangles)
-            mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    Object o;
-    o.name = "balls";
-    o.kind = ObjectKind::mesh;
-    o.mesh = mesh;
+    const std::vector<testing::Ball> balls = {{{0, 0, 0}, 2.0},   {{0, 0, 0}, 1.0},
+                                              {{5, 0, 0}, 1.0},   {{0, 5, 0}, 1.0},
+                                              {{0.8, 5, 0}, 1.0}, {{1.9, 1.9, 0}, 0.4}};
+    const Object o = testing::balls_object(balls, 3);
     auto e = prepare(testing::scene_of({o}));
     ASSERT_TRUE(e);
     ASSERT_EQ(e->topology()[0].sign, SignMethod::parity);
@@ -187,10 +172,10 @@ TEST(Inside, ComponentsOfOneMeshEachCountWhereTheirBoxesHoldThePoint) {
         const Vec3d p{ux(rng), uy(rng), uz(rng)};
         int in = 0;
         bool clear = true;
-        for (const Ball& b : balls) {
-            const double d = length(p - b.c);
-            in += d < 0.98 * b.r;
-            clear = clear && (d < 0.98 * b.r || d > b.r);
+        for (const testing::Ball& b : balls) {
+            const double d = length(p - b.centre);
+            in += d < 0.98 * b.radius;
+            clear = clear && (d < 0.98 * b.radius || d > b.radius);
         }
         if (clear) {
             pts.push_back(p);
@@ -221,21 +206,11 @@ TEST(Inside, ManyNestedComponentsHoldingOnePoint) {
     // 18 concentric spheres in one mesh: a point near the centre is in all 18 boxes (more than
     // the seven pieces a point keeps in place, more than the 16 counts kept on the stack), and
     // inside exactly when an odd number of the spheres surround it.
-    auto mesh = std::make_shared<TriangleMesh>();
     const int kShells = 18;
-    for (int k = 1; k <= kShells; ++k) {
-        const Object o = testing::icosphere_object(2, {0, 0, 0}, double(k));
-        const auto base = static_cast<std::uint32_t>(mesh->positions.size());
-        mesh->positions.insert(mesh->positions.end(), o.mesh->positions.begin(),
-                               o.mesh->positions.end());
-        for (auto t : o.mesh->triangles)
-            mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-    Object o;
-    o.name = "shells";
-    o.kind = ObjectKind::mesh;
-    o.mesh = mesh;
-    auto e = prepare(testing::scene_of({o}));
+    std::vector<testing::Ball> shells;
+    for (int k = 1; k <= kShells; ++k)
+        shells.push_back({{0, 0, 0}, double(k)});
+    auto e = prepare(testing::scene_of({testing::balls_object(shells, 2)}));
     ASSERT_TRUE(e);
     ASSERT_EQ(e->topology()[0].sign, SignMethod::parity);
     std::mt19937_64 rng(5);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "engine/testing/scenes.h"
@@ -81,6 +82,31 @@ inline Object voxel_object(const std::vector<std::array<int, 3>>& cells) {
         }
     }
     return mesh_object("voxels", std::move(p), std::move(t));
+}
+
+/// An icosphere of balls_object: its centre, radius, and whether it faces inwards.
+struct Ball {
+    Vec3d centre;
+    double radius = 1.0;
+    bool inward = false;
+};
+
+/// Icospheres of `level` in one mesh object, one connected component each (the inward ones with
+/// their triangles turned round): the parity test's pieces (engine/mesh/components.h).
+inline Object balls_object(const std::vector<Ball>& balls, int level) {
+    std::vector<Vec3d> p;
+    std::vector<std::array<std::uint32_t, 3>> t;
+    for (const Ball& b : balls) {
+        const Object o = icosphere_object(level, b.centre, b.radius);
+        const auto base = static_cast<std::uint32_t>(p.size());
+        p.insert(p.end(), o.mesh->positions.begin(), o.mesh->positions.end());
+        for (auto tri : o.mesh->triangles) {
+            if (b.inward)
+                std::swap(tri[1], tri[2]);
+            t.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
+        }
+    }
+    return mesh_object("balls", std::move(p), std::move(t));
 }
 
 /// A scene of the given objects with the default material.

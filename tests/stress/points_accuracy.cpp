@@ -97,28 +97,15 @@ std::vector<re::Vec3d> on_surface(const re::TriangleMesh& m, std::size_t n) {
 /// radius 0.5 facing out and its inner one of radius 0.3 facing in, so that the winding number
 /// the reference sums (1 in the ball's wall, 0 in its cavity) is the parity truth.
 re::Object sphere_field() {
-    auto mesh = std::make_shared<re::TriangleMesh>();
-    auto add = [&](const re::Vec3d& c, double r, bool inward) {
-        const re::Object o = re::testing::icosphere_object(2, c, r);
-        const auto base = static_cast<std::uint32_t>(mesh->positions.size());
-        mesh->positions.insert(mesh->positions.end(), o.mesh->positions.begin(),
-                               o.mesh->positions.end());
-        for (auto t : o.mesh->triangles) {
-            if (inward)
-                std::swap(t[1], t[2]);
-            mesh->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-        }
-    };
+    std::vector<re::testing::Ball> balls;
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 3; ++j)
             for (int i = 0; i < 3; ++i)
-                add({double(i), double(j), double(k)}, 0.35, false);
-    add({1, 1, 2.6}, 0.5, false);
-    add({1, 1, 2.6}, 0.3, true);
-    re::Object o;
+                balls.push_back({{double(i), double(j), double(k)}, 0.35});
+    balls.push_back({{1, 1, 2.6}, 0.5});
+    balls.push_back({{1, 1, 2.6}, 0.3, true});
+    re::Object o = re::testing::balls_object(balls, 2);
     o.name = "field";
-    o.kind = re::ObjectKind::mesh;
-    o.mesh = mesh;
     return o;
 }
 
