@@ -6,7 +6,8 @@
 // table). A query finds its cell with one floor per axis and tests that cell's boxes exactly.
 // Why a grid and not a tree: a binary tree of the 200 component boxes of bench_points' scene B
 // took 300 ns a query on B's shell points (its upper nodes overlap, so a query descends into
-// many; measured with a driver over the shell points in their spatial order), the grid ~20.
+// many), the grid 133 ns in the same driver (both with each point's own cache miss: the points
+// read in spatial order from an array in random order), and 20 ns on points already in order.
 //
 // Exactness: a box is entered in the cells c(lo) .. c(hi) of each axis, c(x) =
 // floor((x − origin)·scale) clamped to the grid, and a point is looked up in cell c(p) with the
