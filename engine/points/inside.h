@@ -17,9 +17,9 @@
 //                  way out (away from that surface on the side its normal points to, through it
 //                  from behind); every crossing on any ray from p is at least p's distance from
 //                  the surface away, more than the rounding of any t. A ray that crosses an edge
-//                  or a vertex of a counted component (a ray along a face's plane meets its
-//                  edges) is cast again along two fixed directions, and if those also touch
-//                  edges the three vote; winding 1 or 0;
+//                  or a vertex of the mesh (a ray along a face's plane meets its edges) is cast
+//                  again along two fixed directions, and if those also touch edges the three
+//                  vote; winding 1 or 0;
 //   winding mesh   the generalized winding number (QueryEngine::winding_number: fast winding
 //                  numbers), inside where it is ≥ ½; a lone triangle encloses nothing.
 // The scene's answer: inside any object; its winding number is the largest of the objects'.
