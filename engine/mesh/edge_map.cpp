@@ -193,21 +193,27 @@ std::size_t count_non_manifold_vertices(const WeldedTriangles& w, const EdgeMap&
     return count;
 }
 
-std::size_t count_components(const WeldedTriangles& w) {
+namespace {
+
+/// The vertices joined by the triangles that use them: count_components' and
+/// label_components' sets.
+UnionFind vertex_sets(const WeldedTriangles& w) {
     UnionFind sets(w.vertices);
     for (const auto& t : w.triangles) {
         sets.join(t[0], t[1]);
         sets.join(t[1], t[2]);
     }
-    return sets.roots();
+    return sets;
+}
+
+}  // namespace
+
+std::size_t count_components(const WeldedTriangles& w) {
+    return vertex_sets(w).roots();
 }
 
 std::vector<std::uint32_t> label_components(const WeldedTriangles& w, std::uint32_t* count) {
-    UnionFind sets(w.vertices);
-    for (const auto& t : w.triangles) {
-        sets.join(t[0], t[1]);
-        sets.join(t[1], t[2]);
-    }
+    UnionFind sets = vertex_sets(w);
     // A root's label, given when its first triangle comes.
     std::vector<std::uint32_t> label_of_root(w.vertices, kNoFace);
     std::vector<std::uint32_t> out(w.triangles.size());
