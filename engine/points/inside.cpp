@@ -54,30 +54,21 @@ struct HeldBy {
     const std::uint32_t* end() const { return begin() + n; }
 };
 
-/// How far a ray from p along unit d must go to leave the boxes of the listed pieces: the
-/// largest of their exit parameters, each box widened first by 2⁻²⁰ of its largest extent plus
-/// 2⁻⁴⁰ of its largest coordinate. Every crossing of a piece lies in its box, so at most the
-/// unwidened exit away, and the widening is over 2¹⁰ times what the exact path's rounding of a
-/// t can move it (a few ulps of the coordinates): none of those crossings is lost at the far
-/// end, and the end itself is outside every listed box, which is all mesh/components.h asks of
-/// it. (The coordinates' share is kept small: a small component far from the origin would
-/// otherwise get a ray many times its size.)
+/// How far a ray from p along unit d must go to leave the listed pieces' boxes widened for the
+/// ray's end (ParityPieces::ray_bounds says by how much and why): the largest of their exit
+/// parameters.
 double reach(const ParityPieces& pp, const Vec3d& p, const Vec3d& d, const std::uint32_t* first,
              const std::uint32_t* last) {
+    auto leave = [](double lo, double hi, double o, double dir) {
+        if (dir > 0)
+            return (hi - o) / dir;
+        if (dir < 0)
+            return (lo - o) / dir;
+        return kInfinity;
+    };
     double t_max = 0.0;
     for (const std::uint32_t* k = first; k != last; ++k) {
-        const Bounds3& b = pp.bounds[*k];
-        const Vec3d e = b.diagonal();
-        const double coords = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
-                                        std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
-        const double pad = std::max({e.x, e.y, e.z}) * 0x1p-20 + coords * 0x1p-40;
-        auto leave = [pad](double lo, double hi, double o, double dir) {
-            if (dir > 0)
-                return (hi + pad - o) / dir;
-            if (dir < 0)
-                return (lo - pad - o) / dir;
-            return kInfinity;
-        };
+        const Bounds3& b = pp.ray_bounds[*k];
         const double t = std::min({leave(b.lo.x, b.hi.x, p.x, d.x), leave(b.lo.y, b.hi.y, p.y, d.y),
                                    leave(b.lo.z, b.hi.z, p.z, d.z)});
         t_max = std::max(t_max, t);

@@ -198,7 +198,7 @@ TEST(Inside, ComponentsOfOneMeshEachCountWhereTheirBoxesHoldThePoint) {
             << "point " << i << " (" << pts[i].x << ", " << pts[i].y << ", " << pts[i].z << ")";
     }
     // The pieces were built, one per component, and are counted in the engine's memory.
-    EXPECT_EQ(e->parity_pieces().bounds.size(), 6u);
+    EXPECT_EQ(e->parity_pieces().object.size(), 6u);
     EXPECT_GE(e->memory_bytes(), e->parity_pieces().memory_bytes());
 }
 

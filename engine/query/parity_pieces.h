@@ -22,10 +22,17 @@ struct ParityPieces {
     std::vector<std::uint32_t> first;
     /// The object of each piece.
     std::vector<std::uint32_t> object;
-    /// The box of each piece (its component's).
-    std::vector<Bounds3> bounds;
-    /// Over `bounds`: which pieces' boxes hold a point.
+    /// Over the pieces' boxes (their components'): which of them hold a point.
     BoxGrid grid;
+    /// Each piece's box widened for the end of a parity ray, once at build: by 2⁻²⁰ of its
+    /// largest extent plus 2⁻⁴⁰ of its largest coordinate. Every crossing of a piece lies in its
+    /// box, so at most the unwidened exit away, and the widening is over 2¹⁰ times what the exact
+    /// path's rounding of a t can move it (a few ulps of the coordinates): a ray that ends where
+    /// it leaves these loses none of those crossings at its far end, and its end is outside every
+    /// piece's box it was cast for, which is all mesh/components.h asks of it. (The coordinates'
+    /// share is kept small: a small component far from the origin would otherwise get a ray many
+    /// times its size.)
+    std::vector<Bounds3> ray_bounds;
 
     /// The piece of triangle `primitive` of parity mesh `o`.
     std::uint32_t piece(std::uint32_t o, std::uint32_t primitive) const {

@@ -1,6 +1,9 @@
 // QueryEngine's point-query entries (intersect.h): closest points through the point BVH (or the
 // accelerator the scene has), each object's topology, and the trees built on first use.
 
+#include <algorithm>
+#include <cmath>
+
 #include <tbb/parallel_for.h>
 
 #include "engine/accel/embree_accel.h"
@@ -31,7 +34,7 @@ struct ParitySlot : PerObjectOnce<ParityPieces> {
 std::size_t ParityPieces::memory_bytes() const {
     std::size_t n = first.capacity() * sizeof(std::uint32_t) +
                     object.capacity() * sizeof(std::uint32_t) +
-                    bounds.capacity() * sizeof(Bounds3) + grid.memory_bytes();
+                    ray_bounds.capacity() * sizeof(Bounds3) + grid.memory_bytes();
     for (const MeshComponents& c : of_object)
         n += sizeof(MeshComponents) + c.memory_bytes();
     return n;
@@ -77,14 +80,24 @@ const ParityPieces& QueryEngine::parity_pieces() const {
                 out->of_object[i] = find_components(*s.objects[i].mesh);
         });
         out->first.assign(s.objects.size(), 0);
+        std::vector<Bounds3> boxes;
         for (std::uint32_t o = 0; o < s.objects.size(); ++o) {
-            out->first[o] = static_cast<std::uint32_t>(out->bounds.size());
+            out->first[o] = static_cast<std::uint32_t>(boxes.size());
             for (const Bounds3& b : out->of_object[o].bounds) {
                 out->object.push_back(o);
-                out->bounds.push_back(b);
+                boxes.push_back(b);
             }
         }
-        out->grid = BoxGrid(out->bounds);
+        out->grid = BoxGrid(boxes);
+        out->ray_bounds = boxes;
+        for (Bounds3& b : out->ray_bounds) {
+            const Vec3d e = b.diagonal();
+            const double coords = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
+                                            std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+            const double pad = std::max({e.x, e.y, e.z}) * 0x1p-20 + coords * 0x1p-40;
+            b.lo = b.lo - Vec3d{pad, pad, pad};
+            b.hi = b.hi + Vec3d{pad, pad, pad};
+        }
         return std::unique_ptr<const ParityPieces>(std::move(out));
     });
 }
