@@ -49,6 +49,7 @@
 #include "engine/load/model_loader.h"
 #include "engine/mesh/topology.h"
 #include "engine/points/point_queries.h"
+#include "engine/testing/surface_points.h"
 
 namespace rb = raycastd::bench;
 namespace re = raycastd::engine;
@@ -187,9 +188,8 @@ std::vector<re::Vec3d> surface_shell_points(const rb::Workload& w, std::size_t n
     for (auto& p : out) {
         const auto& t = w.triangles[pick(rng)];
         const re::Vec3d a = vertex(t[0]), b = vertex(t[1]), c = vertex(t[2]);
-        // Uniform on the triangle: (1 − √r₁, √r₁(1 − r₂), √r₁ r₂) (Osada et al. 2002, §4.2).
-        const double s1 = std::sqrt(u(rng)), r2 = u(rng);
-        const re::Vec3d x = a * (1.0 - s1) + b * (s1 * (1.0 - r2)) + c * (s1 * r2);
+        const double r1 = u(rng), r2 = u(rng);  // drawn in this order: the same points as before
+        const re::Vec3d x = re::testing::uniform_on_triangle(a, b, c, r1, r2);
         p = re::Vec3d(re::Vec3f(x + re::normalize(re::cross(b - a, c - a)) * off(rng)));
     }
     return out;

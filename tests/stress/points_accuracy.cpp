@@ -38,6 +38,7 @@
 #include "engine/mesh/test_models.h"
 #include "engine/points/point_queries.h"
 #include "engine/testing/point_meshes.h"
+#include "engine/testing/surface_points.h"
 #include "tests/stress/point_reference.h"
 
 namespace {
@@ -120,9 +121,8 @@ std::vector<re::Vec3d> field_shell(const re::Object& field, std::size_t n, std::
     std::vector<re::Vec3d> out(n);
     for (auto& p : out) {
         const re::Triangle t = m.triangle(pick(rng));
-        // Uniform on the triangle: (1 − √r₁, √r₁(1 − r₂), √r₁ r₂) (Osada et al. 2002, §4.2).
-        const double s1 = std::sqrt(u(rng)), r2 = u(rng);
-        const re::Vec3d on = t.a * (1.0 - s1) + t.b * (s1 * (1.0 - r2)) + t.c * (s1 * r2);
+        const double r1 = u(rng), r2 = u(rng);
+        const re::Vec3d on = re::testing::uniform_on_triangle(t.a, t.b, t.c, r1, r2);
         const re::Vec3d normal = normalize(cross(t.b - t.a, t.c - t.a));
         p = on + normal * ((sign(rng) < 0 ? -1 : 1) * std::pow(10.0, x(rng)));
     }
