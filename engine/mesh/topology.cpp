@@ -6,6 +6,8 @@
 
 #include <OpenMesh/Core/Mesh/TriConnectivity.hh>
 #include <OpenMesh/Core/System/omstream.hh>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include "engine/mesh/edge_map.h"
 
@@ -82,8 +84,14 @@ MeshTopology compute_topology(const TriangleMesh& mesh) {
     silence_openmesh();
     MeshTopology out;
     out.triangles = mesh.size();
-    for (std::size_t t = 0; t < mesh.size(); ++t)
-        out.degenerate_triangles += is_degenerate(mesh.triangle(t));
+    out.degenerate_triangles = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, mesh.size(), 16384), std::size_t{0},
+        [&](const tbb::blocked_range<std::size_t>& r, std::size_t n) {
+            for (std::size_t t = r.begin(); t < r.end(); ++t)
+                n += is_degenerate(mesh.triangle(t));
+            return n;
+        },
+        [](std::size_t a, std::size_t b) { return a + b; });
     const WeldedTriangles w = weld(mesh);
     out.vertices = w.vertices;
     const EdgeMap e = build_edge_map(w);

@@ -196,6 +196,7 @@ TEST(Topology, WithoutTheHalfEdgeStructureBoundariesAreStillCounted) {
 struct Reference {
     std::size_t vertices = 0, edges = 0, faces = 0, boundary = 0, non_manifold = 0;
     std::size_t same_direction = 0, components = 0;
+    std::size_t non_manifold_vertices = 0;
 };
 
 Reference reference_counts(const TriangleMesh& m) {
@@ -208,6 +209,8 @@ Reference reference_counts(const TriangleMesh& m) {
     };
     std::map<std::pair<std::size_t, std::size_t>, std::pair<int, int>> edges;  // up, down uses
     std::map<std::size_t, std::set<std::size_t>> adjacent;
+    std::vector<std::array<std::size_t, 3>> faces;
+    std::map<std::size_t, std::vector<std::size_t>> faces_at;
     for (const auto& t : m.triangles) {
         const std::size_t v[3] = {id(t[0]), id(t[1]), id(t[2])};
         for (int k = 0; k < 3; ++k) {
@@ -217,6 +220,9 @@ Reference reference_counts(const TriangleMesh& m) {
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
             continue;
         ++r.faces;
+        for (std::size_t x : v)
+            faces_at[x].push_back(faces.size());
+        faces.push_back({v[0], v[1], v[2]});
         for (int k = 0; k < 3; ++k) {
             const std::size_t a = v[k], b = v[(k + 1) % 3];
             auto& e = edges[{std::min(a, b), std::max(a, b)}];
@@ -230,6 +236,40 @@ Reference reference_counts(const TriangleMesh& m) {
         r.boundary += n == 1;
         r.non_manifold += n > 2;
         r.same_direction += n == 2 && uses.first != 1;
+    }
+    // Fans by brute force: two faces at x are in one fan when they share an edge x–u of exactly
+    // two faces; a vertex with more than one fan is non-manifold.
+    auto shared_manifold_edge = [&](std::size_t x, const std::array<std::size_t, 3>& f,
+                                    const std::array<std::size_t, 3>& g) {
+        for (std::size_t u : f) {
+            if (u == x || std::find(g.begin(), g.end(), u) == g.end())
+                continue;
+            const auto& e = edges.at({std::min(x, u), std::max(x, u)});
+            if (e.first + e.second == 2)
+                return true;
+        }
+        return false;
+    };
+    for (const auto& [x, at] : faces_at) {
+        std::vector<int> fan(at.size(), -1);
+        int fans = 0;
+        for (std::size_t i = 0; i < at.size(); ++i) {
+            if (fan[i] >= 0)
+                continue;
+            fan[i] = fans++;
+            std::vector<std::size_t> stack = {i};
+            while (!stack.empty()) {
+                const std::size_t a = stack.back();
+                stack.pop_back();
+                for (std::size_t b = 0; b < at.size(); ++b) {
+                    if (fan[b] < 0 && shared_manifold_edge(x, faces[at[a]], faces[at[b]])) {
+                        fan[b] = fan[i];
+                        stack.push_back(b);
+                    }
+                }
+            }
+        }
+        r.non_manifold_vertices += fans > 1;
     }
     std::set<std::size_t> seen;
     for (const auto& [v, next] : adjacent) {
@@ -254,6 +294,7 @@ void expect_matches_reference(const TriangleMesh& m, const MeshTopology& t) {
     EXPECT_EQ(t.vertices, r.vertices);
     EXPECT_EQ(t.boundary_edges, r.boundary);
     EXPECT_EQ(t.non_manifold_edges, r.non_manifold);
+    EXPECT_EQ(t.non_manifold_vertices, r.non_manifold_vertices);
     EXPECT_EQ(t.components, r.components);
     EXPECT_EQ(t.euler_characteristic, static_cast<std::int64_t>(r.vertices) -
                                           static_cast<std::int64_t>(r.edges) +
@@ -275,6 +316,51 @@ TEST(Topology, RandomSoupsMatchAnIndependentCount) {
         const MeshTopology t = compute_topology(m);
         expect_matches_reference(m, t);
         EXPECT_LE(t.refused_triangles, t.triangles);
+    }
+}
+
+TEST(Topology, TwoSpheresTouchingAtAVertexPinchIt) {
+    // Every edge has two faces, so each vertex's walk around its faces decides it; the one
+    // shared vertex's walk comes back after the faces of one sphere only (two fans).
+    Object a = testing::icosphere_object(2, {0, 0, 0}, 1.0);
+    const Vec3d top = a.mesh->positions[0];
+    Object b = testing::icosphere_object(2, top * 2.0, 1.0);  // its vertex −top lands on top
+    TriangleMesh m = *a.mesh;
+    for (const auto& t : b.mesh->triangles) {
+        std::array<std::uint32_t, 3> u;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3d& p = b.mesh->positions[t[k]];
+            u[k] = static_cast<std::uint32_t>(m.positions.size());
+            m.positions.push_back(length(p - top) < 1e-12 ? top : p);
+        }
+        m.triangles.push_back(u);
+    }
+    const MeshTopology t = compute_topology(m);
+    EXPECT_EQ(t.non_manifold_vertices, 1u);
+    EXPECT_EQ(t.non_manifold_edges, 0u);
+    EXPECT_EQ(t.boundary_edges, 0u);
+    EXPECT_EQ(t.components, 1u);
+    expect_matches_reference(m, t);
+}
+
+TEST(Topology, SpheresWithFacesRemovedAndRepeatedMatchAnIndependentCount) {
+    // Large meshes where most vertices are decided by the walk and the rest (at holes and at
+    // the edges of a repeated face, which have three faces or more) by grouping their faces.
+    std::mt19937 rng(18);
+    for (int trial = 0; trial < 20; ++trial) {
+        const Object o = testing::icosphere_object(3);
+        TriangleMesh m = *o.mesh;
+        std::uniform_int_distribution<std::size_t> pick(0, m.triangles.size() - 1);
+        for (int k = 0; k < trial % 5; ++k)
+            m.triangles.erase(m.triangles.begin() + static_cast<std::ptrdiff_t>(pick(rng)));
+        for (int k = 0; k < trial / 5; ++k) {
+            auto t = m.triangles[pick(rng)];
+            if (k % 2)
+                std::swap(t[1], t[2]);
+            m.triangles.push_back(t);
+        }
+        SCOPED_TRACE(trial);
+        expect_matches_reference(m, compute_topology(m));
     }
 }
 
