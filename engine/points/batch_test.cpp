@@ -37,6 +37,15 @@ double path_length(const std::vector<Vec3d>& pts, const std::vector<std::uint32_
     return sum;
 }
 
+/// order holds each of 0 .. n−1 once.
+void expect_permutation(const std::vector<std::uint32_t>& order, std::size_t n) {
+    ASSERT_EQ(order.size(), n);
+    std::vector<std::uint32_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    for (std::uint32_t i = 0; i < sorted.size(); ++i)
+        ASSERT_EQ(sorted[i], i);
+}
+
 TEST(SpatialOrder, SmallBatchesKeepTheirOrder) {
     const auto pts = uniform_points(kSpatialOrderMin - 1, 1);
     EXPECT_TRUE(spatial_order(pts.data(), pts.size()).empty());
@@ -52,11 +61,7 @@ TEST(SpatialOrder, IsAPermutationWithNearPointsTogetherAndTheNonFiniteFirst) {
     pts[70'000] = {0, std::numeric_limits<double>::infinity(), 0};
     pts[99'999] = {1e300, -1e300, 0};  // finite, far: stretches the grid, still ordered
     const std::vector<std::uint32_t> order = spatial_order(pts.data(), pts.size());
-    ASSERT_EQ(order.size(), pts.size());
-    std::vector<std::uint32_t> sorted = order;
-    std::sort(sorted.begin(), sorted.end());
-    for (std::uint32_t i = 0; i < sorted.size(); ++i)
-        ASSERT_EQ(sorted[i], i);
+    expect_permutation(order, pts.size());
     EXPECT_EQ(order[0], 500u);  // the non-finite, in their own order
     EXPECT_EQ(order[1], 70'000u);
 
@@ -72,6 +77,30 @@ TEST(SpatialOrder, IsAPermutationWithNearPointsTogetherAndTheNonFiniteFirst) {
     const double ratio = path_length(pts, z) / path_length(pts, given);
     std::printf("Z-order path / given path: %.4f\n", ratio);
     EXPECT_LT(ratio, 0.1);
+}
+
+TEST(SpatialOrder, ExtentsTooSmallOrTooLargeForTheirCellsStillGiveAPermutation) {
+    // x spans a subnormal extent (64 / extent overflows: that axis gets one cell), z spans 1e308
+    // (near overflow); y orders the points.
+    const double tiny = std::numeric_limits<double>::denorm_min();
+    std::vector<Vec3d> pts = uniform_points(4 * kSpatialOrderMin, 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        pts[i].x = i % 2 ? tiny : 0.0;
+        pts[i].z = i % 3 ? 1e308 : -1e307;
+    }
+    const std::vector<std::uint32_t> order = spatial_order(pts.data(), pts.size());
+    expect_permutation(order, pts.size());
+    // Within one z slab (the same z), y never decreases by more than a cell's height: 16,384
+    // points get 2⁵ cells an axis, y's extent is 3.
+    double last_y = -kInfinity, last_z = pts[order[0]].z;
+    for (std::uint32_t i : order) {
+        if (pts[i].z != last_z) {
+            last_z = pts[i].z;
+            last_y = -kInfinity;
+        }
+        EXPECT_GT(pts[i].y, last_y - 3.0 / 32 * 1.01);
+        last_y = std::max(last_y, pts[i].y);
+    }
 }
 
 TEST(SpatialOrder, ForEachPointVisitsEachIndexOnceInTheGivenOrder) {
