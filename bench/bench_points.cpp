@@ -22,6 +22,8 @@
 //   * when Debian's python3-open3d is installed, Open3D's RaycastingScene.compute_closest_points
 //     and compute_signed_distance (bench/peers/open3d_points_peer.py, with the Embree mask shim
 //     preloaded: its sign comes from rays, which hit nothing without it; PERFORMANCE.md).
+// On A each side's figure is the median of 3 calls after a warm-up (kPeerReps); on B the peers
+// and we time one call (Open3D takes tens of seconds a call there).
 //
 // Registration is timed in its parts, each the median of 3 runs after a warm-up: parse
 // (load_model), validate, the Embree BVH (EmbreeAccel::build), the topology (compute_topology)
@@ -30,6 +32,7 @@
 // QueryEngine::build. Wall and CPU seconds are both printed: on a shared 2-core machine the CPU
 // figures are the steadier ones.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -69,6 +72,8 @@ constexpr Sizes kQuick{"quick", 4, 50, 3, std::size_t{1} << 16};
 constexpr Sizes kSmoke{"smoke", 3, 8, 2, 4096};
 constexpr std::uint64_t kFieldSeed = 0x5eed0001;  // bench_intersect's workload B
 constexpr std::uint64_t kPointSeed = 0x5eed0018;
+/// Calls timed on A, ours and the peers': the median of this many after a warm-up.
+constexpr int kPeerReps = 3;
 
 double cpu_now() {
     return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
@@ -206,17 +211,34 @@ struct Run {
     Timed t;
 };
 
-/// Times one query over the points; returns the answers and the times.
+/// Times one query over the points; returns the answers and the times. With reps > 1: the
+/// median (by wall time) of that many calls after a warm-up, the statistic the peers report on
+/// A (bench/peers/*.py --reps), so that a ratio compares like with like.
 Run run(const re::QueryEngine& e, const std::vector<re::Vec3d>& pts, re::PointQuery q,
-        const char* what, bool spatial_order = true) {
+        const char* what, bool spatial_order = true, int reps = 1) {
     Run r;
-    r.t = timed([&] {
-        (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}, spatial_order},
-                               r.answers);
-    });
-    std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s\n",
-                re::to_string(q), what, pts.size(), r.t.wall, r.t.cpu,
-                pts.size() / r.t.wall * 1e-6);
+    auto once = [&] {
+        r.answers.clear();  // each call fills a fresh vector, as a request's does
+        r.answers.shrink_to_fit();
+        return timed([&] {
+            (void)re::query_points(e, pts, re::PointOptions{q, re::kInfinity, {}, spatial_order},
+                                   r.answers);
+        });
+    };
+    if (reps > 1) {
+        once();
+        std::vector<Timed> t;
+        for (int k = 0; k < reps; ++k)
+            t.push_back(once());
+        std::sort(t.begin(), t.end(),
+                  [](const Timed& a, const Timed& b) { return a.wall < b.wall; });
+        r.t = t[t.size() / 2];
+    } else {
+        r.t = once();
+    }
+    std::printf("  %-16s %-28s %8zu points  %7.3f s (CPU %7.3f s)  %6.2f Mpoints/s%s\n",
+                re::to_string(q), what, pts.size(), r.t.wall, r.t.cpu, pts.size() / r.t.wall * 1e-6,
+                reps > 1 ? "  (median of 3 after a warm-up)" : "");
     return r;
 }
 
@@ -276,7 +298,7 @@ void compare(const char* what, const char* key, const Run& ours, const nlohmann:
 /// The peers on the points `name` and the mesh `a`, and the comparison table.
 void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
                const std::vector<re::Vec3d>& pts, const Run& dist, const Run& signed_dist,
-               int reps = 3) {
+               int reps = kPeerReps) {
     if (peer.open3d_script.empty() && peer.server.empty())
         return;
     if (!write_peer_files(peer, name, a, pts, dist, signed_dist)) {
@@ -326,21 +348,23 @@ double points_on_a(const Sizes& s, const Peer& peer) {
                 re::to_string(e->topology()[0].sign));
     point_tree(*e);
     run(*e, pts, re::PointQuery::closest, "(first: no warm-up)");
-    const Run closest = run(*e, pts, re::PointQuery::closest, "");
+    const Run closest = run(*e, pts, re::PointQuery::closest, "", true, kPeerReps);
     // The same points in the order given (the batch is otherwise taken in its spatial order:
     // engine/points/batch.h), to measure what that order gains in this run.
     run(*e, pts, re::PointQuery::closest, "(given order)", false);
     run(*e, pts, re::PointQuery::distance, "");
-    const Run sd = run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)");
+    const Run sd =
+        run(*e, pts, re::PointQuery::signed_distance, "(parity rays, exact)", true, kPeerReps);
     run(*e, pts, re::PointQuery::occupancy, "");
     run_peers(peer, "A", a, pts, closest, sd);
     // A shell near the surface (issue 18's second point set): the nearest triangles are then
     // close and many compete within the same distance.
     const auto shell = shell_points(s.points);
     std::printf("points in a shell about A (radii 0.99 … 1.01):\n");
-    const Run shell_closest = run(*e, shell, re::PointQuery::closest, "(shell)");
+    const Run shell_closest = run(*e, shell, re::PointQuery::closest, "(shell)", true, kPeerReps);
     run(*e, shell, re::PointQuery::closest, "(shell, given order)", false);
-    const Run shell_sd = run(*e, shell, re::PointQuery::signed_distance, "(shell, parity rays)");
+    const Run shell_sd =
+        run(*e, shell, re::PointQuery::signed_distance, "(shell, parity rays)", true, kPeerReps);
     run(*e, shell, re::PointQuery::signed_distance, "(shell, parity, given order)", false);
     run_peers(peer, "A_shell", a, shell, shell_closest, shell_sd);
     double worst = 0;
