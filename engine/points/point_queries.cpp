@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "engine/huge_pages.h"
 #include "engine/points/batch.h"
 #include "engine/points/inside.h"
 
@@ -47,6 +48,7 @@ std::optional<PointQuery> point_query_from_string(std::string_view name) {
 Status query_points(const QueryEngine& engine, const std::vector<Vec3d>& points,
                     const PointOptions& options, std::vector<PointAnswer>& out) {
     const std::size_t n = points.size();
+    reserve_fresh(out, n);  // engine/huge_pages.h: first touch of 112 B an answer
     out.assign(n, PointAnswer{});
     const bool signs =
         options.query == PointQuery::signed_distance || options.query == PointQuery::occupancy;

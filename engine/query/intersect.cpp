@@ -8,6 +8,7 @@
 
 #include "engine/accel/embree_accel.h"
 #include "engine/accel/linear_accel.h"
+#include "engine/huge_pages.h"
 
 namespace raycastd::engine {
 
@@ -303,7 +304,8 @@ Status QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& 
     switch (opt.mode) {
         case Mode::closest:
         case Mode::any:
-            out.hits.resize(n);  // intersect_span writes every answer
+            reserve_fresh(out.hits, n);  // engine/huge_pages.h: first touch of 72 B a ray
+            out.hits.resize(n);          // intersect_span writes every answer
             intersect_span(rays.data(), n, opt, out.hits.data());
             break;
         case Mode::all:

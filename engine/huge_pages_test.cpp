@@ -1,0 +1,103 @@
+// reserve_fresh: room without copying, and (where the kernel offers transparent huge pages) the
+// room backed by them once touched.
+
+#include "engine/huge_pages.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace raycastd::engine {
+namespace {
+
+TEST(HugePages, ReserveFreshGrowsWithoutKeepingAndKeepsWhatHasRoom) {
+    std::vector<int> v = {1, 2, 3};
+    reserve_fresh(v, 1000);
+    EXPECT_GE(v.capacity(), 1000u);
+    EXPECT_TRUE(v.empty());  // released, not copied: the callers assign or overwrite all
+    v.assign(10, 7);
+    const int* before = v.data();
+    reserve_fresh(v, 500);  // room enough: the same storage and contents
+    EXPECT_EQ(v.data(), before);
+    EXPECT_EQ(v.size(), 10u);
+    EXPECT_EQ(v[9], 7);
+}
+
+/// The kernel's THP mode ("always", "madvise" or "never"), empty where it has none.
+std::string thp_mode() {
+    std::ifstream f("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string line;
+    std::getline(f, line);
+    const auto b = line.find('['), e = line.find(']');
+    return b == std::string::npos || e == std::string::npos ? "" : line.substr(b + 1, e - b - 1);
+}
+
+/// kB of huge pages in the mapping that holds address a (/proc/self/smaps), or −1 if none holds
+/// it.
+long anon_huge_kb(std::uintptr_t a) {
+    std::ifstream f("/proc/self/smaps");
+    std::string line;
+    bool in = false;
+    while (std::getline(f, line)) {
+        unsigned long lo = 0, hi = 0;
+        if (std::sscanf(line.c_str(), "%lx-%lx ", &lo, &hi) == 2 && line.find(':') > 8) {
+            in = a >= lo && a < hi;
+            continue;
+        }
+        long kb = 0;
+        if (in && std::sscanf(line.c_str(), "AnonHugePages: %ld kB", &kb) == 1)
+            return kb;
+    }
+    return -1;
+}
+
+/// Under ASan or TSan the sanitizer's allocator maps (and reuses) the memory, not glibc's malloc:
+/// what backs a buffer is its choice.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kSanitizerAllocator = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool kSanitizerAllocator = true;
+#else
+constexpr bool kSanitizerAllocator = false;
+#endif
+#else
+constexpr bool kSanitizerAllocator = false;
+#endif
+
+TEST(HugePages, ALargeFreshBufferIsBackedByHugePagesWhereTheKernelOffersThem) {
+    if (kSanitizerAllocator)
+        GTEST_SKIP() << "a sanitizer's allocator maps this process's memory";
+    const std::string mode = thp_mode();
+    if (mode != "madvise" && mode != "always")
+        GTEST_SKIP() << "transparent huge pages are '" << mode << "' here: nothing to advise";
+    std::vector<std::uint64_t> v;
+    const std::size_t n = (std::size_t{64} << 20) / sizeof(std::uint64_t);  // 64 MiB
+    reserve_fresh(v, n);
+    v.assign(n, 1);
+    const long kb = anon_huge_kb(reinterpret_cast<std::uintptr_t>(v.data() + n / 2));
+    std::printf("AnonHugePages of the 64 MiB buffer: %ld kB (THP %s)\n", kb, mode.c_str());
+    // Most of it (a fragmented machine may not find a free 2 MiB block for every page).
+    EXPECT_GE(kb, 32L << 10);
+}
+
+TEST(HugePages, SmallBuffersAreNotAdvised) {
+    if (kSanitizerAllocator)
+        GTEST_SKIP() << "a sanitizer's allocator maps this process's memory";
+    const std::string mode = thp_mode();
+    if (mode != "madvise")
+        GTEST_SKIP() << "THP is '" << mode << "': a small buffer's pages are the kernel's choice";
+    std::vector<std::uint64_t> v;
+    const std::size_t n = (kHugePageMinBytes / 2) / sizeof(std::uint64_t);
+    reserve_fresh(v, n);
+    v.assign(n, 1);
+    const long kb = anon_huge_kb(reinterpret_cast<std::uintptr_t>(v.data() + n / 2));
+    EXPECT_LE(kb, 0L);
+}
+
+}  // namespace
+}  // namespace raycastd::engine
