@@ -13,6 +13,8 @@
 //   bench_points --registration-only   the registration part alone
 //   bench_points --smoke    tiny sizes, < 1 s; exits 1 if a signed distance disagrees with the
 //                           sphere it approximates (the CTest `bench_points_smoke`)
+//   bench_points --json F   also writes the registration and the side-by-side rows to F (what
+//                           bench/run_all.py puts into docs/benchmarks.md)
 //
 // Besides in-process (not in --smoke), the same mesh and points go through two peers in the same
 // run, and a table of the three closes the sections on A, its shell and B:
@@ -78,6 +80,10 @@ constexpr int kPeerReps = 3;
 double cpu_now() {
     return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
 }
+
+/// What --json writes: the registration's parts and each side-by-side row (bench/run_all.py
+/// reads it into docs/benchmarks.md).
+nlohmann::json g_report = nlohmann::json::object();
 
 /// Wall and CPU seconds of one call.
 struct Timed {
@@ -148,6 +154,16 @@ void registration(const Sizes& s) {
         "wall, %+.0f%% CPU\n",
         without * 1e3, without_cpu * 1e3, with * 1e3, with_cpu * 1e3, 100 * (with / without - 1),
         100 * (with_cpu / without_cpu - 1));
+    g_report["registration"] = {
+        {"triangles", scene->triangle_count()},
+        {"parse", {parse.wall, parse.cpu}},
+        {"validate", {validate.wall, validate.cpu}},
+        {"bvh", {bvh.wall, bvh.cpu}},
+        {"topology", {topology.wall, topology.cpu}},
+        {"build", {build.wall, build.cpu}},
+        {"without", {without, without_cpu}},
+        {"with", {with, with_cpu}},
+    };
     std::printf("  topology: V %zu, closed %d, components %zu, chi %lld, half-edge %d, sign %s\n",
                 topo.vertices, topo.closed, topo.components,
                 static_cast<long long>(topo.euler_characteristic), topo.half_edge,
@@ -276,13 +292,22 @@ nlohmann::json run_peer(const std::string& cmd, const char* name) {
 
 /// The table of in-process, the binary endpoint and Open3D for one query ("closest" or
 /// "signed" in the peers' JSON); ratios are points/s against Open3D's.
-void compare(const char* what, const char* key, const Run& ours, const nlohmann::json& http,
-             const nlohmann::json& o3d) {
+void compare(const std::string& set, const char* what, const char* key, const Run& ours,
+             const nlohmann::json& http, const nlohmann::json& o3d) {
     auto field = [&](const nlohmann::json& j, const char* f) {
         return j.is_object() && j.contains(key) ? j[key].value(f, 0.0) : 0.0;
     };
     const double o3d_wall = field(o3d, "seconds"), o3d_cpu = field(o3d, "cpu_seconds");
     const double http_wall = field(http, "seconds"), http_cpu = field(http, "server_cpu_seconds");
+    auto pair = [](double wall, double cpu) {
+        return wall > 0 ? nlohmann::json{wall, cpu} : nlohmann::json(nullptr);
+    };
+    g_report["points"].push_back({{"set", set},
+                                  {"query", what},
+                                  {"points", ours.answers.size()},
+                                  {"ours", pair(ours.t.wall, ours.t.cpu)},
+                                  {"endpoint", pair(http_wall, http_cpu)},
+                                  {"open3d", pair(o3d_wall, o3d_cpu)}});
     std::printf("  %-16s in-process %.3f s (CPU %.3f)", what, ours.t.wall, ours.t.cpu);
     if (http_wall > 0)
         std::printf("   binary endpoint %.3f s (server CPU %.3f)", http_wall, http_cpu);
@@ -319,8 +344,8 @@ void run_peers(const Peer& peer, const std::string& name, const rb::Workload& a,
                        "open3d");
     }
     std::printf("  side by side (wall; CPU of every thread of the process):\n");
-    compare("closest", "closest", dist, http, o3d);
-    compare("signed_distance", "signed", signed_dist, http, o3d);
+    compare(name, "closest", "closest", dist, http, o3d);
+    compare(name, "signed_distance", "signed", signed_dist, http, o3d);
 }
 
 std::shared_ptr<const re::QueryEngine> prepare(re::Scene s) {
@@ -416,6 +441,7 @@ void winding_on_b(const Sizes& s) {
 int main(int argc, char** argv) {
     Sizes s = kFull;
     bool registration_only = false;
+    std::string json_path;
     const std::filesystem::path here = std::filesystem::path(argv[0]).parent_path();
     const std::string peers = std::string(RAYCASTD_SOURCE_DIR) + "/bench/peers/";
     Peer peer{(here / "points_peer_data").string(), (here / "libembree_mask_shim.so").string(),
@@ -429,8 +455,12 @@ int main(int argc, char** argv) {
             s = kSmoke;
         } else if (a == "--registration-only") {
             registration_only = true;
+        } else if (a == "--json" && i + 1 < argc) {
+            json_path = argv[++i];
         } else {
-            std::fprintf(stderr, "usage: bench_points [--quick | --smoke] [--registration-only]\n");
+            std::fprintf(stderr,
+                         "usage: bench_points [--quick | --smoke] [--registration-only] "
+                         "[--json FILE]\n");
             return 2;
         }
     }
@@ -449,9 +479,23 @@ int main(int argc, char** argv) {
         }
     }
     std::printf("bench_points (%s)\n", s.name);
+    g_report["preset"] = s.name;
+    g_report["points"] = nlohmann::json::array();
+    // Written at the end of each way out, so that a run of its parts leaves what it measured.
+    auto write_json = [&] {
+        if (json_path.empty())
+            return true;
+        std::ofstream f(json_path);
+        f << g_report.dump(1) << "\n";
+        if (!f) {
+            std::fprintf(stderr, "bench_points: cannot write %s\n", json_path.c_str());
+            return false;
+        }
+        return true;
+    };
     registration(s);
     if (registration_only)
-        return 0;
+        return write_json() ? 0 : 1;
     const double worst = points_on_a(s, peer);
     points_on_b(s, peer);
     winding_on_b(s);
@@ -459,5 +503,7 @@ int main(int argc, char** argv) {
     const double tolerance = 0.5 * std::pow(M_PI / (5.0 * std::pow(2.0, s.ico_level)), 2) * 4;
     std::printf("signed distance vs the unit sphere: worst %.2e (the icosphere is within %.2e)\n",
                 worst, tolerance);
-    return worst <= tolerance ? 0 : 1;
+    g_report["sphere_check"] = {{"worst", worst}, {"tolerance", tolerance}};
+    const bool written = write_json();
+    return worst <= tolerance && written ? 0 : 1;
 }

@@ -335,6 +335,88 @@ def targets_table_17(results: dict) -> list[str]:
     return checks_table(mesh, checks)
 
 
+POINT_SETS = {
+    "A": "A, uniform",
+    "A_shell": "A's shell (radii 0.99–1.01)",
+    "B": "B, uniform",
+    "B_shell": "B's shell (within 0.01)",
+}
+POINT_QUERIES = {"closest": "closest", "signed_distance": "signed distance"}
+
+
+def point_ratio(row: dict | None, side: str, cpu: bool = False) -> float | None:
+    """Open3D's seconds over `side`'s for one bench_points row: points/s against Open3D's."""
+    if not row or not row.get(side) or not row.get("open3d"):
+        return None
+    k = 1 if cpu else 0
+    return row["open3d"][k] / row[side][k] if row[side][k] > 0 else None
+
+
+def points_section(results: dict) -> list[str]:
+    """Issue 18: the point queries side by side, and the topology's share of a registration
+    (bench_points --json)."""
+    doc = results.get("points")
+    if not doc:
+        return ["Not measured in this run (a run from before bench_points joined it)."]
+    if "unavailable" in doc:
+        return [f"Not measured: {doc['unavailable']}."]
+    out: list[str] = []
+    rows = {(r["set"], r["query"]): r for r in doc.get("points", [])}
+    if rows:
+        sets = [k for k in POINT_SETS if any(key[0] == k for key in rows)]
+        goals = {"closest": 1.5, "signed_distance": 1.0}
+        checks = [
+            (
+                f"in-process {POINT_QUERIES[q]} ≥ {goal:.1f}× Open3D (points/s, wall)",
+                [point_ratio(rows.get((k, q)), "ours") for k in sets],
+                goal,
+                "×",
+            )
+            for q, goal in goals.items()
+        ]
+        out += checks_table([POINT_SETS[k] for k in sets], checks)
+        out += [
+            "",
+            "| points | query | in-process wall (CPU) | binary endpoint wall (server CPU) | "
+            "Open3D wall (CPU) | in-process ÷ Open3D (CPU) | endpoint ÷ Open3D (CPU) |",
+            "|---|---|---:|---:|---:|---:|---:|",
+        ]
+
+        def cell(pair) -> str:
+            return "—" if not pair else f"{pair[0]:.3f} s ({pair[1]:.3f})"
+
+        def ratio_cell(row, side) -> str:
+            w, c = point_ratio(row, side), point_ratio(row, side, cpu=True)
+            return "—" if w is None else f"{w:.2f}× ({c:.2f}×)"
+
+        for k in sets:
+            for q in POINT_QUERIES:
+                r = rows.get((k, q))
+                if not r:
+                    continue
+                out.append(
+                    f"| {POINT_SETS[k]}, {r['points']:,} | {POINT_QUERIES[q]} | "
+                    f"{cell(r['ours'])} | {cell(r['endpoint'])} | {cell(r['open3d'])} | "
+                    f"{ratio_cell(r, 'ours')} | {ratio_cell(r, 'endpoint')} |"
+                )
+        out.append("")
+    reg = doc.get("registration")
+    if reg:
+        grow_w = reg["with"][0] / reg["without"][0] - 1
+        grow_c = reg["with"][1] / reg["without"][1] - 1
+        out.append(
+            f"Registration of B ({reg['triangles']:,} triangles, binary PLY; medians of 3): "
+            f"{reg['without'][0] * 1e3:.0f} ms without the topology (parse, validate, Embree "
+            f"BVH), {reg['with'][0] * 1e3:.0f} ms with it (parse, `QueryEngine::build`): "
+            f"**{grow_w:+.0%} wall ({grow_c:+.0%} CPU)** against a target of ~+30%; the "
+            f"topology alone {reg['topology'][0] * 1e3:.0f} ms, the BVH "
+            f"{reg['bvh'][0] * 1e3:.0f} ms."
+        )
+        out.append("")
+    out.append(POINTS_NOTE)
+    return out
+
+
 def targets_table(results: dict) -> list[str]:
     rows = results["rows"]
     mesh = [w for w in ("A", "B") if w in results["meta"]["workloads"]]
@@ -430,6 +512,18 @@ ISSUE_17_NOTE = (
     "read from memory: 90 ns of refined's 180 on A's camera rays and 70 of 250 on its random "
     "rays in single-thread CPU time), ROBUST traversal (10-15%) and the clipped, normalised ray "
     "set-up. `exact` is unchanged: every candidate is Embree user geometry decided in double."
+)
+
+POINTS_NOTE = (
+    "Measured by `bench_points` (its own output has more rows: the given order, occupancy, "
+    "the winding-number path on B minus one triangle); docs/points.md has the history and "
+    "the reasons. Points are 1,048,576 a set in the full run, rounded to float so that both "
+    "peers get the same ones; A is the 81,920-triangle icosphere, B the 1,024,000-triangle "
+    "field of 200 icospheres (closed: parity signs). On A each side is the median of 3 calls "
+    "after a warm-up; on B one call each (Open3D takes tens of seconds a call there). The "
+    "binary endpoint is `POST /v1/scenes/{id}/points?dtype=float32` on loopback, timed to the "
+    "answer's last byte. The accuracy of the same queries against a quad-precision reference, "
+    "with Open3D's, is in docs/accuracy.md (`bench/accuracy_points.py`)."
 )
 
 # --- the document --------------------------------------------------------------------------------
@@ -653,6 +747,10 @@ def render(results: dict, accuracy: str) -> str:
         *targets_table_17(results),
         "",
         ISSUE_17_NOTE,
+        "",
+        "## Targets of issue 18: point queries",
+        "",
+        *points_section(results),
         "",
         "## Closest hit on each whole ray set (1M rays in the full run)",
         "",

@@ -4,7 +4,7 @@
     bench/run_all.py            full size (1M rays; ~80k and ~1M triangles; 1000 spheres)
     bench/run_all.py --quick    small sizes; writes <build>/bench/benchmarks-quick.md
 
-Builds nothing: it runs what `cmake --build build/release` made (bench_intersect,
+Builds nothing: it runs what `cmake --build build/release` made (bench_intersect, bench_points,
 bench_http_load, libembree_mask_shim.so, server/raycastd) and the Open3D peer. In order:
   1. bench_intersect: raw Embree (the ceiling) and the engine in-process; writes the meshes,
      rays and raw Embree's hits to <build>/bench/data-<preset>/ (never committed);
@@ -14,7 +14,10 @@ bench_http_load, libembree_mask_shim.so, server/raycastd) and the Open3D peer. I
   3. Open3D's RaycastingScene.cast_rays with the Embree mask shim preloaded (and once without,
      on a sample, to show why the shim is needed);
   4. (issue 6's run time against error per precision is bench/accuracy, a command of its own;
-     the report points to its docs/accuracy.md).
+     the report points to its docs/accuracy.md);
+  5. bench_points (issue 18): the topology's share of a registration, and closest points and
+     signed distances in-process, over the binary endpoint and through Open3D on A, B and shells
+     about them (it runs its peers itself).
 Must run under Debian's /usr/bin/python3 (numpy and open3d are Debian packages).
 """
 
@@ -441,6 +444,34 @@ def run_open3d(
 # --- 4. the accuracy bench (issue 6) -----------------------------------------------------------
 
 
+# --- 5. point queries (issue 18) -----------------------------------------------------------------
+
+
+def run_points(build: str, preset: str, data_dir: str, skip_peers: bool) -> dict:
+    """bench_points: the registration's topology share, and 1M points (full) against A, its
+    shell, B and B's shell, in-process side by side with the binary endpoint and Open3D (which it
+    runs itself). Its JSON, or {"unavailable": why}."""
+    out_json = os.path.join(data_dir, "points.json")
+    if os.path.exists(out_json):
+        os.remove(out_json)
+    cmd = [
+        need(os.path.join(build, "bench", "bench_points")),
+        *PRESETS[preset]["flag"],
+        "--json",
+        out_json,
+    ]
+    if skip_peers:
+        cmd.append("--registration-only")
+    log(" ".join(cmd))
+    proc = subprocess.run(cmd, stdout=subprocess.DEVNULL if preset == "quick" else None)
+    if not os.path.exists(out_json):
+        return {"unavailable": f"bench_points exited {proc.returncode} without its JSON"}
+    with open(out_json) as f:
+        doc = json.load(f)
+    doc["exit_code"] = proc.returncode
+    return doc
+
+
 def accuracy_section() -> str:
     """Hook for issue 6, "run time against error" per precision mode. That bench is its own
     command, bench/accuracy (it builds its stress targets and writes docs/accuracy.md and
@@ -469,6 +500,7 @@ def accuracy_section() -> str:
 def render_only(results_path: str, out: str | None) -> int:
     with open(results_path) as f:
         results = json.load(f)
+    points = run_points(build, preset, data_dir, args.skip_open3d and args.skip_http)
     accuracy = accuracy_section()
     default = "benchmarks-quick.md" if results["preset"] == "quick" else None
     out = out or (
@@ -540,6 +572,7 @@ def main() -> int:
     if not args.skip_open3d:
         o3d_rows, open3d = run_open3d(build, preset, data_dir, workloads)
         rows += o3d_rows
+    points = run_points(build, preset, data_dir, args.skip_open3d and args.skip_http)
     accuracy = accuracy_section()
 
     machine["loadavg_end"] = os.getloadavg()
@@ -550,6 +583,7 @@ def main() -> int:
         "rows": rows,
         "small_requests": load,
         "open3d": open3d,
+        "points": points,
         "preset": preset,
     }
     with open(os.path.join(data_dir, "results.json"), "w") as f:
