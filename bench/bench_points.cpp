@@ -155,14 +155,10 @@ void registration(const Sizes& s) {
         without * 1e3, without_cpu * 1e3, with * 1e3, with_cpu * 1e3, 100 * (with / without - 1),
         100 * (with_cpu / without_cpu - 1));
     g_report["registration"] = {
-        {"triangles", scene->triangle_count()},
-        {"parse", {parse.wall, parse.cpu}},
-        {"validate", {validate.wall, validate.cpu}},
-        {"bvh", {bvh.wall, bvh.cpu}},
-        {"topology", {topology.wall, topology.cpu}},
-        {"build", {build.wall, build.cpu}},
-        {"without", {without, without_cpu}},
-        {"with", {with, with_cpu}},
+        {"triangles", scene->triangle_count()},      {"parse", {parse.wall, parse.cpu}},
+        {"validate", {validate.wall, validate.cpu}}, {"bvh", {bvh.wall, bvh.cpu}},
+        {"topology", {topology.wall, topology.cpu}}, {"build", {build.wall, build.cpu}},
+        {"without", {without, without_cpu}},         {"with", {with, with_cpu}},
     };
     std::printf("  topology: V %zu, closed %d, components %zu, chi %lld, half-edge %d, sign %s\n",
                 topo.vertices, topo.closed, topo.components,
