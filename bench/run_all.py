@@ -500,7 +500,6 @@ def accuracy_section() -> str:
 def render_only(results_path: str, out: str | None) -> int:
     with open(results_path) as f:
         results = json.load(f)
-    points = run_points(build, preset, data_dir, args.skip_open3d and args.skip_http)
     accuracy = accuracy_section()
     default = "benchmarks-quick.md" if results["preset"] == "quick" else None
     out = out or (
@@ -553,6 +552,8 @@ def main() -> int:
         if args.quick
         else os.path.join(REPO, "docs", "benchmarks.md")
     )
+    # Every binary up front: a missing one found at step 5 would lose the whole run.
+    need(os.path.join(build, "bench", "bench_points"))
     wait_for_quiet(args.wait_quiet)
     started = time.time()
     machine = machine_info()

@@ -73,16 +73,19 @@ TEST(HugePages, ALargeFreshBufferIsBackedByHugePagesWhereTheKernelOffersThem) {
     if (kSanitizerAllocator)
         GTEST_SKIP() << "a sanitizer's allocator maps this process's memory";
     const std::string mode = thp_mode();
-    if (mode != "madvise" && mode != "always")
-        GTEST_SKIP() << "transparent huge pages are '" << mode << "' here: nothing to advise";
+    if (mode != "madvise")
+        GTEST_SKIP() << "transparent huge pages are '" << mode
+                     << "' here: the advice changes nothing ('always' backs every large buffer "
+                        "with them, 'never' none)";
     std::vector<std::uint64_t> v;
     const std::size_t n = (std::size_t{64} << 20) / sizeof(std::uint64_t);  // 64 MiB
     reserve_fresh(v, n);
     v.assign(n, 1);
     const long kb = anon_huge_kb(reinterpret_cast<std::uintptr_t>(v.data() + n / 2));
     std::printf("AnonHugePages of the 64 MiB buffer: %ld kB (THP %s)\n", kb, mode.c_str());
-    // Most of it (a fragmented machine may not find a free 2 MiB block for every page).
-    EXPECT_GE(kb, 32L << 10);
+    // Some of it at least (a fragmented machine may not find a free 2 MiB block for every
+    // page; without the advice there is none).
+    EXPECT_GE(kb, 2L << 10);
 }
 
 TEST(HugePages, SmallBuffersAreNotAdvised) {

@@ -1,6 +1,7 @@
 #include "engine/mesh/edge_map.h"
 
 #include <algorithm>
+#include <iterator>
 #include <numeric>
 
 #include <tbb/blocked_range.h>
@@ -69,7 +70,8 @@ struct EdgeCounts {
         boundary_edges += right.boundary_edges;
         non_manifold_edges += right.non_manifold_edges;
         same_direction_edges += right.same_direction_edges;
-        boundary.insert(boundary.end(), right.boundary.begin(), right.boundary.end());
+        boundary.insert(boundary.end(), std::make_move_iterator(right.boundary.begin()),
+                        std::make_move_iterator(right.boundary.end()));
     }
 };
 
@@ -195,8 +197,8 @@ enum class Fan : std::uint8_t { single, several, unsure };
 /// each time the edge it did not come over. Those faces and edges form a graph in which every
 /// face has degree 2 while no edge at v is a boundary or non-manifold one, so the walk runs
 /// around one cycle: back at t0 after all n faces at v, they form a single fan; back sooner,
-/// the faces of the cycle are a fan of their own and the rest another. An edge at v that has
-/// not exactly two faces ends the walk undecided.
+/// the faces of the cycle are a fan of their own and the rest at least one more. An edge at v that
+/// has not exactly two faces ends the walk undecided.
 Fan walk_fan(const WeldedTriangles& w, const EdgeMap& e, std::uint32_t v, std::uint32_t t0,
              std::uint32_t n) {
     std::uint32_t prev = kNoFace, t = t0;

@@ -319,6 +319,25 @@ TEST(Topology, RandomSoupsMatchAnIndependentCount) {
     }
 }
 
+/// An icosphere of `level` with `removed` random faces taken out and `repeated` random faces
+/// added again (every other one reversed): holes, and edges of three faces or more.
+TriangleMesh with_faces_removed_and_repeated(int level, int removed, int repeated,
+                                             std::mt19937& rng) {
+    TriangleMesh m = *testing::icosphere_object(level).mesh;
+    auto pick = [&] {
+        return std::uniform_int_distribution<std::size_t>(0, m.triangles.size() - 1)(rng);
+    };
+    for (int k = 0; k < removed; ++k)
+        m.triangles.erase(m.triangles.begin() + static_cast<std::ptrdiff_t>(pick()));
+    for (int k = 0; k < repeated; ++k) {
+        auto t = m.triangles[pick()];
+        if (k % 2)
+            std::swap(t[1], t[2]);
+        m.triangles.push_back(t);
+    }
+    return m;
+}
+
 TEST(Topology, TwoSpheresTouchingAtAVertexPinchIt) {
     // Every edge has two faces, so each vertex's walk around its faces decides it; the one
     // shared vertex's walk comes back after the faces of one sphere only (two fans).
@@ -348,20 +367,39 @@ TEST(Topology, SpheresWithFacesRemovedAndRepeatedMatchAnIndependentCount) {
     // the edges of a repeated face, which have three faces or more) by grouping their faces.
     std::mt19937 rng(18);
     for (int trial = 0; trial < 20; ++trial) {
-        const Object o = testing::icosphere_object(3);
-        TriangleMesh m = *o.mesh;
-        std::uniform_int_distribution<std::size_t> pick(0, m.triangles.size() - 1);
-        for (int k = 0; k < trial % 5; ++k)
-            m.triangles.erase(m.triangles.begin() + static_cast<std::ptrdiff_t>(pick(rng)));
-        for (int k = 0; k < trial / 5; ++k) {
-            auto t = m.triangles[pick(rng)];
-            if (k % 2)
-                std::swap(t[1], t[2]);
-            m.triangles.push_back(t);
-        }
         SCOPED_TRACE(trial);
+        const TriangleMesh m = with_faces_removed_and_repeated(3, trial % 5, trial / 5, rng);
         expect_matches_reference(m, compute_topology(m));
     }
+}
+
+TEST(Topology, ALargeMeshWithHolesAndRepeatedFacesMatchesAnIndependentCount) {
+    // 40,962 vertices and 81,920 triangles: more than one range of each parallel pass (the edge
+    // map's rows, the vertices' walks), so their joins are in the count.
+    std::mt19937 rng(19);
+    const TriangleMesh m = with_faces_removed_and_repeated(6, 40, 12, rng);
+    const MeshTopology t = compute_topology(m);
+    EXPECT_GT(t.boundary_edges, 0u);
+    EXPECT_GT(t.non_manifold_edges, 0u);
+    expect_matches_reference(m, t);
+}
+
+TEST(Topology, TwoSidedTrianglesAreOneFanEachAndTwoAtASharedVertex) {
+    // Two faces on the same three corners share both their edges at each corner: the walk
+    // around a corner finds both edges leading back to the face it came from.
+    TriangleMesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+    m.triangles = {{0, 1, 2}, {0, 2, 1}};
+    MeshTopology t = compute_topology(m);
+    EXPECT_EQ(t.non_manifold_vertices, 0u);
+    EXPECT_TRUE(t.closed);
+    expect_matches_reference(m, t);
+    // A second such pair at corner 0: two fans there.
+    m.triangles.push_back({0, 3, 4});
+    m.triangles.push_back({0, 4, 3});
+    t = compute_topology(m);
+    EXPECT_EQ(t.non_manifold_vertices, 1u);
+    expect_matches_reference(m, t);
 }
 
 TEST(Topology, PublishedModelsMatchAnIndependentCount) {

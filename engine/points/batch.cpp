@@ -73,8 +73,10 @@ std::vector<std::uint32_t> spatial_order(const Vec3d* points, std::size_t n) {
     // so rounding only moves a point to a neighbouring cell, which changes the order the points
     // are answered in, never an answer.
     auto per_length = [&](double e) {
+        if (!(e > 0.0))
+            return 0.0;
         const double k = cells / e;
-        return e > 0.0 && k < std::numeric_limits<double>::infinity() ? k : 0.0;
+        return k < std::numeric_limits<double>::infinity() ? k : 0.0;
     };
     const Vec3d scale(per_length(extent.x), per_length(extent.y), per_length(extent.z));
     auto cell = [&](double v, double l, double k) {
