@@ -8,6 +8,9 @@
 //   bench_intersect --quick         small sizes (seconds)
 //   bench_intersect --smoke         tiny sizes, < 1 s; exits 1 if the engine disagrees with
 //                                   Embree (this is the CTest `bench_smoke`)
+//   bench_intersect --memory-probe W   one JSON line: the resident bytes the engine keeps for
+//                                   workload W after a refined and an exact query (run by the
+//                                   others, a process of its own for each mesh workload)
 //   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
 //            --raw-only (raw Embree's builds and traces alone, no engine)
 //            --ceiling-only (raw rtcIntersect1 alone: run_all.py times it around each peer)
@@ -24,11 +27,13 @@
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include "bench/bench_files.h"
 #include "bench/raw_embree.h"
 #include "bench/timing.h"
 #include "bench/workloads.h"
+#include "engine/huge_pages.h"
 #include "engine/query/intersect.h"
 
 namespace rb = raycastd::bench;
@@ -73,6 +78,8 @@ struct Args {
     bool ceiling_only = false;                      ///< raw rtcIntersect1 alone, no files
     std::string modes = "closest,any,all,count";    ///< engine modes measured
     std::string precisions = "fast,refined,exact";  ///< engine precisions measured
+    char memory_probe = 0;                          ///< --memory-probe W: that probe alone
+    std::string self;                               ///< argv[0], to run the probe
 };
 
 bool parse_args(int argc, char** argv, Args& a) {
@@ -97,6 +104,13 @@ bool parse_args(int argc, char** argv, Args& a) {
             a.raw_only = true;
         } else if (arg == "--json") {
             a.json_path = value();
+        } else if (arg == "--memory-probe") {
+            const std::string w = value();
+            if (w != "A" && w != "B" && w != "C") {
+                std::fprintf(stderr, "bench_intersect: --memory-probe takes A, B or C\n");
+                return false;
+            }
+            a.memory_probe = w[0];
         } else if (arg == "--modes") {
             a.modes = value();
         } else if (arg == "--precisions") {
@@ -145,6 +159,21 @@ class Report {
                          {"peer", peer},
                          {"variant", variant},
                          {"ms", ms}});
+    }
+    void memory(const json& probe) {
+        const double tris = probe.value("triangles", 0.0);
+        if (!(tris > 0))
+            return;
+        const double after = probe.value("resident_refined_exact", 0.0);
+        std::printf(
+            "%-2s %-10s resident after refined and exact queries %.1f MB: %.0f B a triangle "
+            "(after the build alone %.0f B; the engine's own estimate %.0f B)\n",
+            probe.value("workload", "").c_str(), "memory", after / 1e6, after / tris,
+            probe.value("resident_after_build", 0.0) / tris,
+            probe.value("engine_estimate", 0.0) / tris);
+        json row = probe;
+        row["kind"] = "memory";
+        rows_.push_back(std::move(row));
     }
     json& meta() { return meta_; }
     bool write(const std::string& path) const {
@@ -250,12 +279,15 @@ RaySetRefs bench_raw(Report& report, const rb::Workload& w, const std::string& r
 const void* volatile g_escape = nullptr;
 
 /// What a fresh answer costs before any tracing: QueryResult::hits is a new std::vector<Hit>
-/// of one Hit per ray, and the first touch of fresh pages is ~2.5 ms per MB on this machine.
+/// of one Hit per ray, and the first touch of fresh pages is ~2.5 ms per MB on this machine
+/// (less on huge pages, which the engine asks for on answers of 32 MiB and more).
 /// Reported so that the engine's figures can be read against this floor.
 void bench_result_allocation(Report& report, const rb::Workload& w, const std::string& rays_name,
                              std::size_t n, int reps) {
     const double s = rb::median_seconds(reps, [&] {
-        std::vector<re::Hit> hits(n);
+        std::vector<re::Hit> hits;
+        re::reserve_fresh(hits, n);  // as QueryEngine::intersect grows a fresh answer
+        hits.resize(n);
         g_escape = hits.data();
     });
     report.trace(w.name, rays_name, "overhead", "fresh std::vector<Hit>", "closest", "-",
@@ -424,6 +456,8 @@ bool bench_ceiling_only(Report& report, const rb::Workload& w, const Args& args)
     return true;
 }
 
+void bench_memory(Report& report, const std::string& self, const Sizes& sizes, char name);
+
 bool bench_workload(Report& report, const rb::Workload& w, const Args& args, double& worst) {
     const Sizes& s = args.sizes;
     json& meta = report.meta()["workloads"][w.name];
@@ -482,6 +516,10 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
             engine->intersect({probe}, re::QueryOptions{re::Mode::closest, re::Precision::fast});
         });
         report.build(w.name, "engine", "fast BVH (built by the first fast query)", 1e3 * fast_s);
+        // Resident memory, in a process of its own (this one holds raw Embree's scenes and the
+        // timed builds' freed pages).
+        if (w.triangles.size() > 0)
+            bench_memory(report, args.self, args.sizes, w.name[0]);
     }
 
     for (const std::string rays_name : {"coherent", "incoherent"}) {
@@ -505,6 +543,70 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
     return true;
 }
 
+/// This process's resident bytes (/proc/self/statm), 0 where there is no such file.
+std::size_t resident_bytes() {
+    std::ifstream f("/proc/self/statm");
+    std::size_t pages = 0, resident = 0;
+    if (!(f >> pages >> resident))
+        return 0;
+    return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
+
+/// --memory-probe W (run as a process of its own, from bench_workload): what the engine keeps
+/// resident for workload W once it has answered a refined and an exact query (issue 17: the
+/// native BVH with its widened triangles, the exact BVH, the scene's own vertices and indices),
+/// as one JSON line. A small scene is built and queried first, so that Embree's device, TBB's
+/// threads and the allocator's first arenas are not counted.
+int memory_probe(char name, const Sizes& sizes) {
+    const rb::Workload warm = make_workload('A', kSmoke);
+    const re::Ray probe{{0.0, 0.0, -10.0}, {0.0, 0.0, 1.0}};
+    for (re::Precision p : {re::Precision::refined, re::Precision::exact}) {
+        auto e =
+            re::QueryEngine::build(std::make_shared<const re::Scene>(rb::to_engine_scene(warm)));
+        if (e.ok())
+            (*e)->intersect({probe}, re::QueryOptions{re::Mode::closest, p});
+    }
+    const rb::Workload w = make_workload(name, sizes);
+    const auto bs = w.bounding_sphere();
+    const re::Ray ray{{bs[0], bs[1], bs[2] - 2.0 * bs[3]}, {0.0, 0.0, 1.0}};
+    const std::size_t before = resident_bytes();
+    auto built = re::QueryEngine::build(std::make_shared<const re::Scene>(rb::to_engine_scene(w)));
+    if (!built.ok())
+        return 1;
+    const auto& engine = *built;
+    const std::size_t after_build = resident_bytes();
+    engine->intersect({ray}, re::QueryOptions{re::Mode::closest, re::Precision::refined});
+    engine->intersect({ray}, re::QueryOptions{re::Mode::closest, re::Precision::exact});
+    const std::size_t after = resident_bytes();
+    std::printf("%s\n", json{{"workload", w.name},
+                             {"triangles", engine->scene().triangle_count()},
+                             {"resident_after_build", after_build - before},
+                             {"resident_refined_exact", after - before},
+                             {"engine_estimate", engine->memory_bytes()}}
+                            .dump()
+                            .c_str());
+    return 0;
+}
+
+/// Runs this binary's --memory-probe for workload `name` and reports its figures.
+void bench_memory(Report& report, const std::string& self, const Sizes& sizes, char name) {
+    const std::string flag = sizes.name == std::string(kQuick.name)   ? " --quick"
+                             : sizes.name == std::string(kSmoke.name) ? " --smoke"
+                                                                      : "";
+    std::FILE* f = popen((self + flag + " --memory-probe " + name).c_str(), "r");
+    if (!f)
+        return;
+    std::string out;
+    char line[1024];
+    while (std::fgets(line, sizeof line, f))
+        out += line;
+    pclose(f);
+    const json j = json::parse(out, nullptr, /*allow_exceptions=*/false);
+    if (!j.is_object())
+        return;
+    report.memory(j);
+}
+
 std::string utc_now() {
     const std::time_t now = std::time(nullptr);
     char buf[32];
@@ -518,6 +620,9 @@ int main(int argc, char** argv) {
     Args args;
     if (!parse_args(argc, argv, args))
         return 2;
+    args.self = argv[0];
+    if (args.memory_probe)
+        return memory_probe(args.memory_probe, args.sizes);
     // Every TBB loop in the process (ours, the engine's, Embree's BVH build) uses this many
     // threads.
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
