@@ -1,11 +1,24 @@
 #include "bench/bench_files.h"
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
 namespace raycastd::bench {
+
+std::string command_output(const std::string& cmd) {
+    std::FILE* f = popen(cmd.c_str(), "r");
+    if (!f)
+        return {};
+    std::string out;
+    char line[4096];
+    while (std::fgets(line, sizeof line, f))
+        out += line;
+    pclose(f);
+    return out;
+}
 
 namespace {
 

@@ -13,6 +13,10 @@
 
 namespace raycastd::bench {
 
+/// What shell command `cmd` printed on its standard output (a peer's one line of JSON); empty when
+/// it could not be started. Its standard error goes where this process's does.
+std::string command_output(const std::string& cmd);
+
 /// Binary little-endian PLY: float x y z per vertex, uchar-counted int index lists per face.
 /// Returns false when the file cannot be written.
 bool write_ply(const std::string& path, const Workload& w);

@@ -61,5 +61,10 @@ TEST(Ply, LoadsBackAsTheSameMesh) {
     std::remove(path.c_str());
 }
 
+TEST(CommandOutput, IsWhatTheCommandPrintedOrNothing) {
+    EXPECT_EQ(command_output("printf '{\"a\": 1}\\n'"), "{\"a\": 1}\n");
+    EXPECT_EQ(command_output("true"), "");
+}
+
 }  // namespace
 }  // namespace raycastd::bench

@@ -593,15 +593,8 @@ void bench_memory(Report& report, const std::string& self, const Sizes& sizes, c
     const std::string flag = sizes.name == std::string(kQuick.name)   ? " --quick"
                              : sizes.name == std::string(kSmoke.name) ? " --smoke"
                                                                       : "";
-    std::FILE* f = popen((self + flag + " --memory-probe " + name).c_str(), "r");
-    if (!f)
-        return;
-    std::string out;
-    char line[1024];
-    while (std::fgets(line, sizeof line, f))
-        out += line;
-    pclose(f);
-    const json j = json::parse(out, nullptr, /*allow_exceptions=*/false);
+    const json j = json::parse(rb::command_output(self + flag + " --memory-probe " + name), nullptr,
+                               /*allow_exceptions=*/false);
     if (!j.is_object())
         return;
     report.memory(j);

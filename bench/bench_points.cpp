@@ -282,14 +282,7 @@ bool write_peer_files(const Peer& peer, const std::string& name, const rb::Workl
 
 /// Runs one peer's command and returns the JSON object it printed (null if none).
 nlohmann::json run_peer(const std::string& cmd, const char* name) {
-    std::FILE* f = popen(cmd.c_str(), "r");
-    if (!f)
-        return nullptr;
-    std::string out;
-    char line[4096];
-    while (std::fgets(line, sizeof line, f))
-        out += line;
-    pclose(f);
+    const std::string out = rb::command_output(cmd);
     std::printf("  %s (same points, same run): %s", name, out.c_str());
     auto j = nlohmann::json::parse(out, nullptr, /*allow_exceptions=*/false);
     return j.is_object() ? j : nlohmann::json(nullptr);

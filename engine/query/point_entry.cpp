@@ -1,9 +1,6 @@
 // QueryEngine's point-query entries (intersect.h): closest points through the point BVH (or the
 // accelerator the scene has), each object's topology, and the trees built on first use.
 
-#include <algorithm>
-#include <cmath>
-
 #include <tbb/parallel_for.h>
 
 #include "engine/accel/embree_accel.h"
@@ -91,10 +88,8 @@ const ParityPieces& QueryEngine::parity_pieces() const {
         out->grid = BoxGrid(boxes);
         out->ray_bounds = boxes;
         for (Bounds3& b : out->ray_bounds) {
-            const Vec3d e = b.diagonal();
-            const double coords = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
-                                            std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
-            const double pad = std::max({e.x, e.y, e.z}) * 0x1p-20 + coords * 0x1p-40;
+            const double coords = max_component(max(abs(b.lo), abs(b.hi)));
+            const double pad = max_component(b.diagonal()) * 0x1p-20 + coords * 0x1p-40;
             b.lo = b.lo - Vec3d{pad, pad, pad};
             b.hi = b.hi + Vec3d{pad, pad, pad};
         }
