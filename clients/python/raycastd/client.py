@@ -13,6 +13,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import socket
 import time
 import urllib.parse
@@ -158,6 +159,12 @@ class Client(ArrayQueries):
                     exc, (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError)
                 )
                 if attempt == 0 and reused and stale:
+                    continue
+                # An answer cut short: behind a balancer, the replica died while writing it, and
+                # the balancer cannot send the request elsewhere once it has passed the header
+                # on (docs/deploy.md). A pure query is safe to ask once more.
+                cut = isinstance(exc, (http.client.IncompleteRead, ConnectionResetError))
+                if attempt == 0 and cut and _pure(method, path):
                     continue
                 raise ConnectionFailed(
                     f"cannot reach raycastd at {self.url} ({method} {path}): {exc}",
@@ -398,6 +405,18 @@ def _plain(value: Any) -> Any:
 
 def _put(body: dict[str, Any], **fields: Any) -> None:
     body.update({k: v for k, v in fields.items() if v is not None})
+
+
+# The requests that change nothing on the server (API.md): GETs, the queries, and registration,
+# whose id is the content's hash (a second post answers 200 with the same id). The same set as
+# deploy/nginx.conf's retried locations.
+_PURE_POST = re.compile(
+    r"^/v1/(intersect|explain|points|scenes|scenes/[A-Za-z0-9_]+/(intersect|trace|points))$"
+)
+
+
+def _pure(method: str, path: str) -> bool:
+    return method in ("GET", "HEAD") or (method == "POST" and _PURE_POST.match(path) is not None)
 
 
 def _quote(part: str) -> str:

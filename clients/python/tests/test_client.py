@@ -239,5 +239,53 @@ class UrlAndTokenTest(unittest.TestCase):
         self.assertEqual((cm.exception.code, cm.exception.request_id), ("unauthorized", "rq_7"))
 
 
+class CutAnswerTest(unittest.TestCase):
+    """An answer cut short (behind nginx: the replica died while writing it) is asked once more
+    when the request is pure, and is an error for a render, which may have started a job."""
+
+    def serve_cutting_first(self) -> tuple:
+        seen: list[str] = []
+        answer = b'{"precision":"refined","mode":"closest","hits":[null]}'
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            protocol_version = "HTTP/1.1"
+
+            def do_POST(self) -> None:  # noqa: N802 (http.server's name)
+                self.rfile.read(int(self.headers.get("Content-Length", 0)))
+                seen.append(self.path)
+                self.send_response(200)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(answer)))
+                self.end_headers()
+                if len(seen) == 1:  # the header and a few bytes, then the connection closes
+                    self.wfile.write(answer[:5])
+                    self.close_connection = True
+                else:
+                    self.wfile.write(answer)
+
+            def log_message(self, *args: object) -> None:
+                pass
+
+        httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        threading.Thread(target=httpd.serve_forever, daemon=True).start()
+        self.addCleanup(httpd.server_close)
+        self.addCleanup(httpd.shutdown)
+        return f"http://127.0.0.1:{httpd.server_address[1]}", seen
+
+    def test_a_query_is_asked_again(self) -> None:
+        url, seen = self.serve_cutting_first()
+        with Client(url, timeout=5) as c:
+            got = c.intersect("sc_0", [RAY])
+        self.assertEqual(got["hits"], [None])
+        self.assertEqual(seen, ["/v1/scenes/sc_0/intersect"] * 2)
+
+    def test_a_render_is_not(self) -> None:
+        url, seen = self.serve_cutting_first()
+        with Client(url, timeout=5) as c:
+            with self.assertRaises(ConnectionFailed):
+                c.render("sc_0", width=8, height=8)
+        self.assertEqual(seen, ["/v1/scenes/sc_0/render"])
+
+
 if __name__ == "__main__":
     unittest.main()
