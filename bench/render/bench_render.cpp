@@ -4,9 +4,13 @@
 //       two point lights;
 //   (b) tests/golden/scenes/duck.json: the glTF sample Duck on a reflective floor.
 // POV-Ray renders a .pov written from the same scene document (pov_writer.h) with 2 threads;
-// spp 4 maps to POV-Ray's non-adaptive antialiasing (+AM1 +A0.0 +R2: 2×2 extra samples in every
-// pixel whose neighbours differ at all). Also reported: the renderer's rays per second against
-// raw Embree tracing the Duck scene's primary rays (bench/raw_embree.h), the ceiling for rays.
+// spp 4 maps to POV-Ray's antialiasing method 1 (+AM1 +A0.0 +R2: 2×2 extra samples in every
+// pixel whose colour differs at all from a neighbour's, so POV-Ray supersamples only where the
+// image is not flat). raycastd's rows at spp 4 are uniform (4 samples in every pixel, its
+// default) and adaptive ("sampling": "adaptive": 3 more samples in every pixel whose first
+// sample shows differently in 8 bits from a neighbour's), the same policy as POV-Ray's. Also
+// reported: the renderer's rays per second against raw Embree tracing the Duck scene's primary rays
+// (bench/raw_embree.h), the ceiling for rays.
 //
 //   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
 //                [--scenes tutorial_like,duck] [--precisions refined,fast] [--single-rays]
@@ -230,17 +234,25 @@ int main(int argc, char** argv) {
             if (a.povray != "none" && !a.smoke) {
                 pov = run_povray(a, bench::to_pov(engine->scene(), cam, w, h, 5), w, h, spp);
             }
-            for (auto [p, batch] : std::vector<std::pair<engine::Precision, bool>>{
-                     {engine::Precision::fast, true},
-                     {engine::Precision::fast, false},
-                     {engine::Precision::refined, true},
-                     {engine::Precision::refined, false}}) {
-                if (!listed(a.precisions, engine::to_string(p)) || (!batch && !a.single_rays))
+            struct Variant {
+                engine::Precision p;
+                bool batch, adaptive;
+            };
+            for (auto [p, batch, adaptive] :
+                 std::vector<Variant>{{engine::Precision::fast, true, false},
+                                      {engine::Precision::fast, true, true},
+                                      {engine::Precision::fast, false, false},
+                                      {engine::Precision::refined, true, false},
+                                      {engine::Precision::refined, true, true},
+                                      {engine::Precision::refined, false, false}}) {
+                if (!listed(a.precisions, engine::to_string(p)) || (!batch && !a.single_rays) ||
+                    (adaptive && spp == 1))
                     continue;
                 engine::RenderOptions o;
                 o.width = w;
                 o.height = h;
                 o.spp = spp;
+                o.adaptive = adaptive;
                 o.whitted.max_depth = 5;
                 o.whitted.precision = p;
                 o.whitted.trace_in_batches = batch;
@@ -252,13 +264,16 @@ int main(int argc, char** argv) {
                 }
                 const double m = median(ms);
                 std::string precision = engine::to_string(r.precision);
-                if (p == engine::Precision::fast && batch)
+                if (p == engine::Precision::fast && batch && !adaptive)
                     precision += " (default)";
+                if (adaptive)
+                    precision += ", adaptive";
                 if (!batch)
                     precision += ", single rays";
                 rows.push_back(
                     {name, precision, spp, m, r.counts.total() / m / 1e3, pov, r.counts});
-                if (name == "duck" && spp == 4 && p == engine::Precision::fast && batch)
+                if (name == "duck" && spp == 4 && p == engine::Precision::fast && batch &&
+                    !adaptive)
                     write_preview(a, r.image, extra);
                 if (a.smoke)
                     break;

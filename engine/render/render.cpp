@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "engine/render/camera_rays.h"
+#include "engine/render/image.h"
 
 namespace raycastd::engine {
 
@@ -93,22 +94,28 @@ struct Frame {
     }
 };
 
-/// Renders the pixels [x0, x1) × [y0, y1). The camera rays of the tile are traced as one batch
-/// ordered in 4 × 4 pixel blocks, sample by sample, so that each run of 16 rays is coherent
-/// (the engine traces such runs as Embree packets where that is faster); then each hit is shaded.
-void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, RayCounts& counts) {
+/// Traces samples [s0, s1) of the pixels of [x0, x1) × [y0, y1) for which want(x, y) holds and
+/// adds each sample's colour to sums[(y − y0)·(x1 − x0) + (x − x0)]. The camera rays are traced
+/// as one batch ordered in 4 × 4 pixel blocks, sample by sample, so that each run of 16 rays is
+/// coherent (the engine traces such runs as Embree packets where that is faster); then each hit
+/// is shaded.
+template <class Want>
+void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s1, const Want& want,
+                   std::vector<Vec3d>& sums, RayCounts& counts) {
     // Per call, not per thread: while this thread waits inside the batch's own parallel loop,
     // TBB may hand it another tile.
     std::vector<Ray> rays;
     std::vector<std::array<int, 2>> where;
-    const std::size_t n = static_cast<std::size_t>((x1 - x0) * (y1 - y0) * f.opt.spp);
+    const std::size_t n = static_cast<std::size_t>((x1 - x0) * (y1 - y0) * (s1 - s0));
     rays.reserve(n);
     where.reserve(n);
     for (int by = y0; by < y1; by += 4) {
         for (int bx = x0; bx < x1; bx += 4) {
-            for (int s = 0; s < f.opt.spp; ++s) {
+            for (int s = s0; s < s1; ++s) {
                 for (int y = by; y < std::min(by + 4, y1); ++y) {
                     for (int x = bx; x < std::min(bx + 4, x1); ++x) {
+                        if (!want(x, y))
+                            continue;
                         rays.push_back(f.sample_ray(x, y, s));
                         where.push_back({x - x0, y - y0});
                     }
@@ -116,11 +123,12 @@ void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, R
             }
         }
     }
+    if (rays.empty())
+        return;
     std::vector<Hit> hits;
     f.whitted.closest_batch(rays, hits);
     counts.primary += rays.size();
     const int w = x1 - x0;
-    std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
     std::vector<Vec3d> colors;
     if (f.opt.shading == ShadingMode::phong) {
         f.whitted.shade_hits(rays, hits, colors, counts);  // generation by generation, in packets
@@ -131,12 +139,97 @@ void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, R
     }
     for (std::size_t i = 0; i < rays.size(); ++i)
         sums[static_cast<std::size_t>(where[i][1] * w + where[i][0])] += colors[i];
+}
+
+/// Renders the pixels [x0, x1) × [y0, y1): every sample of every pixel.
+void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, RayCounts& counts) {
+    const int w = x1 - x0;
+    std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
+    trace_samples(
+        f, x0, y0, x1, y1, 0, f.opt.spp, [](int, int) { return true; }, sums, counts);
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
             image.set(x, y,
                       sums[static_cast<std::size_t>((y - y0) * w + (x - x0))] /
                           static_cast<double>(f.opt.spp));
         }
+    }
+}
+
+/// The 8-bit value a colour shows as: sRGB for phong, linear for the data modes (as the PNG
+/// encoder writes them, encode_image).
+std::array<unsigned char, 3> shown_as(const Vec3d& c, ShadingMode mode) {
+    std::array<unsigned char, 3> out{};
+    for (int k = 0; k < 3; ++k) {
+        const float v = static_cast<float>(c[static_cast<std::size_t>(k)]);
+        out[static_cast<std::size_t>(k)] =
+            is_data_mode(mode) ? static_cast<unsigned char>(std::lround(
+                                     std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) * 255.0f : 0.0f))
+                               : srgb_encode(v);
+    }
+    return out;
+}
+
+/// What adaptive sampling's first pass leaves for the second, over the whole image: each
+/// pixel's first sample, and the 8-bit value it shows as.
+struct FirstSamples {
+    std::vector<Vec3d> color;
+    std::vector<std::array<unsigned char, 3>> shown;
+};
+
+/// Adaptive sampling, first pass: sample 0 of every pixel of the tile.
+void tile_first_samples(const Frame& f, int x0, int y0, int x1, int y1, FirstSamples& first,
+                        RayCounts& counts) {
+    const int w = x1 - x0;
+    std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
+    trace_samples(
+        f, x0, y0, x1, y1, 0, 1, [](int, int) { return true; }, sums, counts);
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; ++x) {
+            const Vec3d& c = sums[static_cast<std::size_t>((y - y0) * w + (x - x0))];
+            const std::size_t i =
+                static_cast<std::size_t>(y) * static_cast<std::size_t>(f.opt.width) +
+                static_cast<std::size_t>(x);
+            first.color[i] = c;
+            first.shown[i] = shown_as(c, f.opt.shading);
+        }
+    }
+}
+
+/// Adaptive sampling, second pass: samples 1..spp of each pixel whose first sample shows
+/// differently from one of its four neighbours' first samples, averaged with its first (summed
+/// in the order tile_pixels sums them, so such a pixel is exactly the uniform render's); the
+/// other pixels keep their first sample.
+void tile_more_samples(const Frame& f, int x0, int y0, int x1, int y1, const FirstSamples& first,
+                       Image& image, RayCounts& counts) {
+    const int width = f.opt.width, height = f.opt.height;
+    const auto index = [&](int x, int y) {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+               static_cast<std::size_t>(x);
+    };
+    const int w = x1 - x0;
+    const auto local = [&](int x, int y) {
+        return static_cast<std::size_t>((y - y0) * w + (x - x0));
+    };
+    std::vector<char> more(static_cast<std::size_t>(w * (y1 - y0)));
+    std::vector<Vec3d> sums(more.size());
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; ++x) {
+            const auto& c = first.shown[index(x, y)];
+            const auto differs = [&](int nx, int ny) { return first.shown[index(nx, ny)] != c; };
+            more[local(x, y)] =
+                (x > 0 && differs(x - 1, y)) || (x + 1 < width && differs(x + 1, y)) ||
+                (y > 0 && differs(x, y - 1)) || (y + 1 < height && differs(x, y + 1));
+            sums[local(x, y)] = first.color[index(x, y)];
+        }
+    }
+    const auto want = [&](int x, int y) { return more[local(x, y)] != 0; };
+    trace_samples(f, x0, y0, x1, y1, 1, f.opt.spp, want, sums, counts);
+    for (int y = y0; y < y1; ++y) {
+        for (int x = x0; x < x1; ++x)
+            image.set(x, y,
+                      want(x, y) ? sums[local(x, y)] / static_cast<double>(f.opt.spp)
+                                 : sums[local(x, y)]);
     }
 }
 
@@ -248,22 +341,47 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
     if (progress)
         progress->tiles_total = total;
     std::mutex counts_mutex;
-    tbb::parallel_for(std::size_t{0}, total, [&](std::size_t tile) {
-        if (opt.cancel.cancelled())
-            return;
-        const int x0 = static_cast<int>(tile % static_cast<std::size_t>(tiles_x)) * opt.tile_size;
-        const int y0 = static_cast<int>(tile / static_cast<std::size_t>(tiles_x)) * opt.tile_size;
-        const int x1 = std::min(x0 + opt.tile_size, opt.width);
-        const int y1 = std::min(y0 + opt.tile_size, opt.height);
-        RayCounts counts;
-        tile_pixels(frame, x0, y0, x1, y1, out.image, counts);
-        {
-            std::lock_guard<std::mutex> lock(counts_mutex);
-            out.counts += counts;
-        }
+    // Calls tile_work(x0, y0, x1, y1, counts) for every tile, over the threads.
+    const auto each_tile = [&](const auto& tile_work) {
+        tbb::parallel_for(std::size_t{0}, total, [&](std::size_t tile) {
+            if (opt.cancel.cancelled())
+                return;
+            const int x0 =
+                static_cast<int>(tile % static_cast<std::size_t>(tiles_x)) * opt.tile_size;
+            const int y0 =
+                static_cast<int>(tile / static_cast<std::size_t>(tiles_x)) * opt.tile_size;
+            const int x1 = std::min(x0 + opt.tile_size, opt.width);
+            const int y1 = std::min(y0 + opt.tile_size, opt.height);
+            RayCounts counts;
+            tile_work(x0, y0, x1, y1, counts);
+            {
+                std::lock_guard<std::mutex> lock(counts_mutex);
+                out.counts += counts;
+            }
+            if (progress)
+                progress->tiles_done.fetch_add(1, std::memory_order_relaxed);
+        });
+    };
+    if (opt.adaptive && opt.spp > 1) {
+        // Two passes over the tiles: a pixel's neighbours in the next tile must have their
+        // first sample before it is decided whether the pixel needs more.
         if (progress)
-            progress->tiles_done.fetch_add(1, std::memory_order_relaxed);
-    });
+            progress->tiles_total = 2 * total;
+        const std::size_t pixels =
+            static_cast<std::size_t>(opt.width) * static_cast<std::size_t>(opt.height);
+        FirstSamples first{std::vector<Vec3d>(pixels),
+                           std::vector<std::array<unsigned char, 3>>(pixels)};
+        each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
+            tile_first_samples(frame, x0, y0, x1, y1, first, counts);
+        });
+        each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
+            tile_more_samples(frame, x0, y0, x1, y1, first, out.image, counts);
+        });
+    } else {
+        each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
+            tile_pixels(frame, x0, y0, x1, y1, out.image, counts);
+        });
+    }
     if (opt.cancel.fired())
         return opt.cancel.status();  // `out` and its image go here
     out.render_ms =

@@ -43,6 +43,10 @@ struct RenderOptions {
     int width = 640;
     int height = 480;
     int spp = 1;  ///< samples per pixel, stratified over the pixel (1: its centre)
+    /// Adaptive sampling ("sampling": "adaptive"): every pixel's first sample is traced, and
+    /// only a pixel whose first sample shows a different 8-bit value from one of its four
+    /// neighbours' gets the other spp − 1 (render.cpp). False: every pixel gets spp samples.
+    bool adaptive = false;
     ShadingMode shading = ShadingMode::phong;
     Lighting lighting = Lighting::automatic;
     /// max_depth, precision, background (its headlight is set by render() from `lighting`)

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/render/camera_rays.h"
+#include "engine/render/image.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -171,6 +172,49 @@ TEST(Render, SamplesPerPixelMultiplyPrimaryRaysAndAreDeterministic) {
     const RenderResult b = render(*engine, o).value();
     EXPECT_EQ(a.counts.primary, 40u * 30u * 5u);
     EXPECT_EQ(a.image.rgb, b.image.rgb);
+}
+
+// Adaptive sampling (RenderOptions::adaptive): the first sample everywhere, the other spp − 1
+// only where a pixel's first sample shows differently from a neighbour's. Such a pixel is the
+// uniform render's exactly (the same samples, summed in the same order; exact precision, so the
+// batches' different packets decide every ray the same); the others differ from it in 8 bits
+// only where a feature falls between first samples. Fails when the second pass takes other
+// samples than the uniform render (its pixels then match nothing), when it skips pixels at tile
+// borders, or when the first pass' pixels keep a sum instead of an average.
+TEST(Render, AdaptiveSamplingSupersamplesWhereNeighboursDiffer) {
+    auto engine = prepare(lit_spheres(0.4));
+    RenderOptions o = small();
+    o.width = 80;
+    o.height = 60;
+    o.tile_size = 8;
+    o.spp = 4;
+    o.whitted.precision = Precision::exact;
+    const RenderResult uniform = render(*engine, o).value();
+    o.adaptive = true;
+    const RenderResult adaptive = render(*engine, o).value();
+    EXPECT_EQ(render(*engine, o).value().image.rgb, adaptive.image.rgb);  // deterministic
+    const std::size_t pixels = 80 * 60;
+    ASSERT_EQ((adaptive.counts.primary - pixels) % 3, 0u);
+    const std::size_t more = (adaptive.counts.primary - pixels) / 3;
+    EXPECT_GT(more, pixels / 20);  // the spheres' shading and silhouettes
+    EXPECT_LT(more, pixels / 2);   // not the background
+    std::size_t same = 0, shown_differently = 0;
+    for (int y = 0; y < 60; ++y) {
+        for (int x = 0; x < 80; ++x) {
+            const Vec3d a = adaptive.image.at(x, y), u = uniform.image.at(x, y);
+            same += a == u;
+            for (int k = 0; k < 3; ++k)
+                shown_differently +=
+                    srgb_encode(static_cast<float>(a[k])) != srgb_encode(static_cast<float>(u[k]));
+        }
+    }
+    EXPECT_GE(same, more);
+    EXPECT_LE(shown_differently, pixels * 3 / 200);
+    EXPECT_LT(adaptive.counts.shadow, uniform.counts.shadow);
+
+    // Nothing in view: one sample a pixel.
+    o.camera = Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 30};
+    EXPECT_EQ(render(*engine, o).value().counts.primary, pixels);
 }
 
 TEST(Render, DataModes) {

@@ -115,6 +115,14 @@ void read_render_members(const Json& body, RenderRequest& r) {
         }
         o.shading = *mode;
     }
+    if (const Json* v = member(body, "sampling")) {
+        const std::string s = read_string(*v, "/sampling", kInvalid);
+        if (s != "uniform" && s != "adaptive") {
+            throw ApiError(kInvalid, "unknown sampling \"" + s + "\" (expected uniform, adaptive)",
+                           "/sampling");
+        }
+        o.adaptive = s == "adaptive";
+    }
     if (const Json* v = member(body, "lighting")) {
         const std::string s = read_string(*v, "/lighting", kInvalid);
         const auto lighting = engine::lighting_from_name(s);

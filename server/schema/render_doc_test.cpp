@@ -62,6 +62,12 @@ TEST(RenderDoc, ReadsEveryField) {
     }
 }
 
+TEST(RenderDoc, SamplingIsUniformUnlessAskedAdaptive) {
+    EXPECT_FALSE(parse_render_request(Json::object(), kMaxPixels).options.adaptive);
+    EXPECT_FALSE(parse_render_request(Json{{"sampling", "uniform"}}, kMaxPixels).options.adaptive);
+    EXPECT_TRUE(parse_render_request(Json{{"sampling", "adaptive"}}, kMaxPixels).options.adaptive);
+}
+
 TEST(RenderDoc, ErrorsNameTheField) {
     auto parse = [](const char* text) {
         return error_of([&] { parse_render_request(Json::parse(text), kMaxPixels); });
@@ -83,6 +89,8 @@ TEST(RenderDoc, ErrorsNameTheField) {
               "/camera/look_at");
     EXPECT_EQ(parse(R"({"camera": {"up": [0,0,1]}})").path, "/camera/up");
     EXPECT_EQ(parse(R"({"async": 1})").path, "/async");
+    EXPECT_EQ(parse(R"({"sampling": "stochastic"})").path, "/sampling");
+    EXPECT_EQ(parse(R"({"sampling": true})").path, "/sampling");
     EXPECT_EQ(parse(R"([1])").code, ErrorCode::invalid_request);
 }
 

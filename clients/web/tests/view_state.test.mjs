@@ -27,11 +27,12 @@ test('unusable values fall back to the defaults and are named', () => {
 
 test('the render body: sizes scaled for the preview; lighting always, precision only when chosen', () => {
     const view = { ...DEFAULTS, scene: 'sc_1', camera };
-    assert.deepEqual(renderBody(view), { camera, width: 640, height: 480, spp: 4, max_depth: 5, shading: 'phong', lighting: 'auto' });
+    assert.deepEqual(renderBody(view), { camera, width: 640, height: 480, spp: 4, sampling: 'adaptive', max_depth: 5, shading: 'phong', lighting: 'auto' });
     const eighth = renderBody(view, { scale: 1 / 8, spp: 1 });
     assert.equal(eighth.width, 80);
     assert.equal(eighth.height, 60);
     assert.equal(eighth.spp, 1);
+    assert.equal(eighth.sampling, undefined);  // one sample: nothing to adapt
     const chosen = renderBody({ ...view, lighting: 'headlight', precision: 'exact' });
     assert.equal(chosen.lighting, 'headlight');
     assert.equal(chosen.precision, 'exact');
