@@ -149,6 +149,12 @@ def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
     q.add_argument("-o", "--output", type=pathlib.Path, required=True, metavar="FILE")
     q.add_argument("--size", type=size_arg, metavar="WxH", help="image size (640x480)")
     q.add_argument("--spp", type=int, help="samples per pixel (1)")
+    q.add_argument(
+        "--sampling",
+        choices=["uniform", "adaptive"],
+        help="uniform (default): spp samples in every pixel; adaptive: the extra ones only "
+        "where a pixel differs from a neighbour",
+    )
     q.add_argument("--max-depth", type=int)
     q.add_argument("--shading", choices=["phong", "normal", "depth", "object_id", "barycentric"])
     q.add_argument(
@@ -487,6 +493,7 @@ def cmd_render(client: Client, args: argparse.Namespace, io: Output) -> int:
     )
     for key, value in (
         ("spp", args.spp),
+        ("sampling", args.sampling),
         ("max_depth", args.max_depth),
         ("shading", args.shading),
         ("lighting", args.lighting),

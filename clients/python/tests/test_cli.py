@@ -165,6 +165,8 @@ class CliTest(ServerTestCase):
             "40x30",
             "--spp",
             "2",
+            "--sampling",
+            "adaptive",
             "--lighting",
             "headlight",
         )
