@@ -392,77 +392,6 @@ bool refined_any(const Impl& a, const Ray& ray) {
     return refined_confirm_no_hit(a, ray, c);
 }
 
-/// refined's closest hits of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one packet on the
-/// native BVH; for an incoherent packet, the double decision taken after the traversal instead of
-/// in it. The hit filter accepts every candidate by its float t (RayContext::defer), so each lane
-/// ends on its closest float candidate; then the lanes' triangles are fetched together (the index
-/// rows of all of them, then their corners, prefetched before any is read) and decided by the
-/// same double test. In the traversal each decision waited on two dependent cache misses (the
-/// index row, then a corner: 80% of the filter's time on workload A's random rays, perf); here
-/// the 16 lanes' misses overlap. The answer is the deciding filter's: when the closest float
-/// candidate is a double hit it is also the closest double hit (every other candidate's float t is
-/// at or beyond it; between equal float t, Embree's first stays first, a float decision as before),
-/// and no candidate was rejected before it; when it is a double miss the ray is traced again with
-/// the deciding filter (refined_closest: the ray passed within the widening of an edge, a few rays
-/// in a hundred); a lane with no candidate met none in either mode. `escalations` counts the
-/// rays the exact path decided.
-void refined_packet(const Impl& a, const Ray* rays, std::size_t m, bool want_normal, Hit* out,
-                    int& escalations) {
-    RayContext lanes[kLanes];
-    alignas(64) RTCRayHit16 rh;
-    alignas(64) int valid[kLanes];
-    auto prepare = [&](const Ray& ray, RayContext& c, FloatRay& f) {
-        return prepare_refined_ray(a, ray, c, f);
-    };
-    // Camera rays find their triangles in cache, and there the decision after the traversal
-    // gained nothing, while the rays it must trace again (3.7% of workload A's camera rays hit
-    // the widening of a triangle before the neighbour they hit, against 1.7% of its random
-    // rays) cost more than a packet lane: coherent packets keep deciding in the filter.
-    const bool deferred = trace_packet(
-        a, a.native.get(), rays, m, prepare,
-        [](const RTCIntersectContext& c) { return c.flags != RTC_INTERSECT_CONTEXT_FLAG_COHERENT; },
-        lanes, rh, valid);
-
-    const TriangleMesh* mesh[kLanes] = {};  // a deferred lane's triangle mesh, if it has one
-    for (std::size_t k = 0; k < m; ++k) {
-        if (deferred && valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
-            mesh[k] = a.scene->objects[rh.hit.geomID[k]].mesh.get();
-            __builtin_prefetch(&mesh[k]->triangles[rh.hit.primID[k]]);
-        }
-    }
-    for (std::size_t k = 0; k < m; ++k) {
-        if (mesh[k]) {
-            for (const std::uint32_t v : mesh[k]->triangles[rh.hit.primID[k]])
-                __builtin_prefetch(&mesh[k]->positions[v]);
-        }
-    }
-    for (std::size_t k = 0; k < m; ++k) {
-        if (!valid[k]) {
-            out[k] = Hit{};  // the segment misses the scene's bounds: nothing can be hit
-            continue;
-        }
-        bool escalated = false;
-        std::optional<Hit> h;
-        if (mesh[k]) {
-            const unsigned prim = rh.hit.primID[k];
-            auto d = intersect_triangle(mesh[k]->triangle(prim), rays[k], /*want_normal=*/false);
-            if (d) {
-                d->object = rh.hit.geomID[k];
-                d->primitive = prim;
-                lanes[k].best = *d;
-                lanes[k].best_tf = rh.ray.tfar[k];
-                h = refined_answer(a, rays[k], lanes[k], want_normal, escalated);
-            } else {
-                h = refined_closest(a, rays[k], want_normal, escalated);
-            }
-        } else {
-            h = refined_answer(a, rays[k], lanes[k], want_normal, escalated);
-        }
-        escalations += escalated;
-        out[k] = h ? *h : Hit{};
-    }
-}
-
 // In a scene that is not certified, a refined ray in doubt pays both traversals, plus the
 // double recompute, and random rays mostly are (73% of bench_intersect's incoherent rays miss).
 // So there, once a group of 16 had a ray escalate, the next group goes to the exact path
@@ -498,7 +427,18 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
                 escalations += escalated;
             }
         } else {
-            refined_packet(a, rays + i, m, want_normal, out + i, escalations);
+            closest_packet(
+                a, a.native.get(), rays + i, m,
+                [&](const Ray& ray, RayContext& c, FloatRay& f) {
+                    return prepare_refined_ray(a, ray, c, f);
+                },
+                [&](std::size_t k, const RayContext& c, const NativeHit&) {
+                    bool escalated = false;
+                    auto h = refined_answer(a, rays[i + k], c, want_normal, escalated);
+                    escalations += escalated;
+                    return h;
+                },
+                out + i);
         }
         exact_first = !a.certified_misses && escalations > 0;
     }

@@ -240,12 +240,13 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
     }
 }
 
-// refined's incoherent packets decide the closest float candidate after the traversal
-// (refined_packet): a ray aimed at a shared edge meets both triangles' widenings at one float t,
-// and when the neighbour's comes first its double test misses and the ray is traced again. Rays
-// from random points around an icosphere at random points of its edges (incoherent groups of
-// 16) must get exact's answer: the same hit or miss and object, t within the bounds. Fails when
-// a deferred lane whose candidate misses in double is answered as a miss.
+// refined's packets of rays aimed at shared edges: each ray meets both triangles' widenings at
+// one float t, and the hit filter must reject the neighbour it misses in double and keep the
+// triangle it crosses. Rays from random points around an icosphere at random points of its
+// edges (incoherent groups of 16) must get exact's answer: the same hit or miss and object, t
+// within the bounds. (It failed when a lane whose closest float candidate misses in double was
+// answered as a miss, in a tried and dropped variant that decided after the traversal,
+// docs/numerics.md.)
 TEST(EmbreeAccel, RefinedPacketsAimedAtEdgesAgreeWithExact) {
     Scene s;
     s.materials.push_back(Material{});

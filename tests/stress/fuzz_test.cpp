@@ -200,6 +200,21 @@ TEST(Fuzz, RegressionCases) {
         std::vector<std::size_t> bad;
         EXPECT_EQ(judge_case(c, bad), "") << entry.path();
         EXPECT_EQ(judge_case(padded, bad), "") << entry.path() << " (padded for Embree)";
+        // Each ray again as the first lane of an incoherent packet (the other 15: its direction
+        // with the signs and order of its components changed): Embree's packet kernels and the
+        // per-lane contexts of refined's hit filter, not only rtcIntersect1.
+        StressCase packed = padded;
+        packed.rays.clear();
+        for (const engine::Ray& r : c.rays) {
+            const engine::Vec3d d = r.direction;
+            for (int k = 0; k < 16; ++k) {
+                engine::Ray lane = r;
+                const engine::Vec3d e = k < 8 ? d : engine::Vec3d{d.y, d.z, d.x};
+                lane.direction = {(k & 1) ? -e.x : e.x, (k & 2) ? -e.y : e.y, (k & 4) ? -e.z : e.z};
+                packed.rays.push_back(lane);
+            }
+        }
+        EXPECT_EQ(judge_case(packed, bad), "") << entry.path() << " (in incoherent packets)";
     }
     EXPECT_GT(files, 0u) << "no cases in " << dir;
 }

@@ -18,8 +18,6 @@ namespace {
 /// surfaces whose float t agree comes first stays a float decision (docs/numerics.md).
 void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
     RayContext& c = ctx_of(args->context);
-    if (c.defer)
-        return;  // every candidate accepted by float t; refined_packet decides the closest
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     const TriangleMesh& mesh = *g->accel->scene->objects[g->object].mesh;
     for (unsigned i = 0; i < args->N; ++i) {

@@ -90,9 +90,6 @@ struct RayContext {
     bool rejected() const { return rejected_tf < std::numeric_limits<float>::infinity(); }
     /// A packet's context: the lanes' own contexts, indexed by the Embree ray id.
     RayContext* lanes = nullptr;
-    /// refined's packets (refined_packet): the hit filter accepts every fat-triangle candidate
-    /// by its float t, and the closest one is decided in double after the traversal.
-    bool defer = false;
 
     /// A packet lane's context (never handed to Embree: packets carry no user geometry).
     RayContext() = default;

@@ -83,26 +83,6 @@ void fill_lanes(const Impl& a, const Ray* rays, std::size_t m, Prepare& prepare,
     }
 }
 
-/// One packet of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) traced for its closest hits on
-/// `scene`: lanes from prepare(ray, context, float_ray) (fill_lanes), the packet flagged
-/// coherent or not (packet_context). `defer(context)` says whether the hit filter leaves the
-/// decision to the caller (RayContext::defer); returns whether it did.
-template <class Prepare, class Defer>
-bool trace_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Prepare& prepare,
-                  Defer&& defer, RayContext* lanes, RTCRayHit16& rh, int* valid) {
-    fill_lanes(a, rays, m, prepare, lanes, rh.ray, valid);
-    for (std::size_t k = 0; k < kLanes; ++k)
-        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-    // The lanes travel in the context: refined's hit filter finds a lane's double ray and
-    // keeps its decision there (fat_triangles.cpp).
-    RayContext pc(a);
-    pc.rtc = packet_context(rays, m, a.float_scale);
-    pc.lanes = lanes;
-    pc.defer = defer(pc.rtc);
-    rtcIntersect16(valid, scene, &pc.rtc, &rh);
-    return pc.defer;
-}
-
 /// Closest hits of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one packet on `scene`:
 /// lanes from prepare(ray, context, float_ray) (fill_lanes); out[k] is answer(k, context,
 /// native_hit) as a Hit (an empty optional: a miss), or Hit{} where the ray's segment misses the
@@ -113,9 +93,15 @@ void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t 
     RayContext lanes[kLanes];
     alignas(64) RTCRayHit16 rh;
     alignas(64) int valid[kLanes];
-    trace_packet(
-        a, scene, rays, m, prepare, [](const RTCIntersectContext&) { return false; }, lanes, rh,
-        valid);
+    fill_lanes(a, rays, m, prepare, lanes, rh.ray, valid);
+    for (std::size_t k = 0; k < kLanes; ++k)
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    // The lanes travel in the context: refined's hit filter finds a lane's double ray and
+    // keeps its decision there (fat_triangles.cpp).
+    RayContext pc(a);
+    pc.rtc = packet_context(rays, m, a.float_scale);
+    pc.lanes = lanes;
+    rtcIntersect16(valid, scene, &pc.rtc, &rh);
     for (std::size_t k = 0; k < m; ++k) {
         if (!valid[k]) {
             out[k] = Hit{};  // the segment misses the scene's bounds: nothing can be hit
