@@ -138,13 +138,16 @@ class Client(ArrayQueries):
         if self.token:
             headers["Authorization"] = f"Bearer {self.token}"
         url = self.url + path
+        pure = _pure(method, path)
         for attempt in (0, 1):
             conn = self._connect()
             reused = self._used
+            reading = False  # whether the status line had come (the error is then in the body)
             try:
                 conn.request(method, target, body=body, headers=headers)
                 self._used = True
                 res = conn.getresponse()
+                reading = True
                 data = res.read()
             except socket.timeout as exc:
                 self.close()
@@ -158,13 +161,15 @@ class Client(ArrayQueries):
                 stale = isinstance(
                     exc, (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError)
                 )
-                if attempt == 0 and reused and stale:
+                # Not once an answer has begun: the server had the request, and a render may
+                # have started a job.
+                if attempt == 0 and reused and stale and not reading:
                     continue
                 # An answer cut short: behind a balancer, the replica died while writing it, and
                 # the balancer cannot send the request elsewhere once it has passed the header
                 # on (docs/deploy.md). A pure query is safe to ask once more.
                 cut = isinstance(exc, (http.client.IncompleteRead, ConnectionResetError))
-                if attempt == 0 and cut and _pure(method, path):
+                if attempt == 0 and cut and pure:
                     continue
                 raise ConnectionFailed(
                     f"cannot reach raycastd at {self.url} ({method} {path}): {exc}",
@@ -300,8 +305,8 @@ class Client(ArrayQueries):
     ) -> bytes:
         """Renders an image and returns its bytes (PNG unless `format=` says otherwise).
 
-        `options` are the other body fields (`camera`, `shading`, `lighting`, `max_depth`,
-        `precision`, `background`, `format`). With `progress` (True, or a callback taking
+        `options` are the other body fields (`camera`, `sampling`, `shading`, `lighting`,
+        `max_depth`, `precision`, `background`, `format`). With `progress` (True, or a callback taking
         `(fraction, job_status)`) the render runs as an async job that is polled every
         `poll_s` seconds, and cancelled if the wait is interrupted."""
         body: dict[str, Any] = {}

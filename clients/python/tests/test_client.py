@@ -7,8 +7,10 @@ import json
 import os
 import pathlib
 import socket
+import struct
 import tempfile
 import threading
+import time
 import unittest
 from unittest import mock
 
@@ -243,7 +245,9 @@ class CutAnswerTest(unittest.TestCase):
     """An answer cut short (behind nginx: the replica died while writing it) is asked once more
     when the request is pure, and is an error for a render, which may have started a job."""
 
-    def serve_cutting_first(self) -> tuple:
+    def serve_cutting(self, cut: int = 1, reset: bool = False) -> tuple:
+        """A server that cuts its answer to the `cut`-th request short (closing the connection,
+        or with `reset` resetting it), and answers the rest."""
         seen: list[str] = []
         answer = b'{"precision":"refined","mode":"closest","hits":[null]}'
 
@@ -257,9 +261,15 @@ class CutAnswerTest(unittest.TestCase):
                 self.send_header("Content-Type", "application/json")
                 self.send_header("Content-Length", str(len(answer)))
                 self.end_headers()
-                if len(seen) == 1:  # the header and a few bytes, then the connection closes
+                if len(seen) == cut:  # the header and a few bytes, then the connection closes
                     self.wfile.write(answer[:5])
                     self.close_connection = True
+                    if reset:  # SO_LINGER 0: the close sends RST, read as ConnectionResetError
+                        time.sleep(0.1)  # the bytes above reach the client first
+                        self.connection.setsockopt(
+                            socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0)
+                        )
+                        self.connection.close()
                 else:
                     self.wfile.write(answer)
 
@@ -273,18 +283,26 @@ class CutAnswerTest(unittest.TestCase):
         return f"http://127.0.0.1:{httpd.server_address[1]}", seen
 
     def test_a_query_is_asked_again(self) -> None:
-        url, seen = self.serve_cutting_first()
+        url, seen = self.serve_cutting()
         with Client(url, timeout=5) as c:
             got = c.intersect("sc_0", [RAY])
         self.assertEqual(got["hits"], [None])
         self.assertEqual(seen, ["/v1/scenes/sc_0/intersect"] * 2)
 
     def test_a_render_is_not(self) -> None:
-        url, seen = self.serve_cutting_first()
+        url, seen = self.serve_cutting()
         with Client(url, timeout=5) as c:
             with self.assertRaises(ConnectionFailed):
                 c.render("sc_0", width=8, height=8)
         self.assertEqual(seen, ["/v1/scenes/sc_0/render"])
+        # Nor on a kept-alive connection, where a failure before the answer is taken for the
+        # server's idle close and the request sent again.
+        url, seen = self.serve_cutting(cut=2, reset=True)
+        with Client(url, timeout=5) as c:
+            c.intersect("sc_0", [RAY])
+            with self.assertRaises(ConnectionFailed):
+                c.render("sc_0", width=8, height=8)
+        self.assertEqual(seen, ["/v1/scenes/sc_0/intersect", "/v1/scenes/sc_0/render"])
 
 
 if __name__ == "__main__":
