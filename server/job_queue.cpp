@@ -175,6 +175,11 @@ std::optional<JobInfo> JobQueue::info(const std::string& id) const {
     if (j.state == JobState::done) {
         out.progress = 1.0;
         out.eta_s = 0.0;
+    } else if (const std::size_t total = j.progress.samples_total.load(); total > 0) {
+        // Camera samples, not tiles: an adaptive render's first pass over its tiles traces one
+        // sample a pixel, its second the rest where they are needed.
+        out.progress = std::min(
+            1.0, static_cast<double>(j.progress.samples_done.load()) / static_cast<double>(total));
     } else if (out.tiles_total > 0) {
         out.progress = static_cast<double>(out.tiles_done) / static_cast<double>(out.tiles_total);
     }

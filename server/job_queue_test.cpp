@@ -65,6 +65,32 @@ TEST(JobQueue, RunsAJobToTheEndWithRealProgress) {
     EXPECT_EQ(done.output->body, "image");
 }
 
+// A render that reports camera samples (RenderProgress::samples_*) is measured by them, not by
+// its tiles: an adaptive render's first pass is half its tiles but a fraction of its samples.
+TEST(JobQueue, ProgressInSamplesWhenTheRenderCountsThem) {
+    JobQueue q(4, 8);
+    std::atomic<bool> release{false}, reported{false};
+    auto id = q.submit([&](engine::RenderProgress& p, const engine::CancelToken&) {
+        p.tiles_total = 4;
+        p.tiles_done = 2;
+        p.samples_total = 1000;
+        p.samples_done = 250;
+        reported = true;
+        while (!release.load())
+            std::this_thread::sleep_for(1ms);
+        return JobOutput{"image", "image/png", {}};
+    });
+    ASSERT_TRUE(id);
+    while (!reported.load())
+        std::this_thread::sleep_for(1ms);
+    const auto info = q.info(*id);
+    ASSERT_TRUE(info);
+    EXPECT_EQ(info->progress, 0.25);
+    EXPECT_EQ(info->tiles_done, 2u);
+    release = true;
+    EXPECT_EQ(wait_finished(q, *id).progress, 1.0);
+}
+
 TEST(JobQueue, EtaFromTheRateSoFar) {
     JobQueue q(4, 8);
     auto id = q.submit(tiles_work(10, nullptr, 30ms));

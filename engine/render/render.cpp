@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -177,6 +178,18 @@ struct FirstSamples {
     std::vector<std::array<unsigned char, 3>> shown;
 };
 
+/// Whether pixel (x, y) of a width × height image gets more samples: its first sample shows
+/// differently from one of its four neighbours'.
+bool needs_more(const FirstSamples& first, int x, int y, int width, int height) {
+    const auto at = [&](int px, int py) -> const std::array<unsigned char, 3>& {
+        return first.shown[static_cast<std::size_t>(py) * static_cast<std::size_t>(width) +
+                           static_cast<std::size_t>(px)];
+    };
+    const auto& c = at(x, y);
+    return (x > 0 && at(x - 1, y) != c) || (x + 1 < width && at(x + 1, y) != c) ||
+           (y > 0 && at(x, y - 1) != c) || (y + 1 < height && at(x, y + 1) != c);
+}
+
 /// Adaptive sampling, first pass: sample 0 of every pixel of the tile.
 void tile_first_samples(const Frame& f, int x0, int y0, int x1, int y1, FirstSamples& first,
                         RayCounts& counts) {
@@ -215,11 +228,7 @@ void tile_more_samples(const Frame& f, int x0, int y0, int x1, int y1, const Fir
     std::vector<Vec3d> sums(more.size());
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
-            const auto& c = first.shown[index(x, y)];
-            const auto differs = [&](int nx, int ny) { return first.shown[index(nx, ny)] != c; };
-            more[local(x, y)] =
-                (x > 0 && differs(x - 1, y)) || (x + 1 < width && differs(x + 1, y)) ||
-                (y > 0 && differs(x, y - 1)) || (y + 1 < height && differs(x, y + 1));
+            more[local(x, y)] = needs_more(first, x, y, width, height);
             sums[local(x, y)] = first.color[index(x, y)];
         }
     }
@@ -358,22 +367,38 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
                 std::lock_guard<std::mutex> lock(counts_mutex);
                 out.counts += counts;
             }
-            if (progress)
+            if (progress) {
                 progress->tiles_done.fetch_add(1, std::memory_order_relaxed);
+                progress->samples_done.fetch_add(counts.primary, std::memory_order_relaxed);
+            }
         });
     };
+    const std::size_t pixels =
+        static_cast<std::size_t>(opt.width) * static_cast<std::size_t>(opt.height);
+    if (progress)
+        progress->samples_total = pixels * static_cast<std::size_t>(opt.spp);
     if (opt.adaptive && opt.spp > 1) {
         // Two passes over the tiles: a pixel's neighbours in the next tile must have their
         // first sample before it is decided whether the pixel needs more.
         if (progress)
             progress->tiles_total = 2 * total;
-        const std::size_t pixels =
-            static_cast<std::size_t>(opt.width) * static_cast<std::size_t>(opt.height);
         FirstSamples first{std::vector<Vec3d>(pixels),
                            std::vector<std::array<unsigned char, 3>>(pixels)};
         each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
             tile_first_samples(frame, x0, y0, x1, y1, first, counts);
         });
+        if (progress && !opt.cancel.cancelled()) {
+            // The samples the second pass will trace are known now (until now the total
+            // assumed every pixel needed them: a job's estimate erred long, not short).
+            std::atomic<std::size_t> more{0};
+            tbb::parallel_for(0, opt.height, [&](int y) {
+                std::size_t row = 0;
+                for (int x = 0; x < opt.width; ++x)
+                    row += needs_more(first, x, y, opt.width, opt.height);
+                more.fetch_add(row, std::memory_order_relaxed);
+            });
+            progress->samples_total = pixels + more.load() * static_cast<std::size_t>(opt.spp - 1);
+        }
         each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
             tile_more_samples(frame, x0, y0, x1, y1, first, out.image, counts);
         });

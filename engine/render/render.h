@@ -61,7 +61,12 @@ struct RenderOptions {
 /// How far a render has come, shared with whoever watches it (RenderOptions::cancel stops it).
 struct RenderProgress {
     std::atomic<std::size_t> tiles_done{0};
-    std::atomic<std::size_t> tiles_total{0};
+    std::atomic<std::size_t> tiles_total{0};  ///< an adaptive render counts each tile twice
+    /// Camera samples traced, and to trace: the measure of progress (an adaptive render's two
+    /// passes differ in cost; its total is every pixel's spp until the first pass has told
+    /// which pixels get more).
+    std::atomic<std::size_t> samples_done{0};
+    std::atomic<std::size_t> samples_total{0};
 };
 
 struct RenderResult {

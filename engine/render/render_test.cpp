@@ -244,6 +244,27 @@ TEST(Render, ProgressCountsTiles) {
     EXPECT_EQ(progress.tiles_total.load(), tile_count(o));
     EXPECT_EQ(tile_count(o), 5u * 4u);
     EXPECT_EQ(progress.tiles_done.load(), progress.tiles_total.load());
+    EXPECT_EQ(progress.samples_total.load(), 40u * 30u);
+    EXPECT_EQ(progress.samples_done.load(), progress.samples_total.load());
+}
+
+// An adaptive render's progress is in camera samples: its total drops from every pixel's spp to
+// what the second pass traces once the first pass has told which pixels need more, and it ends
+// at what was traced. Its tiles count twice (two passes).
+TEST(Render, AdaptiveProgressCountsSamples) {
+    auto engine = prepare(lit_spheres(0.4));
+    RenderOptions o = small();
+    o.tile_size = 8;
+    o.spp = 4;
+    o.adaptive = true;
+    RenderProgress progress;
+    const auto r = render(*engine, o, &progress);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(progress.tiles_total.load(), 2 * tile_count(o));
+    EXPECT_EQ(progress.tiles_done.load(), progress.tiles_total.load());
+    EXPECT_EQ(progress.samples_total.load(), r.value().counts.primary);
+    EXPECT_EQ(progress.samples_done.load(), r.value().counts.primary);
+    EXPECT_LT(progress.samples_total.load(), 40u * 30u * 4u);
 }
 
 TEST(Render, CancelledTokenStopsBeforeTheNextTile) {
