@@ -142,7 +142,7 @@ class Client(ArrayQueries):
         for attempt in (0, 1):
             conn = self._connect()
             reused = self._used
-            reading = False  # whether the status line had come (the error is then in the body)
+            reading = False  # whether the answer's head had come (the error is then in its body)
             try:
                 conn.request(method, target, body=body, headers=headers)
                 self._used = True
