@@ -13,15 +13,8 @@ namespace {
 
 std::vector<unsigned char> to_8bit(const Image& img, bool linear) {
     std::vector<unsigned char> out(img.rgb.size());
-    for (std::size_t i = 0; i < img.rgb.size(); ++i) {
-        const float v = img.rgb[i];
-        if (linear) {
-            const float c = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
-            out[i] = static_cast<unsigned char>(std::lround(c * 255.0f));
-        } else {
-            out[i] = srgb_encode(v);
-        }
-    }
+    for (std::size_t i = 0; i < img.rgb.size(); ++i)
+        out[i] = encode_8bit(img.rgb[i], linear);
     return out;
 }
 
@@ -147,6 +140,13 @@ unsigned char srgb_encode(float linear) {
     const float s =
         linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
     return static_cast<unsigned char>(std::lround(s * 255.0f));
+}
+
+unsigned char encode_8bit(float value, bool linear) {
+    if (!linear)
+        return srgb_encode(value);
+    const float c = std::isfinite(value) ? std::clamp(value, 0.0f, 1.0f) : 0.0f;
+    return static_cast<unsigned char>(std::lround(c * 255.0f));
 }
 
 namespace {

@@ -91,6 +91,9 @@ const char* mime_type(ImageFormat format);
 
 /// The sRGB encoding of a linear value in [0, 1] (clamped), as an 8-bit code.
 unsigned char srgb_encode(float linear);
+/// The 8-bit code a value is written as: sRGB-encoded, or with `linear` (the data modes) the
+/// value in [0, 1] (clamped; not finite: 0) times 255, rounded.
+unsigned char encode_8bit(float value, bool linear);
 
 /// The image encoded in `format`. Never fails for a well-formed Image (width·height·3 floats).
 std::string encode_image(const Image& image, ImageFormat format, bool linear_8bit = false);

@@ -157,38 +157,33 @@ void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, R
     }
 }
 
-/// The 8-bit value a colour shows as: sRGB for phong, linear for the data modes (as the PNG
-/// encoder writes them, encode_image).
-std::array<unsigned char, 3> shown_as(const Vec3d& c, ShadingMode mode) {
-    std::array<unsigned char, 3> out{};
-    for (int k = 0; k < 3; ++k) {
-        const float v = static_cast<float>(c[static_cast<std::size_t>(k)]);
-        out[static_cast<std::size_t>(k)] =
-            is_data_mode(mode) ? static_cast<unsigned char>(std::lround(
-                                     std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) * 255.0f : 0.0f))
-                               : srgb_encode(v);
-    }
-    return out;
-}
-
 /// What adaptive sampling's first pass leaves for the second, over the whole image: each
-/// pixel's first sample, and the 8-bit value it shows as.
+/// pixel's first sample, the 8-bit value it shows as (as encode_image writes it: sRGB for phong,
+/// linear for the data modes), and, once the first pass is over, whether it gets more samples.
 struct FirstSamples {
+    int width = 0, height = 0;
     std::vector<Vec3d> color;
     std::vector<std::array<unsigned char, 3>> shown;
-};
+    std::vector<char> more;
 
-/// Whether pixel (x, y) of a width × height image gets more samples: its first sample shows
-/// differently from one of its four neighbours'.
-bool needs_more(const FirstSamples& first, int x, int y, int width, int height) {
-    const auto at = [&](int px, int py) -> const std::array<unsigned char, 3>& {
-        return first.shown[static_cast<std::size_t>(py) * static_cast<std::size_t>(width) +
-                           static_cast<std::size_t>(px)];
-    };
-    const auto& c = at(x, y);
-    return (x > 0 && at(x - 1, y) != c) || (x + 1 < width && at(x + 1, y) != c) ||
-           (y > 0 && at(x, y - 1) != c) || (y + 1 < height && at(x, y + 1) != c);
-}
+    FirstSamples(int w, int h)
+        : width(w), height(h), color(pixels()), shown(pixels()), more(pixels()) {}
+    std::size_t pixels() const {
+        return static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    }
+    std::size_t index(int x, int y) const {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+               static_cast<std::size_t>(x);
+    }
+    /// Whether pixel (x, y)'s first sample shows differently from one of its four neighbours'.
+    bool differs(int x, int y) const {
+        const auto& c = shown[index(x, y)];
+        return (x > 0 && shown[index(x - 1, y)] != c) ||
+               (x + 1 < width && shown[index(x + 1, y)] != c) ||
+               (y > 0 && shown[index(x, y - 1)] != c) ||
+               (y + 1 < height && shown[index(x, y + 1)] != c);
+    }
+};
 
 /// Adaptive sampling, first pass: sample 0 of every pixel of the tile.
 void tile_first_samples(const Frame& f, int x0, int y0, int x1, int y1, FirstSamples& first,
@@ -197,42 +192,49 @@ void tile_first_samples(const Frame& f, int x0, int y0, int x1, int y1, FirstSam
     std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
     trace_samples(
         f, x0, y0, x1, y1, 0, 1, [](int, int) { return true; }, sums, counts);
+    const bool linear = is_data_mode(f.opt.shading);
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x) {
             const Vec3d& c = sums[static_cast<std::size_t>((y - y0) * w + (x - x0))];
-            const std::size_t i =
-                static_cast<std::size_t>(y) * static_cast<std::size_t>(f.opt.width) +
-                static_cast<std::size_t>(x);
+            const std::size_t i = first.index(x, y);
             first.color[i] = c;
-            first.shown[i] = shown_as(c, f.opt.shading);
+            for (std::size_t k = 0; k < 3; ++k)
+                first.shown[i][k] = encode_8bit(static_cast<float>(c[k]), linear);
         }
     }
 }
 
-/// Adaptive sampling, second pass: samples 1..spp of each pixel whose first sample shows
-/// differently from one of its four neighbours' first samples, averaged with its first (summed
-/// in the order tile_pixels sums them, so such a pixel is exactly the uniform render's); the
-/// other pixels keep their first sample.
+/// Marks the pixels that get more samples (FirstSamples::more) once the first pass is over;
+/// returns how many.
+std::size_t mark_more(FirstSamples& first) {
+    std::atomic<std::size_t> total{0};
+    tbb::parallel_for(0, first.height, [&](int y) {
+        std::size_t row = 0;
+        for (int x = 0; x < first.width; ++x) {
+            const bool more = first.differs(x, y);
+            first.more[first.index(x, y)] = more;
+            row += more;
+        }
+        total.fetch_add(row, std::memory_order_relaxed);
+    });
+    return total.load();
+}
+
+/// Adaptive sampling, second pass: samples 1..spp of each pixel marked for more (mark_more),
+/// averaged with its first (summed in the order tile_pixels sums them, so such a pixel is
+/// exactly the uniform render's); the other pixels keep their first sample.
 void tile_more_samples(const Frame& f, int x0, int y0, int x1, int y1, const FirstSamples& first,
                        Image& image, RayCounts& counts) {
-    const int width = f.opt.width, height = f.opt.height;
-    const auto index = [&](int x, int y) {
-        return static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-               static_cast<std::size_t>(x);
-    };
     const int w = x1 - x0;
     const auto local = [&](int x, int y) {
         return static_cast<std::size_t>((y - y0) * w + (x - x0));
     };
-    std::vector<char> more(static_cast<std::size_t>(w * (y1 - y0)));
-    std::vector<Vec3d> sums(more.size());
+    std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
     for (int y = y0; y < y1; ++y) {
-        for (int x = x0; x < x1; ++x) {
-            more[local(x, y)] = needs_more(first, x, y, width, height);
-            sums[local(x, y)] = first.color[index(x, y)];
-        }
+        for (int x = x0; x < x1; ++x)
+            sums[local(x, y)] = first.color[first.index(x, y)];
     }
-    const auto want = [&](int x, int y) { return more[local(x, y)] != 0; };
+    const auto want = [&](int x, int y) { return first.more[first.index(x, y)] != 0; };
     trace_samples(f, x0, y0, x1, y1, 1, f.opt.spp, want, sums, counts);
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x)
@@ -382,22 +384,16 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
         // first sample before it is decided whether the pixel needs more.
         if (progress)
             progress->tiles_total = 2 * total;
-        FirstSamples first{std::vector<Vec3d>(pixels),
-                           std::vector<std::array<unsigned char, 3>>(pixels)};
+        FirstSamples first(opt.width, opt.height);
         each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
             tile_first_samples(frame, x0, y0, x1, y1, first, counts);
         });
-        if (progress && !opt.cancel.cancelled()) {
+        if (!opt.cancel.cancelled()) {
+            const std::size_t more = mark_more(first);
             // The samples the second pass will trace are known now (until now the total
             // assumed every pixel needed them: a job's estimate erred long, not short).
-            std::atomic<std::size_t> more{0};
-            tbb::parallel_for(0, opt.height, [&](int y) {
-                std::size_t row = 0;
-                for (int x = 0; x < opt.width; ++x)
-                    row += needs_more(first, x, y, opt.width, opt.height);
-                more.fetch_add(row, std::memory_order_relaxed);
-            });
-            progress->samples_total = pixels + more.load() * static_cast<std::size_t>(opt.spp - 1);
+            if (progress)
+                progress->samples_total = pixels + more * static_cast<std::size_t>(opt.spp - 1);
         }
         each_tile([&](int x0, int y0, int x1, int y1, RayCounts& counts) {
             tile_more_samples(frame, x0, y0, x1, y1, first, out.image, counts);

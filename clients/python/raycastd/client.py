@@ -306,8 +306,8 @@ class Client(ArrayQueries):
         """Renders an image and returns its bytes (PNG unless `format=` says otherwise).
 
         `options` are the other body fields (`camera`, `sampling`, `shading`, `lighting`,
-        `max_depth`, `precision`, `background`, `format`). With `progress` (True, or a callback taking
-        `(fraction, job_status)`) the render runs as an async job that is polled every
+        `max_depth`, `precision`, `background`, `format`). With `progress` (True, or a callback
+        taking `(fraction, job_status)`) the render runs as an async job that is polled every
         `poll_s` seconds, and cancelled if the wait is interrupted."""
         body: dict[str, Any] = {}
         _put(body, width=width, height=height, spp=spp, **options)
