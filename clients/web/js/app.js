@@ -148,7 +148,8 @@ const preview = new Preview({
         ui.badge.textContent = frame.stage === 'full' ? '' : `preview ${frame.stage}`;
         ui.badge.hidden = frame.stage === 'full';
         ui.frameInfo.textContent =
-            `${body.width}×${body.height}, spp ${body.spp} · ${frame.renderMs.toFixed(1)} ms render, ` +
+            `${body.width}×${body.height}, spp ${body.spp}${body.sampling ? ` ${body.sampling}` : ''} · ` +
+            `${frame.renderMs.toFixed(1)} ms render, ` +
             `${frame.roundTripMs.toFixed(0)} ms round trip · ${frame.precision} · ${frame.rays}`;
         ui.viewport.dataset.stage = frame.stage;
         ui.viewport.dataset.frames = String(preview.stats.frames);
