@@ -84,14 +84,27 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
         const DD den = add(add(two_prod(n.x, d.x), two_prod(n.y, d.y)), two_prod(n.z, d.z));
         if (den.hi != 0.0) {
             const double t = div(num, den);
-            // |δn|₁ ≤ γ₃·Σ|products| plus the rounding of e1 and e2: 16u·|e1|₁·|e2|₁ covers it.
-            // |v − p|₁ from the double hit point; accept when the shift is below u·|t|
-            // (4u·|v − o|₁ more for the rounding of v − p itself).
-            auto l1 = [](const Vec3d& w) { return std::abs(w.x) + std::abs(w.y) + std::abs(w.z); };
-            const double dn = 16.0 * kDoubleUnitRoundoff * l1(e1) * l1(e2);
-            const Vec3d vo_hi{vo[0].hi, vo[1].hi, vo[2].hi};
-            const double vp = l1(vo_hi - d * t) + 4.0 * kDoubleUnitRoundoff * l1(vo_hi);
-            if (dn * vp <= kDoubleUnitRoundoff * std::abs(t) * std::abs(den.hi))
+            // The normal's error, component by component: n.x = e1.y·e2.z − e1.z·e2.y with
+            // each edge rounded once, each product once and the difference once, so
+            // |δn.x| ≤ γ₄·(|e1.y·e2.z| + |e1.z·e2.y|) (Higham 2002, Lemma 3.1); γ₅ of the
+            // computed magnitudes covers their own rounding. A coordinate-aligned triangle
+            // (a floor) has δn only along its normal, where v − p has no component.
+            const Vec3d a1{std::abs(e1.x), std::abs(e1.y), std::abs(e1.z)};
+            const Vec3d a2{std::abs(e2.x), std::abs(e2.y), std::abs(e2.z)};
+            const Vec3d dn = gamma(5) * Vec3d{a1.y * a2.z + a1.z * a2.y, a1.z * a2.x + a1.x * a2.z,
+                                              a1.x * a2.y + a1.y * a2.x};
+            // |v − p| from the computed crossing p = o + t·d, with 4u of its terms for the
+            // rounding of vo's low part, the product and the difference. The true crossing is
+            // |Δt|·|d| further, so |Δt| ≤ δn·|v − p| / (|n·d| − δn·|d|); accept when that is
+            // below u·|t|.
+            auto vp = [&](std::size_t i) {
+                const double dt = std::abs(d[i] * t), v_o = std::abs(vo[i].hi);
+                return std::abs(vo[i].hi - d[i] * t) + 4.0 * kDoubleUnitRoundoff * (v_o + dt);
+            };
+            const double shift = dn.x * vp(0) + dn.y * vp(1) + dn.z * vp(2);
+            const double slack = std::abs(den.hi) - (dn.x * std::abs(d.x) + dn.y * std::abs(d.y) +
+                                                     dn.z * std::abs(d.z));
+            if (slack > 0.0 && shift <= kDoubleUnitRoundoff * std::abs(t) * slack)
                 return t;
         }
     }
@@ -121,10 +134,16 @@ bool is_degenerate(const Triangle& tri) {
 
 namespace {
 
+/// Where woop() takes t from.
+enum class TFrom {
+    plane,  ///< the plane crossing in double-double (plane_t): about an ulp
+    shear,  ///< Woop's own sheared z, interpolated (pbrt-v4 §6.8.4): within its t_err
+};
+
 /// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
 /// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere).
-std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
-                        bool require_inside) {
+std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
+                        TFrom t_from = TFrom::plane) {
     const ShearFrame s = make_shear(ray.direction);
     const Vec3d A = tri.a - ray.origin;
     const Vec3d B = tri.b - ray.origin;
@@ -162,13 +181,41 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
     // The inside/outside decision above is Woop's (watertight); t is the plane crossing in
     // double-double, which Woop's sheared t (rounded in the shear, and ill-conditioned for a
     // grazing ray) agrees with to its t_err.
-    const double t = plane_t(tri, ray);
-    if (std::isnan(t))
-        return std::nullopt;  // in the plane to double-double precision
-    if (require_inside && !(t >= ray.tmin && t <= ray.tmax))
-        return std::nullopt;
     const double az = s.sz * A[s.kz], bz = s.sz * B[s.kz], cz = s.sz * C[s.kz];
     const double inv_det = 1.0 / det;
+
+    // Conservative bound on |t_shear − t_exact| (pbrt-v4 §6.8.4, "Error bounds for t"); also
+    // reported with the plane crossing, which is far closer.
+    auto t_error = [&] {
+        const double max_z = max_abs(Vec3d{az, bz, cz});
+        const double max_x = max_abs(Vec3d{ax, bx, cx});
+        const double max_y = max_abs(Vec3d{ay, by, cy});
+        const double delta_z = gamma(3) * max_z;
+        const double delta_x = gamma(5) * (max_x + max_z);
+        const double delta_y = gamma(5) * (max_y + max_z);
+        const double delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+        const double max_e = max_abs(Vec3d{u, v, w});
+        return 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) *
+               std::abs(inv_det);
+    };
+
+    double t, t_err;
+    if (t_from == TFrom::plane) {
+        t = plane_t(tri, ray);
+        if (std::isnan(t))
+            return std::nullopt;  // in the plane to double-double precision
+        if (require_inside && !(t >= ray.tmin && t <= ray.tmax))
+            return std::nullopt;
+        t_err = t_error();
+    } else {
+        t = (u * az + v * bz + w * cz) * inv_det;
+        t_err = t_error();
+        // Only a hit certainly at or after tmin (pbrt-v4's t > δt): a ray spawned just off
+        // this very triangle (shade/spawn.h) crosses its plane a hair behind its origin, which
+        // the sheared t, off by up to t_err, could put in front.
+        if (require_inside && !(t - t_err >= ray.tmin && t <= ray.tmax))
+            return std::nullopt;
+    }
 
     Hit hit;
     hit.t = t;
@@ -180,18 +227,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
     // make_shear keeps it meaningful): det > 0 means the ray meets (b−a)×(c−a) head on. Taking
     // it from det rather than from the normal keeps it consistent with the inside test.
     hit.front_face = det > 0.0;
-
-    // Conservative bound on |t − t_exact| (pbrt-v4 §6.8.4, "Error bounds for t").
-    const double max_z = max_abs(Vec3d{az, bz, cz});
-    const double max_x = max_abs(Vec3d{ax, bx, cx});
-    const double max_y = max_abs(Vec3d{ay, by, cy});
-    const double delta_z = gamma(3) * max_z;
-    const double delta_x = gamma(5) * (max_x + max_z);
-    const double delta_y = gamma(5) * (max_y + max_z);
-    const double delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    const double max_e = max_abs(Vec3d{u, v, w});
-    hit.t_err =
-        3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * std::abs(inv_det);
+    hit.t_err = t_err;
 
     if (want_normal) {
         hit.normal = triangle_normal(tri);
@@ -203,6 +239,10 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal,
 
 std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal) {
     return woop(tri, ray, want_normal, /*require_inside=*/true);
+}
+
+std::optional<Hit> intersect_triangle_fast(const Triangle& tri, const Ray& ray, bool want_normal) {
+    return woop(tri, ray, want_normal, /*require_inside=*/true, TFrom::shear);
 }
 
 std::optional<Hit> triangle_plane_hit(const Triangle& tri, const Ray& ray, bool want_normal) {

@@ -38,6 +38,13 @@ bool is_degenerate(const Triangle& tri);
 /// front_face is always set; `want_normal = false` skips the normal.
 std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal = true);
 
+/// intersect_triangle's inside test (Woop's, watertight) with t taken from the test's own
+/// sheared coordinates instead of the double-double plane crossing: within the reported t_err
+/// (pbrt-v4 §6.8.4), not within an ulp. A hit is reported only where t − t_err ≥ tmin (so a ray
+/// spawned off the triangle does not find it again). For `fast`.
+std::optional<Hit> intersect_triangle_fast(const Triangle& tri, const Ray& ray,
+                                           bool want_normal = true);
+
 /// Where the ray's line meets the triangle's plane, in double precision, whether or not that
 /// point is inside: t and the barycentrics u, v (possibly negative), with the same arithmetic as
 /// intersect_triangle. Used to refine a hit another (single-precision) test already decided.

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -121,19 +122,12 @@ TEST(Triangle, NearlyParallelRayExactT) {
     EXPECT_LE(std::abs(hit->t - 8.0), hit->t_err);
 }
 
-// A sliver (angle ~1e-8 rad at a): the plane crossing of a ray through its interior, checked
-// against the same formula in GCC's __float128, where the differences and the products of the
-// normal are exact or nearly (long double would lose ~8 digits of the sliver's normal).
-TEST(Triangle, SliverTToAnUlp) {
-    const Triangle sliver{{0.3, -0.2, 4}, {2.3, 0.1, 4.2}, {1.3, -0.05 + 1e-8, 4.1}};
-    const Vec3d target = sliver.a * 0.2 + sliver.b * 0.4 + sliver.c * 0.4;
-    const Ray ray{{-1, 3, -2}, target - Vec3d{-1, 3, -2}};
-    auto hit = triangle_plane_hit(sliver, ray);
-    ASSERT_TRUE(hit);
+/// The plane crossing t = n·(a − o) / n·d in GCC's __float128 (the differences and products of
+/// the normal exact or nearly; long double would lose ~8 digits of a sliver's normal).
+double plane_t_quad(const Triangle& tri, const Ray& ray) {
     using Q = __float128;
     auto q = [](const Vec3d& v) { return std::array<Q, 3>{v.x, v.y, v.z}; };
-    const auto a = q(sliver.a), b = q(sliver.b), c = q(sliver.c), o = q(ray.origin),
-               d = q(ray.direction);
+    const auto a = q(tri.a), b = q(tri.b), c = q(tri.c), o = q(ray.origin), d = q(ray.direction);
     const Q e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     const Q e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
     const Q n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
@@ -143,7 +137,18 @@ TEST(Triangle, SliverTToAnUlp) {
         num += n[k] * (a[k] - o[k]);
         den += n[k] * d[k];
     }
-    const double t = static_cast<double>(num / den);
+    return static_cast<double>(num / den);
+}
+
+// A sliver (angle ~1e-8 rad at a): the plane crossing of a ray through its interior, checked
+// against the same formula in GCC's __float128 (plane_t_quad).
+TEST(Triangle, SliverTToAnUlp) {
+    const Triangle sliver{{0.3, -0.2, 4}, {2.3, 0.1, 4.2}, {1.3, -0.05 + 1e-8, 4.1}};
+    const Vec3d target = sliver.a * 0.2 + sliver.b * 0.4 + sliver.c * 0.4;
+    const Ray ray{{-1, 3, -2}, target - Vec3d{-1, 3, -2}};
+    auto hit = triangle_plane_hit(sliver, ray);
+    ASSERT_TRUE(hit);
+    const double t = plane_t_quad(sliver, ray);
     EXPECT_LE(std::abs(hit->t - t), 2 * (std::nextafter(t, 2 * t) - t));
 }
 
@@ -164,6 +169,87 @@ TEST(Triangle, SharedEdgeNeverLeaks) {
             ++leaks;
     }
     EXPECT_EQ(leaks, 0);
+}
+
+// Large triangles seen from close by, as a render's floor is: coordinate-aligned ones (whose
+// normal's rounding lies along the normal only, so the plain-double normal is taken) and tilted
+// ones (where it is not, and the double-double normal is), every t to an ulp of the __float128
+// crossing. Fails when the plain-double normal is accepted where its error shows in t.
+TEST(Triangle, LargeTrianglesFromCloseByToAnUlp) {
+    std::mt19937_64 rng(2026);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), pos(-3.0, 3.0);
+    std::vector<Triangle> tris;
+    for (double h : {0.0, 0.099, -1.7, 1e-3}) {
+        tris.push_back({{-50, h, -50}, {-50, h, 50}, {50, h, -50}});  // a floor, as bench's
+        tris.push_back({{h, -30.3, -30.1}, {h, 30.7, -29.9}, {h, 0.1, 30.2}});
+    }
+    for (int i = 0; i < 8; ++i) {
+        const Vec3d a{pos(rng) * 20, pos(rng) * 20, pos(rng) * 20};
+        tris.push_back({a, a + Vec3d{pos(rng), pos(rng), pos(rng)} * 25,
+                        a + Vec3d{pos(rng), pos(rng), pos(rng)} * 25});
+    }
+    int checked = 0;
+    for (const Triangle& tri : tris) {
+        for (int k = 0; k < 400; ++k) {
+            const double u = unit(rng), v = unit(rng) * (1.0 - u);
+            const Vec3d target = tri.a + (tri.b - tri.a) * u + (tri.c - tri.a) * v;
+            const Vec3d origin = target + Vec3d{pos(rng), pos(rng), pos(rng)};
+            const Ray ray{origin, target - origin};
+            auto hit = triangle_plane_hit(tri, ray);
+            ASSERT_TRUE(hit);
+            const double t = plane_t_quad(tri, ray);
+            EXPECT_LE(std::abs(hit->t - t), std::nextafter(t, 2 * t) - t)
+                << "triangle " << (&tri - tris.data()) << ", ray " << k;
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, static_cast<int>(tris.size()) * 400);
+}
+
+// fast's kernel: Woop's inside test as intersect_triangle's, t from the shear within its own
+// t_err of the exact crossing.
+TEST(Triangle, FastKernelDecidesAsTheExactOneWithinItsBound) {
+    std::mt19937_64 rng(77);
+    std::uniform_real_distribution<double> pos(-4.0, 4.0);
+    int hits = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3d a{pos(rng), pos(rng), pos(rng)};
+        const Triangle tri{a, a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.5,
+                           a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.5};
+        const Vec3d o{pos(rng) * 3, pos(rng) * 3, pos(rng) * 3};
+        const Ray ray{o, a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.2 - o};
+        const auto exact = intersect_triangle(tri, ray);
+        const auto fast = intersect_triangle_fast(tri, ray);
+        ASSERT_EQ(fast.has_value(), exact.has_value()) << i;
+        if (!fast)
+            continue;
+        ++hits;
+        EXPECT_LE(std::abs(fast->t - exact->t), fast->t_err) << i;
+        EXPECT_GT(fast->t_err, 0.0);
+        EXPECT_EQ(fast->front_face, exact->front_face);
+        EXPECT_EQ(fast->u, exact->u);
+        EXPECT_EQ(fast->v, exact->v);
+        EXPECT_EQ(fast->normal, exact->normal);
+    }
+    EXPECT_GT(hits, 2000);
+}
+
+// A hit the sheared t cannot place at or after tmin is not one for fast: a ray leaving a corner
+// of the triangle does not find the triangle it leaves, where the exact kernel reports t = 0.
+TEST(Triangle, FastKernelReportsNothingItCannotPlaceAfterTmin) {
+    const Triangle tilted{{-1.3, 0.7, 12.1}, {3.1, 2.9, 11.7}, {0.3, -2.2, 13.3}};
+    const Vec3d p = tilted.a;
+    const Ray leaving{p, {0.3, -0.2, 1}};
+    const auto exact = intersect_triangle(tilted, leaving);
+    ASSERT_TRUE(exact);
+    EXPECT_EQ(exact->t, 0.0);
+    EXPECT_FALSE(intersect_triangle_fast(tilted, leaving));
+    // Arriving at a point inside, it is found where the exact kernel finds it.
+    const Vec3d q = tilted.a * 0.3 + tilted.b * 0.3 + tilted.c * 0.4;
+    const Ray arriving{q - leaving.direction, leaving.direction};
+    const auto fast = intersect_triangle_fast(tilted, arriving);
+    ASSERT_TRUE(fast);
+    EXPECT_NEAR(fast->t, 1.0, fast->t_err);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "engine/accel/embree_accel.h"
 #include "engine/accel/linear_accel.h"
+#include "engine/accel/scene_scan.h"
 #include "engine/huge_pages.h"
 
 namespace raycastd::engine {
@@ -196,13 +197,11 @@ FloatFrame QueryEngine::float_frame(Precision precision) const {
     return accel_->float_frame();
 }
 
-std::unique_ptr<EmbreeAccel> QueryEngine::bvh_for_many_rays(Precision precision) const {
-    // A scene wider than float is brute force for a reason a ray count does not change.
-    if (accel_ || precision == Precision::exact || scene_->objects.empty() || !fits_float(*scene_))
+std::unique_ptr<SceneScan> QueryEngine::scan_for_many_rays(Precision precision) const {
+    const std::size_t prims = scene_->triangle_count() + scene_->sphere_count();
+    if (accel_ || prims == 0 || prims > kBruteForceMaxPrimitives)
         return nullptr;
-    auto built = EmbreeAccel::build(*scene_);
-    // Without it the brute-force path still gives the right (exact) answers, only slower.
-    return built.ok() ? std::move(*built) : nullptr;
+    return std::make_unique<SceneScan>(*scene_, precision == Precision::fast);
 }
 
 std::size_t QueryEngine::memory_bytes() const {

@@ -21,6 +21,7 @@
 namespace raycastd::engine {
 
 class EmbreeAccel;
+class SceneScan;
 struct WindingTrees;     // query/point_entry.cpp
 struct PointTree;        // query/point_entry.cpp
 struct ParityPieces;     // query/parity_pieces.h
@@ -132,14 +133,14 @@ class QueryEngine {
     ~QueryEngine();
 
   private:
-    friend class Tracer;  // query/tracer.h: BuildHint::many_rays asks for bvh_for_many_rays()
+    friend class Tracer;  // query/tracer.h: BuildHint::many_rays asks for scan_for_many_rays()
     explicit QueryEngine(std::shared_ptr<const Scene> scene);
-    /// A BVH of its own for a caller about to trace many rays at `precision` through a scene
-    /// this engine answers by brute force only because it is small (a render: brute force is the
-    /// cheapest for a few rays, not for millions); nullptr where the engine's own path stays
-    /// (it has a BVH, exact is asked for, the scene is empty or wider than float, or the build
-    /// failed).
-    std::unique_ptr<EmbreeAccel> bvh_for_many_rays(Precision precision) const;
+    /// A scan of its own (accel/scene_scan.h) for a caller about to trace many rays at
+    /// `precision` through a scene this engine answers by brute force because it is small (at
+    /// most 16 primitives; a render): the same exact answers without linear_closest's overheads,
+    /// or fast's kernels at `fast`. nullptr where the engine's own path stays (it has a BVH, the
+    /// scene is empty, or it is brute force for being wider than float, whatever its size).
+    std::unique_ptr<SceneScan> scan_for_many_rays(Precision precision) const;
     std::size_t scene_memory_bytes() const;
     /// point_entry.cpp: each object's topology (objects in parallel) and the empty winding-tree
     /// slots; run by build() before the BVH.

@@ -1,32 +1,37 @@
 #include "engine/query/tracer.h"
 
-#include "engine/accel/embree_accel.h"
+#include "engine/accel/scene_scan.h"
 
 namespace raycastd::engine {
 
 Tracer::Tracer(const QueryEngine& engine, Precision precision, BuildHint hint)
     : engine_(engine),
       precision_(precision),
-      own_bvh_(hint == BuildHint::many_rays ? engine.bvh_for_many_rays(precision) : nullptr),
-      frame_(own_bvh_ ? own_bvh_->float_frame() : engine.float_frame(precision)) {}
+      scan_(hint == BuildHint::many_rays ? engine.scan_for_many_rays(precision) : nullptr),
+      // The scan decides in double at every precision.
+      frame_(scan_ ? FloatFrame{} : engine.float_frame(precision)) {}
 
 Tracer::~Tracer() = default;
 
 Precision Tracer::precision() const {
-    return own_bvh_ ? precision_ : engine_.effective_precision(precision_);
+    if (scan_)
+        return precision_ == Precision::fast ? Precision::fast : Precision::exact;
+    return engine_.effective_precision(precision_);
 }
 
 std::optional<Hit> Tracer::closest(const Ray& ray, bool want_normal) const {
-    if (own_bvh_)
-        return own_bvh_->closest(ray, precision_, want_normal);
+    if (scan_)
+        return scan_->closest(ray, want_normal);
     return engine_.closest(ray, precision_, want_normal);
 }
 
 void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
-    if (own_bvh_) {
+    if (scan_) {
         out.assign(rays.size(), Hit{});
-        own_bvh_->closest_range(rays.data(), rays.size(), precision_, /*want_normal=*/true,
-                                out.data());
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            if (auto h = scan_->closest(rays[i], /*want_normal=*/true))
+                out[i] = *h;
+        }
         return;
     }
     QueryOptions q;
@@ -37,9 +42,13 @@ void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) 
 }
 
 void Tracer::occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
-    if (own_bvh_) {
-        out.assign(rays.size(), Hit{});
-        own_bvh_->any_range(rays.data(), rays.size(), precision_, out.data());
+    if (scan_) {
+        out.resize(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            out[i] = Hit{};
+            if (scan_->any(rays[i]))
+                out[i].object = 0;  // an `any` answer: valid() says blocked (query_result.h)
+        }
         return;
     }
     QueryOptions q;
@@ -51,8 +60,8 @@ void Tracer::occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out)
 }
 
 bool Tracer::occluded(const Ray& ray) const {
-    if (own_bvh_)
-        return own_bvh_->any(ray, precision_);
+    if (scan_)
+        return scan_->any(ray);
     return engine_.occluded(ray, precision_);
 }
 

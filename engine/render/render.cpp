@@ -321,7 +321,7 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
     const Camera cam = resolve_camera(scene, opt.camera, opt.width, opt.height);
     const Lighting lighting = resolve_lighting(scene, opt.lighting);
     WhittedOptions wo = opt.whitted;
-    wo.bvh_for_small_scenes = true;
+    wo.many_rays = true;
     wo.headlight = std::nullopt;
     if (lighting == Lighting::headlight) {
         // The camera's view direction; a degenerate camera (look_at = position) has none.

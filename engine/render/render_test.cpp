@@ -310,25 +310,31 @@ TEST(Render, TokenThatNeverFiresChangesNothing) {
     EXPECT_FALSE(o.cancel.fired());
 }
 
-TEST(Render, SmallSceneBvhAgreesWithExactBruteForce) {
-    // Three spheres: QueryEngine answers them by brute force (exact); a render traces them
-    // through its own BVH at the precision asked for. The pictures must agree.
+TEST(Render, SmallSceneScanAgreesWithExactBruteForce) {
+    // Three spheres: QueryEngine answers them by brute force (exact); a render scans them
+    // itself (accel/scene_scan.h), exact's answers at refined, fast's kernels at fast. The
+    // pictures must agree: refined's is exact's to the bit.
     auto engine = prepare(lit_spheres(0.3));
     ASSERT_TRUE(engine->brute_force());
     RenderOptions o = small();
-    o.whitted.precision = Precision::refined;
-    const RenderResult bvh = render(*engine, o).value();
     o.whitted.precision = Precision::exact;
     const RenderResult exact = render(*engine, o).value();
-    EXPECT_EQ(bvh.precision, Precision::refined);
+    o.whitted.precision = Precision::refined;
+    const RenderResult refined = render(*engine, o).value();
+    o.whitted.precision = Precision::fast;
+    const RenderResult fast = render(*engine, o).value();
     EXPECT_EQ(exact.precision, Precision::exact);
+    EXPECT_EQ(refined.precision, Precision::exact);
+    EXPECT_EQ(fast.precision, Precision::fast);
+    EXPECT_EQ(refined.image.rgb, exact.image.rgb);
     int differ = 0;
-    for (std::size_t i = 0; i < bvh.image.rgb.size(); ++i) {
-        if (std::abs(bvh.image.rgb[i] - exact.image.rgb[i]) > 1e-3f)
+    for (std::size_t i = 0; i < fast.image.rgb.size(); ++i) {
+        if (std::abs(fast.image.rgb[i] - exact.image.rgb[i]) > 1e-3f)
             ++differ;
     }
     EXPECT_EQ(differ, 0);
-    EXPECT_EQ(bvh.counts.shadow, exact.counts.shadow);
+    EXPECT_EQ(fast.counts.shadow, exact.counts.shadow);
+    EXPECT_EQ(refined.counts.total(), exact.counts.total());
 }
 
 TEST(Render, RaysInBatchesGiveTheImageOfSingleRays) {

@@ -67,12 +67,12 @@ AcneCase acne_scene(Vec3d o, int grid) {
 }
 
 /// Pixels that should be lit but are dark, over a 200 × 150 view.
-int wrongly_dark_pixels(const AcneCase& c, Precision precision, bool small_bvh, bool* used_bvh) {
+int wrongly_dark_pixels(const AcneCase& c, Precision precision, bool scan, bool* used_bvh) {
     auto engine = prepare(c.scene);
     *used_bvh = !engine->brute_force();
     WhittedOptions opt;
     opt.precision = precision;
-    opt.bvh_for_small_scenes = small_bvh;
+    opt.many_rays = scan;
     const Whitted w(*engine, opt);
     const CameraRays cam(*c.scene.camera, 200, 150);
     const Sphere& ball = c.scene.objects[1].sphere;
@@ -119,11 +119,11 @@ TEST(Whitted, NoShadowAcneNearTheOriginOrFarFromIt) {
         for (int grid : {1, 16}) {  // 2 triangles + a sphere: brute force; 512: Embree
             const AcneCase c = acne_scene(o, grid);
             for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
-                for (bool small_bvh : {false, true}) {
+                for (bool scan : {false, true}) {
                     bool bvh = false;
-                    EXPECT_EQ(wrongly_dark_pixels(c, p, small_bvh, &bvh), 0)
+                    EXPECT_EQ(wrongly_dark_pixels(c, p, scan, &bvh), 0)
                         << "at " << o.x << ", grid " << grid << ", precision " << to_string(p)
-                        << (small_bvh ? ", own BVH" : "");
+                        << (scan ? ", scanned" : "");
                     EXPECT_EQ(bvh, grid > 1);
                 }
             }

@@ -57,7 +57,7 @@ Whitted::Whitted(const QueryEngine& engine, WhittedOptions options)
     : engine_(engine),
       options_(options),
       tracer_(engine, options.precision,
-              options.bvh_for_small_scenes ? BuildHint::many_rays : BuildHint::few_rays),
+              options.many_rays ? BuildHint::many_rays : BuildHint::few_rays),
       plan_(plan_shading(engine.scene(), options.headlight)) {
     const auto n = static_cast<std::uint32_t>(engine.scene().objects.size());
     computed_normals_.reserve(n);
@@ -192,11 +192,11 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth,
 
 void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                          std::vector<Vec3d>& out, RayCounts& counts) const {
-    // A scene small enough for the tracer's own BVH is mostly spheres, user geometry that a
-    // packet decides lane by lane in double: there the batches cost more than they save
-    // (bench_render, tutorial_like at fast on an idle machine: 460 ms batched against 215 ms
-    // ray by ray at spp 1, 968 against 912 at spp 4), while the Duck's mesh gains 1.29–1.33×.
-    if (!options_.trace_in_batches || tracer_.own_bvh()) {
+    // A scene small enough for the tracer to scan itself traces ray by ray: batches exist for
+    // Embree's packets, which a scan does not have (with the BVH the scan replaced, batches
+    // had cost more than they saved there too: bench_render, tutorial_like at fast, 460 ms
+    // batched against 215 ms ray by ray at spp 1), while the Duck's mesh gains 1.29–1.33×.
+    if (!options_.trace_in_batches || tracer_.scans()) {
         out.assign(rays.size(), options_.background);
         for (std::size_t i = 0; i < rays.size(); ++i) {
             if (hits[i].valid())

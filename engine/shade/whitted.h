@@ -22,8 +22,8 @@
 // All tracing goes through a Tracer over the QueryEngine (query/tracer.h: closest for camera
 // and secondary rays, occluded for shadow rays) at the precision asked for, which also says how
 // much float rounding spawned origins must clear; secondary rays start at robust origins
-// (shade/spawn.h). Renders ask for a tracer built for many rays (bvh_for_small_scenes), which
-// gives a scene QueryEngine answers by brute force a BVH of its own.
+// (shade/spawn.h). Renders ask for a tracer built for many rays (many_rays), which
+// scans a scene QueryEngine answers by brute force through a flat copy of its own.
 
 #include <cstdint>
 #include <optional>
@@ -47,13 +47,13 @@ struct WhittedOptions {
     /// own lights (ray trees always use those).
     std::optional<Vec3d> headlight;
     /// Trace through a Tracer built for many rays (BuildHint::many_rays): a scene QueryEngine
-    /// answers by brute force gets a BVH of its own (renders: millions of rays). Off for a
-    /// single ray tree, where exact brute force is the cheapest.
-    bool bvh_for_small_scenes = false;
+    /// answers by brute force gets a scan of its own (renders: millions of rays). Off for a
+    /// single ray tree, where QueryEngine's brute force is the cheapest.
+    bool many_rays = false;
     /// shade_hits() traces each generation of rays as a batch (Embree packets); off, it shades
     /// hit by hit as shade_hit() does (the tests and bench_render --single-rays compare them).
-    /// Scenes the tracer gives a BVH of its own (at most 16 primitives) are shaded hit by hit
-    /// either way (measured slower in batches, whitted.cpp).
+    /// Scenes the tracer scans itself (at most 16 primitives) are shaded hit by hit either way
+    /// (a scan has no packets to gain from batches, whitted.cpp).
     bool trace_in_batches = true;
 };
 

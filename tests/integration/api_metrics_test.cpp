@@ -91,8 +91,9 @@ TEST_F(Metrics, CountersMoveWithTheRequestsServed) {
     EXPECT_EQ(sample(after, R"(raycastd_rays_total{kind="closest",precision="exact"})") -
                   sample(before, R"(raycastd_rays_total{kind="closest",precision="exact"})"),
               6);
-    // 8 × 4 camera rays at 1 sample per pixel, and shadow rays toward the light for the hits.
-    EXPECT_EQ(sample(after, R"(raycastd_rays_total{kind="primary",precision="refined"})"), 32);
+    // 8 × 4 camera rays at 1 sample per pixel, and shadow rays toward the light for the hits,
+    // counted under the path that answered: exact, for a scene this small (API.md).
+    EXPECT_EQ(sample(after, R"(raycastd_rays_total{kind="primary",precision="exact"})"), 32);
     EXPECT_EQ(sample(after, R"(raycastd_api_errors_total{code="scene_not_found"})"), 1);
     EXPECT_EQ(sample(after, R"(raycastd_points_total{query="signed_distance"})"), 2);
     EXPECT_EQ(sample(after, R"(raycastd_points_total{query="closest"})"), 0);

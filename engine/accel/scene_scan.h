@@ -1,0 +1,54 @@
+#pragma once
+// A scene of a few primitives (QueryEngine's brute-force scenes: at most 16) traced by testing
+// every primitive, for the millions of rays of a render. linear_accel.h answers the same
+// questions for a handful of rays; this keeps the primitives in one flat array (a triangle's
+// corners copied, not gathered through the mesh's index on every ray), decides t first and
+// fills the answer's normal once for the winner, so that a render of the bench's six-primitive
+// scene (four spheres and a floor) spends its time in the kernels rather than around them.
+//
+// At `exact` the answers are linear_closest's and linear_any's bit for bit: the same kernels
+// (sphere_roots, intersect_triangle), objects in index order, triangles in file order, the
+// same tie rules (`closer` across objects, strictly closer within one). At `fast` a sphere is
+// decided by the plain-double kernel (sphere_roots_fast), as fast's Embree path decides it,
+// and a triangle by Woop's watertight test with t from its own shear (intersect_triangle_fast,
+// no double-double plane crossing): still double, and within fast's error bounds.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "engine/geometry/sphere.h"
+#include "engine/geometry/triangle.h"
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine {
+
+class SceneScan {
+  public:
+    /// A scan of `scene` (its primitives copied: the scan does not refer to it); `fast`: the
+    /// fast kernels.
+    SceneScan(const Scene& scene, bool fast);
+
+    /// The closest hit in [tmin, tmax], or nullopt (linear_closest at exact).
+    std::optional<Hit> closest(const Ray& ray, bool want_normal) const;
+    /// Whether anything is hit in [tmin, tmax] (linear_any at exact).
+    bool any(const Ray& ray) const;
+
+  private:
+    struct Primitive {
+        Triangle tri;          ///< a triangle's corners (unused for a sphere)
+        Sphere sphere;         ///< a sphere (unused for a triangle)
+        std::uint32_t object;  ///< the scene's object index
+        std::uint32_t index;   ///< the triangle's index in its mesh (0 for a sphere)
+        bool is_sphere;
+        bool last_of_object;  ///< the object's last primitive (its own best is then settled)
+    };
+
+    SphereRoots roots(const Sphere& s, const Ray& ray) const;
+    std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
+
+    std::vector<Primitive> prims_;
+    bool fast_;
+};
+
+}  // namespace raycastd::engine

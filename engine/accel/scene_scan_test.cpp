@@ -1,0 +1,139 @@
+// SceneScan: at exact, linear_closest's and linear_any's answers bit for bit (ties included);
+// at fast, the same surfaces within the fast kernels' bounds.
+
+#include "engine/accel/scene_scan.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "engine/accel/linear_accel.h"
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine {
+namespace {
+
+using testing::mesh_object;
+using testing::sphere;
+
+/// Spheres, a floor of two triangles, a cube (12 triangles sharing edges and vertices) and
+/// exact twins: a sphere and a one-triangle mesh repeated as later objects (ties across
+/// objects), and a mesh with a triangle repeated (a tie within one). 16 primitives.
+Scene tie_scene() {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(sphere("a", {0.5, 1, 4}, 1.0, 0));
+    s.objects.push_back(mesh_object("floor", {{-9, 0, -9}, {-9, 0, 9}, {9, 0, -9}, {9, 0, 9}},
+                                    {{0, 1, 2}, {2, 1, 3}}));
+    s.objects.push_back(sphere("a twin", {0.5, 1, 4}, 1.0, 0));
+    s.objects.push_back(
+        mesh_object("tri", {{-3, 0.5, 6}, {-1, 0.5, 6}, {-2, 2.5, 6}}, {{0, 1, 2}}));
+    s.objects.push_back(
+        mesh_object("tri twin", {{-3, 0.5, 6}, {-1, 0.5, 6}, {-2, 2.5, 6}}, {{0, 1, 2}}));
+    // The cube [1.5, 2.5]³ less two faces' triangles, and with one triangle listed twice: 16
+    // primitives in all.
+    const Object cube = testing::cube_object(1.5, 2.5);
+    std::vector<std::array<std::uint32_t, 3>> t(cube.mesh->triangles.begin(),
+                                                cube.mesh->triangles.begin() + 10);
+    t.push_back(t[1]);  // z = 1.5, the face the rays meet
+    s.objects.push_back(mesh_object("cube", cube.mesh->positions, std::move(t)));
+    return s;
+}
+
+/// Rays from the eye's side aimed at the objects, their vertices and their edges (exact ties
+/// of shared edges and of the twins), some with a short or raised segment.
+std::vector<Ray> aimed_rays(const Scene& s, std::uint64_t seed, int n) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), pos(-6.0, 6.0);
+    std::vector<Vec3d> targets;
+    for (const Object& o : s.objects) {
+        if (o.kind == ObjectKind::sphere) {
+            targets.push_back(o.sphere.center);
+            targets.push_back(o.sphere.center + Vec3d{o.sphere.radius, 0, 0});
+            continue;
+        }
+        for (std::size_t p = 0; p < o.mesh->size(); ++p) {
+            const Triangle t = o.mesh->triangle(p);
+            targets.insert(targets.end(), {t.a, t.b, (t.a + t.b) * 0.5, (t.a + t.b + t.c) / 3.0});
+        }
+    }
+    std::vector<Ray> rays;
+    for (int i = 0; i < n; ++i) {
+        Ray r;
+        r.origin = {pos(rng), 3.0 + pos(rng) * 0.5, -6.0 + pos(rng) * 0.3};
+        const Vec3d target = i % 3 == 0 ? Vec3d{pos(rng), pos(rng) * 0.5, 6.0 + pos(rng)}
+                                        : targets[rng() % targets.size()];
+        r.direction = target - r.origin;
+        if (i % 7 == 0)
+            r.tmax = unit(rng) * 1.2;
+        if (i % 11 == 0)
+            r.tmin = unit(rng) * 0.9;
+        rays.push_back(r);
+    }
+    return rays;
+}
+
+void expect_identical(const Hit& got, const Hit& want, std::size_t i) {
+    EXPECT_EQ(got.object, want.object) << i;
+    EXPECT_EQ(got.primitive, want.primitive) << i;
+    EXPECT_EQ(got.t, want.t) << i;
+    EXPECT_EQ(got.t_err, want.t_err) << i;
+    EXPECT_EQ(got.u, want.u) << i;
+    EXPECT_EQ(got.v, want.v) << i;
+    EXPECT_EQ(got.normal, want.normal) << i;
+    EXPECT_EQ(got.front_face, want.front_face) << i;
+    EXPECT_EQ(got.on_edge, want.on_edge) << i;
+}
+
+TEST(SceneScan, ExactIsTheLinearScanBitForBit) {
+    const Scene s = tie_scene();
+    const SceneScan scan(s, /*fast=*/false);
+    const std::vector<Ray> rays = aimed_rays(s, 5, 6000);
+    int hits = 0, twins = 0, on_edge = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        for (bool want_normal : {true, false}) {
+            const auto want = linear_closest(s, rays[i], want_normal);
+            const auto got = scan.closest(rays[i], want_normal);
+            ASSERT_EQ(got.has_value(), want.has_value()) << i;
+            if (got)
+                expect_identical(*got, *want, i);
+        }
+        EXPECT_EQ(scan.any(rays[i]), linear_any(s, rays[i])) << i;
+        if (const auto h = linear_closest(s, rays[i], false)) {
+            ++hits;
+            twins += h->object == 0 || h->object == 3;  // a twin later in the list ties with it
+            on_edge += h->on_edge;
+        }
+    }
+    // The rays reach what the test is about: the twins' ties and shared edges.
+    EXPECT_GT(hits, 3000);
+    EXPECT_GT(twins, 300);
+    EXPECT_GT(on_edge, 100);
+}
+
+TEST(SceneScan, FastFindsTheSameSurfacesWithinItsBounds) {
+    const Scene s = tie_scene();
+    const SceneScan scan(s, /*fast=*/true);
+    const std::vector<Ray> rays = aimed_rays(s, 6, 6000);
+    int agree = 0, hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto want = linear_closest(s, rays[i], true);
+        const auto got = scan.closest(rays[i], true);
+        // A ray aimed at an edge or a silhouette may go either way within the bounds; where
+        // both hit, the answers are within both bounds of each other.
+        if (got.has_value() == want.has_value())
+            ++agree;
+        if (!got || !want)
+            continue;
+        ++hits;
+        EXPECT_LE(std::abs(got->t - want->t), got->t_err + want->t_err) << i;
+        EXPECT_GT(got->t_err, 0.0) << i;
+        EXPECT_EQ(dot(got->normal, got->normal) > 0.5, true) << i;
+        EXPECT_EQ(scan.any(rays[i]), true) << i;
+    }
+    EXPECT_GE(agree, static_cast<int>(rays.size()) - 30);
+    EXPECT_GT(hits, 3000);
+}
+
+}  // namespace
+}  // namespace raycastd::engine
