@@ -138,8 +138,9 @@ class QueryEngine {
     /// A scan of its own (accel/scene_scan.h) for a caller about to trace many rays at
     /// `precision` through a scene this engine answers by brute force because it is small (at
     /// most 16 primitives; a render): the same exact answers without linear_closest's overheads,
-    /// or fast's kernels at `fast`. nullptr where the engine's own path stays (it has a BVH, the
-    /// scene is empty, or it is brute force for being wider than float, whatever its size).
+    /// or fast's kernels at `fast`. nullptr where the engine's own path stays: it has a BVH, the
+    /// scene is empty, or it has more than 16 primitives (brute force only for being wider than
+    /// float; a small scene that wide is scanned, in double).
     std::unique_ptr<SceneScan> scan_for_many_rays(Precision precision) const;
     std::size_t scene_memory_bytes() const;
     /// point_entry.cpp: each object's topology (objects in parallel) and the empty winding-tree

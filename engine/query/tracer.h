@@ -20,7 +20,7 @@ namespace raycastd::engine {
 /// How many rays a Tracer is about to trace.
 enum class BuildHint {
     few_rays,   ///< a ray tree, a handful of rays: QueryEngine's own paths are the cheapest
-    many_rays,  ///< a render: worth a BVH even where QueryEngine answers by brute force
+    many_rays,  ///< a render: worth a scan of its own where QueryEngine answers by brute force
 };
 
 /// Closest hits and occlusion of single rays (and closest hits of batches) at one precision;

@@ -1,6 +1,6 @@
 // Shadow acne over whole views: a lit plane and a sphere, near the origin and 1e6 units away,
 // rendered pixel by pixel through the Whitted tracer at every precision, with and without the
-// tracer's own BVH for small scenes. (It lives with the renderer because it looks through a
+// tracer's own scan of small scenes. (It lives with the renderer because it looks through a
 // camera: render/camera_rays.h.)
 
 #include <array>
