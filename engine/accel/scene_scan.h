@@ -37,6 +37,8 @@ class SceneScan {
   private:
     struct Primitive {
         Triangle tri;          ///< a triangle's corners (unused for a sphere)
+        Vec3d n;               ///< a triangle's (b − a)×(c − a), rounded
+        Vec3d n_err;           ///< bound on |n − exact normal|, per component
         Sphere sphere;         ///< a sphere (unused for a triangle)
         std::uint32_t object;  ///< the scene's object index
         std::uint32_t index;   ///< the triangle's index in its mesh (0 for a sphere)
@@ -44,6 +46,9 @@ class SceneScan {
         bool last_of_object;  ///< the object's last primitive (its own best is then settled)
     };
 
+    /// Whether the ray certainly leaves the plane of triangle `p` behind: its origin strictly
+    /// on one side, its direction strictly away (both beyond their rounding), tmin ≥ 0.
+    static bool leaves_plane(const Primitive& p, const Ray& ray);
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
 

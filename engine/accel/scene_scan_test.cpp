@@ -111,6 +111,65 @@ TEST(SceneScan, ExactIsTheLinearScanBitForBit) {
     EXPECT_GT(on_edge, 100);
 }
 
+// Rays that start on a surface, as a render's shadow and reflected rays do (origins on tilted
+// triangles' planes to within rounding, on either side or on it, directions off it at every
+// angle and some within it): the scan's shortcut for a ray leaving a triangle's plane must skip
+// only what the exact kernel misses. Fails when that shortcut ignores its rounding bounds.
+TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(sphere("ball", {0.3, 1.2, 4.1}, 0.9, 0));
+    s.objects.push_back(
+        mesh_object("tilted floor",
+                    {{-7.1, -0.3, -6.7}, {-6.9, 0.45, 7.3}, {7.2, -0.61, -7.05}, {6.8, 0.2, 6.9}},
+                    {{0, 1, 2}, {2, 1, 3}}));
+    std::mt19937_64 rng(41);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), dir(-1.0, 1.0);
+    for (int i = 0; i < 10; ++i) {
+        const Vec3d a{dir(rng) * 4, dir(rng) * 2 + 1, dir(rng) * 4 + 3};
+        s.objects.push_back(mesh_object("t" + std::to_string(i),
+                                        {a, a + Vec3d{dir(rng), dir(rng), dir(rng)} * 1.5,
+                                         a + Vec3d{dir(rng), dir(rng), dir(rng)} * 1.5},
+                                        {{0, 1, 2}}));
+    }
+    const SceneScan exact(s, /*fast=*/false);
+    int checked = 0, hits = 0, near_start = 0;
+    for (std::size_t obj = 1; obj < s.objects.size(); ++obj) {
+        const TriangleMesh& mesh = *s.objects[obj].mesh;
+        for (std::size_t p = 0; p < mesh.size(); ++p) {
+            const Triangle t = mesh.triangle(p);
+            const Vec3d n = normalize(cross(t.b - t.a, t.c - t.a));
+            for (int k = 0; k < 300; ++k) {
+                const double u = unit(rng), v = unit(rng) * (1.0 - u);
+                Ray ray;
+                ray.origin = t.a + (t.b - t.a) * u + (t.c - t.a) * v;  // on the plane, rounded
+                ray.direction = Vec3d{dir(rng), dir(rng), dir(rng)};
+                if (k % 5 == 0)  // nearly or exactly within the plane
+                    ray.direction =
+                        ray.direction - n * dot(ray.direction, n) * (k % 10 ? 1.0 : 0.999);
+                if (k % 7 == 0)
+                    ray.origin = ray.origin + n * (k % 2 ? 1e-13 : -1e-13);
+                for (bool want_normal : {true, false}) {
+                    const auto want = linear_closest(s, ray, want_normal);
+                    const auto got = exact.closest(ray, want_normal);
+                    ASSERT_EQ(got.has_value(), want.has_value()) << obj << " " << p << " " << k;
+                    if (got)
+                        expect_identical(*got, *want, k);
+                }
+                EXPECT_EQ(exact.any(ray), linear_any(s, ray)) << obj << " " << p << " " << k;
+                ++checked;
+                if (const auto h = linear_closest(s, ray, false)) {
+                    ++hits;
+                    near_start += h->t < 1e-9;
+                }
+            }
+        }
+    }
+    EXPECT_EQ(checked, 11 * 300 + 300);
+    EXPECT_GT(hits, 1000);
+    EXPECT_GT(near_start, 50);  // rays that find the very surface they start on
+}
+
 TEST(SceneScan, FastFindsTheSameSurfacesWithinItsBounds) {
     const Scene s = tie_scene();
     const SceneScan scan(s, /*fast=*/true);
