@@ -1,5 +1,7 @@
 #include "engine/accel/scene_scan.h"
 
+#include <cmath>
+
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
@@ -20,46 +22,68 @@ bool first_root_in_range(const SphereRoots& r, const Ray& ray, double& t) {
 
 }  // namespace
 
+TrianglePlane TrianglePlane::of(const Triangle& tri) {
+    TrianglePlane p;
+    p.a = tri.a;
+    const Vec3d e1 = tri.b - tri.a, e2 = tri.c - tri.a;
+    p.n = cross(e1, e2);
+    // As plane_t's bound: each edge, product and difference rounded once (γ₄ of the
+    // magnitudes; γ₅ covers their own rounding; Higham 2002, Lemma 3.1).
+    const Vec3d a1 = abs(e1), a2 = abs(e2);
+    const double products[6] = {a1.y * a2.z, a1.z * a2.y, a1.z * a2.x,
+                                a1.x * a2.z, a1.x * a2.y, a1.y * a2.x};
+    const Vec3d m{products[0] + products[1], products[2] + products[3], products[4] + products[5]};
+    p.n_err = gamma(5) * m;
+    const Vec3d an = abs(p.n);
+    p.dd_scale = 0x1p-96 * (an.x + an.y + an.z + m.x + m.y + m.z);
+    // A product that underflows breaks the relative bounds above (and the kernels' own): such
+    // a triangle (edge components below ~1e-150) is never skipped. A zero factor is exact.
+    const double f1[6] = {a1.y, a1.z, a1.z, a1.x, a1.x, a1.y};
+    const double f2[6] = {a2.z, a2.y, a2.x, a2.z, a2.y, a2.x};
+    p.usable = std::isfinite(p.dd_scale);
+    for (int k = 0; k < 6; ++k)
+        p.usable = p.usable && (f1[k] == 0.0 || f2[k] == 0.0 || products[k] >= 0x1p-1000);
+    return p;
+}
+
+bool TrianglePlane::left_behind(const Ray& ray) const {
+    // s = n·(o − a) and n·d, each within its error bound of the exact triangle's: the rounded
+    // normal's error times the other factor, and the rounding of o − a and of the dot products
+    // (γ₅ of the magnitudes, with room for the bounds' own rounding). Beyond that, s must clear
+    // plane_t's double-double resolution (its numerator n·(v − o), v the corner nearest the
+    // origin, is exact only to ~u² of Σ|n||v − o|, and |v − o|∞ ≤ |a − o|∞: a numerator below
+    // that rounds to 0 and gives t = 0, a hit at tmin = 0), and both 2⁻¹⁰⁰⁰ (no underflowed
+    // terms). Both beyond their bounds and of one sign: the line crosses the plane at
+    // t = −s/(n·d) < 0, strictly before the origin, and plane_t's t keeps that sign (its
+    // plain-double path is within u·|t|/8 of it, its double-double path has the numerator's
+    // sign), as the fast kernel's t − t_err does: neither reports a hit at tmin ≥ 0.
+    if (!usable || !(ray.tmin >= 0.0))
+        return false;
+    const Vec3d oa = ray.origin - a;
+    const Vec3d& d = ray.direction;
+    const double s = dot(n, oa), sd = dot(n, d);
+    const Vec3d an = abs(n), aoa = abs(oa), ad = abs(d);
+    const double s_err =
+        1.0001 * (dot(n_err, aoa) + gamma(5) * dot(an, aoa) + dd_scale * max_component(aoa)) +
+        0x1p-1000;
+    const double sd_err = 1.0001 * (dot(n_err, ad) + gamma(4) * dot(an, ad)) + 0x1p-1000;
+    return (s > s_err && sd > sd_err) || (s < -s_err && sd < -sd_err);
+}
+
 SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         if (o.kind == ObjectKind::sphere) {
-            prims_.push_back(Primitive{Triangle{}, Vec3d{}, Vec3d{}, o.sphere, i, 0, true, true});
+            prims_.push_back(Primitive{Triangle{}, TrianglePlane{}, o.sphere, i, 0, true, true});
             continue;
         }
         const TriangleMesh& mesh = *o.mesh;
         for (std::size_t p = 0; p < mesh.size(); ++p) {
             const Triangle t = mesh.triangle(p);
-            const Vec3d e1 = t.b - t.a, e2 = t.c - t.a;
-            // As plane_t's bound: each edge, product and difference rounded once (γ₄ of the
-            // magnitudes; γ₅ covers their own rounding; Higham 2002, Lemma 3.1).
-            const Vec3d a1 = abs(e1), a2 = abs(e2);
-            const Vec3d n_err =
-                gamma(5) * Vec3d{a1.y * a2.z + a1.z * a2.y, a1.z * a2.x + a1.x * a2.z,
-                                 a1.x * a2.y + a1.y * a2.x};
-            prims_.push_back(Primitive{t, cross(e1, e2), n_err, Sphere{}, i,
+            prims_.push_back(Primitive{t, TrianglePlane::of(t), Sphere{}, i,
                                        static_cast<std::uint32_t>(p), false, p + 1 == mesh.size()});
         }
     }
-}
-
-bool SceneScan::leaves_plane(const Primitive& p, const Ray& ray) {
-    // s = n·(o − a) and n·d, each within its error bound of the exact triangle's: the rounded
-    // normal's error times the other factor, and the rounding of o − a and of the dot products
-    // (γ₅ of the magnitudes, with room for the bounds' own rounding). Both beyond their bounds
-    // and of one sign: the line crosses the plane at t = −s/(n·d) < 0, strictly before the
-    // origin, where plane_t's t (about an ulp) and the fast kernel's (t − t_err ≥ tmin asked)
-    // cannot reach a tmin ≥ 0. A ray spawned off a floor, or looking up from above it, skips
-    // Woop's test of the floor's triangles.
-    if (!(ray.tmin >= 0.0))
-        return false;
-    const Vec3d oa = ray.origin - p.tri.a;
-    const Vec3d& d = ray.direction;
-    const double s = dot(p.n, oa), sd = dot(p.n, d);
-    const Vec3d an = abs(p.n), aoa = abs(oa), ad = abs(d);
-    const double s_err = 1.0001 * (dot(p.n_err, aoa) + gamma(5) * dot(an, aoa));
-    const double sd_err = 1.0001 * (dot(p.n_err, ad) + gamma(4) * dot(an, ad));
-    return (s > s_err && sd > sd_err) || (s < -s_err && sd < -sd_err);
 }
 
 SphereRoots SceneScan::roots(const Sphere& s, const Ray& ray) const {
@@ -104,8 +128,9 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
             local = ray;
             mesh_winner = nullptr;
         }
-        // leaves_plane: a miss, without Woop's test.
-        const std::optional<Hit> h = leaves_plane(p, local) ? std::nullopt : triangle(p.tri, local);
+        // A plane left behind: a miss, without Woop's test.
+        const std::optional<Hit> h =
+            p.plane.left_behind(local) ? std::nullopt : triangle(p.tri, local);
         if (h && (!mesh_winner || h->t < mesh_best.t)) {
             mesh_best = *h;
             mesh_best.object = p.object;
@@ -137,7 +162,7 @@ bool SceneScan::any(const Ray& ray) const {
             double t;
             if (first_root_in_range(roots(p.sphere, ray), ray, t))
                 return true;
-        } else if (!leaves_plane(p, ray) && triangle(p.tri, ray)) {
+        } else if (!p.plane.left_behind(ray) && triangle(p.tri, ray)) {
             return true;
         }
     }

@@ -23,6 +23,21 @@
 
 namespace raycastd::engine {
 
+/// A triangle's plane as SceneScan's shortcut needs it: whether a ray certainly leaves the plane
+/// behind (its origin strictly on one side, its direction strictly away, both beyond every
+/// rounding of this test and of the kernels', tmin ≥ 0), in which case neither
+/// intersect_triangle nor intersect_triangle_fast reports a hit.
+struct TrianglePlane {
+    Vec3d a;              ///< the triangle's first corner
+    Vec3d n;              ///< (b − a)×(c − a), rounded
+    Vec3d n_err;          ///< bound on |n − the exact normal|, per component
+    double dd_scale = 0;  ///< 2⁻⁹⁶·(Σ|nᵢ| + Σ|products|): plane_t's double-double resolution
+    bool usable = false;  ///< no product of the normal underflows (else never left behind)
+
+    static TrianglePlane of(const Triangle& tri);
+    bool left_behind(const Ray& ray) const;
+};
+
 class SceneScan {
   public:
     /// A scan of `scene` (its primitives copied: the scan does not refer to it); `fast`: the
@@ -37,8 +52,7 @@ class SceneScan {
   private:
     struct Primitive {
         Triangle tri;          ///< a triangle's corners (unused for a sphere)
-        Vec3d n;               ///< a triangle's (b − a)×(c − a), rounded
-        Vec3d n_err;           ///< bound on |n − exact normal|, per component
+        TrianglePlane plane;   ///< the triangle's plane (unused for a sphere)
         Sphere sphere;         ///< a sphere (unused for a triangle)
         std::uint32_t object;  ///< the scene's object index
         std::uint32_t index;   ///< the triangle's index in its mesh (0 for a sphere)
@@ -46,9 +60,6 @@ class SceneScan {
         bool last_of_object;  ///< the object's last primitive (its own best is then settled)
     };
 
-    /// Whether the ray certainly leaves the plane of triangle `p` behind: its origin strictly
-    /// on one side, its direction strictly away (both beyond their rounding), tmin ≥ 0.
-    static bool leaves_plane(const Primitive& p, const Ray& ray);
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
 

@@ -133,11 +133,12 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
                                         {{0, 1, 2}}));
     }
     const SceneScan exact(s, /*fast=*/false);
-    int checked = 0, hits = 0, near_start = 0;
+    int hits = 0, near_start = 0, left_behind = 0;
     for (std::size_t obj = 1; obj < s.objects.size(); ++obj) {
         const TriangleMesh& mesh = *s.objects[obj].mesh;
         for (std::size_t p = 0; p < mesh.size(); ++p) {
             const Triangle t = mesh.triangle(p);
+            const TrianglePlane plane = TrianglePlane::of(t);
             const Vec3d n = normalize(cross(t.b - t.a, t.c - t.a));
             for (int k = 0; k < 300; ++k) {
                 const double u = unit(rng), v = unit(rng) * (1.0 - u);
@@ -157,7 +158,11 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
                         expect_identical(*got, *want, k);
                 }
                 EXPECT_EQ(exact.any(ray), linear_any(s, ray)) << obj << " " << p << " " << k;
-                ++checked;
+                if (plane.left_behind(ray)) {
+                    ++left_behind;
+                    EXPECT_FALSE(intersect_triangle(t, ray)) << obj << " " << p << " " << k;
+                    EXPECT_FALSE(intersect_triangle_fast(t, ray)) << obj << " " << p << " " << k;
+                }
                 if (const auto h = linear_closest(s, ray, false)) {
                     ++hits;
                     near_start += h->t < 1e-9;
@@ -165,9 +170,61 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
             }
         }
     }
-    EXPECT_EQ(checked, 11 * 300 + 300);
     EXPECT_GT(hits, 1000);
-    EXPECT_GT(near_start, 50);  // rays that find the very surface they start on
+    EXPECT_GT(near_start, 50);    // rays that find the very surface they start on
+    EXPECT_GT(left_behind, 150);  // the shortcut taken: rays 1e-13 off the plane, leaving it
+}
+
+// Where plane_t's numerator is below its double-double resolution it rounds to 0 and the exact
+// kernel reports t = 0: an origin 1e-33 off a triangle through the world origin (a helper's
+// case), and scenes at 2⁻³⁵⁵ (~1e-107), where the normal's products underflow. The shortcut
+// must leave all of them to the kernels.
+TEST(SceneScan, OriginsWithinTheKernelsResolutionAreLeftToThem) {
+    const Triangle tri{{0, 0, 0}, {0, 3, 0}, {0.9, 1, 0.9}};
+    const Ray ray{{1e-33, 1, 0}, {1, 0.1, -0.5}};
+    EXPECT_FALSE(TrianglePlane::of(tri).left_behind(ray));
+    Scene one;
+    one.materials.push_back(Material{});
+    one.objects.push_back(mesh_object("t", {tri.a, tri.b, tri.c}, {{0, 1, 2}}));
+    const auto want = linear_closest(one, ray, true);
+    const auto got = SceneScan(one, false).closest(ray, true);
+    ASSERT_EQ(got.has_value(), want.has_value());
+    if (got)
+        expect_identical(*got, *want, 0);
+
+    // A normal whose products underflow is never used; a zero edge component is exact.
+    EXPECT_FALSE(TrianglePlane::of(Triangle{{0, 0, 0}, {1e-200, 1, 0}, {0, 1e-200, 1}}).usable);
+    EXPECT_TRUE(TrianglePlane::of(Triangle{{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}).usable);
+
+    std::mt19937_64 rng(355);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), dir(-1.0, 1.0);
+    for (const double scale : {0x1p-355, 0x1p-500, 1.0}) {
+        Scene s;
+        s.materials.push_back(Material{});
+        for (int i = 0; i < 12; ++i) {
+            const Vec3d a = Vec3d{dir(rng), dir(rng), dir(rng)} * scale;
+            s.objects.push_back(mesh_object("t" + std::to_string(i),
+                                            {a, a + Vec3d{dir(rng), dir(rng), dir(rng)} * scale,
+                                             a + Vec3d{dir(rng), dir(rng), dir(rng)} * scale},
+                                            {{0, 1, 2}}));
+        }
+        const SceneScan scan(s, false);
+        int hits = 0;
+        for (int k = 0; k < 4000; ++k) {
+            const Triangle t = s.objects[k % 12].mesh->triangle(0);
+            const double u = unit(rng), v = unit(rng) * (1.0 - u);
+            const Ray r{t.a + (t.b - t.a) * u + (t.c - t.a) * v,
+                        Vec3d{dir(rng), dir(rng), dir(rng)}};
+            const auto w = linear_closest(s, r, false);
+            const auto g = scan.closest(r, false);
+            ASSERT_EQ(g.has_value(), w.has_value()) << scale << " " << k;
+            if (g)
+                expect_identical(*g, *w, k);
+            EXPECT_EQ(scan.any(r), linear_any(s, r)) << scale << " " << k;
+            hits += w.has_value();
+        }
+        EXPECT_GT(hits, 100) << scale;
+    }
 }
 
 TEST(SceneScan, FastFindsTheSameSurfacesWithinItsBounds) {
