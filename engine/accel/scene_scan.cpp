@@ -6,43 +6,24 @@
 
 namespace raycastd::engine {
 
-namespace {
-
-/// The first of `r`'s roots in [tmin, tmax] (they are ascending), or none: intersect_sphere's
-/// choice.
-bool first_root_in_range(const SphereRoots& r, const Ray& ray, double& t) {
-    for (int i = 0; i < r.count; ++i) {
-        if (r.t[i] >= ray.tmin && r.t[i] <= ray.tmax) {
-            t = r.t[i];
-            return true;
-        }
-    }
-    return false;
-}
-
-}  // namespace
-
 TrianglePlane TrianglePlane::of(const Triangle& tri) {
     TrianglePlane p;
     p.a = tri.a;
     const Vec3d e1 = tri.b - tri.a, e2 = tri.c - tri.a;
     p.n = cross(e1, e2);
-    // As plane_t's bound: each edge, product and difference rounded once (γ₄ of the
-    // magnitudes; γ₅ covers their own rounding; Higham 2002, Lemma 3.1).
-    const Vec3d a1 = abs(e1), a2 = abs(e2);
-    const double products[6] = {a1.y * a2.z, a1.z * a2.y, a1.z * a2.x,
-                                a1.x * a2.z, a1.x * a2.y, a1.y * a2.x};
-    const Vec3d m{products[0] + products[1], products[2] + products[3], products[4] + products[5]};
+    // plane_t's bound on the rounded normal (cross_magnitudes).
+    const Vec3d m = cross_magnitudes(e1, e2);
     p.n_err = gamma(5) * m;
     const Vec3d an = abs(p.n);
     p.dd_scale = 0x1p-96 * (an.x + an.y + an.z + m.x + m.y + m.z);
     // A product that underflows breaks the relative bounds above (and the kernels' own): such
     // a triangle (edge components below ~1e-150) is never skipped. A zero factor is exact.
+    const Vec3d a1 = abs(e1), a2 = abs(e2);
     const double f1[6] = {a1.y, a1.z, a1.z, a1.x, a1.x, a1.y};
     const double f2[6] = {a2.z, a2.y, a2.x, a2.z, a2.y, a2.x};
     p.usable = std::isfinite(p.dd_scale);
     for (int k = 0; k < 6; ++k)
-        p.usable = p.usable && (f1[k] == 0.0 || f2[k] == 0.0 || products[k] >= 0x1p-1000);
+        p.usable = p.usable && (f1[k] == 0.0 || f2[k] == 0.0 || f1[k] * f2[k] >= 0x1p-1000);
     return p;
 }
 
@@ -108,18 +89,13 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
     for (const Primitive& p : prims_) {
         if (p.is_sphere) {
             new_object = true;
-            const SphereRoots r = roots(p.sphere, ray);
-            double t;
-            if (first_root_in_range(r, ray, t)) {
-                Hit h;
-                h.t = t;
-                h.t_err = r.t_err;
-                h.object = p.object;
-                h.primitive = 0;
-                if (!winner || closer(h, best)) {
-                    best = h;
+            // intersect_sphere without the normal (filled below for the winner).
+            if (auto h = first_hit_of_roots(p.sphere, ray, roots(p.sphere, ray), false)) {
+                h->object = p.object;
+                if (!winner || closer(*h, best)) {
+                    best = *h;
                     winner = &p;
-                    ray.tmax = t;
+                    ray.tmax = h->t;
                 }
             }
             continue;
@@ -159,8 +135,7 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
 bool SceneScan::any(const Ray& ray) const {
     for (const Primitive& p : prims_) {
         if (p.is_sphere) {
-            double t;
-            if (first_root_in_range(roots(p.sphere, ray), ray, t))
+            if (first_hit_of_roots(p.sphere, ray, roots(p.sphere, ray), false))
                 return true;
         } else if (!p.plane.left_behind(ray) && triangle(p.tri, ray)) {
             return true;

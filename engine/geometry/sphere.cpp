@@ -113,7 +113,11 @@ void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
 }
 
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal) {
-    const SphereRoots r = sphere_roots(s, ray);
+    return first_hit_of_roots(s, ray, sphere_roots(s, ray), want_normal);
+}
+
+std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const SphereRoots& r,
+                                      bool want_normal) {
     for (int i = 0; i < r.count; ++i) {
         const double t = r.t[i];
         if (t >= ray.tmin && t <= ray.tmax) {

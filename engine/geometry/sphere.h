@@ -56,6 +56,11 @@ int sphere_hits_fast(const Sphere& s, const Ray& ray, Hit out[2]);
 /// root. `want_normal = false` skips the normal and front-face computation.
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal = true);
 
+/// intersect_sphere's answer from roots already found (sphere_roots or sphere_roots_fast):
+/// the first of them in [ray.tmin, ray.tmax] as a Hit.
+std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const SphereRoots& r,
+                                      bool want_normal);
+
 /// Every root in [ray.tmin, ray.tmax] as a Hit (t, t_err, primitive 0, outward normal and
 /// front_face; object left for the caller), ascending; returns how many (0, 1 or 2).
 int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]);

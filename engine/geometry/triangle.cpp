@@ -84,15 +84,10 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
         const DD den = add(add(two_prod(n.x, d.x), two_prod(n.y, d.y)), two_prod(n.z, d.z));
         if (den.hi != 0.0) {
             const double t = div(num, den);
-            // The normal's error, component by component: n.x = e1.y·e2.z − e1.z·e2.y with
-            // each edge rounded once, each product once and the difference once, so
-            // |δn.x| ≤ γ₄·(|e1.y·e2.z| + |e1.z·e2.y|) (Higham 2002, Lemma 3.1); γ₅ of the
-            // computed magnitudes covers their own rounding. A coordinate-aligned triangle (a
-            // floor) has δn only along its normal, where v − p has no component.
-            const Vec3d a1{std::abs(e1.x), std::abs(e1.y), std::abs(e1.z)};
-            const Vec3d a2{std::abs(e2.x), std::abs(e2.y), std::abs(e2.z)};
-            const Vec3d dn = gamma(5) * Vec3d{a1.y * a2.z + a1.z * a2.y, a1.z * a2.x + a1.x * a2.z,
-                                              a1.x * a2.y + a1.y * a2.x};
+            // The normal's error, component by component (cross_magnitudes): a
+            // coordinate-aligned triangle (a floor) has δn only along its normal, where v − p
+            // has no component.
+            const Vec3d dn = gamma(5) * cross_magnitudes(e1, e2);
             // |v − p| from the computed crossing p = o + t·d, with 4u of its terms for the
             // rounding of vo's low part, the product and the difference. The true crossing is
             // |Δt|·|d| further, so |Δt| ≤ δn·|v − p| / (|n·d| − δn·|d|). Accept when that is

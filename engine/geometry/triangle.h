@@ -38,6 +38,15 @@ bool is_degenerate(const Triangle& tri);
 /// front_face is always set; `want_normal = false` skips the normal.
 std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal = true);
 
+/// The magnitudes of the terms of each component of e1 × e2: (|e1.y·e2.z| + |e1.z·e2.y|, …).
+/// With e1, e2 the edges b − a, c − a each rounded once, γ₅ of them bounds the rounding of the
+/// normal (b − a)×(c − a) formed in double, component by component (each product and the
+/// difference rounded once: γ₄ of the exact magnitudes; Higham 2002, Lemma 3.1).
+inline Vec3d cross_magnitudes(const Vec3d& e1, const Vec3d& e2) {
+    const Vec3d a1 = abs(e1), a2 = abs(e2);
+    return {a1.y * a2.z + a1.z * a2.y, a1.z * a2.x + a1.x * a2.z, a1.x * a2.y + a1.y * a2.x};
+}
+
 /// intersect_triangle's inside test (Woop's, watertight) with t taken from the test's own
 /// sheared coordinates instead of the double-double plane crossing: within the reported t_err
 /// (pbrt-v4 §6.8.4), not within an ulp. A hit is reported only where t − t_err ≥ tmin (so a ray
