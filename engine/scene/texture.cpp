@@ -36,6 +36,10 @@ double reduce(double c, TextureWrap wrap) {
 /// Texel index i (possibly one outside the period) mapped into [0, n).
 int wrap_index(long i, int n, TextureWrap wrap) {
     const long size = n;
+    // Every mode leaves an index inside the image as it is: the four texels of a bilinear
+    // sample almost always are, and the divisions below had been most of a sample's cost.
+    if (i >= 0 && i < size)
+        return static_cast<int>(i);
     switch (wrap) {
         case TextureWrap::repeat:
             return static_cast<int>(((i % size) + size) % size);
@@ -51,21 +55,29 @@ int wrap_index(long i, int n, TextureWrap wrap) {
 
 }  // namespace
 
-double srgb_to_linear(std::uint8_t code) {
+namespace {
+
+const std::array<double, 256>& srgb_table() {
     static const std::array<double, 256> table = make_srgb_table();
-    return table[code];
+    return table;
+}
+
+}  // namespace
+
+double srgb_to_linear(std::uint8_t code) {
+    return srgb_table()[code];
 }
 
 Vec3d Texture::sample(double u, double v) const {
     if (!image || image->width <= 0 || image->height <= 0)
         return {1.0, 1.0, 1.0};
     const TextureImage& img = *image;
+    const std::array<double, 256>& linear = srgb_table();  // srgb_to_linear(), fetched once
     auto texel = [&](int x, int y) {
         const std::size_t at = (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
                                 static_cast<std::size_t>(x)) *
                                3;
-        return Vec3d{srgb_to_linear(img.rgb[at]), srgb_to_linear(img.rgb[at + 1]),
-                     srgb_to_linear(img.rgb[at + 2])};
+        return Vec3d{linear[img.rgb[at]], linear[img.rgb[at + 1]], linear[img.rgb[at + 2]]};
     };
     const double x = reduce(u, wrap_s) * img.width - 0.5;
     const double y = reduce(v, wrap_t) * img.height - 0.5;

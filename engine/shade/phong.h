@@ -25,9 +25,17 @@ inline Vec3d phong_ambient(const Material& m, const Vec3d& ia) {
 }
 
 /// The diffuse and specular terms of one light of intensity `ip` in unit direction `l` at a
-/// point with unit normal `n` seen from unit direction `v`. Zero when n·l ≤ 0.
-/// `with_specular = false` skips the power for materials whose ks is zero.
-PhongLightTerms phong_light(const Material& m, const Vec3d& n, const Vec3d& l, const Vec3d& v,
-                            const Vec3d& ip, bool with_specular);
+/// point with unit normal `n` seen from unit direction `v`, for diffuse colour `kd`, specular
+/// colour `ks` and shininess `shininess`. Zero when n·l ≤ 0. `with_specular = false` skips the
+/// power for materials whose ks is zero.
+PhongLightTerms phong_light(const Vec3d& kd, const Vec3d& ks, double shininess, const Vec3d& n,
+                            const Vec3d& l, const Vec3d& v, const Vec3d& ip, bool with_specular);
+
+/// phong_light() with the material's own colours (a textured surface passes its kd instead:
+/// shade/whitted.cpp).
+inline PhongLightTerms phong_light(const Material& m, const Vec3d& n, const Vec3d& l,
+                                   const Vec3d& v, const Vec3d& ip, bool with_specular) {
+    return phong_light(m.diffuse, m.specular, m.shininess, n, l, v, ip, with_specular);
+}
 
 }  // namespace raycastd::engine

@@ -107,21 +107,17 @@ Vec3d Whitted::shading_normal(const Hit& hit) const {
     return n / len;
 }
 
-const Material& Whitted::textured(const Hit& hit, const Material& stored, Material& scratch) const {
-    if (!stored.texture)
-        return stored;
+std::optional<Vec3d> Whitted::texel(const Hit& hit, const Material& m) const {
+    if (!m.texture)
+        return std::nullopt;
     const Object& o = scene().objects[hit.object];
     if (!o.mesh || o.mesh->corner_uvs.size() != o.mesh->size())
-        return stored;
+        return std::nullopt;
     // The hit's barycentrics interpolate the corners' (u, v) as they do the shading normal.
     const auto& c = o.mesh->corner_uvs[hit.primitive];
     const double u = at_hit<double>(hit, c[0][0], c[1][0], c[2][0]);
     const double v = at_hit<double>(hit, c[0][1], c[1][1], c[2][1]);
-    const Vec3d texel = stored.texture->sample(u, v);
-    scratch = stored;
-    scratch.diffuse = stored.diffuse * texel;
-    scratch.ambient = stored.ambient * texel;
-    return scratch;
+    return m.texture->sample(u, v);
 }
 
 Vec3d Whitted::radiance(const Ray& ray, RayCounts& counts) const {
@@ -168,6 +164,12 @@ struct Whitted::Surface {
     const Hit& hit;
     const Material& m;
     std::uint32_t material;
+    // The material's ambient and diffuse colours times its texture's colour at the hit (its
+    // own where it has no texture). Held here rather than in a textured copy of the Material:
+    // copying one per hit (144 bytes and an atomic count on its texture's shared_ptr) had been
+    // a tenth of a Duck render's shading (perf, bench_render).
+    Vec3d ka;
+    Vec3d kd;
     Vec3d d;          ///< unit direction of the incoming ray
     Vec3d p;          ///< the hit point
     Vec3d ng;         ///< geometric normal, turned to face the ray (spawned origins move along it)
@@ -176,17 +178,29 @@ struct Whitted::Surface {
     bool camera_hit;  ///< depth 1: the camera ray's own hit
 };
 
-Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth,
-                                  Material& scratch) const {
+Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) const {
     const std::uint32_t mi = material_of(hit);
-    const Material& m = textured(hit, scene().materials[mi], scratch);
+    const Material& m = scene().materials[mi];
+    Vec3d ka = m.ambient, kd = m.diffuse;
+    if (const std::optional<Vec3d> t = texel(hit, m)) {
+        ka = m.ambient * *t;
+        kd = m.diffuse * *t;
+    }
     const Vec3d d = normalize(ray.direction);
     const Vec3d ng = face_towards_ray(hit.normal, d);
     Vec3d n = shading_normal(hit);
     if (dot(n, ng) < 0.0)
         n = -n;
-    return Surface{hit,           m,  mi, d,
-                   ray.at(hit.t), ng, n,  hit_point_error(ray, hit, tracer_.float_frame()),
+    return Surface{hit,
+                   m,
+                   mi,
+                   ka,
+                   kd,
+                   d,
+                   ray.at(hit.t),
+                   ng,
+                   n,
+                   hit_point_error(ray, hit, tracer_.float_frame()),
                    depth == 1};
 }
 
@@ -211,9 +225,6 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
                           std::vector<Vec3d>& out, RayCounts& counts) const {
     const std::size_t n = rays.size();
     out.assign(n, options_.background);
-    // Reserved up front: each Surface refers to its scratch material, which only a textured
-    // material writes (one unused slot serves an untextured scene).
-    std::vector<Material> scratch(plan_.textures ? n : 1);
     std::vector<Surface> surfaces;
     surfaces.reserve(n);
     std::vector<std::size_t> hit_of;  // surfaces[h] is the hit of rays[hit_of[h]]
@@ -221,7 +232,7 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     for (std::size_t i = 0; i < n; ++i) {
         if (!hits[i].valid())
             continue;
-        surfaces.push_back(surface(rays[i], hits[i], depth, scratch[plan_.textures ? i : 0]));
+        surfaces.push_back(surface(rays[i], hits[i], depth));
         hit_of.push_back(i);
     }
     // Shadow rays light by light, so that the rays of neighbouring hits to one light sit side
@@ -300,8 +311,7 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
 
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
                      TreeBuild* tree) const {
-    Material scratch;
-    const Surface sp = surface(ray, hit, depth, scratch);
+    const Surface sp = surface(ray, hit, depth);
 
     // Node k of the tree is written before its children so that labels run depth-first; the
     // vector may grow during the recursion, so the node is addressed by index, never by reference.
@@ -337,7 +347,7 @@ Ray Whitted::shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) c
 Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
                       const std::uint8_t* traced) const {
     const Scene& s = scene();
-    Vec3d color = sp.m.emissive + phong_ambient(sp.m, plan_.ambient);
+    Vec3d color = sp.m.emissive + sp.ka * plan_.ambient;  // phong_ambient()
     for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
@@ -362,9 +372,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
             }
             if (!blocked) {
                 lit = true;
-                color +=
-                    phong_light(sp.m, sp.n, l, -sp.d, light.intensity, plan_.specular[sp.material])
-                        .sum();
+                color += lit_by(sp, l, light.intensity);
             }
         }
         if (node)
@@ -390,7 +398,13 @@ Vec3d Whitted::headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) 
             return {};
     }
     lit = true;
-    return phong_light(sp.m, sp.n, l, -sp.d, h.intensity, plan_.specular[sp.material]).sum();
+    return lit_by(sp, l, h.intensity);
+}
+
+Vec3d Whitted::lit_by(const Surface& sp, const Vec3d& l, const Vec3d& intensity) const {
+    return phong_light(sp.kd, sp.m.specular, sp.m.shininess, sp.n, l, -sp.d, intensity,
+                       plan_.specular[sp.material])
+        .sum();
 }
 
 Whitted::SecondaryRays Whitted::secondary_rays(const Surface& sp) const {

@@ -170,10 +170,10 @@ class Whitted {
     /// computed ones (QueryEngine::computed_normals: area-weighted, split at creases). The
     /// geometric normal for spheres, lone triangles, and where the interpolation vanishes.
     Vec3d shading_normal(const Hit& hit) const;
-    /// The material as lit at a hit: `stored` itself, or, when it has a texture and the mesh
-    /// has texture coordinates, a copy in `scratch` whose diffuse and ambient colours are
-    /// multiplied by the texture's linear colour at the hit's (u, v) (docs/api.md, render).
-    const Material& textured(const Hit& hit, const Material& stored, Material& scratch) const;
+    /// The linear colour of material `m`'s texture at a hit's (u, v), which multiplies its
+    /// diffuse and ambient colours (docs/api.md, render); none when `m` has no texture or the
+    /// mesh has no texture coordinates.
+    std::optional<Vec3d> texel(const Hit& hit, const Material& m) const;
 
   private:
     struct Surface;  // a hit made ready for shading (whitted.cpp)
@@ -188,9 +188,8 @@ class Whitted {
     Vec3d trace(const Ray& ray, int depth, RayCounts& counts, TreeBuild* tree, int* slot) const;
     Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
                 TreeBuild* tree) const;
-    /// The hit made ready for shading; `scratch` holds a textured copy of its material, and
-    /// must outlive the Surface.
-    Surface surface(const Ray& ray, const Hit& hit, int depth, Material& scratch) const;
+    /// The hit made ready for shading.
+    Surface surface(const Ray& ray, const Hit& hit, int depth) const;
     /// shade_hits() at `depth` (1: camera hits).
     void shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& hits, int depth,
                      std::vector<Vec3d>& out, RayCounts& counts) const;
@@ -209,6 +208,9 @@ class Whitted {
     /// The headlight's diffuse and specular terms (zero when it is behind N or, below the camera
     /// hit, its shadow ray is blocked).
     Vec3d headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) const;
+    /// The diffuse and specular terms of a light in unit direction `l` (phong_light() with
+    /// the surface's textured kd).
+    Vec3d lit_by(const Surface& sp, const Vec3d& l, const Vec3d& intensity) const;
     /// The weighted reflected and refracted rays (below max_depth); children go into node k.
     Vec3d indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
                    std::size_t k) const;
