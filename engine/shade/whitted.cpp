@@ -239,32 +239,35 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     // by side.
     const std::size_t lights = plan_.shadow_lights.size();
     std::vector<Ray> shadow;
-    std::vector<std::size_t> slot;  // shadow[j] answers blocked[slot[j]]
+    std::vector<std::size_t> slot;  // shadow[j] answers towards[slot[j]]
     shadow.reserve(surfaces.size() * lights);
     slot.reserve(surfaces.size() * lights);
+    // Each surface's direction to each light, kept for direct() so that it is not computed
+    // twice.
+    std::vector<ToLight> towards(surfaces.size() * lights);
     for (std::size_t k = 0; k < lights; ++k) {
         const Light& light = scene().lights[plan_.shadow_lights[k]];
         for (std::size_t h = 0; h < surfaces.size(); ++h) {
-            const Vec3d l = to_light(surfaces[h], light);
-            if (dot(surfaces[h].n, l) > 0.0) {  // direct()'s `facing`
-                shadow.push_back(shadow_ray(surfaces[h], light, l));
+            ToLight& t = towards[h * lights + k];
+            t.l = to_light(surfaces[h], light);
+            if (dot(surfaces[h].n, t.l) > 0.0) {  // direct()'s `facing`
+                shadow.push_back(shadow_ray(surfaces[h], light, t.l));
                 slot.push_back(h * lights + k);
             }
         }
     }
-    std::vector<std::uint8_t> blocked(surfaces.size() * lights, 0);
     if (!shadow.empty()) {
         std::vector<Hit> occluders;
         tracer_.occluded_batch(shadow, occluders);
         counts.shadow += shadow.size();
         for (std::size_t j = 0; j < shadow.size(); ++j)
-            blocked[slot[j]] = occluders[j].valid() ? 1 : 0;
+            towards[slot[j]].blocked = occluders[j].valid();
     }
     std::vector<Vec3d> direct_color(surfaces.size());
     for (std::size_t h = 0; h < surfaces.size(); ++h) {
         bool lit = false;
         direct_color[h] =
-            direct(surfaces[h], counts, nullptr, lit, lights ? &blocked[h * lights] : nullptr);
+            direct(surfaces[h], counts, nullptr, lit, lights ? &towards[h * lights] : nullptr);
     }
     // The next generation: every reflected ray of this one as a batch, then every refracted
     // ray, each shaded by the same function one level deeper. Summed in indirect()'s order
@@ -345,20 +348,20 @@ Ray Whitted::shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) c
 }
 
 Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
-                      const std::uint8_t* traced) const {
+                      const ToLight* traced) const {
     const Scene& s = scene();
     Vec3d color = sp.m.emissive + sp.ka * plan_.ambient;  // phong_ambient()
     for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
-        const Vec3d l = to_light(sp, light);
+        const Vec3d l = traced ? traced[k].l : to_light(sp, light);
         ShadowRayRecord rec;
         rec.light = li;
         rec.facing = dot(sp.n, l) > 0.0;
         if (rec.facing) {
             bool blocked;
             if (traced) {
-                blocked = traced[k] != 0;
+                blocked = traced[k].blocked;
             } else if (node) {
                 ++counts.shadow;
                 // The tree names the blocker, so it asks for the closest one.

@@ -184,6 +184,12 @@ class Whitted {
         bool total_internal_reflection = false;
     };
     struct TreeBuild;  // a ray tree being built, and its token (whitted.cpp)
+    /// A surface point's unit direction to one light and whether its shadow ray is blocked
+    /// (traced by shade_batch for direct()).
+    struct ToLight {
+        Vec3d l;
+        bool blocked = false;
+    };
 
     Vec3d trace(const Ray& ray, int depth, RayCounts& counts, TreeBuild* tree, int* slot) const;
     Vec3d shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
@@ -201,10 +207,11 @@ class Whitted {
     Ray shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const;
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
-    /// `blocked`, when given, holds whether the shadow ray to plan().shadow_lights[k] is
-    /// blocked, already traced (and counted) by the caller; else direct() traces them.
+    /// `traced`, when given, holds for each plan().shadow_lights[k] its to_light() direction
+    /// and whether its shadow ray is blocked, already traced (and counted) by the caller; else
+    /// direct() computes and traces them.
     Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
-                 const std::uint8_t* blocked = nullptr) const;
+                 const ToLight* traced = nullptr) const;
     /// The headlight's diffuse and specular terms (zero when it is behind N or, below the camera
     /// hit, its shadow ray is blocked).
     Vec3d headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) const;
