@@ -55,15 +55,31 @@ class SceneScan {
         TrianglePlane plane;   ///< the triangle's plane (unused for a sphere)
         Sphere sphere;         ///< a sphere (unused for a triangle)
         std::uint32_t object;  ///< the scene's object index
-        std::uint32_t index;   ///< the triangle's index in its mesh (0 for a sphere)
+        std::uint32_t index;   ///< the triangle's index in its mesh; a sphere's slot in spheres_
         bool is_sphere;
         bool last_of_object;  ///< the object's last primitive (its own best is then settled)
     };
+    /// Two spheres side by side, for sphere_candidates(): lane k of entry j is sphere 2j + k.
+    struct SpherePair {
+        double cx[2], cy[2], cz[2];  ///< centres
+        double r2[2];                ///< radius², rounded
+    };
+
+    /// Bit k set: sphere k (spheres_' order) may be hit by the ray's line; clear: the line
+    /// certainly misses it, and neither sphere_roots nor sphere_roots_fast finds a root.
+    std::uint32_t sphere_candidates(const Ray& ray) const;
+    /// Whether sphere k is among the candidates (beyond the 32 bits: always).
+    static bool may_hit(std::uint32_t candidates, std::uint32_t k) {
+        return k >= 32 || ((candidates >> k) & 1u) != 0;
+    }
 
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
 
     std::vector<Primitive> prims_;
+    std::vector<SpherePair> spheres_;
+    /// Bit k set: sphere k may be ruled out by sphere_candidates (its r² is a normal double).
+    std::uint32_t cullable_ = 0;
     bool fast_;
 };
 

@@ -3,6 +3,8 @@
 
 #include "engine/accel/scene_scan.h"
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -249,6 +251,89 @@ TEST(SceneScan, FastFindsTheSameSurfacesWithinItsBounds) {
     }
     EXPECT_GE(agree, static_cast<int>(rays.size()) - 30);
     EXPECT_GT(hits, 3000);
+}
+
+/// A sphere's kernel answer as the scan must give it: the first root in range.
+std::optional<Hit> kernel_hit(const Sphere& s, const Ray& r, bool fast) {
+    return first_hit_of_roots(s, r, fast ? sphere_roots_fast(s, r) : sphere_roots(s, r), true);
+}
+
+TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
+    // The scan rules spheres out two at a time before calling a kernel (lines that miss by
+    // more than the rounding, spheres behind an origin outside them). Rays are made to sit on
+    // those boundaries: lines passing at r·(1 ± ε) from the centre, origins at r·(1 ± ε) from
+    // it moving away or towards, over scales and offsets where the bounds' terms change size,
+    // and with tmin below, at and above 0. Three spheres, so that a pair and a lone lane are
+    // both used, the rays aimed at the middle one; each must get the kernel's own answer.
+    std::mt19937_64 rng(20261204);
+    std::uniform_real_distribution<double> dir(-1.0, 1.0);
+    const double eps[] = {0.0, 1e-17, 1e-16, 4e-16, 1e-15, 1e-14, 1e-12, 1e-8, 1e-3};
+    int checked = 0, hits = 0, misses = 0;
+    for (const double radius : {1.0, 1e-3, 1e8, 1e-160, 1e160, 1e-300}) {
+        for (const double offset : {0.0, 1e6, 1e12, -1e15}) {
+            const Vec3d c{offset + 0.3 * radius, offset - 0.7 * radius, offset + 0.1 * radius};
+            // The others well apart from it, also where the radius is below the offset's ulp.
+            const double apart = 1e3 * std::max(radius, 1e-9 * std::abs(offset));
+            Scene s;
+            s.materials.push_back(Material{});
+            s.objects.push_back(sphere("far", c + Vec3d{1e6, 1e6, 1e6} * apart, radius, 0));
+            s.objects.push_back(sphere("aimed", c, radius, 0));
+            s.objects.push_back(sphere("other", c - Vec3d{0.05, 0.05, 0.05} * apart, radius, 0));
+            for (const bool fast : {false, true}) {
+                const SceneScan scan(s, fast);
+                for (int k = 0; k < 600; ++k) {
+                    Vec3d d{dir(rng), dir(rng), dir(rng)};
+                    if (!(length(d) > 0.1))
+                        continue;
+                    d = d * (k % 3 == 0 ? 1e-3 : k % 3 == 1 ? 1.0 : 7e2);
+                    // A unit vector across the direction.
+                    Vec3d w = cross(d, Vec3d{dir(rng), dir(rng), dir(rng)});
+                    w = w / length(w);
+                    const double e = eps[k % 9] * (k % 2 ? 1.0 : -1.0);
+                    Ray r;
+                    if (k % 4 < 2) {
+                        // The line passes at r(1 + e) from the centre, the origin before or
+                        // after the closest approach.
+                        const double along = (k % 4 == 0 ? -3.0 : 2.0) * radius / length(d);
+                        r = Ray{c + w * (radius * (1 + e)) + d * along, d};
+                    } else {
+                        // The origin r(1 + e) from the centre, moving away from it or towards.
+                        const Vec3d out = (k % 4 == 2 ? d : -d) / length(d);
+                        const Vec3d u = normalize(out * 0.8 + w * 0.6);
+                        r = Ray{c + u * (radius * (1 + e)), d};
+                    }
+                    r.tmin = k % 5 == 0 ? -2.0 : k % 5 == 1 ? 1e-9 : 0.0;
+                    const auto want = kernel_hit(s.objects[1].sphere, r, fast);
+                    const auto got = scan.closest(r, true);
+                    const std::string where = std::to_string(radius) + " " +
+                                              std::to_string(offset) + " " + std::to_string(fast) +
+                                              " " + std::to_string(k);
+                    // Where the scan answers with another sphere (one the ray meets before its
+                    // origin, with tmin < 0), the aimed one's hit must not come first.
+                    if (got && got->object != 1) {
+                        if (want) {
+                            EXPECT_TRUE(got->object == 0 ? want->t >= got->t : want->t > got->t)
+                                << where;
+                        }
+                        continue;
+                    }
+                    ASSERT_EQ(got.has_value(), want.has_value()) << where;
+                    ++checked;
+                    if (!got) {
+                        ++misses;
+                        EXPECT_FALSE(scan.any(r)) << where;
+                        continue;
+                    }
+                    ++hits;
+                    EXPECT_EQ(got->t, want->t) << where;
+                    EXPECT_TRUE(scan.any(r)) << where;
+                }
+            }
+        }
+    }
+    EXPECT_GT(hits, 3000);
+    EXPECT_GT(misses, 3000);
+    EXPECT_GT(checked, 20000);
 }
 
 }  // namespace
