@@ -22,21 +22,26 @@ Vec3d hit_point_error(const Ray& ray, const Hit& hit, const FloatFrame& frame) {
     return err;
 }
 
+namespace {
+
+/// p + offset rounded once more away from p, so that the addition cannot land back inside the
+/// error box.
+double moved_away(double p, double offset) {
+    const double po = p + offset;
+    return offset > 0.0 ? next_up(po) : offset < 0.0 ? next_down(po) : po;
+}
+
+}  // namespace
+
 Vec3d offset_ray_origin(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
     const double d = dot(abs(n), p_err);
     Vec3d offset = n * d;
     if (dot(w, n) < 0.0)
         offset = -offset;
-    Vec3d po = p + offset;
-    // Round away from p so that the addition above cannot land back inside the error box.
-    for (std::size_t i = 0; i < 3; ++i) {
-        if (offset[i] > 0.0) {
-            po[i] = next_up(po[i]);
-        } else if (offset[i] < 0.0) {
-            po[i] = next_down(po[i]);
-        }
-    }
-    return po;
+    // Component by component, not through an indexed loop over a Vec3d: GCC kept that one in
+    // memory, and reading it back whole after writing one component stalled store forwarding
+    // (a third of spawn_ray's samples on the Duck, perf annotate).
+    return {moved_away(p.x, offset.x), moved_away(p.y, offset.y), moved_away(p.z, offset.z)};
 }
 
 Ray spawn_ray(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
