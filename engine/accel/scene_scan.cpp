@@ -100,6 +100,10 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray) const {
     constexpr double kMax = std::numeric_limits<double>::max();
     // Roots before the origin are out of range only when the range starts at or after it.
     const bool behind_ok = ray.tmin >= 0.0;
+    // Below 2⁻¹⁰²⁰, d·d has lost its relative precision to the subnormal grid, and a·r² (r²
+    // up to 2¹⁰⁰⁰) with it: no line is ruled out (a helper's review found a hit at fast with
+    // |d| ≈ 3e-162 and r = 1e100 that the test had ruled out).
+    const auto a_normal = v2d{a, a} >= 0x1p-1020;
     std::uint32_t ruled_out = 0;
     for (std::size_t j = 0; j < spheres_.size() && j < 16; ++j) {
         const SpherePair& p = spheres_[j];
@@ -115,19 +119,20 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray) const {
         const v2d bound = 128.0 * kDoubleUnitRoundoff * (ff * a + ar2) + 0x1p-900;
         // Lanes are −1 where the line certainly misses (all terms finite, so the comparisons
         // are false on a NaN or an overflow).
-        auto miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax);
+        auto miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax) & a_normal;
         if (behind_ok) {
             // Or where the sphere lies behind: the origin outside it (γ = |f|² − r² > 0) and
             // the ray moving away from its centre (β = f·d > 0). Both roots (−β ± √(β² − aγ))/a
             // are then negative, and the kernels' too: their γ and β keep those signs when
-            // each clears its rounding (|f|² and r² within γ₃ and u; β within γ₃·|f||d|, so
-            // β² > 16u²·|f|²a suffices), and neither forms a root of another sign from them.
+            // each clears its rounding (|f|² and r² within γ₃ and u; β within (γ₃ + u)·|f||d|
+            // ≈ 4u·|f||d| of the exact f·d, so β² > 64u²·|f|²a leaves room), and neither forms
+            // a root of another sign from them.
             const v2d r2 = {p.r2[0], p.r2[1]};
             const v2d beta = fx * dx + fy * dy + fz * dz;
             const v2d fa = ff * a;
             miss |=
                 (ff - r2 > 8.0 * kDoubleUnitRoundoff * (ff + r2)) & (beta > 0.0) &
-                (beta * beta > 16.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * fa + 0x1p-900) &
+                (beta * beta > 64.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * fa + 0x1p-900) &
                 (fa <= kMax) & (ff <= kMax);
         }
         ruled_out |= (miss[0] ? std::uint32_t{1} : 0u) << (2 * j) |

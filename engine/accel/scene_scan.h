@@ -48,6 +48,14 @@ class SceneScan {
     std::optional<Hit> closest(const Ray& ray, bool want_normal) const;
     /// Whether anything is hit in [tmin, tmax] (linear_any at exact).
     bool any(const Ray& ray) const;
+    /// Bit k set: the k-th sphere (in object order) may be hit; clear: the ray's line certainly
+    /// misses it, or it lies behind the origin and tmin ≥ 0, so that neither sphere_roots nor
+    /// sphere_roots_fast finds a root in range. Public for tests.
+    std::uint32_t sphere_candidates(const Ray& ray) const;
+    /// Whether sphere k is among the candidates (beyond the 32 bits: always).
+    static bool may_hit(std::uint32_t candidates, std::uint32_t k) {
+        return k >= 32 || ((candidates >> k) & 1u) != 0;
+    }
 
   private:
     struct Primitive {
@@ -65,20 +73,13 @@ class SceneScan {
         double r2[2];                ///< radius², rounded
     };
 
-    /// Bit k set: sphere k (spheres_' order) may be hit by the ray's line; clear: the line
-    /// certainly misses it, and neither sphere_roots nor sphere_roots_fast finds a root.
-    std::uint32_t sphere_candidates(const Ray& ray) const;
-    /// Whether sphere k is among the candidates (beyond the 32 bits: always).
-    static bool may_hit(std::uint32_t candidates, std::uint32_t k) {
-        return k >= 32 || ((candidates >> k) & 1u) != 0;
-    }
-
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
 
     std::vector<Primitive> prims_;
     std::vector<SpherePair> spheres_;
-    /// Bit k set: sphere k may be ruled out by sphere_candidates (its r² is a normal double).
+    /// Bit k set: sphere k may be ruled out by sphere_candidates (its r² lies in
+    /// [2⁻¹⁰⁰⁰, 2¹⁰⁰⁰], where the bounds' relative terms hold).
     std::uint32_t cullable_ = 0;
     bool fast_;
 };

@@ -268,8 +268,10 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     std::mt19937_64 rng(20261204);
     std::uniform_real_distribution<double> dir(-1.0, 1.0);
     const double eps[] = {0.0, 1e-17, 1e-16, 4e-16, 1e-15, 1e-14, 1e-12, 1e-8, 1e-3};
-    int checked = 0, hits = 0, misses = 0;
-    for (const double radius : {1.0, 1e-3, 1e8, 1e-160, 1e160, 1e-300}) {
+    int checked = 0, hits = 0, misses = 0, ruled_out = 0;
+    // r² within [2⁻¹⁰⁰⁰, 2¹⁰⁰⁰] is ruled on (1e±150 near its ends); 1e±160 and 1e-300 go to the
+    // kernel always.
+    for (const double radius : {1.0, 1e-3, 1e8, 1e-150, 1e150, 1e-160, 1e160, 1e-300}) {
         for (const double offset : {0.0, 1e6, 1e12, -1e15}) {
             const Vec3d c{offset + 0.3 * radius, offset - 0.7 * radius, offset + 0.1 * radius};
             // The others well apart from it, also where the radius is below the offset's ulp.
@@ -285,7 +287,10 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                     Vec3d d{dir(rng), dir(rng), dir(rng)};
                     if (!(length(d) > 0.1))
                         continue;
-                    d = d * (k % 3 == 0 ? 1e-3 : k % 3 == 1 ? 1.0 : 7e2);
+                    // Lengths from 3e-162 (d·d subnormal: its rounding is no longer relative)
+                    // to 7e2.
+                    const double lengths[] = {1e-3, 1.0, 7e2, 1e-160, 3e-162};
+                    d = d * lengths[(k / 7) % 5];
                     // A unit vector across the direction.
                     Vec3d w = cross(d, Vec3d{dir(rng), dir(rng), dir(rng)});
                     w = w / length(w);
@@ -305,6 +310,11 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                     r.tmin = k % 5 == 0 ? -2.0 : k % 5 == 1 ? 1e-9 : 0.0;
                     const auto want = kernel_hit(s.objects[1].sphere, r, fast);
                     const auto got = scan.closest(r, true);
+                    if (!SceneScan::may_hit(scan.sphere_candidates(r), 1)) {
+                        ++ruled_out;
+                        EXPECT_FALSE(want.has_value())
+                            << radius << " " << offset << " " << fast << " " << k;
+                    }
                     const std::string where = std::to_string(radius) + " " +
                                               std::to_string(offset) + " " + std::to_string(fast) +
                                               " " + std::to_string(k);
@@ -334,6 +344,21 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     EXPECT_GT(hits, 3000);
     EXPECT_GT(misses, 3000);
     EXPECT_GT(checked, 20000);
+    EXPECT_GT(ruled_out, 2000);  // the rule itself at work, not only the kernels
+
+    // A direction so short that d·d is a few subnormal steps (a helper's review): its rounding
+    // is no longer relative, a·r² with r = 1e100 is off by a third, and the line, 0.85 r from
+    // the centre and square to f (so the fast kernel's l = f whatever a is), had been ruled
+    // out while sphere_roots_fast hits.
+    Scene big;
+    big.materials.push_back(Material{});
+    big.objects.push_back(sphere("big", {0, 0, 0}, 1e100, 0));
+    const double k = 1.2247 * 0x1p-537;
+    const Ray grazing{{6e99, -6e99, 0}, {k, k, k}};
+    ASSERT_TRUE(kernel_hit(big.objects[0].sphere, grazing, true).has_value());
+    EXPECT_TRUE(SceneScan::may_hit(SceneScan(big, true).sphere_candidates(grazing), 0));
+    EXPECT_TRUE(SceneScan(big, true).closest(grazing, true).has_value());
+    EXPECT_TRUE(SceneScan(big, true).any(grazing));
 }
 
 }  // namespace

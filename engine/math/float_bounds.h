@@ -66,7 +66,8 @@ inline double next_up(double v) {
     std::memcpy(&v, &bits, sizeof bits);
     return v;
 }
-/// The next representable double below v (v itself for −inf and NaN).
+/// The next representable double below v (v itself for −inf; a NaN stays a NaN, its sign
+/// flipped).
 inline double next_down(double v) {
     return -next_up(-v);
 }

@@ -1,6 +1,8 @@
 #include "engine/math/float_bounds.h"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 

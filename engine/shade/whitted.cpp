@@ -30,7 +30,6 @@ ShadingPlan plan_shading(const Scene& s, const std::optional<Vec3d>& headlight) 
         plan.refraction = plan.refraction || m.transparency > 0.0;
         plan.specular.push_back(is_nonzero(m.specular));
     }
-    plan.textures = s.features().textures;
     if (headlight) {
         // The headlight replaces the scene's lights entirely (docs/api.md, render `lighting`).
         plan.ambient = Vec3d{kHeadlightAmbient, kHeadlightAmbient, kHeadlightAmbient};

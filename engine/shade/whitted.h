@@ -85,7 +85,6 @@ struct ShadingPlan {
     bool reflection = false;         ///< some material reflects
     bool refraction = false;         ///< some material is transparent
     std::vector<bool> specular;      ///< per material: ks ≠ 0
-    bool textures = false;           ///< Scene::features().textures: some hit samples a texture
 };
 
 /// Ambient intensity and directional intensity of the headlight (docs/api.md, render `lighting`).
