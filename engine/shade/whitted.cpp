@@ -279,11 +279,11 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
         for (std::size_t h = 0; h < surfaces.size(); ++h) {
             const SecondaryRays sec = secondary_rays(surfaces[h]);
             if (sec.reflected) {
-                next[0].push_back(*sec.reflected);
+                next[0].push_back(spawn(surfaces[h], *sec.reflected));
                 owner[0].push_back(h);
             }
             if (sec.refracted) {
-                next[1].push_back(*sec.refracted);
+                next[1].push_back(spawn(surfaces[h], *sec.refracted));
                 owner[1].push_back(h);
             }
         }
@@ -414,16 +414,20 @@ Whitted::SecondaryRays Whitted::secondary_rays(const Surface& sp) const {
     // Leaving a transparent object: its internal reflection is not traced (the tutorial).
     const bool leaving_glass = sp.m.transparency > 0.0 && !sp.hit.front_face;
     if (plan_.reflection && sp.m.reflectivity > 0.0 && !leaving_glass)
-        out.reflected = spawn_ray(sp.p, sp.p_err, sp.ng, reflect(sp.d, sp.n));
+        out.reflected = reflect(sp.d, sp.n);
     if (plan_.refraction && sp.m.transparency > 0.0) {
         const double eta = sp.hit.front_face ? 1.0 / sp.m.ior : sp.m.ior;
         if (const std::optional<Vec3d> t = refract(sp.d, sp.n, eta)) {
-            out.refracted = spawn_ray(sp.p, sp.p_err, sp.ng, *t);
+            out.refracted = *t;
         } else {
             out.total_internal_reflection = true;
         }
     }
     return out;
+}
+
+Ray Whitted::spawn(const Surface& sp, const Vec3d& w) {
+    return spawn_ray(sp.p, sp.p_err, sp.ng, w);
 }
 
 Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
@@ -433,14 +437,16 @@ Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBui
     if (sec.reflected) {
         ++counts.reflected;
         int child = -1;
-        color += trace(*sec.reflected, depth + 1, counts, tree, &child) * sp.m.reflectivity;
+        color +=
+            trace(spawn(sp, *sec.reflected), depth + 1, counts, tree, &child) * sp.m.reflectivity;
         if (tree)
             tree->out.nodes[k].reflected = child;
     }
     if (sec.refracted) {
         ++counts.refracted;
         int child = -1;
-        color += trace(*sec.refracted, depth + 1, counts, tree, &child) * sp.m.transparency;
+        color +=
+            trace(spawn(sp, *sec.refracted), depth + 1, counts, tree, &child) * sp.m.transparency;
         if (tree)
             tree->out.nodes[k].refracted = child;
     } else if (sec.total_internal_reflection && tree) {
