@@ -75,10 +75,6 @@ void set_child(Node4& n4, int l, const Node& n, std::uint32_t child, std::uint32
 /// triangle is read once a level, log₂(64/4) + 1 times in all).
 constexpr std::uint32_t kOrientedTriangles = 64;
 
-/// max(|v.x|, |v.y|, |v.z|) (std::max: fmax is a call out of line).
-double max_abs(const Vec3d& v) {
-    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
-}
 double abs_sum(const Vec3d& v) {
     return std::abs(v.x) + std::abs(v.y) + std::abs(v.z);
 }

@@ -19,10 +19,6 @@ namespace {
 
 using testing::expect_same_point_hit;
 
-double max_abs(const Vec3d& v) {
-    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
-}
-
 TEST(PointBvh, LowerBoundNeverExceedsTheDistance) {
     std::mt19937_64 rng(18);
     std::uniform_real_distribution<double> u(-1, 1);

@@ -46,8 +46,7 @@ bool TrianglePlane::left_behind(const Ray& ray) const {
     const double s = dot(n, oa), sd = dot(n, d);
     const Vec3d an = abs(n), aoa = abs(oa), ad = abs(d);
     const double s_err =
-        1.0001 * (dot(n_err, aoa) + gamma(5) * dot(an, aoa) + dd_scale * max_component(aoa)) +
-        0x1p-1000;
+        1.0001 * (dot(n_err, aoa) + gamma(5) * dot(an, aoa) + dd_scale * max_abs(oa)) + 0x1p-1000;
     const double sd_err = 1.0001 * (dot(n_err, ad) + gamma(4) * dot(an, ad)) + 0x1p-1000;
     return (s > s_err && sd > sd_err) || (s < -s_err && sd < -sd_err);
 }

@@ -14,12 +14,6 @@ namespace {
 /// γ₁₆ times the magnitude of the coordinates involved.
 constexpr double kErrScale = gamma(16);
 
-/// max(|v.x|, |v.y|, |v.z|), with std::max: max_component's std::fmax is a call out of line, and
-/// this runs for every candidate of a point query.
-double max_abs(const Vec3d& v) {
-    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
-}
-
 /// a < b in lexicographic order of (x, y, z): the fixed order of an edge's endpoints.
 bool lex_less(const Vec3d& a, const Vec3d& b) {
     if (a.x != b.x)

@@ -36,14 +36,6 @@ ShearFrame make_shear(const Vec3d& d) {
     return s;
 }
 
-/// max(|v.x|, |v.y|, |v.z|) with plain comparisons: every value here is finite (rays are
-/// validated, meshes are finite), so std::fmax's NaN rule buys nothing, and GCC calls libm for
-/// it (fmax was 4% of exact queries on a closed mesh, perf).
-double max_abs(const Vec3d& v) {
-    const double x = std::abs(v.x), y = std::abs(v.y), z = std::abs(v.z);
-    return std::max(x, std::max(y, z));
-}
-
 /// The vertex nearest the origin (max norm). Anchoring the plane there makes the numerator's
 /// rounding scale with that distance, and an origin exactly on a vertex gets t = 0 exactly.
 const Vec3d& anchor_vertex(const Triangle& tri, const Vec3d& origin) {
