@@ -264,7 +264,8 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     // those boundaries: lines passing at r·(1 ± ε) from the centre, origins at r·(1 ± ε) from
     // it moving away or towards, over scales and offsets where the bounds' terms change size,
     // and with tmin below, at and above 0. Three spheres, so that a pair and a lone lane are
-    // both used, the rays aimed at the middle one; each must get the kernel's own answer.
+    // both used; the rays are aimed at the second (lane 1 of the first pair) or the third (lane
+    // 0 of the second), and each must get the kernel's own answer.
     std::mt19937_64 rng(20261204);
     std::uniform_real_distribution<double> dir(-1.0, 1.0);
     const double eps[] = {0.0, 1e-17, 1e-16, 4e-16, 1e-15, 1e-14, 1e-12, 1e-8, 1e-3};
@@ -280,37 +281,38 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
             s.materials.push_back(Material{});
             s.objects.push_back(sphere("far", c + Vec3d{1e6, 1e6, 1e6} * apart, radius, 0));
             s.objects.push_back(sphere("aimed", c, radius, 0));
-            s.objects.push_back(sphere("other", c - Vec3d{0.05, 0.05, 0.05} * apart, radius, 0));
+            s.objects.push_back(
+                sphere("aimed too", c - Vec3d{0.05, 0.05, 0.05} * apart, radius, 0));
             for (const bool fast : {false, true}) {
                 const SceneScan scan(s, fast);
                 for (int k = 0; k < 600; ++k) {
-                    Vec3d d{dir(rng), dir(rng), dir(rng)};
-                    if (!(length(d) > 0.1))
-                        continue;
-                    // Lengths from 3e-162 (d·d subnormal: its rounding is no longer relative)
-                    // to 7e2.
-                    const double lengths[] = {1e-3, 1.0, 7e2, 1e-160, 3e-162};
-                    d = d * lengths[(k / 7) % 5];
+                    const std::uint32_t aim = 1 + static_cast<std::uint32_t>(k / 3 % 2);
+                    const Vec3d& ac = s.objects[aim].sphere.center;
+                    const Vec3d unit = normalize(Vec3d{dir(rng), dir(rng), dir(rng)});
+                    // Lengths from 3e-162 (d·d subnormal: its rounding is no longer relative),
+                    // either side of the rule's 2⁻¹⁰²⁰ on d·d (2e-154, 4e-154), to 7e2.
+                    const double lengths[] = {1e-3, 1.0, 7e2, 1e-160, 3e-162, 2e-154, 4e-154};
+                    const Vec3d d = unit * lengths[(k / 7) % 7];
                     // A unit vector across the direction.
-                    Vec3d w = cross(d, Vec3d{dir(rng), dir(rng), dir(rng)});
+                    Vec3d w = cross(unit, Vec3d{dir(rng), dir(rng), dir(rng)});
                     w = w / length(w);
                     const double e = eps[k % 9] * (k % 2 ? 1.0 : -1.0);
                     Ray r;
                     if (k % 4 < 2) {
-                        // The line passes at r(1 + e) from the centre, the origin before or
-                        // after the closest approach.
-                        const double along = (k % 4 == 0 ? -3.0 : 2.0) * radius / length(d);
-                        r = Ray{c + w * (radius * (1 + e)) + d * along, d};
+                        // The line passes at r(1 + e) from the centre, the origin 3r before or
+                        // 2r after the closest approach.
+                        const double along = (k % 4 == 0 ? -3.0 : 2.0) * radius;
+                        r = Ray{ac + w * (radius * (1 + e)) + unit * along, d};
                     } else {
                         // The origin r(1 + e) from the centre, moving away from it or towards.
-                        const Vec3d out = (k % 4 == 2 ? d : -d) / length(d);
+                        const Vec3d out = k % 4 == 2 ? unit : -unit;
                         const Vec3d u = normalize(out * 0.8 + w * 0.6);
-                        r = Ray{c + u * (radius * (1 + e)), d};
+                        r = Ray{ac + u * (radius * (1 + e)), d};
                     }
                     r.tmin = k % 5 == 0 ? -2.0 : k % 5 == 1 ? 1e-9 : 0.0;
-                    const auto want = kernel_hit(s.objects[1].sphere, r, fast);
+                    const auto want = kernel_hit(s.objects[aim].sphere, r, fast);
                     const auto got = scan.closest(r, true);
-                    if (!SceneScan::may_hit(scan.sphere_candidates(r), 1)) {
+                    if (!SceneScan::may_hit(scan.sphere_candidates(r), aim)) {
                         ++ruled_out;
                         EXPECT_FALSE(want.has_value())
                             << radius << " " << offset << " " << fast << " " << k;
@@ -320,9 +322,9 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                                               " " + std::to_string(k);
                     // Where the scan answers with another sphere (one the ray meets before its
                     // origin, with tmin < 0), the aimed one's hit must not come first.
-                    if (got && got->object != 1) {
+                    if (got && got->object != aim) {
                         if (want) {
-                            EXPECT_TRUE(got->object == 0 ? want->t >= got->t : want->t > got->t)
+                            EXPECT_TRUE(got->object < aim ? want->t >= got->t : want->t > got->t)
                                 << where;
                         }
                         continue;
@@ -356,6 +358,8 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     const double k = 1.2247 * 0x1p-537;
     const Ray grazing{{6e99, -6e99, 0}, {k, k, k}};
     ASSERT_TRUE(kernel_hit(big.objects[0].sphere, grazing, true).has_value());
+    ASSERT_TRUE(kernel_hit(big.objects[0].sphere, grazing, false).has_value());
+    EXPECT_TRUE(SceneScan(big, false).closest(grazing, true).has_value());
     EXPECT_TRUE(SceneScan::may_hit(SceneScan(big, true).sphere_candidates(grazing), 0));
     EXPECT_TRUE(SceneScan(big, true).closest(grazing, true).has_value());
     EXPECT_TRUE(SceneScan(big, true).any(grazing));

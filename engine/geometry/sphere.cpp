@@ -25,22 +25,53 @@ SphereRoots with_roots(SphereRoots out, double t0, double t1) {
     return out;
 }
 
+/// Directions whose largest component is below 2⁻⁵⁰⁰ are scaled by 2⁶⁰⁰ first: their d·d
+/// would be subnormal (or zero), where rounding is absolute rather than relative, and neither
+/// the bounds nor TwoProduct's exactness hold (a helper's review found |d| ≈ 3e-162, inside a
+/// sphere of radius 1e100, taken for a miss). o + t'·(2⁶⁰⁰d) = o + (2⁶⁰⁰t')·d, and scaling by
+/// a power of two is exact, so the roots are the unscaled ray's.
+constexpr double kTinyDirection = 0x1p-500;
+constexpr double kDirectionScale = 0x1p600;
+
+bool tiny_direction(const Vec3d& d) {
+    const double m = max_abs(d);
+    return m > 0.0 && m < kTinyDirection;
+}
+
+Ray with_scaled_direction(const Ray& ray) {
+    Ray r = ray;
+    r.direction = ray.direction * kDirectionScale;
+    return r;
+}
+
+SphereRoots scaled_back(SphereRoots r) {
+    r.t[0] *= kDirectionScale;
+    r.t[1] *= kDirectionScale;
+    r.t_err *= kDirectionScale;
+    return r;
+}
+
 }  // namespace
 
 RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
+    if (tiny_direction(ray.direction))
+        return scaled_back(sphere_roots(s, with_scaled_direction(ray)));
     SphereRoots out;
     const Vec3d& d = ray.direction;
     {
         // Most rays that reach a sphere miss it by far: decide those in plain double. The
         // discriminant a·r² − |f × d|² formed from the rounded f = o − c is within
         // 40u·|f|²|d|² + 8u·a·r² of the exact one (Higham 2002, Lemma 3.1 applied to the cross
-        // product and the two dot products); 64u on both terms leaves room.
+        // product and the two dot products); 64u on both terms leaves room. Lemma 3.1 needs
+        // relative rounding: a tiny direction has been scaled above (tiny_direction), r² below
+        // 2⁻¹⁰⁰⁰ goes to the double-double path, and 2⁻⁹⁰⁰ covers products that underflow.
         const Vec3d f = ray.origin - s.center;
         const double a = dot(d, d);
+        const double r2 = s.radius * s.radius;
         const Vec3d c = cross(f, d);
-        const double ar2 = a * (s.radius * s.radius);
-        const double bound = 64.0 * kDoubleUnitRoundoff * (dot(f, f) * a + ar2);
-        if (ar2 - dot(c, c) < -bound)
+        const double ar2 = a * r2;
+        const double bound = 64.0 * kDoubleUnitRoundoff * (dot(f, f) * a + ar2) + 0x1p-900;
+        if (a >= 0x1p-1020 && r2 >= 0x1p-1000 && ar2 - dot(c, c) < -bound)
             return out;
     }
     // f = o − c, exactly: a ray starting far from a small sphere loses nothing here.
@@ -134,6 +165,8 @@ std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const Sph
 }
 
 SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
+    if (tiny_direction(ray.direction))
+        return scaled_back(sphere_roots_fast(s, with_scaled_direction(ray)));
     SphereRoots out;
     const Vec3d& d = ray.direction;
     const Vec3d f = ray.origin - s.center;

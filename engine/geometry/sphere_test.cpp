@@ -169,6 +169,18 @@ TEST(Sphere, ErrorBoundCoversFarSphere) {
 // fast's plain-double kernel against the double-double one: the same roots to within the
 // t_err it reports, on ordinary rays, near tangency, from inside; and for the cases plain
 // double cannot form (|o − c|² overflowing, r² underflowing) it hands over to the other.
+TEST(Sphere, SubnormalDirectionLengthStillHits) {
+    // |d|² a few subnormal steps: the plain-double miss test's rounding is not relative there,
+    // and it took this ray, starting inside the sphere, for a miss (a helper's review).
+    const Sphere s{{0, 0, 0}, 1e100};
+    const double k = 1.2247 * 0x1p-537;
+    const Ray r{{6e99, -6e99, 0}, {k, k, k}};
+    const auto exact = intersect_sphere(s, r);
+    ASSERT_TRUE(exact.has_value());
+    EXPECT_GT(exact->t, 0.0);
+    EXPECT_TRUE(first_hit_of_roots(s, r, sphere_roots_fast(s, r), false).has_value());
+}
+
 TEST(Sphere, FastRootsWithinTheirBound) {
     std::mt19937_64 rng(77);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
