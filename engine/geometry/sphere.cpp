@@ -71,7 +71,7 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
         const Vec3d c = cross(f, d);
         const double ar2 = a * r2;
         const double bound = 64.0 * kDoubleUnitRoundoff * (dot(f, f) * a + ar2) + 0x1p-900;
-        if (a >= 0x1p-1020 && r2 >= 0x1p-1000 && ar2 - dot(c, c) < -bound)
+        if (r2 >= 0x1p-1000 && ar2 - dot(c, c) < -bound)
             return out;
     }
     // f = o − c, exactly: a ray starting far from a small sphere loses nothing here.

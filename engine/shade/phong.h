@@ -19,9 +19,10 @@ struct PhongLightTerms {
     Vec3d sum() const { return diffuse + specular; }
 };
 
-/// The ambient term ka·Ia.
-inline Vec3d phong_ambient(const Material& m, const Vec3d& ia) {
-    return m.ambient * ia;
+/// The ambient term ka·Ia (ka: the material's ambient colour, times its texture's where it has
+/// one: shade/whitted.cpp).
+inline Vec3d phong_ambient(const Vec3d& ka, const Vec3d& ia) {
+    return ka * ia;
 }
 
 /// The diffuse and specular terms of one light of intensity `ip` in unit direction `l` at a

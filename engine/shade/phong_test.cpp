@@ -42,6 +42,13 @@ TEST(Phong, SpecularCanBeSkipped) {
     EXPECT_GT(t.diffuse.x, 0.0);
 }
 
+TEST(Phong, AmbientIsKaTimesIaPerChannel) {
+    // The textured ka of a surface (its material's ambient times the texture's colour) times
+    // the ambient intensity, channel by channel.
+    EXPECT_EQ(phong_ambient({0.1, 0.5, 1.0}, {0.5, 0.25, 2.0}), Vec3d(0.05, 0.125, 2.0));
+    EXPECT_EQ(phong_ambient({0.3, 0.3, 0.3}, {}), Vec3d{});
+}
+
 TEST(Optics, ReflectionMirrorsAboutTheNormal) {
     EXPECT_EQ(reflect({1, -1, 0}, {0, 1, 0}), Vec3d(1, 1, 0));
     EXPECT_EQ(reflect({1, -1, 0}, {0, -1, 0}), Vec3d(1, 1, 0));  // either side of the normal

@@ -343,13 +343,13 @@ Vec3d Whitted::to_light(const Surface& sp, const Light& light) {
 
 Ray Whitted::shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const {
     return light.type == LightType::point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
-                                          : spawn_ray(sp.p, sp.p_err, sp.ng, l);
+                                          : spawn(sp, l);
 }
 
 Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
                       const ToLight* traced) const {
     const Scene& s = scene();
-    Vec3d color = sp.m.emissive + sp.ka * plan_.ambient;  // phong_ambient()
+    Vec3d color = sp.m.emissive + phong_ambient(sp.ka, plan_.ambient);
     for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
@@ -396,7 +396,7 @@ Vec3d Whitted::headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) 
     // and a preview takes that approximation for a shadow ray less per pixel.
     if (!sp.camera_hit) {
         ++counts.shadow;
-        if (occluded(spawn_ray(sp.p, sp.p_err, sp.ng, l)))
+        if (occluded(spawn(sp, l)))
             return {};
     }
     lit = true;
