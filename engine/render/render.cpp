@@ -160,14 +160,30 @@ void tile_pixels(const Frame& f, int x0, int y0, int x1, int y1, Image& image, R
 /// What adaptive sampling's first pass leaves for the second, over the whole image: each
 /// pixel's first sample, the 8-bit value it shows as (as encode_image writes it: sRGB for phong,
 /// linear for the data modes), and, once the first pass is over, whether it gets more samples.
+/// Left unwritten when made (DefaultInitAllocator), as the image is: the first pass writes every
+/// pixel's colour and shown value and mark_more every flag, from every thread (a cancelled
+/// first pass skips both the marking and the second pass). Zero-filled here, its 22 MB at
+/// 1024×768 had been first touched by one thread before any tile: 58 ms of page faults in two
+/// of bench_render's three tutorial_like runs (glibc maps a fresh block until its mmap
+/// threshold has grown). Measured paired at spp 4, fast: that adaptive render's median went
+/// from 417–461 ms to 386–390 ms. A mapping of its own advised for huge pages was tried too:
+/// 362–366 ms there, but the Duck rendered next went from 200 to 220 ms, since every render then
+/// faults its buffer afresh where glibc's heap had kept the last one.
 struct FirstSamples {
     int width = 0, height = 0;
-    std::vector<Vec3d> color;
-    std::vector<std::array<unsigned char, 3>> shown;
-    std::vector<char> more;
+    std::vector<double, DefaultInitAllocator<double>> rgb;  ///< 3 per pixel
+    std::vector<std::array<unsigned char, 3>, DefaultInitAllocator<std::array<unsigned char, 3>>>
+        shown;
+    std::vector<char, DefaultInitAllocator<char>> more;
 
     FirstSamples(int w, int h)
-        : width(w), height(h), color(pixels()), shown(pixels()), more(pixels()) {}
+        : width(w), height(h), rgb(3 * pixels()), shown(pixels()), more(pixels()) {}
+    Vec3d color(std::size_t i) const { return {rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]}; }
+    void set_color(std::size_t i, const Vec3d& c) {
+        rgb[3 * i] = c.x;
+        rgb[3 * i + 1] = c.y;
+        rgb[3 * i + 2] = c.z;
+    }
     std::size_t pixels() const {
         return static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     }
@@ -197,7 +213,7 @@ void tile_first_samples(const Frame& f, int x0, int y0, int x1, int y1, FirstSam
         for (int x = x0; x < x1; ++x) {
             const Vec3d& c = sums[static_cast<std::size_t>((y - y0) * w + (x - x0))];
             const std::size_t i = first.index(x, y);
-            first.color[i] = c;
+            first.set_color(i, c);
             for (std::size_t k = 0; k < 3; ++k)
                 first.shown[i][k] = encode_8bit(static_cast<float>(c[k]), linear);
         }
@@ -232,7 +248,7 @@ void tile_more_samples(const Frame& f, int x0, int y0, int x1, int y1, const Fir
     std::vector<Vec3d> sums(static_cast<std::size_t>(w * (y1 - y0)));
     for (int y = y0; y < y1; ++y) {
         for (int x = x0; x < x1; ++x)
-            sums[local(x, y)] = first.color[first.index(x, y)];
+            sums[local(x, y)] = first.color(first.index(x, y));
     }
     const auto want = [&](int x, int y) { return first.more[first.index(x, y)] != 0; };
     trace_samples(f, x0, y0, x1, y1, 1, f.opt.spp, want, sums, counts);
