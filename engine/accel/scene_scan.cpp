@@ -1,7 +1,11 @@
 #include "engine/accel/scene_scan.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+
+#include <immintrin.h>
 
 #include "engine/math/float_bounds.h"
 
@@ -58,17 +62,17 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
         if (o.kind == ObjectKind::sphere) {
             const std::uint32_t k = spheres++;
             prims_.push_back(Primitive{Triangle{}, TrianglePlane{}, o.sphere, i, k, true, true});
-            if (k % 2 == 0)
-                spheres_.push_back(SpherePair{});
-            SpherePair& pair = spheres_.back();
+            if (k % 4 == 0)
+                spheres_.push_back(SphereQuad{});
+            SphereQuad& quad = spheres_.back();
             const Sphere& s = o.sphere;
-            pair.cx[k % 2] = s.center.x;
-            pair.cy[k % 2] = s.center.y;
-            pair.cz[k % 2] = s.center.z;
-            pair.r2[k % 2] = s.radius * s.radius;
+            quad.cx[k % 4] = s.center.x;
+            quad.cy[k % 4] = s.center.y;
+            quad.cz[k % 4] = s.center.z;
+            quad.r2[k % 4] = s.radius * s.radius;
             // Below 2⁻¹⁰⁰⁰ r² has lost its relative precision (or is no radius at all): the
             // bound of sphere_candidates does not hold, and the kernels decide.
-            if (k < 32 && pair.r2[k % 2] >= 0x1p-1000 && pair.r2[k % 2] <= 0x1p1000)
+            if (k < 32 && quad.r2[k % 4] >= 0x1p-1000 && quad.r2[k % 4] <= 0x1p1000)
                 cullable_ |= std::uint32_t{1} << k;
             continue;
         }
@@ -81,62 +85,150 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
     }
 }
 
-std::uint32_t SceneScan::sphere_candidates(const Ray& ray) const {
-    // sphere_roots' own plain-double shortcut, two spheres at a time (SSE2 lanes, GCC's vector
-    // extension), before any call: 89% of the sphere tests of the bench's tutorial_like render
-    // at exact are lines that miss (counted 2026-12-04: 81 of 92 million), and those calls had
-    // been a third of the render (perf). The discriminant a·r² − |f × d|² formed from the
-    // rounded f = o − c is within 48u·(|f|²a + a·r²) of the exact one (sphere_roots: Higham
-    // 2002, Lemma 3.1 on the cross product and the dot products), plus 2⁻⁹⁰⁰ for products that
+namespace {
+
+/// What sphere_candidates' rule needs of the ray.
+struct CandidateRay {
+    double ox, oy, oz, dx, dy, dz;
+    double a;        ///< d·d
+    bool behind_ok;  ///< tmin ≥ 0: roots before the origin are out of range
+    bool a_normal;   ///< d·d ≥ 2⁻¹⁰²⁰
+};
+
+/// W doubles in one vector, and the lanes of their comparisons (0 or −1). GCC takes no
+/// vector_size that depends on a template's parameter.
+template <int W>
+struct VectorOf;
+template <>
+struct VectorOf<2> {
+    using Doubles = double __attribute__((vector_size(16)));
+    using Masks = long long __attribute__((vector_size(16)));
+};
+template <>
+struct VectorOf<4> {
+    using Doubles = double __attribute__((vector_size(32)));
+    using Masks = long long __attribute__((vector_size(32)));
+};
+
+/// The rule of SceneScan::sphere_candidates on W spheres side by side (centres cx..cz and r²
+/// r2s, W of each), in GCC's vector extension (which clang also compiles): lane k of `miss` is
+/// −1 where sphere k is ruled out, else 0. Inlined into each caller, so that its W-wide vectors are
+/// compiled for the caller's instruction set (SSE2 for two lanes, AVX for four).
+template <int W>
+[[gnu::always_inline]] inline void ruled_out_in_lanes(const double* cx, const double* cy,
+                                                      const double* cz, const double* r2s,
+                                                      const CandidateRay& ray,
+                                                      typename VectorOf<W>::Masks& miss) {
+    using vd = typename VectorOf<W>::Doubles;
+    // Loaded by memcpy (no function returns a vector: an AVX vector's ABI differs outside AVX).
+    vd x, y, z, r2;
+    std::memcpy(&x, cx, sizeof x);
+    std::memcpy(&y, cy, sizeof y);
+    std::memcpy(&z, cz, sizeof z);
+    std::memcpy(&r2, r2s, sizeof r2);
+    constexpr double kMax = std::numeric_limits<double>::max();
+    const vd a = vd{} + ray.a;
+    const vd fx = ray.ox - x;
+    const vd fy = ray.oy - y;
+    const vd fz = ray.oz - z;
+    const vd c0 = fy * ray.dz - fz * ray.dy;
+    const vd c1 = fz * ray.dx - fx * ray.dz;
+    const vd c2 = fx * ray.dy - fy * ray.dx;
+    const vd cc = c0 * c0 + c1 * c1 + c2 * c2;
+    const vd ar2 = a * r2;
+    const vd ff = fx * fx + fy * fy + fz * fz;
+    const vd bound = 128.0 * kDoubleUnitRoundoff * (ff * a + ar2) + 0x1p-900;
+    // Lanes are −1 where the line certainly misses (all terms finite, so the comparisons are
+    // false on a NaN or an overflow), d·d permitting.
+    miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax) & (ray.a_normal ? -1 : 0);
+    if (ray.behind_ok) {
+        // Or where the sphere lies behind: the origin outside it (γ = |f|² − r² > 0) and the
+        // ray moving away from its centre (β = f·d > 0). Both roots (−β ± √(β² − aγ))/a are
+        // then negative, and the kernels' too: their γ and β keep those signs when each clears
+        // its rounding (|f|² and r² within γ₃ and u; β within (γ₃ + u)·|f||d| ≈ 4u·|f||d| of
+        // the exact f·d, so β² > 64u²·|f|²a leaves room), and neither forms a root of another
+        // sign from them.
+        const vd beta = fx * ray.dx + fy * ray.dy + fz * ray.dz;
+        const vd fa = ff * a;
+        miss |= (ff - r2 > 8.0 * kDoubleUnitRoundoff * (ff + r2)) & (beta > 0.0) &
+                (beta * beta > 64.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * fa + 0x1p-900) &
+                (fa <= kMax) & (ff <= kMax);
+    }
+}
+
+/// The rule over every quad of spheres (at most 8: 32 bits), two lanes at a time.
+std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n,
+                             const CandidateRay& ray) {
+    std::uint32_t out = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+        const detail::SphereQuad& q = quads[j];
+        VectorOf<2>::Masks lo, hi;
+        ruled_out_in_lanes<2>(q.cx, q.cy, q.cz, q.r2, ray, lo);
+        ruled_out_in_lanes<2>(q.cx + 2, q.cy + 2, q.cz + 2, q.r2 + 2, ray, hi);
+        const auto bits =
+            static_cast<std::uint32_t>(_mm_movemask_pd(reinterpret_cast<__m128d>(lo)) |
+                                       _mm_movemask_pd(reinterpret_cast<__m128d>(hi)) << 2);
+        out |= bits << (4 * j);
+    }
+    return out;
+}
+
+/// The same, four lanes at a time: compiled for AVX (without FMA, so that every lane rounds as
+/// SSE2's does) and called only where the processor has it.
+[[gnu::target("avx")]] std::uint32_t ruled_out_avx(const detail::SphereQuad* quads, std::size_t n,
+                                                   const CandidateRay& ray) {
+    std::uint32_t out = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+        const detail::SphereQuad& q = quads[j];
+        VectorOf<4>::Masks miss;
+        ruled_out_in_lanes<4>(q.cx, q.cy, q.cz, q.r2, ray, miss);
+        out |= static_cast<std::uint32_t>(_mm256_movemask_pd(reinterpret_cast<__m256d>(miss)))
+               << (4 * j);
+    }
+    return out;
+}
+
+}  // namespace
+
+SceneScan::Lanes SceneScan::widest_lanes() {
+    // GCC's and clang's runtime check, which also asks whether the system saves AVX's
+    // registers (XGETBV).
+    static const Lanes lanes = __builtin_cpu_supports("avx") ? Lanes::four : Lanes::two;
+    return lanes;
+}
+
+std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {
+    // sphere_roots' own plain-double shortcut, on several spheres at a time (vector lanes),
+    // before any call: 89% of the sphere tests of the bench's tutorial_like render at exact
+    // are lines that miss (counted 2026-12-04: 81 of 92 million), and those calls had been a
+    // third of the render (perf). The discriminant a·r² − |f × d|² formed from the rounded
+    // f = o − c is within 48u·(|f|²a + a·r²) of the exact one (sphere_roots: Higham 2002,
+    // Lemma 3.1 on the cross product and the dot products), plus 2⁻⁹⁰⁰ for products that
     // underflow. Beyond 128u of that the exact discriminant is below −80u·a·(|f|² + r²): the
     // double-double discriminant of sphere_roots (a few u² of the same terms) is negative, and
     // so is sphere_roots_fast's r² − |l|² (within ~22u·|f|² + 2u·r² + u·|disc| of Δ/(4a)),
     // so both kernels find no root. A lane with an infinity or NaN anywhere is never ruled out.
-    using v2d = double __attribute__((vector_size(16)));
-    const double ox = ray.origin.x, oy = ray.origin.y, oz = ray.origin.z;
-    const double dx = ray.direction.x, dy = ray.direction.y, dz = ray.direction.z;
-    const double a = dx * dx + dy * dy + dz * dz;
-    constexpr double kMax = std::numeric_limits<double>::max();
-    // Roots before the origin are out of range only when the range starts at or after it.
-    const bool behind_ok = ray.tmin >= 0.0;
+    // Four lanes (AVX) against two (SSE2): the tutorial_like render at fast spent 19% of its
+    // time here (perf, 2026-12-04), measured in docs/rendering.md.
+    CandidateRay r;
+    r.ox = ray.origin.x;
+    r.oy = ray.origin.y;
+    r.oz = ray.origin.z;
+    r.dx = ray.direction.x;
+    r.dy = ray.direction.y;
+    r.dz = ray.direction.z;
+    r.a = r.dx * r.dx + r.dy * r.dy + r.dz * r.dz;
+    r.behind_ok = ray.tmin >= 0.0;
     // Below 2⁻¹⁰²⁰, d·d has lost its relative precision to the subnormal grid, and a·r² (r²
     // up to 2¹⁰⁰⁰) with it: no line is ruled out (a helper's review found a hit at fast with
     // |d| ≈ 3e-162 and r = 1e100 that the test had ruled out).
-    const auto a_normal = v2d{a, a} >= 0x1p-1020;
-    std::uint32_t ruled_out = 0;
-    for (std::size_t j = 0; j < spheres_.size() && j < 16; ++j) {
-        const SpherePair& p = spheres_[j];
-        const v2d fx = ox - v2d{p.cx[0], p.cx[1]};
-        const v2d fy = oy - v2d{p.cy[0], p.cy[1]};
-        const v2d fz = oz - v2d{p.cz[0], p.cz[1]};
-        const v2d c0 = fy * dz - fz * dy;
-        const v2d c1 = fz * dx - fx * dz;
-        const v2d c2 = fx * dy - fy * dx;
-        const v2d cc = c0 * c0 + c1 * c1 + c2 * c2;
-        const v2d ar2 = a * v2d{p.r2[0], p.r2[1]};
-        const v2d ff = fx * fx + fy * fy + fz * fz;
-        const v2d bound = 128.0 * kDoubleUnitRoundoff * (ff * a + ar2) + 0x1p-900;
-        // Lanes are −1 where the line certainly misses (all terms finite, so the comparisons
-        // are false on a NaN or an overflow).
-        auto miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax) & a_normal;
-        if (behind_ok) {
-            // Or where the sphere lies behind: the origin outside it (γ = |f|² − r² > 0) and
-            // the ray moving away from its centre (β = f·d > 0). Both roots (−β ± √(β² − aγ))/a
-            // are then negative, and the kernels' too: their γ and β keep those signs when
-            // each clears its rounding (|f|² and r² within γ₃ and u; β within (γ₃ + u)·|f||d|
-            // ≈ 4u·|f||d| of the exact f·d, so β² > 64u²·|f|²a leaves room), and neither forms
-            // a root of another sign from them.
-            const v2d r2 = {p.r2[0], p.r2[1]};
-            const v2d beta = fx * dx + fy * dy + fz * dz;
-            const v2d fa = ff * a;
-            miss |=
-                (ff - r2 > 8.0 * kDoubleUnitRoundoff * (ff + r2)) & (beta > 0.0) &
-                (beta * beta > 64.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * fa + 0x1p-900) &
-                (fa <= kMax) & (ff <= kMax);
-        }
-        ruled_out |= (miss[0] ? std::uint32_t{1} : 0u) << (2 * j) |
-                     (miss[1] ? std::uint32_t{1} : 0u) << (2 * j + 1);
-    }
+    r.a_normal = r.a >= 0x1p-1020;
+    if (spheres_.empty())
+        return ~std::uint32_t{0};
+    const SphereQuad* quads = spheres_.data();
+    const std::size_t n = std::min<std::size_t>(spheres_.size(), 8);
+    const std::uint32_t ruled_out =
+        lanes == Lanes::four ? ruled_out_avx(quads, n, r) : ruled_out_sse2(quads, n, r);
     return ~(ruled_out & cullable_);
 }
 

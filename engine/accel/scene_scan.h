@@ -38,6 +38,15 @@ struct TrianglePlane {
     bool left_behind(const Ray& ray) const;
 };
 
+namespace detail {
+/// Four spheres side by side, for SceneScan::sphere_candidates(): lane k of entry j is sphere
+/// 4j + k (lanes past the last sphere hold a centre at 0 and r² = 0, never ruled out).
+struct alignas(32) SphereQuad {
+    double cx[4], cy[4], cz[4];  ///< centres
+    double r2[4];                ///< radius², rounded
+};
+}  // namespace detail
+
 class SceneScan {
   public:
     /// A scan of `scene` (its primitives copied: the scan does not refer to it); `fast`: the
@@ -51,7 +60,15 @@ class SceneScan {
     /// Bit k set: the k-th sphere (in object order) may be hit; clear: the ray's line certainly
     /// misses it, or it lies behind the origin and tmin ≥ 0, so that neither sphere_roots nor
     /// sphere_roots_fast finds a root in range. Public for tests.
-    std::uint32_t sphere_candidates(const Ray& ray) const;
+    std::uint32_t sphere_candidates(const Ray& ray) const { return sphere_candidates(ray, lanes_); }
+    /// How many spheres sphere_candidates() tests at a time: two in SSE2's registers, or four in
+    /// AVX's where the processor has it (the same operations in each lane, so the same bits).
+    enum class Lanes { two, four };
+    /// The lanes this processor runs: four where it has AVX.
+    static Lanes widest_lanes();
+    /// sphere_candidates() in the given lanes (four only where widest_lanes() says so); for
+    /// tests.
+    std::uint32_t sphere_candidates(const Ray& ray, Lanes lanes) const;
     /// Whether sphere k is among the candidates (beyond the 32 bits: always).
     static bool may_hit(std::uint32_t candidates, std::uint32_t k) {
         return k >= 32 || ((candidates >> k) & 1u) != 0;
@@ -67,20 +84,17 @@ class SceneScan {
         bool is_sphere;
         bool last_of_object;  ///< the object's last primitive (its own best is then settled)
     };
-    /// Two spheres side by side, for sphere_candidates(): lane k of entry j is sphere 2j + k.
-    struct SpherePair {
-        double cx[2], cy[2], cz[2];  ///< centres
-        double r2[2];                ///< radius², rounded
-    };
+    using SphereQuad = detail::SphereQuad;
 
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
 
     std::vector<Primitive> prims_;
-    std::vector<SpherePair> spheres_;
+    std::vector<SphereQuad> spheres_;
     /// Bit k set: sphere k may be ruled out by sphere_candidates (its r² lies in
     /// [2⁻¹⁰⁰⁰, 2¹⁰⁰⁰], where the bounds' relative terms hold).
     std::uint32_t cullable_ = 0;
+    Lanes lanes_ = widest_lanes();
     bool fast_;
 };
 

@@ -4,7 +4,9 @@
 #include "engine/accel/scene_scan.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -259,13 +261,18 @@ std::optional<Hit> kernel_hit(const Sphere& s, const Ray& r, bool fast) {
 }
 
 TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
-    // The scan rules spheres out two at a time before calling a kernel (lines that miss by
-    // more than the rounding, spheres behind an origin outside them). Rays are made to sit on
-    // those boundaries: lines passing at r·(1 ± ε) from the centre, origins at r·(1 ± ε) from
-    // it moving away or towards, over scales and offsets where the bounds' terms change size,
-    // and with tmin below, at and above 0. Three spheres, so that a pair and a lone lane are
-    // both used; the rays are aimed at the second (lane 1 of the first pair) or the third (lane
-    // 0 of the second), and each must get the kernel's own answer.
+    // The scan rules spheres out four (AVX) or two (SSE2) at a time before calling a kernel
+    // (lines that miss by more than the rounding, spheres behind an origin outside them). Rays
+    // are made to sit on those boundaries: lines passing at r·(1 ± ε) from the centre, origins
+    // at r·(1 ± ε) from it moving away or towards, over scales and offsets where the bounds'
+    // terms change size, and with tmin below, at and above 0. Five spheres, so that a full quad
+    // and a lone lane are both used; the rays are aimed at the second (lane 1 of the first
+    // quad), the fourth (lane 3: the second pair's lane 1 in SSE2) or the fifth (lane 0 of the
+    // second quad), and each must get the kernel's own answer, with the same candidates in
+    // either lanes.
+    const bool four_lanes = SceneScan::widest_lanes() == SceneScan::Lanes::four;
+    if (!four_lanes)
+        std::printf("this processor has no AVX: only the two-lane rule is tested\n");
     std::mt19937_64 rng(20261204);
     std::uniform_real_distribution<double> dir(-1.0, 1.0);
     const double eps[] = {0.0, 1e-17, 1e-16, 4e-16, 1e-15, 1e-14, 1e-12, 1e-8, 1e-3};
@@ -281,12 +288,15 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
             s.materials.push_back(Material{});
             s.objects.push_back(sphere("far", c + Vec3d{1e6, 1e6, 1e6} * apart, radius, 0));
             s.objects.push_back(sphere("aimed", c, radius, 0));
+            s.objects.push_back(sphere("far too", c - Vec3d{1e6, 1e6, 1e6} * apart, radius, 0));
             s.objects.push_back(
                 sphere("aimed too", c - Vec3d{0.05, 0.05, 0.05} * apart, radius, 0));
+            s.objects.push_back(
+                sphere("aimed third", c + Vec3d{0.05, -0.05, 0.05} * apart, radius, 0));
             for (const bool fast : {false, true}) {
                 const SceneScan scan(s, fast);
                 for (int k = 0; k < 600; ++k) {
-                    const std::uint32_t aim = 1 + static_cast<std::uint32_t>(k / 3 % 2);
+                    const std::uint32_t aim = std::array<std::uint32_t, 3>{1, 3, 4}[k / 3 % 3];
                     const Vec3d& ac = s.objects[aim].sphere.center;
                     const Vec3d unit = normalize(Vec3d{dir(rng), dir(rng), dir(rng)});
                     // Lengths from 3e-162 (d·d subnormal: its rounding is no longer relative),
@@ -312,7 +322,12 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                     r.tmin = k % 5 == 0 ? -2.0 : k % 5 == 1 ? 1e-9 : 0.0;
                     const auto want = kernel_hit(s.objects[aim].sphere, r, fast);
                     const auto got = scan.closest(r, true);
-                    if (!SceneScan::may_hit(scan.sphere_candidates(r), aim)) {
+                    const std::uint32_t candidates = scan.sphere_candidates(r);
+                    EXPECT_EQ(candidates, scan.sphere_candidates(r, SceneScan::Lanes::two));
+                    if (four_lanes) {
+                        EXPECT_EQ(candidates, scan.sphere_candidates(r, SceneScan::Lanes::four));
+                    }
+                    if (!SceneScan::may_hit(candidates, aim)) {
                         ++ruled_out;
                         EXPECT_FALSE(want.has_value())
                             << radius << " " << offset << " " << fast << " " << k;
