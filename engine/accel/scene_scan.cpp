@@ -13,7 +13,6 @@ namespace raycastd::engine {
 
 TrianglePlane TrianglePlane::of(const Triangle& tri) {
     TrianglePlane p;
-    p.a = tri.a;
     const Vec3d e1 = tri.b - tri.a, e2 = tri.c - tri.a;
     p.n = cross(e1, e2);
     // plane_t's bound on the rounded normal (cross_magnitudes).
@@ -32,7 +31,7 @@ TrianglePlane TrianglePlane::of(const Triangle& tri) {
     return p;
 }
 
-bool TrianglePlane::left_behind(const Ray& ray) const {
+bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
     // s = n·(o − a) and n·d, each within its error bound of the exact triangle's: the rounded
     // normal's error times the other factor, and the rounding of o − a and of the dot products
     // (γ₅ of the magnitudes, with room for the bounds' own rounding). Beyond that, s must clear
@@ -274,7 +273,7 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
         }
         // A plane left behind: a miss, without Woop's test.
         const std::optional<Hit> h =
-            p.plane.left_behind(local) ? std::nullopt : triangle(p.tri, local);
+            p.plane.left_behind(local, p.tri.a) ? std::nullopt : triangle(p.tri, local);
         if (h && (!mesh_winner || h->t < mesh_best.t)) {
             mesh_best = *h;
             mesh_best.object = p.object;
@@ -307,7 +306,7 @@ bool SceneScan::any(const Ray& ray) const {
             if (may_hit(candidates, p.index) &&
                 first_hit_of_roots(p.sphere, ray, roots(p.sphere, ray), false))
                 return true;
-        } else if (!p.plane.left_behind(ray) && triangle(p.tri, ray)) {
+        } else if (!p.plane.left_behind(ray, p.tri.a) && triangle(p.tri, ray)) {
             return true;
         }
     }

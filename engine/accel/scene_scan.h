@@ -28,14 +28,15 @@ namespace raycastd::engine {
 /// rounding of this test and of the kernels', tmin ≥ 0), in which case neither
 /// intersect_triangle nor intersect_triangle_fast reports a hit.
 struct TrianglePlane {
-    Vec3d a;              ///< the triangle's first corner
     Vec3d n;              ///< (b − a)×(c − a), rounded
     Vec3d n_err;          ///< bound on |n − the exact normal|, per component
     double dd_scale = 0;  ///< 2⁻⁹⁶·(Σ|nᵢ| + Σ|products|): plane_t's double-double resolution
     bool usable = false;  ///< no product of the normal underflows (else never left behind)
 
     static TrianglePlane of(const Triangle& tri);
-    bool left_behind(const Ray& ray) const;
+    /// `a`: the first corner of the triangle this plane was made `of` (not kept here: the scan
+    /// holds the triangle beside it).
+    bool left_behind(const Ray& ray, const Vec3d& a) const;
 };
 
 namespace detail {

@@ -162,7 +162,7 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
                         expect_identical(*got, *want, k);
                 }
                 EXPECT_EQ(exact.any(ray), linear_any(s, ray)) << obj << " " << p << " " << k;
-                if (plane.left_behind(ray)) {
+                if (plane.left_behind(ray, t.a)) {
                     ++left_behind;
                     EXPECT_FALSE(intersect_triangle(t, ray)) << obj << " " << p << " " << k;
                     EXPECT_FALSE(intersect_triangle_fast(t, ray)) << obj << " " << p << " " << k;
@@ -186,7 +186,7 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
 TEST(SceneScan, OriginsWithinTheKernelsResolutionAreLeftToThem) {
     const Triangle tri{{0, 0, 0}, {0, 3, 0}, {0.9, 1, 0.9}};
     const Ray ray{{1e-33, 1, 0}, {1, 0.1, -0.5}};
-    EXPECT_FALSE(TrianglePlane::of(tri).left_behind(ray));
+    EXPECT_FALSE(TrianglePlane::of(tri).left_behind(ray, tri.a));
     Scene one;
     one.materials.push_back(Material{});
     one.objects.push_back(mesh_object("t", {tri.a, tri.b, tri.c}, {{0, 1, 2}}));

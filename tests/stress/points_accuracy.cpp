@@ -164,10 +164,6 @@ std::vector<Suite> suites(std::size_t n) {
     return s;
 }
 
-double max_abs(const re::Vec3d& v) {
-    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
-}
-
 /// count values of T to `file`, raw (little-endian on every machine we build for).
 template <class T>
 void write_raw(const std::filesystem::path& file, const T* data, std::size_t count) {
@@ -197,10 +193,10 @@ nlohmann::json run_suite(const Suite& s, const std::filesystem::path& dir) {
     std::vector<double> ref(3 * n), own(n);
     double mesh_scale = 0;
     for (const re::Vec3d& v : mesh.positions)
-        mesh_scale = std::max(mesh_scale, max_abs(v));
+        mesh_scale = std::max(mesh_scale, re::max_abs(v));
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
         const re::Vec3d& p = s.points[i];
-        const double scale = std::max(mesh_scale, max_abs(p));
+        const double scale = std::max(mesh_scale, re::max_abs(p));
         const double d = rs::to_double(rs::reference_distance(mesh, p));
         const double w = rs::reference_winding(mesh, p);
         const bool parity = e.topology()[0].sign == re::SignMethod::parity;
@@ -216,7 +212,7 @@ nlohmann::json run_suite(const Suite& s, const std::filesystem::path& dir) {
                 wrong_surface = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const re::Vec3d& p = s.points[i];
-        const double scale = std::max(mesh_scale, max_abs(p));
+        const double scale = std::max(mesh_scale, re::max_abs(p));
         const double d = dist[i].distance, d_ref = ref[3 * i];
         if (d == 0) {
             ++surface_points;
