@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/testing/sanitizers.h"
+
 namespace raycastd::engine {
 namespace {
 
@@ -57,17 +59,7 @@ long anon_huge_kb(std::uintptr_t a) {
 
 /// Under ASan or TSan the sanitizer's allocator maps (and reuses) the memory, not glibc's malloc:
 /// what backs a buffer is its choice.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kSanitizerAllocator = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-constexpr bool kSanitizerAllocator = true;
-#else
-constexpr bool kSanitizerAllocator = false;
-#endif
-#else
-constexpr bool kSanitizerAllocator = false;
-#endif
+constexpr bool kSanitizerAllocator = testing::kAddressSanitizer || testing::kThreadSanitizer;
 
 TEST(HugePages, ALargeFreshBufferIsBackedByHugePagesWhereTheKernelOffersThem) {
     if (kSanitizerAllocator)

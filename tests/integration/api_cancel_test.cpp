@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include "engine/testing/sanitizers.h"
 #include "tests/support/raw_http.h"
 #include "tests/support/server_process.h"
 
@@ -30,17 +31,7 @@ namespace {
 // ASan's allocator keeps freed memory in its quarantine (256 MB by default) instead of handing
 // it back, so under it resident memory says nothing of what the server freed: the release
 // build checks it (the server under test is built with the same sanitizers as this test).
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAllocatorHandsMemoryBack = false;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAllocatorHandsMemoryBack = false;
-#else
-constexpr bool kAllocatorHandsMemoryBack = true;
-#endif
-#else
-constexpr bool kAllocatorHandsMemoryBack = true;
-#endif
+constexpr bool kAllocatorHandsMemoryBack = !engine::testing::kAddressSanitizer;
 
 using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;

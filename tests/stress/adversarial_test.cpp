@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/testing/sanitizers.h"
 #include "tests/stress/generators.h"
 
 namespace raycastd::stress {
@@ -53,11 +54,8 @@ void check(const std::vector<StressCase>& cases) {
 
 GenOptions options() {
     GenOptions g;
-#if defined(__SANITIZE_ADDRESS__)
-    g.rays = 120;  // quad arithmetic is slow under ASan; the suites stay meaningful
-#else
-    g.rays = 400;
-#endif
+    // Quad arithmetic is slow under ASan; the suites stay meaningful with fewer rays.
+    g.rays = engine::testing::kAddressSanitizer ? 120 : 400;
     return g;
 }
 

@@ -1,0 +1,34 @@
+#pragma once
+// Test helper: whether this translation unit is built under AddressSanitizer or ThreadSanitizer,
+// for tests whose measurements a sanitizer changes (its allocator maps and keeps memory; its
+// arithmetic is slower). GCC defines __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; clang answers
+// __has_feature (and, from version 9 on, also the GCC macros). Written once here: three tests
+// had each spelled it out.
+
+namespace raycastd::engine::testing {
+
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kAddressSanitizer = true;
+#else
+inline constexpr bool kAddressSanitizer = false;
+#endif
+#else
+inline constexpr bool kAddressSanitizer = false;
+#endif
+
+#if defined(__SANITIZE_THREAD__)
+inline constexpr bool kThreadSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+inline constexpr bool kThreadSanitizer = true;
+#else
+inline constexpr bool kThreadSanitizer = false;
+#endif
+#else
+inline constexpr bool kThreadSanitizer = false;
+#endif
+
+}  // namespace raycastd::engine::testing
