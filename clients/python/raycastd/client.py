@@ -14,6 +14,7 @@ import math
 import os
 import pathlib
 import re
+import select
 import socket
 import time
 import urllib.parse
@@ -141,6 +142,11 @@ class Client(ArrayQueries):
         pure = _pure(method, path)
         for attempt in (0, 1):
             conn = self._connect()
+            if self._used and _dropped(conn):
+                # The server closed the kept-alive connection while it sat idle (its keep-alive
+                # timeout): a fresh one, before anything is sent on the old.
+                self.close()
+                conn = self._connect()
             reused = self._used
             reading = False  # whether the answer's head had come (the error is then in its body)
             try:
@@ -156,14 +162,15 @@ class Client(ArrayQueries):
                 ) from exc
             except (ConnectionError, http.client.HTTPException, OSError) as exc:
                 self.close()
-                # A kept-alive connection the server closed meanwhile (its idle timeout) fails
-                # on first use; that request never reached it, so it is sent once more.
+                # A kept-alive connection the server closed just as the request went (its idle
+                # timeout, after _dropped looked) fails on first use without an answer. So does
+                # one whose server had the request and then died, which cannot be told apart
+                # from it here: only a pure request is sent once more (a render may have started
+                # a job), and never once an answer has begun.
                 stale = isinstance(
                     exc, (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError)
                 )
-                # Not once an answer has begun: the server had the request, and a render may
-                # have started a job.
-                if attempt == 0 and reused and stale and not reading:
+                if attempt == 0 and reused and stale and not reading and pure:
                     continue
                 # An answer cut short: behind a balancer, the replica died while writing it, and
                 # the balancer cannot send the request elsewhere once it has passed the header
@@ -418,6 +425,20 @@ def _put(body: dict[str, Any], **fields: Any) -> None:
 _PURE_POST = re.compile(
     r"^/v1/(intersect|explain|points|scenes|scenes/[A-Za-z0-9_]+/(intersect|trace|points))$"
 )
+
+
+def _dropped(conn: http.client.HTTPConnection) -> bool:
+    """Whether the server has closed (or written unasked on) a connection kept alive between
+    requests: its socket is readable with nothing asked. As urllib3 checks a pooled connection
+    before it reuses it."""
+    sock = conn.sock
+    if sock is None:
+        return False  # not connected yet: http.client connects on the request
+    try:
+        readable, _, _ = select.select([sock], [], [], 0)
+    except (OSError, ValueError):  # closed under us
+        return True
+    return bool(readable)
 
 
 def _pure(method: str, path: str) -> bool:

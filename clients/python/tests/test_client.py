@@ -12,6 +12,7 @@ import tempfile
 import threading
 import time
 import unittest
+from typing import Callable
 from unittest import mock
 
 from support import RAY, TRIANGLE, TUTORIAL, ServerTestCase
@@ -241,6 +242,44 @@ class UrlAndTokenTest(unittest.TestCase):
         self.assertEqual((cm.exception.code, cm.exception.request_id), ("unauthorized", "rq_7"))
 
 
+# What the fake servers below answer to a query: no hit.
+ANSWER = b'{"precision":"refined","mode":"closest","hits":[null]}'
+
+
+def serve_posts(
+    test: unittest.TestCase, respond: Callable[[http.server.BaseHTTPRequestHandler, int], None]
+) -> tuple[str, list[str]]:
+    """A threaded HTTP/1.1 server on a free port for the test's duration: it reads each POST's
+    body, notes its path, then calls `respond(handler, n)` for the n-th POST (from 1). Returns
+    its URL and the paths seen."""
+    seen: list[str] = []
+
+    class Handler(http.server.BaseHTTPRequestHandler):
+        protocol_version = "HTTP/1.1"
+
+        def do_POST(self) -> None:  # noqa: N802 (http.server's name)
+            self.rfile.read(int(self.headers.get("Content-Length", 0)))
+            seen.append(self.path)
+            respond(self, len(seen))
+
+        def log_message(self, *args: object) -> None:
+            pass
+
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    test.addCleanup(httpd.server_close)
+    test.addCleanup(httpd.shutdown)
+    return f"http://127.0.0.1:{httpd.server_address[1]}", seen
+
+
+def answer_head(handler: http.server.BaseHTTPRequestHandler) -> None:
+    """The status line and headers of a 200 carrying ANSWER."""
+    handler.send_response(200)
+    handler.send_header("Content-Type", "application/json")
+    handler.send_header("Content-Length", str(len(ANSWER)))
+    handler.end_headers()
+
+
 class CutAnswerTest(unittest.TestCase):
     """An answer cut short (behind nginx: the replica died while writing it) is asked once more
     when the request is pure, and is an error for a render, which may have started a job."""
@@ -248,39 +287,22 @@ class CutAnswerTest(unittest.TestCase):
     def serve_cutting(self, cut: int = 1, reset: bool = False) -> tuple:
         """A server that cuts its answer to the `cut`-th request short (closing the connection,
         or with `reset` resetting it), and answers the rest."""
-        seen: list[str] = []
-        answer = b'{"precision":"refined","mode":"closest","hits":[null]}'
 
-        class Handler(http.server.BaseHTTPRequestHandler):
-            protocol_version = "HTTP/1.1"
+        def respond(h: http.server.BaseHTTPRequestHandler, n: int) -> None:
+            answer_head(h)
+            if n != cut:
+                h.wfile.write(ANSWER)
+                return
+            h.wfile.write(ANSWER[:5])  # the header and a few bytes, then the connection closes
+            h.close_connection = True
+            if reset:  # SO_LINGER 0: the close sends RST, read as ConnectionResetError
+                time.sleep(0.1)  # the bytes above reach the client first
+                h.connection.setsockopt(
+                    socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0)
+                )
+                h.connection.close()
 
-            def do_POST(self) -> None:  # noqa: N802 (http.server's name)
-                self.rfile.read(int(self.headers.get("Content-Length", 0)))
-                seen.append(self.path)
-                self.send_response(200)
-                self.send_header("Content-Type", "application/json")
-                self.send_header("Content-Length", str(len(answer)))
-                self.end_headers()
-                if len(seen) == cut:  # the header and a few bytes, then the connection closes
-                    self.wfile.write(answer[:5])
-                    self.close_connection = True
-                    if reset:  # SO_LINGER 0: the close sends RST, read as ConnectionResetError
-                        time.sleep(0.1)  # the bytes above reach the client first
-                        self.connection.setsockopt(
-                            socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0)
-                        )
-                        self.connection.close()
-                else:
-                    self.wfile.write(answer)
-
-            def log_message(self, *args: object) -> None:
-                pass
-
-        httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-        threading.Thread(target=httpd.serve_forever, daemon=True).start()
-        self.addCleanup(httpd.server_close)
-        self.addCleanup(httpd.shutdown)
-        return f"http://127.0.0.1:{httpd.server_address[1]}", seen
+        return serve_posts(self, respond)
 
     def test_a_query_is_asked_again(self) -> None:
         url, seen = self.serve_cutting()
@@ -303,6 +325,53 @@ class CutAnswerTest(unittest.TestCase):
             with self.assertRaises(ConnectionFailed):
                 c.render("sc_0", width=8, height=8)
         self.assertEqual(seen, ["/v1/scenes/sc_0/intersect", "/v1/scenes/sc_0/render"])
+
+
+class KeptAliveTest(unittest.TestCase):
+    """A kept-alive connection the server closed while it sat idle is replaced before the next
+    request is sent; one the server closes after taking a request unanswered (it died) sends
+    only a pure request again, never a render."""
+
+    def serve(self, silent: int = 0, idle_close: bool = False) -> tuple:
+        """A server answering every POST on one kept-alive connection, which it closes without
+        a byte of answer upon the `silent`-th request, or, with `idle_close`, right after its
+        first answer (as its keep-alive timeout would, the client not told)."""
+
+        def respond(h: http.server.BaseHTTPRequestHandler, n: int) -> None:
+            if n == silent:
+                h.close_connection = True
+                return
+            answer_head(h)
+            h.wfile.write(ANSWER)
+            h.wfile.flush()
+            h.close_connection = idle_close and n == 1
+
+        return serve_posts(self, respond)
+
+    def test_an_idle_close_is_seen_before_a_render_is_sent(self) -> None:
+        url, seen = self.serve(idle_close=True)
+        with Client(url, timeout=5) as c:
+            c.intersect("sc_0", [RAY])
+            time.sleep(0.2)  # the server's close reaches the client
+            first = c._conn
+            c.request("POST", "/v1/scenes/sc_0/render", b"{}", "application/json")
+            self.assertIsNot(c._conn, first)  # a fresh connection
+        self.assertEqual(seen, ["/v1/scenes/sc_0/intersect", "/v1/scenes/sc_0/render"])
+
+    def test_a_render_the_server_took_unanswered_is_not_sent_again(self) -> None:
+        url, seen = self.serve(silent=2)
+        with Client(url, timeout=5) as c:
+            c.intersect("sc_0", [RAY])
+            with self.assertRaises(ConnectionFailed):
+                c.request("POST", "/v1/scenes/sc_0/render", b"{}", "application/json")
+        self.assertEqual(seen, ["/v1/scenes/sc_0/intersect", "/v1/scenes/sc_0/render"])
+
+    def test_a_query_the_server_took_unanswered_is_sent_again(self) -> None:
+        url, seen = self.serve(silent=2)
+        with Client(url, timeout=5) as c:
+            c.intersect("sc_0", [RAY])
+            self.assertEqual(c.intersect("sc_0", [RAY])["hits"], [None])
+        self.assertEqual(seen, ["/v1/scenes/sc_0/intersect"] * 3)
 
 
 if __name__ == "__main__":
