@@ -172,8 +172,9 @@ std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n,
     return out;
 }
 
-/// The same, four lanes at a time: compiled for AVX (without FMA, so that every lane rounds as
-/// SSE2's does) and called only where the processor has it.
+/// The same, four lanes at a time: compiled for AVX (without FMA, and the project builds with
+/// -ffp-contract=off, so that every lane rounds as SSE2's does) and called only where the
+/// processor has it.
 [[gnu::target("avx")]] std::uint32_t ruled_out_avx(const detail::SphereQuad* quads, std::size_t n,
                                                    const CandidateRay& ray) {
     std::uint32_t out = 0;
@@ -226,8 +227,9 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {
         return ~std::uint32_t{0};
     const SphereQuad* quads = spheres_.data();
     const std::size_t n = std::min<std::size_t>(spheres_.size(), 8);
-    const std::uint32_t ruled_out =
-        lanes == Lanes::four ? ruled_out_avx(quads, n, r) : ruled_out_sse2(quads, n, r);
+    const std::uint32_t ruled_out = lanes == Lanes::four && widest_lanes() == Lanes::four
+                                        ? ruled_out_avx(quads, n, r)
+                                        : ruled_out_sse2(quads, n, r);
     return ~(ruled_out & cullable_);
 }
 

@@ -41,7 +41,8 @@ struct TrianglePlane {
 
 namespace detail {
 /// Four spheres side by side, for SceneScan::sphere_candidates(): lane k of entry j is sphere
-/// 4j + k (lanes past the last sphere hold a centre at 0 and r² = 0, never ruled out).
+/// 4j + k (lanes past the last sphere hold a centre at 0 and r² = 0; whatever the rule makes of
+/// them is never reported, since SceneScan::cullable_ has no bit for them).
 struct alignas(32) SphereQuad {
     double cx[4], cy[4], cz[4];  ///< centres
     double r2[4];                ///< radius², rounded
@@ -67,8 +68,8 @@ class SceneScan {
     enum class Lanes { two, four };
     /// The lanes this processor runs: four where it has AVX.
     static Lanes widest_lanes();
-    /// sphere_candidates() in the given lanes (four only where widest_lanes() says so); for
-    /// tests.
+    /// sphere_candidates() in the given lanes (four taken as two where widest_lanes() says the
+    /// processor has no AVX); for tests.
     std::uint32_t sphere_candidates(const Ray& ray, Lanes lanes) const;
     /// Whether sphere k is among the candidates (beyond the 32 bits: always).
     static bool may_hit(std::uint32_t candidates, std::uint32_t k) {

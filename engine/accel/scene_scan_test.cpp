@@ -7,11 +7,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "engine/accel/linear_accel.h"
+#include "engine/math/float_bounds.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -260,6 +262,35 @@ std::optional<Hit> kernel_hit(const Sphere& s, const Ray& r, bool fast) {
     return first_hit_of_roots(s, r, fast ? sphere_roots_fast(s, r) : sphere_roots(s, r), true);
 }
 
+/// The rule of SceneScan::sphere_candidates for one sphere, written out in scalar arithmetic in
+/// the scan's own order (the scan runs it in vector lanes): whether it rules `s` out for `r`.
+/// Compared bit by bit with the scan's lanes, so that a lane read or reported for the wrong
+/// sphere shows, whichever sphere the rays were aimed at.
+bool rule_rules_out(const Sphere& s, const Ray& r) {
+    constexpr double u = kDoubleUnitRoundoff;
+    constexpr double kMax = std::numeric_limits<double>::max();
+    const double r2 = s.radius * s.radius;
+    if (!(r2 >= 0x1p-1000 && r2 <= 0x1p1000))
+        return false;  // not cullable: the kernels decide
+    const Vec3d& d = r.direction;
+    const double a = d.x * d.x + d.y * d.y + d.z * d.z;
+    const double fx = r.origin.x - s.center.x, fy = r.origin.y - s.center.y,
+                 fz = r.origin.z - s.center.z;
+    const double c0 = fy * d.z - fz * d.y, c1 = fz * d.x - fx * d.z, c2 = fx * d.y - fy * d.x;
+    const double cc = c0 * c0 + c1 * c1 + c2 * c2;
+    const double ar2 = a * r2;
+    const double ff = fx * fx + fy * fy + fz * fz;
+    const double bound = 128.0 * u * (ff * a + ar2) + 0x1p-900;
+    bool out = ar2 - cc < -bound && bound <= kMax && cc <= kMax && a >= 0x1p-1020;
+    if (r.tmin >= 0.0) {
+        const double beta = fx * d.x + fy * d.y + fz * d.z;
+        const double fa = ff * a;
+        out = out || (ff - r2 > 8.0 * u * (ff + r2) && beta > 0.0 &&
+                      beta * beta > 64.0 * u * u * fa + 0x1p-900 && fa <= kMax && ff <= kMax);
+    }
+    return out;
+}
+
 TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     // The scan rules spheres out four (AVX) or two (SSE2) at a time before calling a kernel
     // (lines that miss by more than the rounding, spheres behind an origin outside them). Rays
@@ -275,7 +306,11 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
         std::printf("this processor has no AVX: only the two-lane rule is tested\n");
     std::mt19937_64 rng(20261204);
     std::uniform_real_distribution<double> dir(-1.0, 1.0);
-    const double eps[] = {0.0, 1e-17, 1e-16, 4e-16, 1e-15, 1e-14, 1e-12, 1e-8, 1e-3};
+    // 128u of the bound is ~1.5e-13 of r² for the lines below (|f|² ≈ 10r²): 3e-14 to 3e-13
+    // bracket it.
+    const double eps[] = {0.0,   1e-17, 1e-16, 4e-16, 1e-15, 1e-14,
+                          3e-14, 1e-13, 3e-13, 1e-12, 1e-8,  1e-3};
+    constexpr int kEps = sizeof eps / sizeof eps[0];
     int checked = 0, hits = 0, misses = 0, ruled_out = 0;
     // r² within [2⁻¹⁰⁰⁰, 2¹⁰⁰⁰] is ruled on (1e±150 near its ends); 1e±160 and 1e-300 go to the
     // kernel always.
@@ -295,8 +330,12 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                 sphere("aimed third", c + Vec3d{0.05, -0.05, 0.05} * apart, radius, 0));
             for (const bool fast : {false, true}) {
                 const SceneScan scan(s, fast);
-                for (int k = 0; k < 600; ++k) {
-                    const std::uint32_t aim = std::array<std::uint32_t, 3>{1, 3, 4}[k / 3 % 3];
+                for (int k = 0; k < 720; ++k) {
+                    // k's digits: the ray's kind (k % 4, below), then ε, then the aimed sphere,
+                    // then ε's sign, so that every aimed sphere meets every ε on every kind.
+                    const int e_index = k / 4 % kEps;
+                    const std::uint32_t aim =
+                        std::array<std::uint32_t, 3>{1, 3, 4}[k / (4 * kEps) % 3];
                     const Vec3d& ac = s.objects[aim].sphere.center;
                     const Vec3d unit = normalize(Vec3d{dir(rng), dir(rng), dir(rng)});
                     // Lengths from 3e-162 (d·d subnormal: its rounding is no longer relative),
@@ -306,7 +345,7 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                     // A unit vector across the direction.
                     Vec3d w = cross(unit, Vec3d{dir(rng), dir(rng), dir(rng)});
                     w = w / length(w);
-                    const double e = eps[k % 9] * (k % 2 ? 1.0 : -1.0);
+                    const double e = eps[e_index] * (k / (12 * kEps) % 2 ? 1.0 : -1.0);
                     Ray r;
                     if (k % 4 < 2) {
                         // The line passes at r(1 + e) from the centre, the origin 3r before or
@@ -326,6 +365,11 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
                     EXPECT_EQ(candidates, scan.sphere_candidates(r, SceneScan::Lanes::two));
                     if (four_lanes) {
                         EXPECT_EQ(candidates, scan.sphere_candidates(r, SceneScan::Lanes::four));
+                    }
+                    for (std::uint32_t j = 0; j < s.objects.size(); ++j) {
+                        EXPECT_EQ(!SceneScan::may_hit(candidates, j),
+                                  rule_rules_out(s.objects[j].sphere, r))
+                            << "sphere " << j << " " << radius << " " << offset << " " << k;
                     }
                     if (!SceneScan::may_hit(candidates, aim)) {
                         ++ruled_out;
@@ -378,6 +422,48 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     EXPECT_TRUE(SceneScan::may_hit(SceneScan(big, true).sphere_candidates(grazing), 0));
     EXPECT_TRUE(SceneScan(big, true).closest(grazing, true).has_value());
     EXPECT_TRUE(SceneScan(big, true).any(grazing));
+}
+
+TEST(SceneScan, FortySpheresAreRuledOnUpToTheThirtySecond) {
+    // Ten quads of spheres: the rule covers the first 32 (eight quads, bit k for sphere k) and
+    // leaves the rest to the kernels. Rays from around and inside the cluster: every bit is the
+    // scalar rule's, every sphere past the 32nd is a candidate, and the scan's answers at exact
+    // are linear_closest's and linear_any's.
+    Scene s;
+    s.materials.push_back(Material{});
+    for (int k = 0; k < 40; ++k) {
+        const double x = (k % 5) * 2.5, y = (k / 5 % 4) * 2.5, z = (k / 20) * 2.5;
+        s.objects.push_back(sphere("s" + std::to_string(k), {x, y, z}, 0.4 + 0.02 * k, 0));
+    }
+    const SceneScan scan(s, /*fast=*/false);
+    std::mt19937_64 rng(40);
+    std::uniform_real_distribution<double> pos(-3.0, 13.0), dir(-1.0, 1.0);
+    int hits = 0, beyond = 0, ruled_out = 0;
+    for (int i = 0; i < 4000; ++i) {
+        Ray r{{pos(rng), pos(rng), pos(rng)}, {dir(rng), dir(rng), dir(rng)}};
+        if (i % 2 == 1)  // aimed near a sphere's centre, every sphere in turn
+            r.direction = s.objects[i / 2 % 40].sphere.center - r.origin +
+                          Vec3d{dir(rng), dir(rng), dir(rng)} * 0.3;
+        r.tmin = i % 3 == 0 ? -1.0 : 0.0;
+        const std::uint32_t candidates = scan.sphere_candidates(r);
+        for (std::uint32_t j = 0; j < 40; ++j) {
+            const bool out = !SceneScan::may_hit(candidates, j);
+            EXPECT_EQ(out, j < 32 && rule_rules_out(s.objects[j].sphere, r)) << i << " " << j;
+            ruled_out += out;
+        }
+        const auto want = linear_closest(s, r, true);
+        const auto got = scan.closest(r, true);
+        ASSERT_EQ(got.has_value(), want.has_value()) << i;
+        if (got) {
+            expect_identical(*got, *want, static_cast<std::size_t>(i));
+            ++hits;
+            beyond += got->object >= 32;
+        }
+        EXPECT_EQ(scan.any(r), linear_any(s, r)) << i;
+    }
+    EXPECT_GT(hits, 1800);
+    EXPECT_GT(beyond, 200);           // spheres past the 32nd are found
+    EXPECT_GT(ruled_out, 4000 * 20);  // most of the first 32 are ruled out for most rays
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 #pragma once
 // Test helper: whether this translation unit is built under AddressSanitizer or ThreadSanitizer,
 // for tests whose measurements a sanitizer changes (its allocator maps and keeps memory; its
-// arithmetic is slower). GCC defines __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; clang answers
-// __has_feature (and, from version 9 on, also the GCC macros). Written once here: three tests
-// had each spelled it out.
+// arithmetic is slower). GCC defines __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; clang (14, as
+// Debian 12 has it) defines neither and answers __has_feature. Written once here for the tests
+// above engine/testing/ in the layer order (engine/huge_pages_test.cpp, below it, keeps its own).
 
 namespace raycastd::engine::testing {
 
