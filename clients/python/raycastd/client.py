@@ -8,6 +8,7 @@ once. Errors are the typed exceptions of `raycastd.errors`. The array queries (`
 
 from __future__ import annotations
 
+import base64
 import http.client
 import json
 import math
@@ -21,7 +22,13 @@ import urllib.parse
 from typing import Any, Callable, Iterable, Mapping, Sequence, Union
 
 from raycastd.arrays import ArrayQueries
-from raycastd.errors import ConnectionFailed, ClientTimeout, RaycastdError, error_from_response
+from raycastd.errors import (
+    ClientTimeout,
+    ConnectionFailed,
+    ModelLoadFailed,
+    RaycastdError,
+    error_from_response,
+)
 
 DEFAULT_URL = "http://127.0.0.1:8080"
 
@@ -211,6 +218,8 @@ class Client(ArrayQueries):
         if isinstance(scene, pathlib.Path):
             content_type = content_type or MODEL_TYPES.get(scene.suffix.lower())
             body = scene.read_bytes()
+            if content_type == "model/gltf+json":
+                body = embed_gltf_files(body, scene.parent)
         elif isinstance(scene, (bytes, bytearray)):
             body = bytes(scene)
         else:
@@ -425,6 +434,53 @@ def _put(body: dict[str, Any], **fields: Any) -> None:
 _PURE_POST = re.compile(
     r"^/v1/(intersect|explain|points|scenes|scenes/[A-Za-z0-9_]+/(intersect|trace|points))$"
 )
+
+
+# The media type of a glTF image by its file's suffix (the spec's two), when the file says none.
+_IMAGE_TYPES = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg"}
+
+
+def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
+    """A `.gltf` whose buffers or images are files beside it, with those files carried inside
+    it as base64 data URIs (glTF 2.0 §3.6.1.1, §3.8.4.2): the server takes only self-contained
+    uploads (a model's `uri`s are read inside its scene root alone, docs/api.md). A file that
+    refers to nothing outside itself is returned as it is. A buffer or image that cannot be read
+    raises ModelLoadFailed (no status: the client's own), naming it as the server would."""
+    try:
+        doc = json.loads(gltf)
+    except ValueError:
+        return gltf  # not JSON: the server says what is wrong with it
+    if not isinstance(doc, dict):
+        return gltf
+    changed = False
+    for kind in ("buffers", "images"):
+        entries = doc.get(kind)
+        if not isinstance(entries, list):
+            continue
+        for i, entry in enumerate(entries):
+            uri = entry.get("uri") if isinstance(entry, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:"):
+                continue
+            # A relative URI reference, percent-encoded (§3.2): the file beside the .gltf.
+            path = folder / urllib.parse.unquote(uri)
+            try:
+                data = path.read_bytes()
+            except OSError as exc:
+                raise ModelLoadFailed(
+                    f"the glTF file names {uri!r}, which cannot be read beside it: "
+                    f"{exc.strerror or exc}",
+                    code="model_load_failed",
+                    path=f"{kind}[{i}].uri",
+                ) from exc
+            if kind == "buffers":
+                media = "application/octet-stream"
+            else:
+                media = entry.get("mimeType") or _IMAGE_TYPES.get(
+                    path.suffix.lower(), "application/octet-stream"
+                )
+            entry["uri"] = f"data:{media};base64," + base64.b64encode(data).decode("ascii")
+            changed = True
+    return json.dumps(doc, separators=(",", ":")).encode() if changed else gltf
 
 
 def _dropped(conn: http.client.HTTPConnection) -> bool:

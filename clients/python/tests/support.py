@@ -7,10 +7,13 @@ port (`--port 0`) and stops it afterwards.
 
 from __future__ import annotations
 
+import json
 import os
 import pathlib
+import struct
 import sys
 import unittest
+import zlib
 
 HERE = pathlib.Path(__file__).resolve().parent
 PACKAGE_ROOT = HERE.parent
@@ -57,3 +60,43 @@ class ServerTestCase(unittest.TestCase):
     def tearDownClass(cls) -> None:
         cls.client.close()
         cls.server.close()
+
+
+def write_gltf_with_files(folder: pathlib.Path, name: str = "tri.gltf") -> pathlib.Path:
+    """A one-triangle glTF (the triangle of TRIANGLE, at z = 5) whose positions are a separate
+    .bin file and which names a separate 1×1 PNG image, as exporters write a `.gltf`."""
+    positions = struct.pack("<9f", 0, 0, 5, 2, 0, 5, 0, 2, 5)
+    (folder / "tri data.bin").write_bytes(positions)
+    raw = b"\x00\xff\x00\x00"  # a 1×1 8-bit RGB PNG, one red texel, written by hand
+    chunks = [
+        (b"IHDR", struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)),
+        (b"IDAT", zlib.compress(raw)),
+        (b"IEND", b""),
+    ]
+    data = b"\x89PNG\r\n\x1a\n" + b"".join(
+        struct.pack(">I", len(c)) + t + c + struct.pack(">I", zlib.crc32(t + c)) for t, c in chunks
+    )
+    (folder / "red.png").write_bytes(data)
+    doc = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": "tri%20data.bin", "byteLength": len(positions)}],
+        "bufferViews": [{"buffer": 0, "byteLength": len(positions)}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 3,
+                "type": "VEC3",
+                "min": [0, 0, 5],
+                "max": [2, 2, 5],
+            }
+        ],
+        "images": [{"uri": "red.png"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    }
+    path = folder / name
+    path.write_text(json.dumps(doc))
+    return path

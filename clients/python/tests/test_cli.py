@@ -12,7 +12,15 @@ import tempfile
 import unittest
 from unittest import mock
 
-from support import EXAMPLES, PACKAGE_ROOT, REPO, TUTORIAL, ServerTestCase, numpy
+from support import (
+    EXAMPLES,
+    PACKAGE_ROOT,
+    REPO,
+    TUTORIAL,
+    ServerTestCase,
+    numpy,
+    write_gltf_with_files,
+)
 
 from raycastd.cli import main
 from raycastd.png import read_png
@@ -257,6 +265,18 @@ class CliTest(ServerTestCase):
         code, _, err = self.run_cli("intersect", str(self.scene_file), "--ray", "0,0,0:0,0,0")
         self.assertEqual(code, 1)
         self.assertIn("invalid_ray", err)
+
+    def test_a_gltf_beside_its_files(self) -> None:
+        # The .gltf goes with its .bin and image inside it; without the .bin, exit 1 names it.
+        gltf = write_gltf_with_files(self.dir)
+        out = json.loads(self.ok("scene", "add", str(gltf), "--json"))
+        self.assertEqual(out["triangles"], 1)
+        (self.dir / "tri data.bin").unlink()
+        code, out, err = self.run_cli("render", str(gltf), "-o", str(self.dir / "x.png"))
+        self.assertEqual((code, out), (1, ""))
+        self.assertIn("model_load_failed", err)
+        self.assertIn("tri%20data.bin", err)
+        self.assertNotIn("Traceback", err)
 
     def test_raycastd_url_and_connection_failure(self) -> None:
         with mock.patch.dict(os.environ, {"RAYCASTD_URL": self.server.url}):

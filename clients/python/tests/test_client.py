@@ -15,7 +15,7 @@ import unittest
 from typing import Callable
 from unittest import mock
 
-from support import RAY, TRIANGLE, TUTORIAL, ServerTestCase
+from support import RAY, REPO, TRIANGLE, TUTORIAL, ServerTestCase, write_gltf_with_files
 
 import raycastd
 from raycastd import (
@@ -26,6 +26,7 @@ from raycastd import (
     NotFound,
     RaycastdError,
 )
+from raycastd.client import embed_gltf_files
 from raycastd.png import read_png
 
 
@@ -152,6 +153,53 @@ class EndpointsTest(ServerTestCase):
             "results"
         ]
         self.assertEqual([r["inside"] for r in inside], [True, False])
+
+
+class GltfFilesTest(ServerTestCase):
+    """A `.gltf` beside its buffers and images is sent with them inside it (data URIs): the
+    server takes only self-contained uploads."""
+
+    def test_buffers_and_images_beside_the_file_are_embedded(self) -> None:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = write_gltf_with_files(pathlib.Path(tmp))
+            # As it is, the server refuses it (it reads no file an upload names).
+            with self.assertRaises(ClientError) as cm:
+                self.client.request("POST", "/v1/scenes", path.read_bytes(), "model/gltf+json")
+            self.assertEqual(cm.exception.code, "model_load_failed")
+            packed = json.loads(embed_gltf_files(path.read_bytes(), path.parent))
+            self.assertTrue(
+                packed["buffers"][0]["uri"].startswith("data:application/octet-stream;")
+            )
+            self.assertTrue(packed["images"][0]["uri"].startswith("data:image/png;base64,"))
+            summary = self.client.add_scene(path)
+            self.assertEqual(summary["triangles"], 1)
+            hit = self.client.intersect(summary["id"], [RAY])["hits"][0]
+            self.assertEqual(hit["t"], 5)
+
+    def test_a_missing_file_is_named(self) -> None:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = write_gltf_with_files(pathlib.Path(tmp))
+            (pathlib.Path(tmp) / "red.png").unlink()
+            with self.assertRaises(raycastd.ModelLoadFailed) as cm:
+                self.client.add_scene(path)
+            self.assertEqual(
+                (cm.exception.code, cm.exception.path), ("model_load_failed", "images[0].uri")
+            )
+            self.assertIn("red.png", str(cm.exception))
+            self.assertIsNone(cm.exception.status)
+
+    def test_a_self_contained_file_is_sent_as_it_is(self) -> None:
+        body = b'{"asset": {"version": "2.0"}, "buffers": [{"uri": "data:,", "byteLength": 0}]}'
+        self.assertIs(embed_gltf_files(body, pathlib.Path(".")), body)
+        self.assertIs(embed_gltf_files(b"not json", pathlib.Path(".")), b"not json")
+
+    def test_the_fox_with_its_texture(self) -> None:
+        fox = REPO.parent / "shared" / "data" / "models" / "Fox" / "glTF" / "Fox.gltf"
+        if not fox.exists():
+            self.skipTest(f"the shared models are not at {fox.parent}")
+        summary = self.client.add_scene(fox)
+        self.assertGreater(summary["triangles"], 500)
+        self.assertTrue(summary["features"]["textures"], summary)
 
 
 class ErrorsTest(ServerTestCase):
