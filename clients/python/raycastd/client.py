@@ -247,6 +247,10 @@ class Client(ArrayQueries):
             return scene
         if isinstance(scene, pathlib.Path):
             key = "file:" + str(scene.resolve()) + ":" + str(scene.stat().st_mtime_ns)
+            if MODEL_TYPES.get(scene.suffix.lower()) == "model/gltf+json":
+                # The files it carries count too: an edited .bin is a new scene.
+                for f in gltf_files(scene.read_bytes(), scene.parent):
+                    key += f":{f}:{f.stat().st_mtime_ns if f.exists() else -1}"
         else:
             key = "doc:" + json.dumps(scene, sort_keys=True)
         if key not in self._scene_ids:
@@ -436,64 +440,131 @@ _PURE_POST = re.compile(
 )
 
 
-# The media type of a glTF image by its file's suffix (the spec's two), when the file says none.
-_IMAGE_TYPES = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg"}
+def _gltf_file(folder: pathlib.Path, uri: str, where: str) -> pathlib.Path:
+    """The file a glTF `uri` names beside the `.gltf` in `folder`: a relative reference,
+    percent-decoded byte by byte (glTF 2.0 §3.2, as the server decodes it). One with a scheme
+    (`file:`, `http:`), a host or an absolute path, or one that climbs out of the folder, is
+    refused (ModelLoadFailed at `where`), as the server refuses them in its scene root: packing a
+    `.gltf` must not send a file from elsewhere on this machine."""
+    parts = urllib.parse.urlsplit(uri)
+    relative = os.fsdecode(urllib.parse.unquote_to_bytes(parts.path))
+    if parts.scheme or parts.netloc or not relative or pathlib.PurePath(relative).is_absolute():
+        raise ModelLoadFailed(
+            f"the glTF file names {uri!r}: only a file beside it (a relative reference) can be "
+            "sent with it",
+            code="model_load_failed",
+            path=where,
+        )
+    path = folder / relative
+    root = folder.resolve()
+    if root != path.resolve() and root not in path.resolve().parents:
+        raise ModelLoadFailed(
+            f"the glTF file names {uri!r}, outside its folder {folder}",
+            code="model_load_failed",
+            path=where,
+        )
+    return path
 
 
-def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
-    """A `.gltf` whose buffers or images are files beside it, with those files carried inside
-    it as base64 data URIs (glTF 2.0 §3.6.1.1, §3.8.4.2): the server takes only self-contained
-    uploads (a model's `uri`s are read inside its scene root alone, docs/api.md). A file that
-    refers to nothing outside itself is returned as it is. A buffer or image that cannot be read
-    raises ModelLoadFailed (no status: the client's own), naming it as the server would."""
+def _gltf_doc(gltf: bytes) -> dict | None:
     try:
         doc = json.loads(gltf)
     except ValueError:
-        return gltf  # not JSON: the server says what is wrong with it
-    if not isinstance(doc, dict):
-        return gltf
-    changed = False
+        return None  # not JSON: the server says what is wrong with it
+    return doc if isinstance(doc, dict) else None
+
+
+def _gltf_references(doc: dict):
+    """(kind, index, entry, uri) of each buffer and image that names something by `uri`, other
+    than a data URI."""
     for kind in ("buffers", "images"):
         entries = doc.get(kind)
         if not isinstance(entries, list):
             continue
         for i, entry in enumerate(entries):
             uri = entry.get("uri") if isinstance(entry, dict) else None
-            if not isinstance(uri, str) or uri.startswith("data:"):
-                continue
-            # A relative URI reference, percent-encoded (§3.2): the file beside the .gltf.
-            path = folder / urllib.parse.unquote(uri)
+            if isinstance(uri, str) and not uri.startswith("data:"):
+                yield kind, i, entry, uri
+
+
+def gltf_files(gltf: bytes, folder: pathlib.Path) -> list[pathlib.Path]:
+    """The files beside a `.gltf` that embed_gltf_files would carry (for a cache key)."""
+    doc = _gltf_doc(gltf)
+    out = []
+    for kind, i, _, uri in _gltf_references(doc) if doc else ():
+        out.append(_gltf_file(folder, uri, f"{kind}[{i}].uri"))
+    return out
+
+
+def _image_media_type(data: bytes) -> str | None:
+    """PNG or JPEG by the file's signature: the data URI prefixes the server's glTF reader takes
+    for images (tinygltf's: image/png, image/jpeg); None for anything else."""
+    if data.startswith(b"\x89PNG\r\n\x1a\n"):
+        return "image/png"
+    if data.startswith(b"\xff\xd8\xff"):
+        return "image/jpeg"
+    return None
+
+
+def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
+    """A `.gltf` whose buffers or images are files beside it, with those files carried inside
+    it as base64 data URIs (glTF 2.0 §3.6.1.1, §3.8.4.2): the server takes only self-contained
+    uploads (a model's `uri`s are read inside its scene root alone, docs/api.md). A file that
+    refers to nothing outside itself is returned as it is.
+
+    A buffer that cannot be read, or a `uri` that is not a relative reference inside the
+    `.gltf`'s folder, raises ModelLoadFailed (no status: the client's own) naming it
+    (`buffers[0].uri`). An image that cannot be read, or is neither PNG nor JPEG, is left as it
+    is named: the server then warns that it cannot read it and uses the material's colour
+    alone, as it does for any image it cannot decode. The encoded file is about 4/3 of the files'
+    size, which the server's --max-body-mb bounds."""
+    doc = _gltf_doc(gltf)
+    if doc is None:
+        return gltf
+    changed = False
+    read: dict[pathlib.Path, bytes] = {}  # a file named twice is read once
+    for kind, i, entry, uri in list(_gltf_references(doc)):
+        where = f"{kind}[{i}].uri"
+        path = _gltf_file(folder, uri, where)
+        if path not in read:
             try:
-                data = path.read_bytes()
+                read[path] = path.read_bytes()
             except OSError as exc:
+                if kind == "images":
+                    continue
                 raise ModelLoadFailed(
-                    f"the glTF file names {uri!r}, which cannot be read beside it: "
+                    f"the glTF file names {uri!r}, which cannot be read at {path}: "
                     f"{exc.strerror or exc}",
                     code="model_load_failed",
-                    path=f"{kind}[{i}].uri",
+                    path=where,
                 ) from exc
-            if kind == "buffers":
-                media = "application/octet-stream"
-            else:
-                media = entry.get("mimeType") or _IMAGE_TYPES.get(
-                    path.suffix.lower(), "application/octet-stream"
-                )
-            entry["uri"] = f"data:{media};base64," + base64.b64encode(data).decode("ascii")
-            changed = True
+        data = read[path]
+        if kind == "buffers":
+            media = "application/octet-stream"
+        else:
+            media = _image_media_type(data)
+            if media is None:
+                continue
+        entry["uri"] = f"data:{media};base64," + base64.b64encode(data).decode("ascii")
+        changed = True
     return json.dumps(doc, separators=(",", ":")).encode() if changed else gltf
 
 
 def _dropped(conn: http.client.HTTPConnection) -> bool:
     """Whether the server has closed (or written unasked on) a connection kept alive between
     requests: its socket is readable with nothing asked. As urllib3 checks a pooled connection
-    before it reuses it."""
+    before it reuses it, with poll() where there is one (select() takes no descriptor past
+    1023)."""
     sock = conn.sock
     if sock is None:
         return False  # not connected yet: http.client connects on the request
-    try:
-        readable, _, _ = select.select([sock], [], [], 0)
-    except (OSError, ValueError):  # closed under us
-        return True
+    if sock.fileno() < 0:
+        return True  # closed under us
+    if hasattr(select, "poll"):
+        poller = select.poll()
+        poller.register(sock, select.POLLIN)
+        return bool(poller.poll(0))
+    readable, _, _ = select.select([sock], [], [], 0)
     return bool(readable)
 
 

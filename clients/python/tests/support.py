@@ -62,11 +62,15 @@ class ServerTestCase(unittest.TestCase):
         cls.server.close()
 
 
-def write_gltf_with_files(folder: pathlib.Path, name: str = "tri.gltf") -> pathlib.Path:
-    """A one-triangle glTF (the triangle of TRIANGLE, at z = 5) whose positions are a separate
-    .bin file and which names a separate 1×1 PNG image, as exporters write a `.gltf`."""
-    positions = struct.pack("<9f", 0, 0, 5, 2, 0, 5, 0, 2, 5)
-    (folder / "tri data.bin").write_bytes(positions)
+def write_gltf_with_files(
+    folder: pathlib.Path, name: str = "tri.gltf", z: float = 5.0, image_uri: str = "red.png"
+) -> pathlib.Path:
+    """A one-triangle glTF (the triangle of TRIANGLE, at `z`) whose positions and texture
+    coordinates are a separate .bin file ("tri data.bin", named percent-encoded) and whose
+    base colour is a separate 1×1 red PNG (`image_uri`), as exporters write a `.gltf`."""
+    positions = struct.pack("<9f", 0, 0, z, 2, 0, z, 0, 2, z)
+    uvs = struct.pack("<6f", 0, 0, 1, 0, 0, 1)
+    (folder / "tri data.bin").write_bytes(positions + uvs)
     raw = b"\x00\xff\x00\x00"  # a 1×1 8-bit RGB PNG, one red texel, written by hand
     chunks = [
         (b"IHDR", struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)),
@@ -79,20 +83,28 @@ def write_gltf_with_files(folder: pathlib.Path, name: str = "tri.gltf") -> pathl
     (folder / "red.png").write_bytes(data)
     doc = {
         "asset": {"version": "2.0"},
-        "buffers": [{"uri": "tri%20data.bin", "byteLength": len(positions)}],
-        "bufferViews": [{"buffer": 0, "byteLength": len(positions)}],
+        "buffers": [{"uri": "tri%20data.bin", "byteLength": len(positions) + len(uvs)}],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": len(positions)},
+            {"buffer": 0, "byteOffset": len(positions), "byteLength": len(uvs)},
+        ],
         "accessors": [
             {
                 "bufferView": 0,
                 "componentType": 5126,
                 "count": 3,
                 "type": "VEC3",
-                "min": [0, 0, 5],
-                "max": [2, 2, 5],
-            }
+                "min": [0, 0, z],
+                "max": [2, 2, z],
+            },
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"},
         ],
-        "images": [{"uri": "red.png"}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "images": [{"uri": image_uri}],
+        "textures": [{"source": 0}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}
+        ],
         "nodes": [{"mesh": 0}],
         "scenes": [{"nodes": [0]}],
         "scene": 0,

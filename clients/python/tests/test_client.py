@@ -6,6 +6,7 @@ import http.server
 import json
 import os
 import pathlib
+import select
 import socket
 import struct
 import tempfile
@@ -159,34 +160,64 @@ class GltfFilesTest(ServerTestCase):
     """A `.gltf` beside its buffers and images is sent with them inside it (data URIs): the
     server takes only self-contained uploads."""
 
-    def test_buffers_and_images_beside_the_file_are_embedded(self) -> None:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = write_gltf_with_files(pathlib.Path(tmp))
-            # As it is, the server refuses it (it reads no file an upload names).
-            with self.assertRaises(ClientError) as cm:
-                self.client.request("POST", "/v1/scenes", path.read_bytes(), "model/gltf+json")
-            self.assertEqual(cm.exception.code, "model_load_failed")
-            packed = json.loads(embed_gltf_files(path.read_bytes(), path.parent))
-            self.assertTrue(
-                packed["buffers"][0]["uri"].startswith("data:application/octet-stream;")
-            )
-            self.assertTrue(packed["images"][0]["uri"].startswith("data:image/png;base64,"))
-            summary = self.client.add_scene(path)
-            self.assertEqual(summary["triangles"], 1)
-            hit = self.client.intersect(summary["id"], [RAY])["hits"][0]
-            self.assertEqual(hit["t"], 5)
+    def setUp(self) -> None:
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.dir = pathlib.Path(tmp.name)
 
-    def test_a_missing_file_is_named(self) -> None:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = write_gltf_with_files(pathlib.Path(tmp))
-            (pathlib.Path(tmp) / "red.png").unlink()
+    def test_buffers_and_images_beside_the_file_are_embedded(self) -> None:
+        path = write_gltf_with_files(self.dir)
+        # As it is, the server refuses it (it reads no file an upload names).
+        with self.assertRaises(ClientError) as cm:
+            self.client.request("POST", "/v1/scenes", path.read_bytes(), "model/gltf+json")
+        self.assertEqual(cm.exception.code, "model_load_failed")
+        packed = json.loads(embed_gltf_files(path.read_bytes(), path.parent))
+        self.assertTrue(packed["buffers"][0]["uri"].startswith("data:application/octet-stream;"))
+        self.assertTrue(packed["images"][0]["uri"].startswith("data:image/png;base64,"))
+        summary = self.client.add_scene(path)
+        self.assertEqual(summary["triangles"], 1)
+        self.assertTrue(summary["features"]["textures"], summary)  # the PNG was decoded
+        self.assertEqual(summary["warnings"], [])
+        hit = self.client.intersect(summary["id"], [RAY])["hits"][0]
+        self.assertEqual(hit["t"], 5)
+
+    def test_a_missing_buffer_is_named_and_a_missing_image_left_to_the_server(self) -> None:
+        path = write_gltf_with_files(self.dir)
+        (self.dir / "red.png").unlink()
+        summary = self.client.add_scene(path)  # the image as the server would: a warning
+        self.assertEqual(summary["triangles"], 1)
+        self.assertFalse(summary["features"]["textures"])
+        self.assertTrue(any("red.png" in w for w in summary["warnings"]), summary["warnings"])
+        (self.dir / "tri data.bin").unlink()
+        with self.assertRaises(raycastd.ModelLoadFailed) as cm:
+            self.client.add_scene(path)
+        self.assertEqual(
+            (cm.exception.code, cm.exception.path), ("model_load_failed", "buffers[0].uri")
+        )
+        self.assertIn("tri%20data.bin", str(cm.exception))
+        self.assertIsNone(cm.exception.status)
+
+    def test_only_files_beside_it_are_sent(self) -> None:
+        # Packing a .gltf from elsewhere must not carry other files of this machine with it.
+        inner = self.dir / "model"
+        inner.mkdir()
+        (self.dir / "secret.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+        for uri in ("../secret.png", "/etc/hostname", "file:///etc/hostname", "http://x/y.png"):
+            path = write_gltf_with_files(inner, image_uri=uri)
             with self.assertRaises(raycastd.ModelLoadFailed) as cm:
-                self.client.add_scene(path)
-            self.assertEqual(
-                (cm.exception.code, cm.exception.path), ("model_load_failed", "images[0].uri")
-            )
-            self.assertIn("red.png", str(cm.exception))
-            self.assertIsNone(cm.exception.status)
+                embed_gltf_files(path.read_bytes(), inner)
+            self.assertEqual(cm.exception.path, "images[0].uri", uri)
+
+    def test_an_edited_buffer_is_a_new_scene(self) -> None:
+        path = write_gltf_with_files(self.dir)
+        first = self.client.scene_id(path)
+        self.assertEqual(self.client.scene_id(path), first)  # the same files: asked once
+        write_gltf_with_files(self.dir, z=7.0)
+        bin_file = self.dir / "tri data.bin"
+        os.utime(bin_file, ns=(bin_file.stat().st_atime_ns, bin_file.stat().st_mtime_ns + 10**9))
+        second = self.client.scene_id(path)
+        self.assertNotEqual(second, first)
+        self.assertEqual(self.client.intersect(second, [RAY])["hits"][0]["t"], 7)
 
     def test_a_self_contained_file_is_sent_as_it_is(self) -> None:
         body = b'{"asset": {"version": "2.0"}, "buffers": [{"uri": "data:,", "byteLength": 0}]}'
@@ -400,7 +431,8 @@ class KeptAliveTest(unittest.TestCase):
         url, seen = self.serve(idle_close=True)
         with Client(url, timeout=5) as c:
             c.intersect("sc_0", [RAY])
-            time.sleep(0.2)  # the server's close reaches the client
+            assert c._conn is not None and c._conn.sock is not None
+            select.select([c._conn.sock], [], [], 10)  # the server's close reaches the client
             first = c._conn
             c.request("POST", "/v1/scenes/sc_0/render", b"{}", "application/json")
             self.assertIsNot(c._conn, first)  # a fresh connection
