@@ -100,6 +100,9 @@ class Client(ArrayQueries):
         self._conn: http.client.HTTPConnection | None = None
         self._used = False  # whether the open connection has carried a request already
         self._scene_ids: dict[str, str] = {}  # registered documents and files, by content
+        # The files each .gltf (by path and modification time) names: parsed once, not on every
+        # call that names the .gltf.
+        self._gltf_refs: dict[str, list[pathlib.Path]] = {}
 
     # -- lifecycle ---------------------------------------------------------------------------
 
@@ -249,7 +252,10 @@ class Client(ArrayQueries):
             key = "file:" + str(scene.resolve()) + ":" + str(scene.stat().st_mtime_ns)
             if MODEL_TYPES.get(scene.suffix.lower()) == "model/gltf+json":
                 # The files it carries count too: an edited .bin is a new scene.
-                for f in gltf_files(scene.read_bytes(), scene.parent):
+                refs = self._gltf_refs.get(key)
+                if refs is None:
+                    refs = self._gltf_refs[key] = gltf_files(scene.read_bytes(), scene.parent)
+                for f in refs:
                     key += f":{f}:{f.stat().st_mtime_ns if f.exists() else -1}"
         else:
             key = "doc:" + json.dumps(scene, sort_keys=True)
