@@ -212,6 +212,9 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
         throw load_error(loaded.status(), "");
     engine::LoadedModel& model = *loaded;
     engine::Scene scene;
+    // A model file without a camera of its own is seen from its front, as model viewers show
+    // it; a scene document keeps the tutorial's side (engine/scene/scene.h DefaultView).
+    scene.default_view = engine::DefaultView::from_plus_z;
     scene.materials.push_back(engine::Material{});
     scene.material_names.push_back("default");
     const std::uint32_t base = adopt_materials(model, display_name, scene);

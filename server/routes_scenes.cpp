@@ -4,6 +4,7 @@
 #include "server/model_source.h"
 #include "server/scene_registry.h"
 #include "server/schema/json_writer.h"
+#include "server/schema/scene_doc.h"
 
 namespace raycastd::server {
 
@@ -27,6 +28,16 @@ std::string info_body(const SceneInfo& i) {
     w.raw(",\"reflection\":").boolean(i.features.reflection);
     w.raw(",\"refraction\":").boolean(i.features.refraction);
     w.raw(",\"textures\":").boolean(i.features.textures).ch('}');
+    w.raw(",\"camera\":");
+    if (i.camera) {
+        w.raw("{\"position\":").vec(i.camera->position);
+        w.raw(",\"look_at\":").vec(i.camera->look_at);
+        w.raw(",\"up\":").vec(i.camera->up);
+        w.raw(",\"fov_y_deg\":").number(i.camera->fov_y_deg).ch('}');
+    } else {
+        w.raw("null");
+    }
+    w.raw(",\"default_view\":").string(default_view_name(i.default_view));
     w.raw(",\"memory_bytes\":").integer(i.memory_bytes);
     w.raw(",\"topology\":");
     write_topology(w, i.topology);

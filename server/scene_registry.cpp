@@ -18,6 +18,7 @@
 #include "server/content_hash.h"
 #include "server/durable_file.h"
 #include "server/schema/json_read.h"
+#include "server/schema/scene_doc.h"
 
 namespace raycastd::server {
 
@@ -38,7 +39,15 @@ Json info_json(const SceneInfo& i) {
                 {"textures", i.features.textures}}},
               {"warnings", i.warnings},
               {"memory_bytes", i.memory_bytes},
-              {"topology", topology_to_json(i.topology)}};
+              {"topology", topology_to_json(i.topology)},
+              {"default_view", default_view_name(i.default_view)}};
+    if (i.camera) {
+        const engine::Camera& c = *i.camera;
+        j["camera"] = {{"position", {c.position.x, c.position.y, c.position.z}},
+                       {"look_at", {c.look_at.x, c.look_at.y, c.look_at.z}},
+                       {"up", {c.up.x, c.up.y, c.up.z}},
+                       {"fov_y_deg", c.fov_y_deg}};
+    }
     if (i.bounds.empty()) {
         j["bounds"] = nullptr;
     } else {
@@ -48,7 +57,9 @@ Json info_json(const SceneInfo& i) {
     return j;
 }
 
-SceneInfo info_from_json(const Json& j) {
+/// `content_type` is the scene's source's: scenes saved before the summary named its default
+/// view take the one their source gives them (a model file's front, a document's −z).
+SceneInfo info_from_json(const Json& j, const std::string& content_type) {
     SceneInfo i;
     i.id = j.at("id").get<std::string>();
     i.objects = j.at("objects").get<std::size_t>();
@@ -62,6 +73,16 @@ SceneInfo info_from_json(const Json& j) {
     i.memory_bytes = j.at("memory_bytes").get<std::size_t>();
     if (const auto t = j.find("topology"); t != j.end())  // absent in scenes saved before it
         i.topology = topology_from_json(*t);
+    if (const auto v = j.find("default_view"); v != j.end()) {
+        const auto view = default_view_from_name(v->get<std::string>());
+        if (!view)
+            throw std::runtime_error("unknown default_view " + v->dump());
+        i.default_view = *view;
+    } else if (content_type != "application/json") {
+        i.default_view = engine::DefaultView::from_plus_z;
+    }
+    if (const auto c = j.find("camera"); c != j.end())  // absent when it has none or was saved
+        i.camera = parse_camera(*c, "/camera", ErrorCode::invalid_scene);  // before it was told
     if (!j.at("bounds").is_null()) {
         const auto lo = j.at("bounds").at("min").get<std::vector<double>>();
         const auto hi = j.at("bounds").at("max").get<std::vector<double>>();
@@ -84,6 +105,8 @@ SceneInfo describe(const engine::QueryEngine& engine) {
     i.warnings = s.warnings;
     i.memory_bytes = engine.memory_bytes();
     i.topology = topology_entries(engine);
+    i.camera = s.camera;
+    i.default_view = s.default_view;
     return i;
 }
 
@@ -241,7 +264,7 @@ std::optional<SceneRegistry::Entry> SceneRegistry::read_saved(const std::string&
     try {
         const Json m = Json::parse(*meta);
         Entry e;
-        e.info = info_from_json(m.at("info"));
+        e.info = info_from_json(m.at("info"), m.at("content_type").get<std::string>());
         e.request_key = m.at("request_key").get<std::string>();
         e.file_sha = m.at("file_sha").get<std::map<std::string, std::string>>();
         if (e.info.id != id)

@@ -47,8 +47,11 @@ struct SceneInfo {
     double build_ms = 0;
     engine::Features features;
     std::vector<std::string> warnings;
-    std::size_t memory_bytes = 0;         ///< estimate of the prepared scene's footprint
-    std::vector<TopologyEntry> topology;  ///< one per mesh object (schema/topology_doc.h)
+    std::size_t memory_bytes = 0;          ///< estimate of the prepared scene's footprint
+    std::vector<TopologyEntry> topology;   ///< one per mesh object (schema/topology_doc.h)
+    std::optional<engine::Camera> camera;  ///< the scene's own (its document's, else its file's)
+    /// The side of the bounds a render without a camera sees the scene from.
+    engine::DefaultView default_view = engine::DefaultView::from_minus_z;
 };
 
 class SceneRegistry {

@@ -120,6 +120,47 @@ TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
     EXPECT_FALSE(fs::exists(live_lock));
 }
 
+TEST(SceneRegistry, SummaryKeepsTheCameraAndDefaultViewOfScenesSavedBeforeThem) {
+    // Scenes saved before the summary carried `camera` and `default_view` have neither in their
+    // meta.json: they come back with no camera and the view of their source's kind (a model
+    // file's +z, a document's −z), which is what a rebuild gives them.
+    TempDir dir;
+    const std::string off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    std::string doc_id, model_id;
+    {
+        Fixture f(dir.path.string());
+        const SceneInfo doc = f.registry.add({"application/json", kSpheres}, no_files()).info;
+        const SceneInfo model = f.registry.add({"model/off", off}, no_files()).info;
+        EXPECT_EQ(doc.default_view, engine::DefaultView::from_minus_z);
+        EXPECT_EQ(model.default_view, engine::DefaultView::from_plus_z);
+        EXPECT_FALSE(model.camera);
+        doc_id = doc.id;
+        model_id = model.id;
+    }
+    for (const std::string& id : {doc_id, model_id}) {
+        const fs::path meta = dir.path / "scenes" / id / "meta.json";
+        std::ifstream in(meta);
+        Json m = Json::parse(in);
+        ASSERT_TRUE(m.at("info").contains("default_view"));
+        m["info"].erase("default_view");
+        m["info"].erase("camera");
+        std::ofstream(meta) << m.dump();
+    }
+    Fixture g(dir.path.string());
+    EXPECT_EQ(g.registry.info(doc_id)->default_view, engine::DefaultView::from_minus_z);
+    EXPECT_EQ(g.registry.info(model_id)->default_view, engine::DefaultView::from_plus_z);
+    // A camera is saved and read back exactly.
+    const std::string with_camera = R"({"objects":[{"type":"sphere","center":[0,0,10],
+        "radius":2}],"camera":{"position":[0.1,2,-3],"look_at":[0,0,10],"fov_y_deg":30}})";
+    const std::string id = g.registry.add({"application/json", with_camera}, no_files()).info.id;
+    Fixture h(dir.path.string());
+    const auto info = h.registry.info(id);
+    ASSERT_TRUE(info && info->camera);
+    EXPECT_EQ(info->camera->position, (engine::Vec3d{0.1, 2, -3}));
+    EXPECT_EQ(info->camera->up, (engine::Vec3d{0, 1, 0}));
+    EXPECT_EQ(info->camera->fov_y_deg, 30.0);
+}
+
 // Two registries on one data dir, as two replicas are: each serves what the other registered,
 // on demand, and a scene deleted through one is gone from the other once it looks on disk.
 TEST(SceneRegistry, ReplicasShareADataDir) {

@@ -249,10 +249,21 @@ TEST(ModelCorpus, DuckCameraFromNodeHierarchy) {
     EXPECT_NEAR(model->camera->fov_y_deg, 0.6605925559997559 * 180.0 / 3.14159265358979323846,
                 1e-9);
     // The camera looks along its −Z: the third matrix column negated.
-    Vec3d forward = model->camera->look_at - model->camera->position;
+    const Vec3d forward = normalize(model->camera->look_at - model->camera->position);
     EXPECT_NEAR(forward.x, -0.5364750623703003, 1e-6);
     EXPECT_NEAR(forward.y, -0.6211478114128113, 1e-6);
     EXPECT_NEAR(forward.z, 0.571287989616394, 1e-6);
+    // Its look_at, the pivot the preview page orbits about, is where that axis passes closest
+    // to the centre of the duck's bounds: about 6.7 units ahead (not one), inside the bounding
+    // sphere (the axis passes 0.64 from the centre; the sphere's radius is 1.27).
+    Bounds3 bounds;
+    for (const ModelPart& part : model->parts)
+        for (const Vec3d& p : part.mesh.positions)
+            bounds.extend(p);
+    const Vec3d to_centre = bounds.center() - model->camera->look_at;
+    EXPECT_NEAR(dot(to_centre, forward), 0.0, 1e-12);
+    EXPECT_LT(length(to_centre), 0.5 * length(bounds.diagonal()));
+    EXPECT_GT(length(model->camera->look_at - model->camera->position), 5.0);
 }
 
 // sphere_lights: a spot on node 1, and on its children a directional, another (empty) spot

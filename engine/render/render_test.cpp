@@ -92,6 +92,33 @@ TEST(Camera, DefaultFramingFillsTheNarrowerFieldOfView) {
     }
 }
 
+TEST(Camera, ModelFilesAreFramedFromTheirFront) {
+    // DefaultView::from_plus_z (a model file, whose front faces +z): the same distance on the
+    // other side, looking along −z with +y up, so +x is on the right of the picture, as in a
+    // glTF viewer. from_minus_z (a scene document) mirrors it: +x on the left.
+    const Bounds3 b{{-1, 0, 2}, {3, 1, 4}};
+    const Vec3d c = b.center();
+    const Camera back = default_camera(b, 4.0 / 3.0, DefaultView::from_minus_z);
+    const Camera front = default_camera(b, 4.0 / 3.0, DefaultView::from_plus_z);
+    EXPECT_EQ(front.look_at, c);
+    EXPECT_GT(front.position.z, c.z);
+    EXPECT_LT(back.position.z, c.z);
+    EXPECT_NEAR(front.position.z - c.z, c.z - back.position.z, 1e-12 * c.z);
+    EXPECT_EQ(front.position.x, c.x);
+    EXPECT_EQ(front.position.y, c.y);
+    EXPECT_GT(CameraRays(front, 40, 30).ray(40, 15).direction.x, 0.0);
+    EXPECT_LT(CameraRays(back, 40, 30).ray(40, 15).direction.x, 0.0);
+
+    Scene s = testing::tutorial_spheres();
+    EXPECT_LT(resolve_camera(s, std::nullopt, 40, 30).position.z, s.bounds().center().z);
+    s.default_view = DefaultView::from_plus_z;
+    EXPECT_GT(resolve_camera(s, std::nullopt, 40, 30).position.z, s.bounds().center().z);
+    Camera own;  // the scene's own camera wins over either side
+    own.position = {0, 0, -1};
+    s.camera = own;
+    EXPECT_EQ(resolve_camera(s, std::nullopt, 40, 30).position, own.position);
+}
+
 TEST(Render, NoLightsTracesNoShadowRays) {
     auto engine = prepare(testing::tutorial_spheres());
     RenderOptions o = small();

@@ -128,7 +128,7 @@ Status validate(const Scene& scene) {
     return {};
 }
 
-Camera default_camera(const Bounds3& bounds, double aspect) {
+Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view) {
     Camera cam;
     if (bounds.empty())
         return cam;
@@ -144,7 +144,7 @@ Camera default_camera(const Bounds3& bounds, double aspect) {
                                   : half_fov_y;
     const double dist = radius / std::sin(std::min(half_fov_y, half_fov_x));
     cam.look_at = c;
-    cam.position = c - Vec3d{0.0, 0.0, dist};
+    cam.position = c + Vec3d{0.0, 0.0, view == DefaultView::from_plus_z ? dist : -dist};
     return cam;
 }
 

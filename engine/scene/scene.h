@@ -39,12 +39,25 @@ struct Features {
     bool textures = false;    ///< some textured material is on a mesh with texture coordinates
 };
 
+/// Which side of its bounds a scene is seen from when neither the request nor the scene has a
+/// camera of its own (default_camera).
+enum class DefaultView {
+    /// On −z, looking along +z: the tutorial's convention (its eye at the origin, the spheres at
+    /// z = 8–10), kept for scene documents.
+    from_minus_z,
+    /// On +z, looking along −z with +y up: a model's front. glTF 2.0 §3.4: "The front of a glTF
+    /// asset faces +Z"; glTF viewers start there, and model viewers in general start from the
+    /// OpenGL eye (on +z, looking down −z), whatever the file's format.
+    from_plus_z,
+};
+
 struct Scene {
     std::vector<Object> objects;
     std::vector<Material> materials;  ///< materials[0] is the default grey Phong material
     std::vector<std::string> material_names;
     std::vector<Light> lights;
     std::optional<Camera> camera;
+    DefaultView default_view = DefaultView::from_minus_z;
     std::vector<std::string> warnings;
 
     std::size_t triangle_count() const;
@@ -59,10 +72,10 @@ struct Scene {
 /// indices in range, material indices valid); the path names the offending object.
 Status validate(const Scene& scene);
 
-/// The default camera for an image of `aspect` = width / height: looks along +z at the centre
-/// of the bounds, from the distance at which their bounding sphere (centre, half the diagonal)
-/// just fills the narrower of the two fields of view (engine/scene/scene.cpp). The camera at the
-/// origin looking along +z for empty bounds.
-Camera default_camera(const Bounds3& bounds, double aspect);
+/// The default camera for an image of `aspect` = width / height: looks at the centre of the
+/// bounds from the side `view` names (+y up), from the distance at which their bounding sphere
+/// (centre, half the diagonal) just fills the narrower of the two fields of view
+/// (engine/scene/scene.cpp). The camera at the origin looking along +z for empty bounds.
+Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view);
 
 }  // namespace raycastd::engine

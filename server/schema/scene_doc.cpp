@@ -188,6 +188,18 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
 
 }  // namespace
 
+const char* default_view_name(engine::DefaultView view) {
+    return view == engine::DefaultView::from_plus_z ? "+z" : "-z";
+}
+
+std::optional<engine::DefaultView> default_view_from_name(std::string_view name) {
+    if (name == "+z")
+        return engine::DefaultView::from_plus_z;
+    if (name == "-z")
+        return engine::DefaultView::from_minus_z;
+    return std::nullopt;
+}
+
 engine::Camera parse_camera(const Json& j, const std::string& path, ErrorCode code) {
     require_object(j, path, code);
     engine::Camera c;

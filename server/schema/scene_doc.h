@@ -6,7 +6,9 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "engine/scene/scene.h"
 #include "server/schema/json_read.h"
@@ -21,6 +23,12 @@ using MeshObjectLoader = std::function<std::shared_ptr<const engine::TriangleMes
 /// A camera object {position, look_at, up, fov_y_deg} (defaults for what is missing); errors
 /// are `code` (invalid_scene in documents, invalid_request in render requests) with pointers.
 engine::Camera parse_camera(const Json& j, const std::string& path, ErrorCode code);
+
+/// The summary's name of a default view: "-z" or "+z", the side of the bounds the default
+/// camera stands on (docs/api.md, "POST /v1/scenes").
+const char* default_view_name(engine::DefaultView view);
+/// The view a name of default_view_name gives; nullopt for any other string.
+std::optional<engine::DefaultView> default_view_from_name(std::string_view name);
 
 /// Parses and validates a scene document. `load_mesh` may be empty, in which case `mesh`
 /// objects are rejected with invalid_scene.

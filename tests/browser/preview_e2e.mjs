@@ -191,9 +191,30 @@ const decode = () =>
         // percentile. A flat silhouette has ~0 (only its antialiased edge differs).
         lum.sort((a, b) => a - b);
         const pct = (q) => (lum.length ? lum[Math.min(lum.length - 1, Math.floor(q * lum.length))] : 0);
+        // A pixel on the model to click: the foreground pixel nearest the foreground's centroid
+        // whose 5 × 5 neighbourhood is all foreground (not on a silhouette, where a pixel's
+        // centre may miss what its antialiased colour shows).
+        const isFgAt = (x, y) => {
+            const i = 4 * (y * w + x);
+            return Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 12;
+        };
+        let sx = 0;
+        let sy = 0;
+        for (let y = 0; y < h; y++) for (let x = 0; x < w; x++) if (isFgAt(x, y)) (sx += x), (sy += y);
+        let fgPixel = null;
+        let best = Infinity;
+        for (let y = 2; y < h - 2 && fg; y++) {
+            for (let x = 2; x < w - 2; x++) {
+                const dist = (x - sx / fg) ** 2 + (y - sy / fg) ** 2;
+                if (dist >= best) continue;
+                let inside = true;
+                for (let v = -2; v <= 2 && inside; v++) for (let u = -2; u <= 2 && inside; u++) inside = isFgAt(x + u, y + v);
+                if (inside) (best = dist), (fgPixel = [x, y]);
+            }
+        }
         return {
             w, h, fg: fg / (w * h), centralFg: centralFg / central, colours: colours.size,
-            lumSpread: pct(0.9) - pct(0.1), thumb: thumb.map((v) => v / per),
+            lumSpread: pct(0.9) - pct(0.1), thumb: thumb.map((v) => v / per), fgPixel,
         };
     });
 const thumbDiff = (a, b) => a.thumb.reduce((s, v, i) => s + Math.abs(v - b.thumb[i]), 0) / a.thumb.length;
@@ -290,8 +311,11 @@ try {
         await screenshot('render-refused');
 
         // A newer view cancels the request in flight: ask for spp 32, and change back to 4
-        // while that full frame is being rendered.
+        // while that full frame is being rendered (at exact, so that it is still in flight:
+        // ~10 M rays, over a second).
         const abortedBefore = abortedRenders;
+        await page.selectOption('#settings select[name=precision]', 'exact');
+        await page.waitForSelector('#error:not([hidden])');
         await spp.fill('32');
         await spp.dispatchEvent('change');
         await page.waitForFunction(() => document.getElementById('viewport').dataset.state === 'rendering full');
@@ -302,6 +326,9 @@ try {
         for (let i = 0; i < 40 && abortedRenders === abortedBefore; i++) await page.waitForTimeout(50);
         check(abortedRenders > abortedBefore, `the stale spp-32 render was aborted in flight (${abortedRenders - abortedBefore} request(s) net::ERR_ABORTED)`);
         check(!(await page.isVisible('#error')), 'the next good frame clears the render error');
+        n = await frames();
+        await page.selectOption('#settings select[name=precision]', 'auto');
+        await waitFull(n);
 
         n = await frames();
         await page.focus('#viewport');
@@ -309,8 +336,10 @@ try {
         await waitFull(n);
         check(JSON.stringify(urlCamera()) !== JSON.stringify(camAfter), 'the arrow keys orbit too');
 
-        // A pixel on the model.
-        await clickPixel(320, 240);
+        // A pixel on the model (the Duck is seen through its file's camera, off the centre).
+        const onModel = (await decode()).fgPixel;
+        check(onModel !== null, `the frame has a pixel well inside the model (${onModel})`);
+        await clickPixel(...(onModel ?? [320, 240]));
         await page.waitForSelector('#hit[data-state]:not([data-state="casting"])');
         const hitName = await page.textContent('#hit .hit-name').catch(() => null);
         check(hitName === 'LOD3spShape', `the hit panel names the duck's mesh (${hitName})`);
@@ -351,6 +380,24 @@ try {
         await waitFull(before);
         const info = await page.textContent('#scene-info');
         check(info.includes('Duck.gltf') && info.includes('4212'), 'Duck.gltf with Duck0.bin and DuckCM.png uploads as one model');
+    }
+
+    // A model file without a camera opens from its front, +z (a glTF asset's front faces +z),
+    // as the server frames it (the summary's default_view), its bounds' centre in the middle.
+    {
+        const off = path.join(os.tmpdir(), `raycastd-front-${process.pid}.off`);
+        fs.writeFileSync(off, 'OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n');
+        const before = await upload(off);
+        await waitFull(before);
+        fs.rmSync(off, { force: true });
+        const cam = urlCamera();
+        check(
+            JSON.stringify(cam.look_at) === '[0.5,0.5,0.5]' && cam.position[0] === 0.5 && cam.position[1] === 0.5 && cam.position[2] > 2,
+            `a model file without a camera is seen from +z (${JSON.stringify(cam)})`,
+        );
+        const frame = await decode();
+        check(frame.fg > 0.05 && frame.centralFg > 0.2, `and fills the middle of the picture (${(frame.fg * 100).toFixed(1)}% of all pixels)`);
+        await screenshot('model-from-the-front');
     }
 
     // The tutorial's spheres: the eye at the origin looking along +z; the centre pixel's ray

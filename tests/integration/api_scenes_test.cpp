@@ -158,14 +158,55 @@ TEST_F(Scenes, RestartAfterKill9AnswersTheSameHits) {
     EXPECT_EQ(post_ok("/v1/scenes", kTutorial, 200).at("id"), tutorial);
 }
 
+TEST_F(Scenes, SummaryNamesTheCameraAndTheDefaultView) {
+    // A client framing a scene as a render without a camera will (the preview page) reads both
+    // from the summary: the scene's own camera, else the side its default camera stands on, −z
+    // for a scene document (the tutorial's eye looking along +z) and +z for a model file (whose
+    // front faces +z, glTF 2.0 §3.4). Both survive a restart.
+    const char* with_camera = R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2}],
+        "camera":{"position":[1,2,-3],"look_at":[0,0,10],"up":[0,1,0],"fov_y_deg":30}})";
+    const Json doc = post_ok("/v1/scenes", with_camera, 201);
+    EXPECT_EQ(doc.at("camera"), Json::parse(R"({"position":[1,2,-3],"look_at":[0,0,10],
+                                                "up":[0,1,0],"fov_y_deg":30})"));
+    EXPECT_EQ(doc.at("default_view"), "-z");
+    const Json spheres = post_ok("/v1/scenes", kTutorial, 201);
+    EXPECT_TRUE(spheres.at("camera").is_null());
+    EXPECT_EQ(spheres.at("default_view"), "-z");
+    const std::string off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    const Json model = post_ok("/v1/scenes", off, 201, "model/off");
+    EXPECT_TRUE(model.at("camera").is_null());
+    EXPECT_EQ(model.at("default_view"), "+z");
+
+    server->stop(SIGKILL);
+    start();
+    for (const Json* before : {&doc, &spheres, &model}) {
+        const std::string id = before->at("id");
+        auto got = server->client()->Get(("/v1/scenes/" + id).c_str());
+        ASSERT_TRUE(got);
+        const Json after = Json::parse(got->body);
+        EXPECT_EQ(after.at("camera"), before->at("camera")) << id;
+        EXPECT_EQ(after.at("default_view"), before->at("default_view")) << id;
+    }
+}
+
 TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
     REQUIRE_MODELS();
     Json duck = post_ok("/v1/scenes", read_file(kModels / "Duck/glTF-Binary/Duck.glb"), 201,
                         "model/gltf-binary");
     EXPECT_EQ(duck.at("triangles"), 4212);
+    // The Duck brings its own camera (a node at (400.113, 463.264, -431.078) under the root's
+    // 0.01 scale, yfov 0.6606 rad): the summary tells it.
+    const std::vector<double> eye = duck.at("camera").at("position");
+    EXPECT_NEAR(eye[0], 4.00113, 1e-5);
+    EXPECT_NEAR(eye[1], 4.63264, 1e-5);
+    EXPECT_NEAR(eye[2], -4.31078, 1e-5);
+    EXPECT_NEAR(duck.at("camera").at("fov_y_deg").get<double>(), 37.8492, 1e-4);
+    EXPECT_EQ(duck.at("default_view"), "+z");
     Json bunny = post_ok("/v1/scenes", read_file(kModels / "stanford-bunny/stanford-bunny.obj"),
                          201, "model/obj");
     EXPECT_EQ(bunny.at("triangles"), 69451);
+    EXPECT_TRUE(bunny.at("camera").is_null());
+    EXPECT_EQ(bunny.at("default_view"), "+z");
     Json stl =
         post_ok("/v1/scenes", read_file(kModels / "teapot_stl/teapot.stl"), 201, "application/sla");
     EXPECT_EQ(stl.at("triangles"), 894);

@@ -216,14 +216,15 @@ async function openScene(id, { camera = null, label = null } = {}) {
         return false;
     }
     clearError('scene');
-    // The scene's camera: the summary's (when the server reports one), else the document's
-    // that this browser uploaded, else the server's default framing of the bounds for the
-    // chosen image size (the sphere fills its narrower side).
+    // The scene's camera: the summary's (its document's or its file's), else the document's
+    // that this browser uploaded (to a server older than the summary's camera), else the
+    // server's default framing of the bounds for the chosen image size (the sphere fills its
+    // narrower side), from the side the summary names.
     const size = vs.parseSize(view.size) ?? vs.parseSize(vs.DEFAULTS.size);
     const home =
         checkCamera(summary.camera) ??
         checkCamera(memory.read('cameras')[id]) ??
-        defaultCamera(summary.bounds, size.width / size.height);
+        defaultCamera(summary.bounds, size.width / size.height, summary.default_view);
     scene = { summary, label: label ?? memory.read('names')[id] ?? null, home: roundCamera(home) };
     view.scene = id;
     view.camera = roundCamera(camera ?? home);

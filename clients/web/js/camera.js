@@ -30,9 +30,11 @@ export function normalize(v) {
 }
 
 /** The camera the server frames a scene with when none is given, for an image of `aspect` =
- *  width / height (engine/scene/scene.cpp default_camera): the bounds' centre seen from −z,
- *  their bounding sphere (half the diagonal) just filling the narrower field of view. */
-export function defaultCamera(bounds, aspect = 4 / 3) {
+ *  width / height (engine/scene/scene.cpp default_camera): the bounds' centre seen from the
+ *  side `view` names (the summary's `default_view`: '-z' for scene documents, '+z' for model
+ *  files, whose front faces +z), their bounding sphere (half the diagonal) just filling the
+ *  narrower field of view. */
+export function defaultCamera(bounds, aspect = 4 / 3, view = '-z') {
     const cam = { position: [0, 0, 0], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 };
     if (!bounds || !bounds.min || !bounds.max) return cam;
     const { min: lo, max: hi } = bounds;
@@ -43,7 +45,7 @@ export function defaultCamera(bounds, aspect = 4 / 3) {
     const halfFovX = aspect > 0 && Number.isFinite(aspect) ? Math.atan(Math.tan(halfFovY) * aspect) : halfFovY;
     const dist = radius / Math.sin(Math.min(halfFovY, halfFovX));
     cam.look_at = c;
-    cam.position = sub(c, [0, 0, dist]);
+    cam.position = add(c, [0, 0, view === '+z' ? dist : -dist]);
     return cam;
 }
 

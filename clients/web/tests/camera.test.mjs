@@ -39,6 +39,18 @@ test('default framing: the bounds\' centre seen from -z, the bounding sphere fil
     assert.deepEqual(defaultCamera({ min: [1, 1, 1], max: [0, 0, 0] }).position, [0, 0, 0]);
 });
 
+test('default framing of a model file: from +z, +x on the right of the picture, as glTF viewers show it', () => {
+    const bounds = { min: [-2, -2, 6], max: [2, 5, 12] };
+    const back = defaultCamera(bounds, 4 / 3, '-z');
+    const front = defaultCamera(bounds, 4 / 3, '+z');
+    assert.deepEqual(back, defaultCamera(bounds));
+    assert.deepEqual(front.look_at, back.look_at);
+    assert.ok(close(front.position, [0, 1.5, 9 + (9 - back.position[2])], 1e-12));
+    // The right edge's ray leans towards +x from the front and towards -x from the back.
+    assert.ok(cameraRay(front, 640, 480, 640, 240).direction[0] > 0);
+    assert.ok(cameraRay(back, 640, 480, 640, 240).direction[0] < 0);
+});
+
 test('default framing, portrait: the bounding sphere fills the width (as engine/render/render_test.cpp checks)', () => {
     const bounds = { min: [-1, 0, 2], max: [3, 1, 4] };
     const c = [1, 0.5, 3];
