@@ -78,6 +78,16 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
     return mesh;
 }
 
+/// A model file's camera has a position and a direction but no target (glTF 2.0 §3.10.1): once
+/// the scene is assembled and placed (a document's transforms applied, its other objects in),
+/// its look_at goes where its axis passes closest to the middle of the scene, the pivot the
+/// preview page orbits about (engine/scene/camera.h aim_at).
+void aim_model_camera(engine::Scene& scene) {
+    const engine::Bounds3 b = scene.bounds();
+    if (scene.camera && !b.empty())
+        engine::aim_at(*scene.camera, b.center(), 0.5 * length(b.diagonal()));
+}
+
 void adopt_model_extras(engine::LoadedModel& model, const std::string& prefix,
                         engine::Scene& scene) {
     for (auto& l : model.lights)
@@ -201,7 +211,10 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         adopt_model_extras(model, path + ": ", scene);
         return merge_parts(model, base, fallback);
     };
-    return parse_scene_doc(doc, prefix, load_mesh);
+    engine::Scene scene = parse_scene_doc(doc, prefix, load_mesh);
+    if (!member(doc, "camera"))
+        aim_model_camera(scene);  // the camera, if any, is a model file's
+    return scene;
 }
 
 engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat format,
@@ -212,9 +225,6 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
         throw load_error(loaded.status(), "");
     engine::LoadedModel& model = *loaded;
     engine::Scene scene;
-    // A model file without a camera of its own is seen from its front, as model viewers show
-    // it; a scene document keeps the tutorial's side (engine/scene/scene.h DefaultView).
-    scene.default_view = engine::DefaultView::from_plus_z;
     scene.materials.push_back(engine::Material{});
     scene.material_names.push_back("default");
     const std::uint32_t base = adopt_materials(model, display_name, scene);
@@ -232,6 +242,7 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
     engine::Status st = engine::validate(scene);
     if (!st.ok())
         throw load_error(st, st.path);
+    aim_model_camera(scene);
     return scene;
 }
 

@@ -57,9 +57,12 @@ Json info_json(const SceneInfo& i) {
     return j;
 }
 
-/// `content_type` is the scene's source's: scenes saved before the summary named its default
-/// view take the one their source gives them (a model file's front, a document's −z).
-SceneInfo info_from_json(const Json& j, const std::string& content_type) {
+/// `view_known` tells whether the entry names its default view (scenes saved before the summary
+/// had one do not). The camera and the view are extras the scene is usable without: one this
+/// server would not read (a newer server's view name, a camera the document rules refuse) is
+/// left out rather than dropping the scene, and the first build fills both in again
+/// (make_resident).
+SceneInfo info_from_json(const Json& j, bool& view_known) {
     SceneInfo i;
     i.id = j.at("id").get<std::string>();
     i.objects = j.at("objects").get<std::size_t>();
@@ -73,16 +76,20 @@ SceneInfo info_from_json(const Json& j, const std::string& content_type) {
     i.memory_bytes = j.at("memory_bytes").get<std::size_t>();
     if (const auto t = j.find("topology"); t != j.end())  // absent in scenes saved before it
         i.topology = topology_from_json(*t);
-    if (const auto v = j.find("default_view"); v != j.end()) {
-        const auto view = default_view_from_name(v->get<std::string>());
-        if (!view)
-            throw std::runtime_error("unknown default_view " + v->dump());
-        i.default_view = *view;
-    } else if (content_type != "application/json") {
-        i.default_view = engine::DefaultView::from_plus_z;
+    view_known = false;
+    if (const auto v = j.find("default_view"); v != j.end() && v->is_string()) {
+        if (const auto view = default_view_from_name(v->get<std::string>())) {
+            i.default_view = *view;
+            view_known = true;
+        }
     }
-    if (const auto c = j.find("camera"); c != j.end())  // absent when it has none or was saved
-        i.camera = parse_camera(*c, "/camera", ErrorCode::invalid_scene);  // before it was told
+    if (const auto c = j.find("camera"); c != j.end() && !c->is_null()) {
+        try {
+            i.camera = parse_camera(*c, "/camera", ErrorCode::invalid_scene);
+        } catch (const ApiError&) {
+            i.camera.reset();
+        }
+    }
     if (!j.at("bounds").is_null()) {
         const auto lo = j.at("bounds").at("min").get<std::vector<double>>();
         const auto hi = j.at("bounds").at("max").get<std::vector<double>>();
@@ -106,7 +113,7 @@ SceneInfo describe(const engine::QueryEngine& engine) {
     i.memory_bytes = engine.memory_bytes();
     i.topology = topology_entries(engine);
     i.camera = s.camera;
-    i.default_view = s.default_view;
+    i.default_view = s.default_view();
     return i;
 }
 
@@ -264,7 +271,27 @@ std::optional<SceneRegistry::Entry> SceneRegistry::read_saved(const std::string&
     try {
         const Json m = Json::parse(*meta);
         Entry e;
-        e.info = info_from_json(m.at("info"), m.at("content_type").get<std::string>());
+        bool view_known = false;
+        e.info = info_from_json(m.at("info"), view_known);
+        if (!view_known) {
+            // Saved before the summary named it: the view the scene's objects give it
+            // (engine::Scene::default_view), told from its source without building it: a model
+            // file, or a document with a mesh object, is seen from +z.
+            const std::string type = m.at("content_type").get<std::string>();
+            bool model = type != "application/json";
+            if (!model) {
+                const auto body = read_file(dir / "body");
+                const std::optional<Json> doc = body ? try_parse_json(*body) : std::nullopt;
+                const Json* objects = doc && doc->is_object() ? member(*doc, "objects") : nullptr;
+                model = objects && objects->is_array() &&
+                        std::any_of(objects->begin(), objects->end(), [](const Json& o) {
+                            const Json* t = o.is_object() ? member(o, "type") : nullptr;
+                            return t && *t == "mesh";
+                        });
+            }
+            e.info.default_view =
+                model ? engine::DefaultView::from_plus_z : engine::DefaultView::from_minus_z;
+        }
         e.request_key = m.at("request_key").get<std::string>();
         e.file_sha = m.at("file_sha").get<std::map<std::string, std::string>>();
         if (e.info.id != id)
@@ -493,6 +520,10 @@ void SceneRegistry::make_resident(Entry& e, std::shared_ptr<const engine::QueryE
     e.lru = lru_.begin();
     e.info.memory_bytes = e.engine->memory_bytes();  // a rebuilt engine has no lazy BVHs yet
     resident_bytes_ += e.info.memory_bytes;
+    // The built scene says what its camera and view are; an entry saved before the summary had
+    // them (or by a server that framed differently) is told them from now on.
+    e.info.camera = e.engine->scene().camera;
+    e.info.default_view = e.engine->scene().default_view();
 }
 
 void SceneRegistry::refresh_bytes(Entry& e) {

@@ -122,22 +122,30 @@ TEST(SceneRegistry, PersistsAndReloadsAfterRestart) {
 
 TEST(SceneRegistry, SummaryKeepsTheCameraAndDefaultViewOfScenesSavedBeforeThem) {
     // Scenes saved before the summary carried `camera` and `default_view` have neither in their
-    // meta.json: they come back with no camera and the view of their source's kind (a model
-    // file's +z, a document's −z), which is what a rebuild gives them.
+    // meta.json: they come back with no camera and the view their objects give them, told from
+    // their saved source without building it (a model file, or a document with a mesh object,
+    // +z; spheres and triangles, −z), which is what a rebuild gives them.
     TempDir dir;
     const std::string off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-    std::string doc_id, model_id;
+    const std::string doc_with_mesh =
+        R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2},{"type":"mesh",
+            "format":"off","data_base64":"T0ZGCjMgMSAwCjAgMCAwCjEgMCAwCjAgMSAwCjMgMCAxIDIK"}]})";
+    std::vector<std::pair<std::string, engine::DefaultView>> saved;
     {
         Fixture f(dir.path.string());
-        const SceneInfo doc = f.registry.add({"application/json", kSpheres}, no_files()).info;
-        const SceneInfo model = f.registry.add({"model/off", off}, no_files()).info;
-        EXPECT_EQ(doc.default_view, engine::DefaultView::from_minus_z);
-        EXPECT_EQ(model.default_view, engine::DefaultView::from_plus_z);
-        EXPECT_FALSE(model.camera);
-        doc_id = doc.id;
-        model_id = model.id;
+        for (const SceneSource& src :
+             {SceneSource{"application/json", kSpheres}, SceneSource{"model/off", off},
+              SceneSource{"application/json", doc_with_mesh}}) {
+            const SceneInfo info = f.registry.add(src, no_files()).info;
+            EXPECT_FALSE(info.camera);
+            saved.emplace_back(info.id, info.default_view);
+        }
     }
-    for (const std::string& id : {doc_id, model_id}) {
+    ASSERT_EQ(saved.size(), 3u);
+    EXPECT_EQ(saved[0].second, engine::DefaultView::from_minus_z);
+    EXPECT_EQ(saved[1].second, engine::DefaultView::from_plus_z);
+    EXPECT_EQ(saved[2].second, engine::DefaultView::from_plus_z);
+    for (const auto& [id, view] : saved) {
         const fs::path meta = dir.path / "scenes" / id / "meta.json";
         std::ifstream in(meta);
         Json m = Json::parse(in);
@@ -147,8 +155,51 @@ TEST(SceneRegistry, SummaryKeepsTheCameraAndDefaultViewOfScenesSavedBeforeThem) 
         std::ofstream(meta) << m.dump();
     }
     Fixture g(dir.path.string());
-    EXPECT_EQ(g.registry.info(doc_id)->default_view, engine::DefaultView::from_minus_z);
-    EXPECT_EQ(g.registry.info(model_id)->default_view, engine::DefaultView::from_plus_z);
+    for (const auto& [id, view] : saved)
+        EXPECT_EQ(g.registry.info(id)->default_view, view) << id;
+    EXPECT_EQ(g.builds.load(), 0);
+    // A glTF with a camera (at (0.5, 0.5, 4), looking along −z at its triangle): the summary
+    // gives the camera, aimed at the triangle's centre. Saved with the camera left out, a view
+    // name this server does not know and, for a second scene, a camera it would refuse, both
+    // still load (the extras are left out, the view told from the source), and their first
+    // build gives them the camera again.
+    const std::string gltf =
+        R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"data:application/)"
+        R"(octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],)"
+        R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,)"
+        R"("componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+        R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"cameras":[{"type":)"
+        R"("perspective","perspective":{"yfov":0.5,"znear":0.1}}],"nodes":[{"mesh":0},)"
+        R"({"translation":[0.5,0.5,4],"camera":0}],"scenes":[{"nodes":[0,1]}],"scene":0})";
+    const SceneInfo with = g.registry.add({"model/gltf+json", gltf}, no_files()).info;
+    ASSERT_TRUE(with.camera);
+    EXPECT_EQ(with.camera->position, (engine::Vec3d{0.5, 0.5, 4}));
+    EXPECT_EQ(with.camera->look_at, (engine::Vec3d{0.5, 0.5, 0}));
+    EXPECT_EQ(with.default_view, engine::DefaultView::from_plus_z);
+    const SceneInfo other = g.registry.add({"model/gltf+json", gltf + " "}, no_files()).info;
+    for (const auto& [id, camera] :
+         {std::pair{with.id, Json()}, std::pair{other.id, Json::parse(R"({"position":[0,0,0],
+                                                                        "look_at":[0,0,0]})")}}) {
+        const fs::path meta = dir.path / "scenes" / id / "meta.json";
+        std::ifstream in(meta);
+        Json m = Json::parse(in);
+        m["info"]["default_view"] = "sideways";
+        m["info"]["camera"] = camera;
+        std::ofstream(meta) << m.dump();
+    }
+    {
+        Fixture k(dir.path.string());
+        for (const std::string& id : {with.id, other.id}) {
+            const auto before = k.registry.info(id);
+            ASSERT_TRUE(before) << id;
+            EXPECT_FALSE(before->camera);
+            EXPECT_EQ(before->default_view, engine::DefaultView::from_plus_z);
+            ASSERT_TRUE(k.registry.get(id));
+            const auto after = k.registry.info(id);
+            ASSERT_TRUE(after && after->camera) << id;
+            EXPECT_EQ(after->camera->look_at, (engine::Vec3d{0.5, 0.5, 0}));
+        }
+    }
     // A camera is saved and read back exactly.
     const std::string with_camera = R"({"objects":[{"type":"sphere","center":[0,0,10],
         "radius":2}],"camera":{"position":[0.1,2,-3],"look_at":[0,0,10],"fov_y_deg":30}})";

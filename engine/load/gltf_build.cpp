@@ -8,7 +8,6 @@
 #include <optional>
 
 #include "engine/load/gltf_internal.h"
-#include "engine/math/bounds.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine::gltf {
@@ -594,25 +593,6 @@ std::string part_name(const tinygltf::Model& m, const tinygltf::Node& node,
     return std::string(model_name) + " mesh " + std::to_string(part_index + 1);
 }
 
-/// A glTF camera has a position and a direction, no target (§3.10.1); `look_at` is any point
-/// ahead on its axis, and to_camera puts it one unit ahead. What it is used for beyond the
-/// direction is the pivot the preview page orbits about: one unit ahead, a drag swings the model
-/// out of the picture. So the pivot goes where the axis passes closest to the centre of the
-/// parts' bounds (t = ⟨c − p, f⟩ along the unit forward f), when that is ahead. The rays keep
-/// their direction up to the rounding of normalize(look_at − position), a few ulps.
-void aim_at_parts(Camera& camera, const std::vector<ModelPart>& parts) {
-    Bounds3 bounds;
-    for (const ModelPart& part : parts)
-        for (const Vec3d& p : part.mesh.positions)
-            bounds.extend(p);
-    if (bounds.empty())
-        return;
-    const Vec3d forward = normalize(camera.look_at - camera.position);
-    const double t = dot(bounds.center() - camera.position, forward);
-    if (t > 0.0 && std::isfinite(t))
-        camera.look_at = camera.position + forward * t;
-}
-
 Status add_camera_and_lights(const tinygltf::Model& m, const std::vector<Placed>& placed,
                              LoadedModel& out) {
     bool skipped_camera = false;
@@ -621,6 +601,14 @@ Status add_camera_and_lights(const tinygltf::Model& m, const std::vector<Placed>
         if (node.camera != -1 && !out.camera) {
             out.camera = to_camera(m.cameras[static_cast<std::size_t>(node.camera)], p.world);
             skipped_camera = skipped_camera || !out.camera;
+            if (out.camera && !has_view(*out.camera)) {
+                // Placed where its one-unit look_at rounds onto its position (beyond ~1e16),
+                // or by a matrix that makes its up parallel to its view: no view to render.
+                out.warnings.push_back(node_path(static_cast<std::size_t>(p.node)) +
+                                       ": its camera has no view (placed too far out, or a "
+                                       "degenerate transform); the default camera is used");
+                out.camera.reset();
+            }
         }
         auto light = node_light(node, p.node, m.lights.size());
         if (!light)
@@ -633,8 +621,6 @@ Status add_camera_and_lights(const tinygltf::Model& m, const std::vector<Placed>
     }
     if (skipped_camera && !out.camera)
         out.warnings.push_back("no perspective camera (orthographic cameras are not supported)");
-    if (out.camera)
-        aim_at_parts(*out.camera, out.parts);
     normalize_light_intensities(out.lights);
     return {};
 }

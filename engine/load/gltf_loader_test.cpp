@@ -404,6 +404,30 @@ TEST(GltfLoader, LightsAndCameraFromNodes) {
     EXPECT_NEAR(m->camera->up.y, 1.0, 1e-12);
 }
 
+TEST(GltfLoader, ACameraWithoutAViewIsDroppedWithAWarning) {
+    // Placed 1e17 out, its look_at one unit ahead rounds onto its position; by a matrix that
+    // sends its local y and z both along world z, its up is parallel to its view. Neither has
+    // a view to render (the scene document's camera rules): each is dropped with a warning,
+    // and a later usable camera is taken.
+    for (const char* node : {R"({"translation":[0,0,1e17],"camera":0})",
+                             R"({"matrix":[1,0,0,0, 0,0,1,0, 0,0,1,0, 0,0,0,1],"camera":0})"}) {
+        Doc d;
+        d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+        auto m = load(d.json(std::string(R"("cameras":[{"type":"perspective","perspective":)"
+                                         R"({"yfov":0.5,"znear":0.1}}],)"
+                                         R"("meshes":[{"primitives":[{"attributes":)"
+                                         R"({"POSITION":0}}]}],"nodes":[{"mesh":0},)") +
+                             node + R"(,{"translation":[0,0,5],"camera":0}],)" +
+                             R"("scenes":[{"nodes":[0,1,2]}])"));
+        ASSERT_TRUE(m.ok()) << m.status().message;
+        ASSERT_TRUE(m->camera) << node;
+        EXPECT_EQ(m->camera->position, Vec3d(0, 0, 5)) << node;
+        ASSERT_EQ(m->warnings.size(), 1u) << node;
+        EXPECT_NE(m->warnings[0].find("/nodes/1: its camera has no view"), std::string::npos)
+            << m->warnings[0];
+    }
+}
+
 TEST(GltfLoader, UnresolvedLightIsRejected) {
     Doc d;
     d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});

@@ -10,7 +10,8 @@ Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested
         return *requested;
     if (scene.camera)
         return *scene.camera;
-    return default_camera(scene.bounds(), static_cast<double>(width) / height, scene.default_view);
+    return default_camera(scene.bounds(), static_cast<double>(width) / height,
+                          scene.default_view());
 }
 
 CameraRays::CameraRays(const Camera& camera, int width, int height)

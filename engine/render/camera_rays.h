@@ -7,8 +7,9 @@
 // with f the unit forward vector, r = normalize(f × up) the right vector and u = r × f the true
 // up vector; (x, y) are pixel coordinates with (0, 0) at the top-left corner of the image.
 // Which camera a render uses: the request's, else the scene's (its document's, else its glTF
-// file's), else one whose bounding sphere fills the image, seen from −z for scene documents and
-// from +z for model files (engine/scene/scene.h default_camera, DefaultView).
+// file's), else one whose bounding sphere fills the image, seen from +z where the scene has a
+// model file and from −z where it has only spheres and triangles (engine/scene/scene.h
+// default_camera, Scene::default_view).
 
 #include <optional>
 
@@ -19,7 +20,7 @@ namespace raycastd::engine {
 
 /// The camera a width × height render of `scene` uses given the one the request asked for (if
 /// any): the request's, else the scene's, else default_camera(bounds, width / height,
-/// scene.default_view).
+/// scene.default_view()).
 Camera resolve_camera(const Scene& scene, const std::optional<Camera>& requested, int width,
                       int height);
 

@@ -1,5 +1,6 @@
 #include "engine/render/render.h"
 
+#include <cmath>
 #include <memory>
 
 #include <gtest/gtest.h>
@@ -95,7 +96,8 @@ TEST(Camera, DefaultFramingFillsTheNarrowerFieldOfView) {
 TEST(Camera, ModelFilesAreFramedFromTheirFront) {
     // DefaultView::from_plus_z (a model file, whose front faces +z): the same distance on the
     // other side, looking along −z with +y up, so +x is on the right of the picture, as in a
-    // glTF viewer. from_minus_z (a scene document) mirrors it: +x on the left.
+    // glTF viewer. from_minus_z (spheres and triangles, the tutorial's) mirrors it: +x on the
+    // left.
     const Bounds3 b{{-1, 0, 2}, {3, 1, 4}};
     const Vec3d c = b.center();
     const Camera back = default_camera(b, 4.0 / 3.0, DefaultView::from_minus_z);
@@ -109,14 +111,49 @@ TEST(Camera, ModelFilesAreFramedFromTheirFront) {
     EXPECT_GT(CameraRays(front, 40, 30).ray(40, 15).direction.x, 0.0);
     EXPECT_LT(CameraRays(back, 40, 30).ray(40, 15).direction.x, 0.0);
 
+    // Spheres and lone triangles (the tutorial's kind of scene) are seen from −z; a mesh (a
+    // model file) among them turns the scene to +z.
     Scene s = testing::tutorial_spheres();
+    s.objects.push_back(
+        testing::mesh_object("floor", {{-9, -3, 0}, {9, -3, 0}, {0, -3, 20}}, {{0, 1, 2}}));
+    EXPECT_EQ(s.default_view(), DefaultView::from_minus_z);
     EXPECT_LT(resolve_camera(s, std::nullopt, 40, 30).position.z, s.bounds().center().z);
-    s.default_view = DefaultView::from_plus_z;
+    s.objects.push_back(testing::cube_object(1, 2));
+    EXPECT_EQ(s.default_view(), DefaultView::from_plus_z);
     EXPECT_GT(resolve_camera(s, std::nullopt, 40, 30).position.z, s.bounds().center().z);
     Camera own;  // the scene's own camera wins over either side
     own.position = {0, 0, -1};
     s.camera = own;
     EXPECT_EQ(resolve_camera(s, std::nullopt, 40, 30).position, own.position);
+}
+
+TEST(Camera, AimAtMovesLookAtAlongTheAxisToTheTarget) {
+    // A glTF camera's look_at (one unit ahead) goes where its axis passes closest to the
+    // scene's centre: the view direction stays, the pivot is in the scene.
+    Camera c;
+    c.position = {1, 2, 3};
+    c.look_at = c.position + normalize(Vec3d{1, 1, 1});
+    const Vec3d forward = normalize(c.look_at - c.position);
+    Camera aimed = c;
+    aim_at(aimed, {11, 12, 15}, 2.0);
+    EXPECT_NEAR(dot(Vec3d{11, 12, 15} - aimed.look_at, forward), 0.0, 1e-12);
+    EXPECT_NEAR(length(aimed.look_at - c.position), 32.0 / std::sqrt(3.0), 1e-12);
+    const Vec3d now = normalize(aimed.look_at - aimed.position);
+    EXPECT_NEAR(length(now - forward), 0.0, 1e-15);
+    EXPECT_TRUE(has_view(aimed));
+    // A target behind the camera, or less than a thousandth of the radius ahead: unchanged.
+    for (const Vec3d& target : {Vec3d{-9, -8, -7}, c.position + forward * 1e-4}) {
+        Camera same = c;
+        aim_at(same, target, 1.0);
+        EXPECT_EQ(same.look_at, c.look_at);
+    }
+    // No view: look_at on the position, up along the view.
+    Camera none = c;
+    none.look_at = none.position;
+    EXPECT_FALSE(has_view(none));
+    none = c;
+    none.up = none.look_at - none.position;
+    EXPECT_FALSE(has_view(none));
 }
 
 TEST(Render, NoLightsTracesNoShadowRays) {

@@ -128,6 +128,12 @@ Status validate(const Scene& scene) {
     return {};
 }
 
+DefaultView Scene::default_view() const {
+    const bool model = std::any_of(objects.begin(), objects.end(),
+                                   [](const Object& o) { return o.kind == ObjectKind::mesh; });
+    return model ? DefaultView::from_plus_z : DefaultView::from_minus_z;
+}
+
 Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view) {
     Camera cam;
     if (bounds.empty())

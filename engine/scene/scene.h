@@ -40,10 +40,10 @@ struct Features {
 };
 
 /// Which side of its bounds a scene is seen from when neither the request nor the scene has a
-/// camera of its own (default_camera).
+/// camera of its own (default_camera, Scene::default_view).
 enum class DefaultView {
     /// On −z, looking along +z: the tutorial's convention (its eye at the origin, the spheres at
-    /// z = 8–10), kept for scene documents.
+    /// z = 8–10), for scenes of spheres and triangles.
     from_minus_z,
     /// On +z, looking along −z with +y up: a model's front. glTF 2.0 §3.4: "The front of a glTF
     /// asset faces +Z"; glTF viewers start there, and model viewers in general start from the
@@ -57,13 +57,15 @@ struct Scene {
     std::vector<std::string> material_names;
     std::vector<Light> lights;
     std::optional<Camera> camera;
-    DefaultView default_view = DefaultView::from_minus_z;
     std::vector<std::string> warnings;
 
     std::size_t triangle_count() const;
     std::size_t sphere_count() const;
     Bounds3 bounds() const;
     Features features() const;
+    /// from_plus_z when some object is a mesh (a model file, whose front faces +z), else
+    /// from_minus_z (spheres and triangles only: the tutorial's kind of scene).
+    DefaultView default_view() const;
     /// Bytes of the decoded texture images the materials hold (each image counted once).
     std::size_t texture_bytes() const;
 };

@@ -311,11 +311,16 @@ try {
         await screenshot('render-refused');
 
         // A newer view cancels the request in flight: ask for spp 32, and change back to 4
-        // while that full frame is being rendered (at exact, so that it is still in flight:
-        // ~10 M rays, over a second).
+        // while that full frame is being rendered. The spp-32 request is held here until the
+        // page has moved on, so that it is in flight however fast the machine renders it.
         const abortedBefore = abortedRenders;
-        await page.selectOption('#settings select[name=precision]', 'exact');
-        await page.waitForSelector('#error:not([hidden])');
+        let release;
+        const released = new Promise((resolve) => (release = resolve));
+        const hold = async (route) => {
+            if (route.request().postDataJSON()?.spp === 32) await released;
+            await route.continue().catch(() => {}); // aborted meanwhile: nothing to continue
+        };
+        await page.route('**/render', hold);
         await spp.fill('32');
         await spp.dispatchEvent('change');
         await page.waitForFunction(() => document.getElementById('viewport').dataset.state === 'rendering full');
@@ -324,11 +329,10 @@ try {
         await spp.dispatchEvent('change');
         await waitFull(n);
         for (let i = 0; i < 40 && abortedRenders === abortedBefore; i++) await page.waitForTimeout(50);
+        release();
+        await page.unroute('**/render', hold);
         check(abortedRenders > abortedBefore, `the stale spp-32 render was aborted in flight (${abortedRenders - abortedBefore} request(s) net::ERR_ABORTED)`);
         check(!(await page.isVisible('#error')), 'the next good frame clears the render error');
-        n = await frames();
-        await page.selectOption('#settings select[name=precision]', 'auto');
-        await waitFull(n);
 
         n = await frames();
         await page.focus('#viewport');

@@ -1,6 +1,7 @@
 // The scene registry over HTTP with the real binary: registration (documents and raw models),
 // content addressing, confinement to the scene root, broken files, and restarts after kill -9.
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -161,8 +162,9 @@ TEST_F(Scenes, RestartAfterKill9AnswersTheSameHits) {
 TEST_F(Scenes, SummaryNamesTheCameraAndTheDefaultView) {
     // A client framing a scene as a render without a camera will (the preview page) reads both
     // from the summary: the scene's own camera, else the side its default camera stands on, −z
-    // for a scene document (the tutorial's eye looking along +z) and +z for a model file (whose
-    // front faces +z, glTF 2.0 §3.4). Both survive a restart.
+    // for spheres and triangles (the tutorial's eye looking along +z) and +z for a scene with a
+    // model file, posted raw or as a document's mesh (its front faces +z, glTF 2.0 §3.4). Both
+    // survive a restart.
     const char* with_camera = R"({"objects":[{"type":"sphere","center":[0,0,10],"radius":2}],
         "camera":{"position":[1,2,-3],"look_at":[0,0,10],"up":[0,1,0],"fov_y_deg":30}})";
     const Json doc = post_ok("/v1/scenes", with_camera, 201);
@@ -176,10 +178,15 @@ TEST_F(Scenes, SummaryNamesTheCameraAndTheDefaultView) {
     const Json model = post_ok("/v1/scenes", off, 201, "model/off");
     EXPECT_TRUE(model.at("camera").is_null());
     EXPECT_EQ(model.at("default_view"), "+z");
+    const Json doc_with_mesh = post_ok("/v1/scenes", R"({"objects":[
+        {"type":"sphere","center":[0,0,10],"radius":2},{"type":"mesh","format":"off",
+         "data_base64":"T0ZGCjMgMSAwCjAgMCAwCjEgMCAwCjAgMSAwCjMgMCAxIDIK"}]})",
+                                       201);
+    EXPECT_EQ(doc_with_mesh.at("default_view"), "+z");
 
     server->stop(SIGKILL);
     start();
-    for (const Json* before : {&doc, &spheres, &model}) {
+    for (const Json* before : {&doc, &spheres, &model, &doc_with_mesh}) {
         const std::string id = before->at("id");
         auto got = server->client()->Get(("/v1/scenes/" + id).c_str());
         ASSERT_TRUE(got);
@@ -201,6 +208,30 @@ TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
     EXPECT_NEAR(eye[1], 4.63264, 1e-5);
     EXPECT_NEAR(eye[2], -4.31078, 1e-5);
     EXPECT_NEAR(duck.at("camera").at("fov_y_deg").get<double>(), 37.8492, 1e-4);
+    // Its look_at, which glTF does not give, is where its axis passes closest to the centre of
+    // the scene's bounds (the pivot the preview page orbits about), also when a document
+    // turns and stretches it: aimed once the scene is placed.
+    auto pivot_off_axis = [](const Json& info) {
+        const std::vector<double> p = info.at("camera").at("position");
+        const std::vector<double> l = info.at("camera").at("look_at");
+        const std::vector<double> lo = info.at("bounds").at("min"),
+                                  hi = info.at("bounds").at("max");
+        double f[3], along = 0, norm = 0, offset = 0;
+        for (int k = 0; k < 3; ++k)
+            f[k] = l[k] - p[k], norm += f[k] * f[k];
+        for (int k = 0; k < 3; ++k)
+            along += (0.5 * (lo[k] + hi[k]) - l[k]) * f[k] / std::sqrt(norm);
+        for (int k = 0; k < 3; ++k)
+            offset += (l[k] - p[k]) * (l[k] - p[k]);
+        return std::pair{along, std::sqrt(offset)};
+    };
+    EXPECT_NEAR(pivot_off_axis(duck).first, 0.0, 1e-9);
+    EXPECT_GT(pivot_off_axis(duck).second, 5.0);
+    const Json turned = post_ok("/v1/scenes",
+                                R"({"objects":[{"type":"mesh","uri":"Duck/glTF-Binary/Duck.glb",
+            "transform":{"rotate_deg":[0,90,0],"scale":[1,3,0.5]}}]})",
+                                201);
+    EXPECT_NEAR(pivot_off_axis(turned).first, 0.0, 1e-9);
     EXPECT_EQ(duck.at("default_view"), "+z");
     Json bunny = post_ok("/v1/scenes", read_file(kModels / "stanford-bunny/stanford-bunny.obj"),
                          201, "model/obj");

@@ -35,7 +35,8 @@ const ui = {
     serverInfo: $('server-info'),
 };
 
-/** Names and cameras of scenes this browser uploaded: the summary carries neither. */
+/** Names and cameras of scenes this browser uploaded: the summary carries no name, and no camera
+ *  when the server predates the summary's `camera`. */
 const memory = {
     read(key) {
         try {

@@ -31,9 +31,9 @@ export function normalize(v) {
 
 /** The camera the server frames a scene with when none is given, for an image of `aspect` =
  *  width / height (engine/scene/scene.cpp default_camera): the bounds' centre seen from the
- *  side `view` names (the summary's `default_view`: '-z' for scene documents, '+z' for model
- *  files, whose front faces +z), their bounding sphere (half the diagonal) just filling the
- *  narrower field of view. */
+ *  side `view` names (the summary's `default_view`: '+z' for a scene with a model file, whose
+ *  front faces +z; '-z' for spheres and triangles only), their bounding sphere (half the
+ *  diagonal) just filling the narrower field of view. */
 export function defaultCamera(bounds, aspect = 4 / 3, view = '-z') {
     const cam = { position: [0, 0, 0], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 };
     if (!bounds || !bounds.min || !bounds.max) return cam;
