@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
+#include <memory>
 
 #include "engine/math/transform.h"
 #include "server/schema/scene_doc.h"
@@ -78,6 +80,35 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
     return mesh;
 }
 
+/// The `files` of an inline mesh object: {relative path: base64 bytes}, the files its model
+/// names (an OBJ's .mtl and map_Kd images, a .gltf's buffers and images), each looked up by the
+/// path the model gives, relative to the model, normalised as a scene-root path is ("./a\b"
+/// and "a/b" are one file; an absolute path, a scheme or a ".." above the model is refused, as
+/// for `uri`). Their bytes count against the body limit like the rest of the document.
+std::map<std::string, std::string> read_inline_files(const Json& files, const std::string& path) {
+    if (!files.is_object())
+        throw ApiError(ErrorCode::invalid_scene, path + " must be an object", path);
+    std::map<std::string, std::string> out;
+    for (const auto& [name, value] : files.items()) {
+        const std::string at = child_path(path, name);
+        std::string slashed = name;
+        std::replace(slashed.begin(), slashed.end(), '\\', '/');
+        auto norm = normalize_relative(slashed);
+        if (!norm.ok())
+            throw ApiError(ErrorCode::invalid_scene, at + ": " + norm.status().message, at);
+        if (!value.is_string())
+            throw ApiError(ErrorCode::invalid_scene, at + " must be a base64 string", at);
+        auto bytes = decode_base64(value.get_ref<const std::string&>());
+        if (!bytes)
+            throw ApiError(ErrorCode::invalid_scene, at + " is not valid base64", at);
+        if (!out.emplace(*norm, std::move(*bytes)).second) {
+            throw ApiError(ErrorCode::invalid_scene, at + " names the same file as another entry",
+                           at);
+        }
+    }
+    return out;
+}
+
 /// A model file's camera has a position and a direction but no target (glTF 2.0 §3.10.1): once
 /// the scene is assembled and placed (a document's transforms applied, its other objects in),
 /// its look_at goes where its axis passes closest to the middle of the scene, the pivot the
@@ -132,6 +163,13 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             throw ApiError(ErrorCode::invalid_scene,
                            path + ": a mesh needs exactly one of uri and data_base64", path);
         }
+        if (uri && member(obj, "files")) {
+            throw ApiError(ErrorCode::invalid_scene,
+                           path +
+                               "/files goes with data_base64: a model named by uri reads the "
+                               "files it names beside it in the scene root",
+                           path + "/files");
+        }
         std::optional<engine::ModelFormat> format;
         if (fmt) {
             const std::string f = read_string(*fmt, path + "/format", ErrorCode::invalid_scene);
@@ -180,6 +218,21 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             }
             bytes = std::move(*decoded);
             display = "inline model";
+            if (const Json* f = member(obj, "files")) {
+                auto inline_files = std::make_shared<const std::map<std::string, std::string>>(
+                    read_inline_files(*f, path + "/files"));
+                resources = [inline_files](const std::string& ref) -> engine::Result<std::string> {
+                    auto norm = normalize_relative(ref);
+                    if (!norm.ok())
+                        return norm.status();
+                    auto it = inline_files->find(*norm);
+                    if (it == inline_files->end()) {
+                        return engine::Status::error(engine::Code::invalid_scene,
+                                                     "no file " + *norm + " in /files");
+                    }
+                    return it->second;
+                };
+            }
         }
         if (!format)
             format = engine::sniff_format(bytes);

@@ -158,9 +158,10 @@ engine::Object parse_object(const Json& j, const std::string& path, std::size_t 
         mesh->triangles.push_back({0, 1, 2});
         o.mesh = std::move(mesh);
     } else if (t == "mesh") {
-        warn_unknown_keys(j, path,
-                          {"type", "name", "material", "uri", "data_base64", "format", "transform"},
-                          scene);
+        warn_unknown_keys(
+            j, path,
+            {"type", "name", "material", "uri", "data_base64", "format", "files", "transform"},
+            scene);
         if (!load_mesh) {
             throw ApiError(kInvalid, "mesh objects cannot be loaded here", path + "/type");
         }

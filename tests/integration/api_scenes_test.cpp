@@ -196,6 +196,88 @@ TEST_F(Scenes, SummaryNamesTheCameraAndTheDefaultView) {
     }
 }
 
+TEST_F(Scenes, AnInlineModelCarriesTheFilesItNames) {
+    // An OBJ sent as data_base64 with its .mtl and texture in "files" (the only way a client
+    // without the server's scene root can send them): the MTL in a folder beside it, its
+    // map_Kd written with Windows separators, the texture's key too. The one-texel texture is
+    // red, so the headlit triangle renders red.
+    const std::string obj =
+        "mtllib sub/tri.mtl\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\n"
+        "usemtl red\nf 1/1 2/2 3/3\n";
+    const std::string mtl = "newmtl red\nKd 1 1 1\nKs 0 0 0\nmap_Kd .\\tex\\red.png\n";
+    const std::string png_b64 =
+        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGN4JicCAAMGARnZ3ys9AAAAAElFTkSuQm"
+        "CC";
+    auto doc = [&](const Json& files) {
+        Json mesh = {{"type", "mesh"}, {"format", "obj"}, {"data_base64", testing::base64(obj)}};
+        if (!files.is_null())
+            mesh["files"] = files;
+        return Json{{"objects", {mesh}}}.dump();
+    };
+    const Json files = {{"sub/tri.mtl", testing::base64(mtl)}, {"sub\\tex\\red.png", png_b64}};
+    const Json info = post_ok("/v1/scenes", doc(files), 201);
+    EXPECT_TRUE(info.at("warnings").empty()) << info.at("warnings").dump();
+    EXPECT_TRUE(info.at("features").at("textures").get<bool>());
+    EXPECT_EQ(info.at("default_view"), "+z");
+    const Json camera = {
+        {"position", {0, 0, 3}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y_deg", 30}};
+    auto img = server->client()->Post(
+        ("/v1/scenes/" + info.at("id").get<std::string>() + "/render").c_str(),
+        Json{{"width", 8}, {"height", 8}, {"format", "ppm"}, {"camera", camera}}.dump(),
+        "application/json");
+    ASSERT_TRUE(img);
+    ASSERT_EQ(img->status, 200) << img->body;
+    const std::string header = "P6\n8 8\n255\n";
+    ASSERT_EQ(img->body.rfind(header, 0), 0u);
+    const auto* centre =
+        reinterpret_cast<const unsigned char*>(img->body.data()) + header.size() + 3 * (4 * 8 + 4);
+    EXPECT_GT(centre[0], 3 * centre[1]) << int(centre[0]) << " " << int(centre[1]);
+    EXPECT_GT(centre[0], 3 * centre[2]);
+
+    // Without its files: the model loads, and the warning names what it could not read.
+    const Json bare = post_ok("/v1/scenes", doc(Json()), 201);
+    ASSERT_FALSE(bare.at("warnings").empty());
+    EXPECT_NE(bare.at("warnings")[0].get<std::string>().find("sub/tri.mtl"), std::string::npos)
+        << bare.at("warnings").dump();
+    EXPECT_FALSE(bare.at("features").at("textures").get<bool>());
+
+    // A .gltf's buffer the same way (positions at z = 4, in "buf/tri data.bin", named
+    // percent-encoded): hit at t = 4 with it, 422 model_load_failed without it.
+    const float z4[9] = {0, 0, 4, 1, 0, 4, 0, 1, 4};
+    const std::string buffer(reinterpret_cast<const char*>(z4), sizeof z4);
+    const std::string gltf =
+        R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"buf/tri%20data.bin"}],)"
+        R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,)"
+        R"("componentType":5126,"count":3,"type":"VEC3","min":[0,0,4],"max":[1,1,4]}],)"
+        R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],)"
+        R"("scenes":[{"nodes":[0]}],"scene":0})";
+    Json gmesh = {{"type", "mesh"}, {"format", "gltf"}, {"data_base64", testing::base64(gltf)}};
+    EXPECT_EQ(error_code("/v1/scenes", Json{{"objects", {gmesh}}}.dump(), 422),
+              "model_load_failed");
+    gmesh["files"] = {{"buf/tri data.bin", testing::base64(buffer)}};
+    const Json g = post_ok("/v1/scenes", Json{{"objects", {gmesh}}}.dump(), 201);
+    const Json hit = closest(g.at("id"), {{"origin", {0.2, 0.2, 0}}, {"direction", {0, 0, 1}}});
+    EXPECT_EQ(hit.at("t"), 4.0) << hit;
+
+    // Refused, with the entry's pointer: a name out of the model's folder, an absolute one,
+    // bytes that are not base64, files that are not an object, files beside a uri.
+    for (const auto& [bad, where] :
+         {std::pair{doc({{"../tri.mtl", "AA=="}}), "/objects/0/files/..~1tri.mtl"},
+          std::pair{doc({{"/etc/passwd", "AA=="}}), "/objects/0/files/~1etc~1passwd"},
+          std::pair{doc({{"sub/tri.mtl", "not base64!"}}), "/objects/0/files/sub~1tri.mtl"},
+          std::pair{doc(Json::array()), "/objects/0/files"},
+          std::pair{std::string(R"({"objects":[{"type":"mesh","uri":"Box/glTF/Box.gltf",)"
+                                R"("files":{}}]})"),
+                    "/objects/0/files"}}) {
+        auto res = post("/v1/scenes", bad);
+        ASSERT_TRUE(res);
+        EXPECT_EQ(res->status, 400) << res->body;
+        const Json e = Json::parse(res->body).at("error");
+        EXPECT_EQ(e.at("code"), "invalid_scene") << res->body;
+        EXPECT_EQ(e.at("path"), where) << res->body;
+    }
+}
+
 TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
     REQUIRE_MODELS();
     Json duck = post_ok("/v1/scenes", read_file(kModels / "Duck/glTF-Binary/Duck.glb"), 201,

@@ -261,6 +261,19 @@ def scene_ref(text: str) -> SceneRef:
     raise UsageError(f"SCENE {text!r} is neither a file nor a scene id (sc_…)")
 
 
+def scene_arg(client: Client, text: str, io: Output) -> str:
+    """A SCENE argument as a registered scene's id: a file is registered first, and the
+    warnings the server has about it are printed as `scene add` prints them (a material library
+    it could not read, an unknown key); an id is taken as it is."""
+    ref = scene_ref(text)
+    if isinstance(ref, pathlib.Path):
+        summary = client.add_scene(ref)
+        for w in summary.get("warnings", []):
+            io.message(f"{ref}: warning: {w}")
+        return summary["id"]
+    return ref
+
+
 def _rays_from_args(args: argparse.Namespace) -> tuple[list[dict], list[list[float]] | None]:
     table = None
     if args.rays is not None:
@@ -325,7 +338,7 @@ def _summary_line(s: dict) -> str:
 
 def cmd_intersect(client: Client, args: argparse.Namespace, io: Output) -> int:
     rays, table = _rays_from_args(args)
-    scene = scene_ref(args.scene)
+    scene = scene_arg(client, args.scene, io)
     if table is None:
         if args.output:
             raise UsageError("-o/--output writes the results of --rays FILE")
@@ -461,7 +474,7 @@ def cmd_points(client: Client, args: argparse.Namespace, io: Output) -> int:
     if not pts:
         raise UsageError("give at least one --point or --points FILE")
     ans = client.points(
-        scene_ref(args.scene), pts, query=args.query, max_distance=args.max_distance
+        scene_arg(client, args.scene, io), pts, query=args.query, max_distance=args.max_distance
     )
 
     def text() -> str:
@@ -507,7 +520,7 @@ def cmd_render(client: Client, args: argparse.Namespace, io: Output) -> int:
     tty = io.err.isatty() if hasattr(io.err, "isatty") else False
     show = args.progress == "always" or (args.progress == "auto" and tty)
     progress: Any = ProgressBar(io.err) if show else False
-    image = client.render(scene_ref(args.scene), progress=progress, **opts)
+    image = client.render(scene_arg(client, args.scene, io), progress=progress, **opts)
     if show:
         io.err.write("\n")
     args.output.write_bytes(image)
@@ -543,7 +556,10 @@ def _json_arg(text: str, what: str) -> Any:
 
 def cmd_trace(client: Client, args: argparse.Namespace, io: Output) -> int:
     ans = client.trace(
-        scene_ref(args.scene), args.ray, max_depth=args.max_depth, precision=args.precision
+        scene_arg(client, args.scene, io),
+        args.ray,
+        max_depth=args.max_depth,
+        precision=args.precision,
     )
     io.result(ans, lambda: tree_text(ans))
     return 0

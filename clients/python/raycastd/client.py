@@ -100,9 +100,9 @@ class Client(ArrayQueries):
         self._conn: http.client.HTTPConnection | None = None
         self._used = False  # whether the open connection has carried a request already
         self._scene_ids: dict[str, str] = {}  # registered documents and files, by content
-        # The files each .gltf (by path and modification time) names: parsed once, not on every
-        # call that names the .gltf.
-        self._gltf_refs: dict[str, list[pathlib.Path]] = {}
+        # The files each .gltf or .obj (by path and modification time) names: parsed once, not
+        # on every call that names it.
+        self._named_files: dict[str, list[pathlib.Path]] = {}
 
     # -- lifecycle ---------------------------------------------------------------------------
 
@@ -223,6 +223,10 @@ class Client(ArrayQueries):
             body = scene.read_bytes()
             if content_type == "model/gltf+json":
                 body = embed_gltf_files(body, scene.parent)
+            elif content_type == "model/obj":
+                doc = obj_document(body, scene.parent, scene.stem)
+                if doc is not None:
+                    body, content_type = dumps(doc), "application/json"
         elif isinstance(scene, (bytes, bytearray)):
             body = bytes(scene)
         else:
@@ -250,11 +254,17 @@ class Client(ArrayQueries):
             return scene
         if isinstance(scene, pathlib.Path):
             key = "file:" + str(scene.resolve()) + ":" + str(scene.stat().st_mtime_ns)
-            if MODEL_TYPES.get(scene.suffix.lower()) == "model/gltf+json":
-                # The files it carries count too: an edited .bin is a new scene.
-                refs = self._gltf_refs.get(key)
+            kind = MODEL_TYPES.get(scene.suffix.lower())
+            if kind in ("model/gltf+json", "model/obj"):
+                # The files it carries count too: an edited .bin or .mtl is a new scene.
+                refs = self._named_files.get(key)
                 if refs is None:
-                    refs = self._gltf_refs[key] = gltf_files(scene.read_bytes(), scene.parent)
+                    data = scene.read_bytes()
+                    refs = self._named_files[key] = (
+                        gltf_files(data, scene.parent)
+                        if kind == "model/gltf+json"
+                        else list(obj_files(data, scene.parent).values())
+                    )
                 for f in refs:
                     key += f":{f}:{f.stat().st_mtime_ns if f.exists() else -1}"
         else:
@@ -554,6 +564,136 @@ def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
         entry["uri"] = f"data:{media};base64," + base64.b64encode(data).decode("ascii")
         changed = True
     return json.dumps(doc, separators=(",", ":")).encode() if changed else gltf
+
+
+# map_Kd options and how many arguments each takes (engine/load/obj_reader.cpp's table);
+# -o, -s and -t take up to three numbers.
+_MTL_OPTION_ARITY = {
+    "-blendu": 1,
+    "-blendv": 1,
+    "-boost": 1,
+    "-mm": 2,
+    "-texres": 1,
+    "-clamp": 1,
+    "-bm": 1,
+    "-imfchan": 1,
+    "-cc": 1,
+    "-type": 1,
+}
+
+
+def _obj_name(name: str) -> str:
+    """A file name as an OBJ or MTL writes it, as the server reads it: Windows separators
+    turned into '/', leading './' dropped."""
+    name = name.strip().replace("\\", "/")
+    while name.startswith("./"):
+        name = name[2:]
+    return name
+
+
+def _beside(folder: pathlib.Path, relative: str) -> pathlib.Path | None:
+    """`relative` inside `folder`, or None for a name that is not a plain relative path there
+    (absolute, a drive or scheme such as 'C:', or climbing out): such names are not carried,
+    and the server warns that it cannot read them."""
+    if not relative or ":" in relative or pathlib.PurePosixPath(relative).is_absolute():
+        return None
+    path = folder / relative
+    root = folder.resolve()
+    resolved = path.resolve()
+    if root != resolved and root not in resolved.parents:
+        return None
+    return path
+
+
+def _mtl_textures(mtl: str) -> list[str]:
+    """The map_Kd file names of an MTL (the maps the server samples), as it parses them."""
+    out = []
+    for line in mtl.splitlines():
+        t = line.split()
+        if len(t) < 2 or t[0] != "map_Kd":
+            continue
+        i = 1
+        while i < len(t) and len(t[i]) > 1 and t[i][0] == "-":
+            opt = t[i]
+            if opt in ("-o", "-s", "-t"):
+                i += 1
+                k = 0
+                while k < 3 and i < len(t):
+                    try:
+                        float(t[i])
+                    except ValueError:
+                        break
+                    i += 1
+                    k += 1
+                continue
+            if opt not in _MTL_OPTION_ARITY:
+                break  # not an option after all: part of the file name
+            i += 1 + _MTL_OPTION_ARITY[opt]
+        name = _obj_name(" ".join(t[i:]))
+        if name:
+            out.append(name)
+    return out
+
+
+def obj_files(obj: bytes, folder: pathlib.Path) -> dict[str, pathlib.Path]:
+    """The files beside an OBJ in `folder` that its model uses: the material libraries its
+    `mtllib` lines name and the `map_Kd` textures those name, keyed by their path relative to
+    the OBJ (as the model names them), for the `files` of an inline mesh object (docs/api.md).
+    Only files that exist inside the folder are listed; a name that is absent, absolute or out
+    of the folder is left to the server, which warns that it cannot read it."""
+    out: dict[str, pathlib.Path] = {}
+    text = obj.decode("utf-8", "replace")
+    for line in text.splitlines():
+        t = line.split()
+        if len(t) < 2 or t[0] != "mtllib":
+            continue
+        # The whole argument first (a name with spaces), then each word (several libraries).
+        names = [_obj_name(line.strip()[len("mtllib") :])]
+        if len(t) > 2:
+            names += [_obj_name(w) for w in t[1:]]
+        for name in names:
+            path = _beside(folder, name)
+            if path is None or not path.is_file():
+                continue
+            out[name] = path
+            mtl_dir = name.rsplit("/", 1)[0] + "/" if "/" in name else ""
+            try:
+                mtl = path.read_text("utf-8", "replace")
+            except OSError:
+                continue
+            for texture in _mtl_textures(mtl):
+                tex = _beside(folder, mtl_dir + texture)
+                if tex is not None and tex.is_file():
+                    out[mtl_dir + texture] = tex
+    return out
+
+
+def obj_document(obj: bytes, folder: pathlib.Path, name: str) -> dict | None:
+    """An OBJ and the files beside it that it uses (obj_files) as a scene document of one
+    inline mesh object carrying them in `files`; None when it uses none (it is then sent as
+    it is). The server reads no file an upload names, so an OBJ's .mtl and textures travel
+    this way. A file that cannot be read raises ModelLoadFailed naming it."""
+    files = obj_files(obj, folder)
+    if not files:
+        return None
+    carried = {}
+    for key, path in files.items():
+        try:
+            carried[key] = base64.b64encode(path.read_bytes()).decode("ascii")
+        except OSError as exc:
+            raise ModelLoadFailed(
+                f"the OBJ uses {key!r}, which cannot be read at {path}: {exc.strerror or exc}",
+                code="model_load_failed",
+                path=f"files/{key}",
+            ) from exc
+    mesh = {
+        "type": "mesh",
+        "name": name,
+        "format": "obj",
+        "data_base64": base64.b64encode(obj).decode("ascii"),
+        "files": carried,
+    }
+    return {"objects": [mesh]}
 
 
 def _dropped(conn: http.client.HTTPConnection) -> bool:

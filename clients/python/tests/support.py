@@ -62,6 +62,39 @@ class ServerTestCase(unittest.TestCase):
         cls.server.close()
 
 
+def red_png() -> bytes:
+    """A 1×1 8-bit RGB PNG, one red texel, written by hand."""
+    raw = b"\x00\xff\x00\x00"
+    chunks = [
+        (b"IHDR", struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)),
+        (b"IDAT", zlib.compress(raw)),
+        (b"IEND", b""),
+    ]
+    return b"\x89PNG\r\n\x1a\n" + b"".join(
+        struct.pack(">I", len(c)) + t + c + struct.pack(">I", zlib.crc32(t + c)) for t, c in chunks
+    )
+
+
+def write_obj_with_files(
+    folder: pathlib.Path, mtllib: str = "sub/tri.mtl", kd: str = "1 1 1"
+) -> pathlib.Path:
+    """A one-triangle OBJ (the triangle of TRIANGLE, at z = 5) with texture coordinates, whose
+    material library `mtllib` (written beside it when it is sub/tri.mtl) gives it a red PNG
+    texture, named with an option and Windows separators (`map_Kd -s 1 1 1 .\\tex\\red.png`,
+    relative to the library: sub/tex/red.png), as exporters on Windows write them."""
+    (folder / "sub" / "tex").mkdir(parents=True, exist_ok=True)
+    (folder / "sub" / "tex" / "red.png").write_bytes(red_png())
+    (folder / "sub" / "tri.mtl").write_text(
+        f"newmtl red\nKd {kd}\nKs 0 0 0\nmap_Kd -s 1 1 1 .\\tex\\red.png\n"
+    )
+    path = folder / "tri.obj"
+    path.write_text(
+        f"mtllib {mtllib}\nv 0 0 5\nv 2 0 5\nv 0 2 5\nvt 0 0\nvt 1 0\nvt 0 1\n"
+        "usemtl red\nf 1/1 2/2 3/3\n"
+    )
+    return path
+
+
 def write_gltf_with_files(
     folder: pathlib.Path, name: str = "tri.gltf", z: float = 5.0, image_uri: str = "red.png"
 ) -> pathlib.Path:
@@ -71,16 +104,7 @@ def write_gltf_with_files(
     positions = struct.pack("<9f", 0, 0, z, 2, 0, z, 0, 2, z)
     uvs = struct.pack("<6f", 0, 0, 1, 0, 0, 1)
     (folder / "tri data.bin").write_bytes(positions + uvs)
-    raw = b"\x00\xff\x00\x00"  # a 1×1 8-bit RGB PNG, one red texel, written by hand
-    chunks = [
-        (b"IHDR", struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)),
-        (b"IDAT", zlib.compress(raw)),
-        (b"IEND", b""),
-    ]
-    data = b"\x89PNG\r\n\x1a\n" + b"".join(
-        struct.pack(">I", len(c)) + t + c + struct.pack(">I", zlib.crc32(t + c)) for t, c in chunks
-    )
-    (folder / "red.png").write_bytes(data)
+    (folder / "red.png").write_bytes(red_png())
     doc = {
         "asset": {"version": "2.0"},
         "buffers": [{"uri": "tri%20data.bin", "byteLength": len(positions) + len(uvs)}],

@@ -20,6 +20,7 @@ from support import (
     ServerTestCase,
     numpy,
     write_gltf_with_files,
+    write_obj_with_files,
 )
 
 from raycastd.cli import main
@@ -277,6 +278,18 @@ class CliTest(ServerTestCase):
         self.assertIn("model_load_failed", err)
         self.assertIn("tri%20data.bin", err)
         self.assertNotIn("Traceback", err)
+
+    def test_an_obj_with_its_mtl_and_the_servers_warnings(self) -> None:
+        # The OBJ goes with its .mtl and texture; a render of a file prints the warnings the
+        # server has about it, as `scene add` does (here: the library it could not read).
+        obj = write_obj_with_files(self.dir)
+        code, _, err = self.run_cli("render", str(obj), "-o", str(self.dir / "x.png"))
+        self.assertEqual(code, 0, err)
+        self.assertNotIn("warning", err)
+        (self.dir / "sub" / "tri.mtl").unlink()
+        code, _, err = self.run_cli("render", str(obj), "-o", str(self.dir / "x.png"))
+        self.assertEqual(code, 0, err)
+        self.assertIn(f"{obj}: warning: material library 'sub/tri.mtl' could not be read", err)
 
     def test_raycastd_url_and_connection_failure(self) -> None:
         with mock.patch.dict(os.environ, {"RAYCASTD_URL": self.server.url}):

@@ -16,7 +16,15 @@ import unittest
 from typing import Callable
 from unittest import mock
 
-from support import RAY, REPO, TRIANGLE, TUTORIAL, ServerTestCase, write_gltf_with_files
+from support import (
+    RAY,
+    REPO,
+    TRIANGLE,
+    TUTORIAL,
+    ServerTestCase,
+    write_gltf_with_files,
+    write_obj_with_files,
+)
 
 import raycastd
 from raycastd import (
@@ -27,7 +35,7 @@ from raycastd import (
     NotFound,
     RaycastdError,
 )
-from raycastd.client import embed_gltf_files
+from raycastd.client import embed_gltf_files, obj_document, obj_files
 from raycastd.png import read_png
 
 
@@ -231,6 +239,67 @@ class GltfFilesTest(ServerTestCase):
         summary = self.client.add_scene(fox)
         self.assertGreater(summary["triangles"], 500)
         self.assertTrue(summary["features"]["textures"], summary)
+
+
+class ObjFilesTest(ServerTestCase):
+    """An OBJ whose material library and textures are files beside it is sent as a scene
+    document with them in its mesh object's `files`: the server reads no file an upload names."""
+
+    def setUp(self) -> None:
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.dir = pathlib.Path(tmp.name)
+
+    def test_its_mtl_and_textures_are_carried(self) -> None:
+        path = write_obj_with_files(self.dir)
+        self.assertEqual(
+            sorted(obj_files(path.read_bytes(), self.dir)), ["sub/tex/red.png", "sub/tri.mtl"]
+        )
+        # As it is, it registers with no material and the server says why.
+        raw = self.client.add_scene(path.read_bytes(), "model/obj")
+        self.assertFalse(raw["features"]["textures"])
+        self.assertTrue(any("sub/tri.mtl" in w for w in raw["warnings"]), raw["warnings"])
+        summary = self.client.add_scene(path)
+        self.assertEqual((summary["objects"], summary["triangles"]), (1, 1))
+        self.assertTrue(summary["features"]["textures"], summary)  # the PNG was decoded
+        self.assertEqual(summary["warnings"], [])
+        self.assertEqual(summary["default_view"], "+z")
+        hit = self.client.intersect(summary["id"], [RAY], fields=["t", "name"])["hits"][0]
+        self.assertEqual((hit["t"], hit["name"]), (5, "tri"))
+
+    def test_an_edited_mtl_is_a_new_scene(self) -> None:
+        path = write_obj_with_files(self.dir)
+        first = self.client.scene_id(path)
+        self.assertEqual(self.client.scene_id(path), first)
+        mtl = write_obj_with_files(self.dir, kd="0.5 0.5 0.5").parent / "sub" / "tri.mtl"
+        os.utime(mtl, ns=(mtl.stat().st_atime_ns, mtl.stat().st_mtime_ns + 10**9))
+        self.assertNotEqual(self.client.scene_id(path), first)
+
+    def test_names_out_of_its_folder_are_left_to_the_server(self) -> None:
+        # Only files inside the OBJ's folder travel: a library named by an absolute path, a
+        # Windows drive or a climb out is not read, and the server warns it cannot read it.
+        inner = self.dir / "model"
+        inner.mkdir()
+        (self.dir / "secret.mtl").write_text("newmtl red\nKd 1 0 0\n")
+        for name in ("../secret.mtl", str(self.dir / "secret.mtl"), "C:\\x\\secret.mtl"):
+            path = write_obj_with_files(inner, mtllib=name)
+            self.assertEqual(obj_files(path.read_bytes(), inner), {}, name)
+            self.assertIsNone(obj_document(path.read_bytes(), inner, "tri"))
+            summary = self.client.add_scene(path)
+            self.assertTrue(any("secret.mtl" in w for w in summary["warnings"]), name)
+        # A texture the library names out of the folder is not carried either.
+        path = write_obj_with_files(inner)
+        (inner / "sub" / "tri.mtl").write_text("newmtl red\nmap_Kd ../../secret.mtl\n")
+        self.assertEqual(sorted(obj_files(path.read_bytes(), inner)), ["sub/tri.mtl"])
+
+    def test_the_spider_with_its_textures(self) -> None:
+        spider = REPO.parent / "shared" / "data" / "models" / "spider" / "spider.obj"
+        if not spider.exists():
+            self.skipTest(f"the shared models are not at {spider.parent}")
+        summary = self.client.add_scene(spider)
+        self.assertEqual(summary["triangles"], 1368)
+        self.assertTrue(summary["features"]["textures"], summary)
+        self.assertEqual(summary["warnings"], [])
 
 
 class ErrorsTest(ServerTestCase):

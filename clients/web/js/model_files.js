@@ -4,7 +4,9 @@
 //
 // A .gltf that refers to external files (Duck.gltf → Duck0.bin, DuckCM.png) can be dropped
 // together with them: the page embeds them as data: URIs, since a raw glTF body must be
-// self-contained. A reference that was not dropped is named before anything is sent.
+// self-contained. A reference that was not dropped is named before anything is sent. An .obj
+// dropped with its .mtl and textures goes as a scene document whose inline mesh carries them
+// in `files`.
 
 export const CONTENT_TYPES = {
     glb: 'model/gltf-binary',
@@ -86,6 +88,79 @@ async function embedGltf(doc, companions, name) {
     }
 }
 
+// map_Kd options and how many arguments each takes (engine/load/obj_reader.cpp's table); -o, -s
+// and -t take up to three numbers.
+const kMapOptionArity = {
+    '-blendu': 1, '-blendv': 1, '-boost': 1, '-mm': 2, '-texres': 1,
+    '-clamp': 1, '-bm': 1, '-imfchan': 1, '-cc': 1, '-type': 1,
+};
+
+/** A file name as an OBJ or MTL writes it, as the server reads it: '\\' → '/', no leading './'. */
+const objName = (name) => {
+    let s = name.trim().replaceAll('\\', '/');
+    while (s.startsWith('./')) s = s.slice(2);
+    return s;
+};
+
+/** The map_Kd names of an MTL (the maps the server samples), as the server parses them. */
+export function mtlTextures(text) {
+    const out = [];
+    for (const line of text.split(/\r?\n/)) {
+        const t = line.trim().split(/\s+/);
+        if (t.length < 2 || t[0] !== 'map_Kd') continue;
+        let i = 1;
+        while (i < t.length && t[i].length > 1 && t[i][0] === '-') {
+            const opt = t[i];
+            if (opt === '-o' || opt === '-s' || opt === '-t') {
+                i += 1;
+                for (let k = 0; k < 3 && i < t.length && Number.isFinite(Number(t[i])); k++) i += 1;
+                continue;
+            }
+            if (!(opt in kMapOptionArity)) break; // not an option: part of the file name
+            i += 1 + kMapOptionArity[opt];
+        }
+        const name = objName(t.slice(i).join(' '));
+        if (name) out.push(name);
+    }
+    return out;
+}
+
+/** The mtllib names of an OBJ: the whole argument, and each word when there are several. */
+function mtlLibraries(text) {
+    const out = [];
+    for (const line of text.split(/\r?\n/)) {
+        const t = line.trim().split(/\s+/);
+        if (t.length < 2 || t[0] !== 'mtllib') continue;
+        out.push(objName(line.trim().slice('mtllib'.length)));
+        if (t.length > 2) out.push(...t.slice(1).map(objName));
+    }
+    return out;
+}
+
+const base64Of = async (file) => (await dataUri(file, 'application/octet-stream')).replace(/^data:[^,]*,/, '');
+
+/** An OBJ dropped with its .mtl and textures: a scene document of one inline mesh object that
+ *  carries them in `files` (docs/api.md), keyed by the names the OBJ and MTL give them; the page
+ *  finds each by its base name among the dropped files. Null when none of them was dropped (the
+ *  OBJ then goes as it is; the server warns about a library it cannot read). */
+async function objDocument(main, companions) {
+    const lookup = new Map(companions.map((f) => [f.name.toLowerCase(), f]));
+    const files = {};
+    for (const lib of mtlLibraries(await main.text())) {
+        const mtl = lookup.get(baseName(lib));
+        if (!mtl || lib in files) continue;
+        files[lib] = await base64Of(mtl);
+        const dir = lib.includes('/') ? lib.slice(0, lib.lastIndexOf('/') + 1) : '';
+        for (const tex of mtlTextures(await mtl.text())) {
+            const image = lookup.get(baseName(tex));
+            if (image) files[dir + tex] = await base64Of(image);
+        }
+    }
+    if (!Object.keys(files).length) return null;
+    const stem = main.name.replace(/\.[^.]*$/, '');
+    return { objects: [{ type: 'mesh', name: stem, format: 'obj', data_base64: await base64Of(main), files }] };
+}
+
 /**
  * The upload for a list of dropped or picked files: {name, contentType, body, document}, where
  * `document` is the parsed scene document (its camera frames the view) when one was dropped.
@@ -114,6 +189,10 @@ export async function prepareUpload(fileList) {
             return { ...upload, contentType: CONTENT_TYPES.gltf, body: JSON.stringify(doc) };
         }
         return { ...upload, contentType: CONTENT_TYPES.json, document: doc };
+    }
+    if (ext === 'obj' && companions.length) {
+        const doc = await objDocument(main, companions);
+        if (doc) return { ...upload, contentType: CONTENT_TYPES.json, body: JSON.stringify(doc) };
     }
     return upload;
 }

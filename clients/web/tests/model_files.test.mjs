@@ -2,7 +2,7 @@
 import assert from 'node:assert/strict';
 import test from 'node:test';
 
-import { UploadError, prepareUpload } from '../js/model_files.js';
+import { UploadError, mtlTextures, prepareUpload } from '../js/model_files.js';
 
 // Node has File but not FileReader: a minimal one for readAsDataURL.
 globalThis.FileReader ??= class {
@@ -56,4 +56,34 @@ test('a .gltf whose files were not dropped is refused before anything is sent', 
 test('JSON that does not parse goes to the server, which names the byte (bad_json)', async () => {
     const u = await prepareUpload([new File(['{"objects": ['], 'broken.json')]);
     assert.equal(u.contentType, 'application/json');
+});
+
+test('an .obj takes its dropped .mtl and textures along in an inline mesh\'s files', async () => {
+    const obj = 'mtllib sub/spider.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n';
+    const mtl = 'newmtl skin\nmap_Kd -s 1 1 1 -clamp on .\\tex\\Skin.jpg\nmap_Kd other.png\n';
+    const u = await prepareUpload([
+        new File([mtl], 'spider.mtl'),
+        new File([obj], 'spider.obj'),
+        new File([new Uint8Array([255, 216, 255])], 'Skin.jpg'),
+    ]);
+    assert.equal(u.name, 'spider.obj');
+    assert.equal(u.contentType, 'application/json');
+    const mesh = JSON.parse(u.body).objects[0];
+    assert.deepEqual(Object.keys(mesh), ['type', 'name', 'format', 'data_base64', 'files']);
+    assert.equal(mesh.name, 'spider');
+    assert.equal(Buffer.from(mesh.data_base64, 'base64').toString(), obj);
+    // Keyed as the model names them: the texture relative to the library's folder; the
+    // texture that was not dropped (other.png) is left for the server's warning.
+    assert.deepEqual(Object.keys(mesh.files).sort(), ['sub/spider.mtl', 'sub/tex/Skin.jpg']);
+    assert.equal(Buffer.from(mesh.files['sub/spider.mtl'], 'base64').toString(), mtl);
+    assert.deepEqual([...Buffer.from(mesh.files['sub/tex/Skin.jpg'], 'base64')], [255, 216, 255]);
+    // Alone, or with nothing it names, it goes as it is.
+    for (const files of [[new File([obj], 'a.obj')], [new File([obj], 'a.obj'), new File(['x'], 'b.mtl')]]) {
+        const alone = await prepareUpload(files);
+        assert.equal(alone.contentType, 'model/obj');
+    }
+});
+
+test('map_Kd options are skipped as the server skips them', () => {
+    assert.deepEqual(mtlTextures('map_Kd -o 0.5 0.5 -mm 0 1 -bm 2 a b.png\nmap_Kd -zz c.png\n'), ['a b.png', '-zz c.png']);
 });
