@@ -386,6 +386,20 @@ try {
         check(info.includes('Duck.gltf') && info.includes('4212'), 'Duck.gltf with Duck0.bin and DuckCM.png uploads as one model');
     }
 
+    // An .obj picked with its .mtl and JPEG textures: they travel in its inline mesh's files,
+    // and the spider comes out textured, seen from the front of its file (+z).
+    if (haveModels) {
+        const dir = path.join(models, 'spider');
+        const picked = ['spider.obj', 'spider.mtl', 'SpiderTex.jpg', 'drkwood2.jpg', 'engineflare1.jpg', 'wal67ar_small.jpg', 'wal69ar_small.jpg'];
+        const before = await upload(picked.map((f) => path.join(dir, f)));
+        await waitFull(before);
+        const info = await page.textContent('#scene-info');
+        check(info.includes('1368') && info.includes('✓ textures'), `spider.obj with its .mtl and JPEGs uploads as one textured model (${info.includes('✓ textures') ? 'textures' : 'no textures'})`);
+        const frame = await decode();
+        check(frame.fg > 0.03 && frame.colours > 100, `and renders (${(frame.fg * 100).toFixed(1)}% of the pixels, ${frame.colours} colours)`);
+        await screenshot('spider-textured');
+    }
+
     // A model file without a camera opens from its front, +z (a glTF asset's front faces +z),
     // as the server frames it (the summary's default_view), its bounds' centre in the middle.
     {
