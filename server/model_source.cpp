@@ -4,6 +4,7 @@
 #include <cctype>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "engine/math/transform.h"
 #include "server/schema/scene_doc.h"
@@ -94,8 +95,12 @@ std::map<std::string, std::string> read_inline_files(const Json& files, const st
         std::string slashed = name;
         std::replace(slashed.begin(), slashed.end(), '\\', '/');
         auto norm = normalize_relative(slashed);
-        if (!norm.ok())
-            throw ApiError(ErrorCode::invalid_scene, at + ": " + norm.status().message, at);
+        if (!norm.ok()) {
+            throw ApiError(ErrorCode::invalid_scene,
+                           at + ": not a path relative to the model (it is absolute, has a "
+                                "scheme or drive, or climbs above the model's folder)",
+                           at);
+        }
         if (!value.is_string())
             throw ApiError(ErrorCode::invalid_scene, at + " must be a base64 string", at);
         auto bytes = decode_base64(value.get_ref<const std::string&>());
@@ -139,6 +144,19 @@ std::uint32_t adopt_materials(const engine::LoadedModel& model, const std::strin
     return base;
 }
 
+/// Pixels of the texture images a loaded model holds, each image once.
+std::size_t decoded_texture_pixels(const engine::LoadedModel& model) {
+    std::set<const engine::TextureImage*> seen;
+    std::size_t pixels = 0;
+    for (const engine::Material& m : model.materials) {
+        if (m.texture && m.texture->image && seen.insert(m.texture->image.get()).second) {
+            pixels += static_cast<std::size_t>(m.texture->image->width) *
+                      static_cast<std::size_t>(m.texture->image->height);
+        }
+    }
+    return pixels;
+}
+
 engine::LoadLimits load_limits(const Limits& limits) {
     engine::LoadLimits l;
     l.max_triangles = limits.max_triangles;
@@ -152,7 +170,13 @@ engine::LoadLimits load_limits(const Limits& limits) {
 }  // namespace
 
 engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
-                                  const FileSource& files, const Limits& limits) {
+                                  const FileSource& files, const Limits& limits, bool textures) {
+    // The texture budget (4 × --max-texture-pixels) is the scene's, shared by its mesh objects:
+    // per object, a document of many small objects could each bring the most one may, and the
+    // same image could come in under as many names (a document's `files`). A scene that is only
+    // queried (textures false) decodes none.
+    const std::size_t texture_budget = textures ? 4 * limits.max_texture_pixels : 0;
+    std::size_t texture_pixels = 0;
     MeshObjectLoader load_mesh =
         [&](const Json& obj, const std::string& path,
             engine::Scene& scene) -> std::shared_ptr<const engine::TriangleMesh> {
@@ -221,7 +245,8 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             if (const Json* f = member(obj, "files")) {
                 auto inline_files = std::make_shared<const std::map<std::string, std::string>>(
                     read_inline_files(*f, path + "/files"));
-                resources = [inline_files](const std::string& ref) -> engine::Result<std::string> {
+                resources = [inline_files](std::string ref) -> engine::Result<std::string> {
+                    std::replace(ref.begin(), ref.end(), '\\', '/');
                     auto norm = normalize_relative(ref);
                     if (!norm.ok())
                         return norm.status();
@@ -243,10 +268,15 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         }
         if (const Json* n = member(obj, "name"); n && n->is_string())
             display = n->get<std::string>();
-        auto loaded = engine::load_model(bytes, *format, resources, display, load_limits(limits));
+        engine::LoadLimits load = load_limits(limits);
+        load.max_texture_pixels_total = texture_budget - texture_pixels;
+        if (!textures)
+            load.max_texture_pixels = 0;
+        auto loaded = engine::load_model(bytes, *format, resources, display, load);
         if (!loaded.ok())
             throw load_error(loaded.status(), path);
         engine::LoadedModel& model = *loaded;
+        texture_pixels += std::min(decoded_texture_pixels(model), texture_budget - texture_pixels);
         if (const Json* t = member(obj, "transform")) {
             engine::apply_transform(model, parse_transform(*t, path + "/transform"));
         }
@@ -401,8 +431,10 @@ std::shared_ptr<const engine::QueryEngine> ModelSource::build_stateless_scene(
     if (!doc)
         throw ApiError(ErrorCode::invalid_request, "/scene is required", "/scene");
     return stateless_cache_.get_or_build(*doc, [&] {
-        return prepare(scene_from_document(*doc, "/scene", scene_root_files(), limits_), limits_,
-                       "/scene", cancel);
+        // Stateless calls (intersect, explain, points) never render: no textures are decoded
+        // for them, and the scenes the cache keeps hold none.
+        return prepare(scene_from_document(*doc, "/scene", scene_root_files(), limits_, false),
+                       limits_, "/scene", cancel);
     });
 }
 

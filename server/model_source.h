@@ -67,8 +67,10 @@ std::string classify_scene_body(std::string_view body, const std::string& conten
 /// Parses a scene document, loading its mesh objects through `files`. ApiError on any problem
 /// (paths start with `prefix`): invalid_scene for the document, unsupported_format for a model
 /// format we do not read, model_load_failed (422) for a file that cannot be used, too_large.
+/// `textures` false: no texture is decoded (a scene only queried, never rendered).
 engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
-                                  const FileSource& files, const Limits& limits);
+                                  const FileSource& files, const Limits& limits,
+                                  bool textures = true);
 
 /// A whole model file as a scene: one object per part (glTF mesh instance, or the file), with
 /// the model's materials, lights and camera.

@@ -431,7 +431,8 @@ SceneRegistry::Saved SceneRegistry::persist(const std::string& id, const SceneSo
                        {"info", info_json(e.info)}};
     // meta.json is written last: a directory is a saved copy once it holds one, and only a
     // rename of a complete temp dir ever creates scenes/<id>.
-    ok = ok && write_synced(tmp / "meta.json", meta.dump(1), error);
+    ok = ok && write_synced(tmp / "meta.json",
+                            meta.dump(1, ' ', false, Json::error_handler_t::replace), error);
     ok = ok && sync_dir(tmp, error);
     if (!ok) {
         fs::remove_all(tmp, ec);

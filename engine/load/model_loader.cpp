@@ -10,6 +10,7 @@
 #include <new>
 
 #include "engine/load/loaders.h"
+#include "engine/utf8.h"
 
 namespace raycastd::engine {
 
@@ -225,6 +226,15 @@ std::size_t add_fan(TriangleMesh& mesh, const std::vector<std::uint32_t>& poly) 
 }
 
 Status finish_model(LoadedModel& model, std::string_view name, const LoadLimits& limits) {
+    // Names and messages quote the file's bytes, in whatever encoding it was written: made
+    // UTF-8 here, once for every format, since answers carry them as JSON strings (a Latin-1
+    // material library name had made registration answer 500).
+    for (ModelPart& part : model.parts)
+        part.name = valid_utf8(part.name);
+    for (std::string& n : model.material_names)
+        n = valid_utf8(n);
+    for (std::string& w : model.warnings)
+        w = valid_utf8(w);
     std::size_t vertices = 0;
     for (ModelPart& part : model.parts) {
         vertices += part.mesh.positions.size();

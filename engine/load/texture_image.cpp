@@ -53,9 +53,9 @@ Result<std::shared_ptr<const TextureImage>> decode_texture_image(std::string_vie
     if (pixels > limits.max_texture_pixels_total ||
         decoded > limits.max_texture_pixels_total - pixels) {
         return refuse(std::to_string(w) + "×" + std::to_string(h) +
-                      " image would take the model's textures past " +
-                      std::to_string(limits.max_texture_pixels_total) +
-                      " pixels together (4 × --max-texture-pixels)");
+                      " image is over what is left of the scene's texture budget (" +
+                      std::to_string(limits.max_texture_pixels_total - decoded) +
+                      " pixels; 4 × --max-texture-pixels for all its images together)");
     }
     int dw = 0, dh = 0;
     stbi_uc* px = stbi_load_from_memory(data, size, &dw, &dh, &channels, 3);

@@ -278,6 +278,73 @@ TEST_F(Scenes, AnInlineModelCarriesTheFilesItNames) {
     }
 }
 
+TEST_F(Scenes, NamesInAnotherEncodingAreAnsweredAsUtf8) {
+    // An OBJ written in Latin-1: the library and the material it names carry byte E9 ("é"),
+    // which is not UTF-8, and the server's warnings quote them. Registered (and saved: the
+    // fixture has a data dir), answered with U+FFFD in their place, and the same after a
+    // restart; it had been 500 internal.
+    const std::string obj =
+        "mtllib caf\xE9.mtl\nusemtl caf\xE9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    const Json info = post_ok("/v1/scenes", obj, 201, "model/obj");
+    ASSERT_EQ(info.at("warnings").size(), 2u) << info.at("warnings").dump();
+    EXPECT_NE(info.at("warnings")[0].get<std::string>().find("'caf\xEF\xBF\xBD.mtl'"),
+              std::string::npos)
+        << info.at("warnings").dump();
+    EXPECT_NE(info.at("warnings")[1].get<std::string>().find("'caf\xEF\xBF\xBD'"),
+              std::string::npos)
+        << info.at("warnings").dump();
+    const std::string id = info.at("id");
+    server->stop(SIGKILL);
+    start();
+    auto again = server->client()->Get(("/v1/scenes/" + id).c_str());
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->status, 200);
+    EXPECT_EQ(Json::parse(again->body).at("warnings"), info.at("warnings"));
+}
+
+TEST_F(Scenes, TheTextureBudgetIsTheScenes) {
+    // --max-texture-pixels 1: a scene's images may have 4 pixels together, however many mesh
+    // objects bring them. Five objects, each an inline OBJ with its own one-texel PNG: four are
+    // textured, the fifth is warned about. A stateless intersect on the same document answers
+    // (its scene decodes no texture: server/model_source_test.cpp).
+    testing::ServerProcess small({"--max-texture-pixels", "1"});
+    const std::string png_b64 =
+        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGN4JicCAAMGARnZ3ys9AAAAAElFTkSuQm"
+        "CC";
+    Json objects = Json::array();
+    for (int k = 0; k < 5; ++k) {
+        const std::string obj = "mtllib m.mtl\nv " + std::to_string(3 * k) +
+                                " 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl t\n"
+                                "f 1/1 2/2 3/3\n";
+        objects.push_back(
+            {{"type", "mesh"},
+             {"format", "obj"},
+             {"data_base64", testing::base64(obj)},
+             {"files",
+              {{"m.mtl", testing::base64("newmtl t\nmap_Kd t.png\n")}, {"t.png", png_b64}}}});
+    }
+    const Json doc = {{"objects", objects}};
+    auto res = small.client()->Post("/v1/scenes", doc.dump(), "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 201) << res->body;
+    const Json info = Json::parse(res->body);
+    EXPECT_TRUE(info.at("features").at("textures").get<bool>());
+    ASSERT_EQ(info.at("warnings").size(), 1u) << info.at("warnings").dump();
+    EXPECT_NE(info.at("warnings")[0].get<std::string>().find("/objects/4"), std::string::npos)
+        << info.at("warnings")[0];
+    EXPECT_NE(info.at("warnings")[0].get<std::string>().find("texture budget (0 pixels"),
+              std::string::npos)
+        << info.at("warnings")[0];
+    auto stateless = small.client()->Post(
+        "/v1/intersect",
+        Json{{"scene", doc}, {"rays", {{{"origin", {0.2, 0.2, -1}}, {"direction", {0, 0, 1}}}}}}
+            .dump(),
+        "application/json");
+    ASSERT_TRUE(stateless);
+    EXPECT_EQ(stateless->status, 200) << stateless->body;
+    EXPECT_EQ(Json::parse(stateless->body).at("hits").at(0).at("hit"), true);
+}
+
 TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
     REQUIRE_MODELS();
     Json duck = post_ok("/v1/scenes", read_file(kModels / "Duck/glTF-Binary/Duck.glb"), 201,

@@ -14,6 +14,7 @@ import json
 import math
 import os
 import pathlib
+import posixpath
 import re
 import select
 import socket
@@ -100,9 +101,11 @@ class Client(ArrayQueries):
         self._conn: http.client.HTTPConnection | None = None
         self._used = False  # whether the open connection has carried a request already
         self._scene_ids: dict[str, str] = {}  # registered documents and files, by content
-        # The files each .gltf or .obj (by path and modification time) names: parsed once, not
-        # on every call that names it.
+        # The files each .gltf (by path and modification time) names: parsed once, not on every
+        # call that names it.
         self._named_files: dict[str, list[pathlib.Path]] = {}
+        self._obj_texts: dict[str, bytes] = {}  # an .obj's bytes, by path and modification time
+        self._mtl_parses: dict[str, list[str]] = {}  # an .mtl's map_Kd names, likewise
 
     # -- lifecycle ---------------------------------------------------------------------------
 
@@ -257,16 +260,20 @@ class Client(ArrayQueries):
             kind = MODEL_TYPES.get(scene.suffix.lower())
             if kind in ("model/gltf+json", "model/obj"):
                 # The files it carries count too: an edited .bin or .mtl is a new scene.
-                refs = self._named_files.get(key)
-                if refs is None:
-                    data = scene.read_bytes()
-                    refs = self._named_files[key] = (
-                        gltf_files(data, scene.parent)
-                        if kind == "model/gltf+json"
-                        else list(obj_files(data, scene.parent).values())
-                    )
+                if kind == "model/gltf+json":
+                    refs = self._named_files.get(key)
+                    if refs is None:
+                        refs = self._named_files[key] = gltf_files(scene.read_bytes(), scene.parent)
+                else:
+                    # Which libraries and textures count depends on the .mtl files too (one may
+                    # appear later, or name another texture): looked up on every call, their
+                    # parses cached by path and modification time.
+                    obj = self._obj_texts.get(key)
+                    if obj is None:
+                        obj = self._obj_texts[key] = scene.read_bytes()
+                    _, refs = obj_files(obj, scene.parent, self._mtl_parses)
                 for f in refs:
-                    key += f":{f}:{f.stat().st_mtime_ns if f.exists() else -1}"
+                    key += f":{f}:{_mtime(f)}"
         else:
             key = "doc:" + json.dumps(scene, sort_keys=True)
         if key not in self._scene_ids:
@@ -566,8 +573,19 @@ def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
     return json.dumps(doc, separators=(",", ":")).encode() if changed else gltf
 
 
-# map_Kd options and how many arguments each takes (engine/load/obj_reader.cpp's table);
-# -o, -s and -t take up to three numbers.
+# How the server reads an OBJ and its MTL (engine/load/obj_reader.cpp, text_scan.h), so that the
+# client carries exactly the files the server will ask for: lines end at \r, \n or \r\n; in an
+# OBJ a backslash at the end of a line joins the next one (with a space); '#' starts a comment;
+# words are separated by ASCII blanks only.
+_LINE_ENDS = re.compile(r"\r\n|\r|\n")
+_BLANKS = re.compile(r"[ \t\v\f]+")
+_BLANK_CHARS = " \t\v\f"
+# A number as std::from_chars reads one (and finite, as map_Kd's -o, -s and -t take them).
+_DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+# RFC 3986 §3.1's scheme, or a drive letter: refused by the server (check_resource_uri).
+_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
+# map_Kd options and how many arguments each takes (obj_reader.cpp's table); -o, -s and -t
+# take up to three numbers.
 _MTL_OPTION_ARITY = {
     "-blendu": 1,
     "-blendv": 1,
@@ -582,110 +600,177 @@ _MTL_OPTION_ARITY = {
 }
 
 
-def _obj_name(name: str) -> str:
-    """A file name as an OBJ or MTL writes it, as the server reads it: Windows separators
-    turned into '/', leading './' dropped."""
-    name = name.strip().replace("\\", "/")
-    while name.startswith("./"):
-        name = name[2:]
-    return name
+def _statements(text: str, continued: bool) -> list[str]:
+    lines = _LINE_ENDS.split(text)
+    if not continued:
+        return lines
+    out, i = [], 0
+    while i < len(lines):
+        line, i = lines[i], i + 1
+        if not line.endswith("\\"):
+            out.append(line)
+            continue
+        parts = [line[:-1]]
+        while i < len(lines):
+            more, i = lines[i], i + 1
+            parts.append(more[:-1] if more.endswith("\\") else more)
+            if not more.endswith("\\"):
+                break
+        out.append(" ".join(parts))
+    return out
 
 
-def _beside(folder: pathlib.Path, relative: str) -> pathlib.Path | None:
-    """`relative` inside `folder`, or None for a name that is not a plain relative path there
-    (absolute, a drive or scheme such as 'C:', or climbing out): such names are not carried,
-    and the server warns that it cannot read them."""
-    if not relative or ":" in relative or pathlib.PurePosixPath(relative).is_absolute():
-        return None
-    path = folder / relative
-    root = folder.resolve()
-    resolved = path.resolve()
-    if root != resolved and root not in resolved.parents:
-        return None
-    return path
+def _tokens(line: str) -> list[str]:
+    return [t for t in _BLANKS.split(line.split("#", 1)[0]) if t]
 
 
-def _mtl_textures(mtl: str) -> list[str]:
-    """The map_Kd file names of an MTL (the maps the server samples), as it parses them."""
+def _rest_of_line(line: str, keyword: str) -> str:
+    rest = line[line.find(keyword) + len(keyword) :]
+    return rest.split("#", 1)[0].strip(_BLANK_CHARS)
+
+
+def _is_number(token: str) -> bool:
+    return _DECIMAL.fullmatch(token) is not None and math.isfinite(float(token))
+
+
+def obj_libraries(obj: bytes) -> list[list[str]]:
+    """The material libraries an OBJ names, one list per `mtllib` statement: the whole
+    argument first (a name with spaces), then each word when there are several, as the server
+    tries them (it takes the whole argument if it reads, else every word that reads). Windows
+    separators are turned into '/' and one leading './' dropped, as the server does."""
     out = []
-    for line in mtl.splitlines():
-        t = line.split()
+    for line in _statements(obj.decode("utf-8", "replace"), continued=True):
+        t = _tokens(line)
+        if len(t) < 2 or t[0] != "mtllib":
+            continue
+        names = [_rest_of_line(line, "mtllib")] + (t[1:] if len(t) > 2 else [])
+        fixed = []
+        for name in names:
+            name = name.replace("\\", "/")
+            fixed.append(name[2:] if name.startswith("./") else name)
+        out.append(fixed)
+    return out
+
+
+def mtl_textures(mtl: str) -> list[str]:
+    """The `map_Kd` file names of an MTL (the maps the server samples), relative to the MTL,
+    as the server parses them: options skipped by its table, the rest of the words joined by
+    a space, Windows separators turned into '/', leading './' dropped."""
+    out = []
+    for line in _statements(mtl, continued=False):
+        t = _tokens(line)
         if len(t) < 2 or t[0] != "map_Kd":
             continue
         i = 1
         while i < len(t) and len(t[i]) > 1 and t[i][0] == "-":
             opt = t[i]
+            i += 1
             if opt in ("-o", "-s", "-t"):
-                i += 1
                 k = 0
-                while k < 3 and i < len(t):
-                    try:
-                        float(t[i])
-                    except ValueError:
-                        break
-                    i += 1
-                    k += 1
+                while k < 3 and i < len(t) and _is_number(t[i]):
+                    i, k = i + 1, k + 1
                 continue
             if opt not in _MTL_OPTION_ARITY:
+                i -= 1
                 break  # not an option after all: part of the file name
-            i += 1 + _MTL_OPTION_ARITY[opt]
-        name = _obj_name(" ".join(t[i:]))
+            i += _MTL_OPTION_ARITY[opt]
+        name = " ".join(t[i:]).replace("\\", "/")
+        while name.startswith("./"):
+            name = name[2:]
         if name:
             out.append(name)
     return out
 
 
-def obj_files(obj: bytes, folder: pathlib.Path) -> dict[str, pathlib.Path]:
-    """The files beside an OBJ in `folder` that its model uses: the material libraries its
-    `mtllib` lines name and the `map_Kd` textures those name, keyed by their path relative to
-    the OBJ (as the model names them), for the `files` of an inline mesh object (docs/api.md).
-    Only files that exist inside the folder are listed; a name that is absent, absolute or out
-    of the folder is left to the server, which warns that it cannot read it."""
-    out: dict[str, pathlib.Path] = {}
-    text = obj.decode("utf-8", "replace")
-    for line in text.splitlines():
-        t = line.split()
-        if len(t) < 2 or t[0] != "mtllib":
-            continue
-        # The whole argument first (a name with spaces), then each word (several libraries).
-        names = [_obj_name(line.strip()[len("mtllib") :])]
-        if len(t) > 2:
-            names += [_obj_name(w) for w in t[1:]]
+def _beside(folder: pathlib.Path, name: str) -> tuple[str, pathlib.Path] | None:
+    """`name` (relative to the OBJ) normalised as the server normalises a path ("a/./b/../c" is
+    "a/c"), and the file it is inside `folder`; None for a name the server would refuse or that
+    leaves the folder (absolute, a scheme or drive, a climb out, also through a symlink)."""
+    if not name or name.startswith("/") or _SCHEME.match(name) or "\0" in name:
+        return None
+    key = posixpath.normpath(name)
+    if key == ".." or key.startswith("../") or key.startswith("/"):
+        return None
+    path = folder / key
+    root = folder.resolve()
+    resolved = path.resolve()
+    if root != resolved and root not in resolved.parents:
+        return None
+    return key, path
+
+
+def _mtime(path: pathlib.Path) -> int:
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return -1
+
+
+def obj_files(
+    obj: bytes, folder: pathlib.Path, parsed: dict | None = None
+) -> tuple[dict[str, pathlib.Path], list[pathlib.Path]]:
+    """The files beside an OBJ in `folder` that the server will ask for, as
+    ({name relative to the OBJ, normalised: file}, every file looked for): the material
+    libraries its `mtllib` statements name, chosen as the server chooses them, and the PNG or
+    JPEG `map_Kd` textures those name. A file that is absent, unreadable, out of the folder, or
+    an image of another kind (which the server cannot decode) is not carried; the server then
+    warns that it cannot read it. The second list, present or not, keys a cache (an .mtl that
+    appears later, or names another texture, is a new scene). `parsed` caches MTL parses by
+    path and modification time."""
+    parsed = {} if parsed is None else parsed
+    carried: dict[str, pathlib.Path] = {}
+    looked: list[pathlib.Path] = []
+    for names in obj_libraries(obj):
+        readable = []
         for name in names:
-            path = _beside(folder, name)
-            if path is None or not path.is_file():
+            found = _beside(folder, name)
+            if found is None:
                 continue
-            out[name] = path
-            mtl_dir = name.rsplit("/", 1)[0] + "/" if "/" in name else ""
-            try:
-                mtl = path.read_text("utf-8", "replace")
-            except OSError:
-                continue
-            for texture in _mtl_textures(mtl):
-                tex = _beside(folder, mtl_dir + texture)
-                if tex is not None and tex.is_file():
-                    out[mtl_dir + texture] = tex
-    return out
+            looked.append(found[1])
+            if found[1].is_file() and os.access(found[1], os.R_OK):
+                readable.append((name, found))
+        # The whole argument when it reads, else every word that does.
+        chosen = readable[:1] if readable and readable[0][0] == names[0] else readable
+        for name, (key, path) in chosen:
+            stamp = f"{path}:{_mtime(path)}"
+            textures = parsed.get(stamp)
+            if textures is None:
+                try:
+                    textures = parsed[stamp] = mtl_textures(path.read_text("utf-8", "replace"))
+                except OSError:
+                    continue
+            carried[key] = path
+            mtl_dir = name[: name.rfind("/") + 1]
+            for texture in textures:
+                found = _beside(folder, mtl_dir + texture)
+                if found is None:
+                    continue
+                looked.append(found[1])
+                try:
+                    with open(found[1], "rb") as f:
+                        head = f.read(8)
+                except OSError:
+                    continue
+                if _image_media_type(head) is not None:
+                    carried[found[0]] = found[1]
+    return carried, looked
 
 
 def obj_document(obj: bytes, folder: pathlib.Path, name: str) -> dict | None:
-    """An OBJ and the files beside it that it uses (obj_files) as a scene document of one
-    inline mesh object carrying them in `files`; None when it uses none (it is then sent as
-    it is). The server reads no file an upload names, so an OBJ's .mtl and textures travel
-    this way. A file that cannot be read raises ModelLoadFailed naming it."""
-    files = obj_files(obj, folder)
-    if not files:
-        return None
+    """An OBJ and the files beside it that the server will ask for (obj_files) as a scene
+    document of one inline mesh object carrying them in `files`; None when there are none (it
+    is then sent as it is). The server reads no file an upload names, so an OBJ's .mtl and
+    textures travel this way. A file that turns unreadable meanwhile is left out, as an absent
+    one is: the server warns that it cannot read it."""
+    files, _ = obj_files(obj, folder)
     carried = {}
     for key, path in files.items():
         try:
             carried[key] = base64.b64encode(path.read_bytes()).decode("ascii")
-        except OSError as exc:
-            raise ModelLoadFailed(
-                f"the OBJ uses {key!r}, which cannot be read at {path}: {exc.strerror or exc}",
-                code="model_load_failed",
-                path=f"files/{key}",
-            ) from exc
+        except OSError:
+            continue
+    if not carried:
+        return None
     mesh = {
         "type": "mesh",
         "name": name,

@@ -250,11 +250,12 @@ class ObjFilesTest(ServerTestCase):
         self.addCleanup(tmp.cleanup)
         self.dir = pathlib.Path(tmp.name)
 
+    def carried(self, path: pathlib.Path) -> list[str]:
+        return sorted(obj_files(path.read_bytes(), path.parent)[0])
+
     def test_its_mtl_and_textures_are_carried(self) -> None:
         path = write_obj_with_files(self.dir)
-        self.assertEqual(
-            sorted(obj_files(path.read_bytes(), self.dir)), ["sub/tex/red.png", "sub/tri.mtl"]
-        )
+        self.assertEqual(self.carried(path), ["sub/tex/red.png", "sub/tri.mtl"])
         # As it is, it registers with no material and the server says why.
         raw = self.client.add_scene(path.read_bytes(), "model/obj")
         self.assertFalse(raw["features"]["textures"])
@@ -267,13 +268,68 @@ class ObjFilesTest(ServerTestCase):
         hit = self.client.intersect(summary["id"], [RAY], fields=["t", "name"])["hits"][0]
         self.assertEqual((hit["t"], hit["name"]), (5, "tri"))
 
-    def test_an_edited_mtl_is_a_new_scene(self) -> None:
+    def test_an_edited_or_new_mtl_is_a_new_scene(self) -> None:
         path = write_obj_with_files(self.dir)
+        mtl = self.dir / "sub" / "tri.mtl"
+        text = mtl.read_text()
+        mtl.unlink()  # absent at first: the OBJ goes as it is
         first = self.client.scene_id(path)
-        self.assertEqual(self.client.scene_id(path), first)
-        mtl = write_obj_with_files(self.dir, kd="0.5 0.5 0.5").parent / "sub" / "tri.mtl"
+        self.assertEqual(self.client.scene_id(path), first)  # nothing changed: asked once
+        mtl.write_text(text)  # it appears, the .obj untouched
+        second = self.client.scene_id(path)
+        self.assertNotEqual(second, first)
+        self.assertTrue(self.client.get_scene(second)["features"]["textures"])
+        mtl.write_text(text.replace("Kd 1 1 1", "Kd 0.5 0.5 0.5"))  # edited
         os.utime(mtl, ns=(mtl.stat().st_atime_ns, mtl.stat().st_mtime_ns + 10**9))
-        self.assertNotEqual(self.client.scene_id(path), first)
+        self.assertNotEqual(self.client.scene_id(path), second)
+
+    def test_names_are_read_as_the_server_reads_them(self) -> None:
+        path = write_obj_with_files(self.dir)
+        lines = path.read_text().splitlines()
+        # A comment after the name, and the statement continued on the next line.
+        lines[0] = "mtllib \\\n   sub/tri.mtl # the materials"
+        path.write_text("\n".join(lines) + "\n")
+        self.assertEqual(self.carried(path), ["sub/tex/red.png", "sub/tri.mtl"])
+        # map_Kd with options (an infinite number is not one: the file name starts there) and
+        # a name with a no-break space, which is not a blank.
+        mtl = self.dir / "sub" / "tri.mtl"
+        (self.dir / "sub" / "inf").mkdir()
+        (self.dir / "sub" / "inf" / "a\u00a0b.png").write_bytes(
+            (self.dir / "sub" / "tex" / "red.png").read_bytes()
+        )
+        mtl.write_text("newmtl red\nmap_Kd -s 1 1 inf/a\u00a0b.png\n")
+        self.assertEqual(self.carried(path), ["sub/inf/a\u00a0b.png", "sub/tri.mtl"])
+        summary = self.client.add_scene(path)
+        self.assertEqual(summary["warnings"], [])
+        self.assertTrue(summary["features"]["textures"])
+
+    def test_one_texture_of_two_libraries_goes_once(self) -> None:
+        # Two libraries in sibling folders naming ../tex/red.png: one file, sent under one
+        # name (two spellings of it had been refused as naming the same file twice).
+        path = write_obj_with_files(self.dir)
+        for d in ("m1", "m2"):
+            (self.dir / d).mkdir()
+            (self.dir / d / "lib.mtl").write_text("newmtl red\nmap_Kd ../sub/tex/red.png\n")
+        path.write_text(
+            path.read_text().replace("mtllib sub/tri.mtl", "mtllib m1/lib.mtl\nmtllib m2/lib.mtl")
+        )
+        self.assertEqual(self.carried(path), ["m1/lib.mtl", "m2/lib.mtl", "sub/tex/red.png"])
+        summary = self.client.add_scene(path)
+        self.assertTrue(summary["features"]["textures"], summary)
+
+    def test_what_the_server_cannot_use_is_left_to_it(self) -> None:
+        # An image of another kind (the server decodes PNG and JPEG) and an .mtl that cannot be
+        # read are not sent; the server warns about them, as for an absent file.
+        path = write_obj_with_files(self.dir)
+        mtl = self.dir / "sub" / "tri.mtl"
+        (self.dir / "sub" / "tex" / "red.tga").write_bytes(b"\x00\x00\x02" + bytes(15))
+        mtl.write_text("newmtl red\nmap_Kd tex/red.tga\n")
+        self.assertEqual(self.carried(path), ["sub/tri.mtl"])
+        mtl.chmod(0)
+        if os.access(mtl, os.R_OK):
+            return  # running as root: every file reads
+        self.assertEqual(self.carried(path), [])
+        self.assertIsNone(obj_document(path.read_bytes(), self.dir, "tri"))
 
     def test_names_out_of_its_folder_are_left_to_the_server(self) -> None:
         # Only files inside the OBJ's folder travel: a library named by an absolute path, a
@@ -283,14 +339,17 @@ class ObjFilesTest(ServerTestCase):
         (self.dir / "secret.mtl").write_text("newmtl red\nKd 1 0 0\n")
         for name in ("../secret.mtl", str(self.dir / "secret.mtl"), "C:\\x\\secret.mtl"):
             path = write_obj_with_files(inner, mtllib=name)
-            self.assertEqual(obj_files(path.read_bytes(), inner), {}, name)
+            self.assertEqual(self.carried(path), [], name)
             self.assertIsNone(obj_document(path.read_bytes(), inner, "tri"))
             summary = self.client.add_scene(path)
             self.assertTrue(any("secret.mtl" in w for w in summary["warnings"]), name)
-        # A texture the library names out of the folder is not carried either.
+        # Nor a texture the library names out of the folder, or through a symlink out of it.
         path = write_obj_with_files(inner)
         (inner / "sub" / "tri.mtl").write_text("newmtl red\nmap_Kd ../../secret.mtl\n")
-        self.assertEqual(sorted(obj_files(path.read_bytes(), inner)), ["sub/tri.mtl"])
+        self.assertEqual(self.carried(path), ["sub/tri.mtl"])
+        (inner / "sub" / "out.png").symlink_to(self.dir / "secret.mtl")
+        (inner / "sub" / "tri.mtl").write_text("newmtl red\nmap_Kd out.png\n")
+        self.assertEqual(self.carried(path), ["sub/tri.mtl"])
 
     def test_the_spider_with_its_textures(self) -> None:
         spider = REPO.parent / "shared" / "data" / "models" / "spider" / "spider.obj"

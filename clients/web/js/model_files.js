@@ -88,72 +88,128 @@ async function embedGltf(doc, companions, name) {
     }
 }
 
-// map_Kd options and how many arguments each takes (engine/load/obj_reader.cpp's table); -o, -s
-// and -t take up to three numbers.
+// How the server reads an OBJ and its MTL (engine/load/obj_reader.cpp), so that the page sends
+// exactly the files the server will ask for: lines end at \r, \n or \r\n; in an OBJ a backslash
+// at the end of a line joins the next one (with a space); '#' starts a comment; words are
+// separated by ASCII blanks only. map_Kd options take a fixed number of arguments, except -o,
+// -s and -t, which take up to three (finite) numbers.
 const kMapOptionArity = {
     '-blendu': 1, '-blendv': 1, '-boost': 1, '-mm': 2, '-texres': 1,
     '-clamp': 1, '-bm': 1, '-imfchan': 1, '-cc': 1, '-type': 1,
 };
+const kDecimal = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
 
-/** A file name as an OBJ or MTL writes it, as the server reads it: '\\' → '/', no leading './'. */
-const objName = (name) => {
-    let s = name.trim().replaceAll('\\', '/');
-    while (s.startsWith('./')) s = s.slice(2);
-    return s;
-};
+function statements(text, continued) {
+    const lines = text.split(/\r\n|\r|\n/);
+    if (!continued) return lines;
+    const out = [];
+    for (let i = 0; i < lines.length; ) {
+        const line = lines[i++];
+        if (!line.endsWith('\\')) {
+            out.push(line);
+            continue;
+        }
+        const parts = [line.slice(0, -1)];
+        while (i < lines.length) {
+            const more = lines[i++];
+            parts.push(more.endsWith('\\') ? more.slice(0, -1) : more);
+            if (!more.endsWith('\\')) break;
+        }
+        out.push(parts.join(' '));
+    }
+    return out;
+}
 
-/** The map_Kd names of an MTL (the maps the server samples), as the server parses them. */
+const tokens = (line) => line.split('#')[0].split(/[ \t\v\f]+/).filter(Boolean);
+const trimBlanks = (s) => s.replace(/^[ \t\v\f]+|[ \t\v\f]+$/g, '');
+
+/** The map_Kd names of an MTL (the maps the server samples), relative to the MTL. */
 export function mtlTextures(text) {
     const out = [];
-    for (const line of text.split(/\r?\n/)) {
-        const t = line.trim().split(/\s+/);
+    for (const line of statements(text, false)) {
+        const t = tokens(line);
         if (t.length < 2 || t[0] !== 'map_Kd') continue;
         let i = 1;
         while (i < t.length && t[i].length > 1 && t[i][0] === '-') {
             const opt = t[i];
             if (opt === '-o' || opt === '-s' || opt === '-t') {
                 i += 1;
-                for (let k = 0; k < 3 && i < t.length && Number.isFinite(Number(t[i])); k++) i += 1;
+                for (let k = 0; k < 3 && i < t.length && kDecimal.test(t[i]) && Number.isFinite(Number(t[i])); k++) i += 1;
                 continue;
             }
             if (!(opt in kMapOptionArity)) break; // not an option: part of the file name
             i += 1 + kMapOptionArity[opt];
         }
-        const name = objName(t.slice(i).join(' '));
+        let name = t.slice(i).join(' ').replaceAll('\\', '/');
+        while (name.startsWith('./')) name = name.slice(2);
         if (name) out.push(name);
     }
     return out;
 }
 
-/** The mtllib names of an OBJ: the whole argument, and each word when there are several. */
+/** The mtllib names of an OBJ, one list per statement: the whole argument, then each word when
+ *  there are several (the server takes the whole argument if it reads, else each word). */
 function mtlLibraries(text) {
     const out = [];
-    for (const line of text.split(/\r?\n/)) {
-        const t = line.trim().split(/\s+/);
+    for (const line of statements(text, true)) {
+        const t = tokens(line);
         if (t.length < 2 || t[0] !== 'mtllib') continue;
-        out.push(objName(line.trim().slice('mtllib'.length)));
-        if (t.length > 2) out.push(...t.slice(1).map(objName));
+        const rest = trimBlanks(line.slice(line.indexOf('mtllib') + 'mtllib'.length).split('#')[0]);
+        out.push([rest, ...(t.length > 2 ? t.slice(1) : [])].map((n) => {
+            const s = n.replaceAll('\\', '/');
+            return s.startsWith('./') ? s.slice(2) : s;
+        }));
     }
     return out;
 }
 
+/** A name relative to the model normalised as the server normalises a path ("a/./b/../c" is
+ *  "a/c"); null when the server would refuse it (absolute, a scheme or drive, climbing out). */
+function normalizedName(name) {
+    if (!name || name.startsWith('/') || /^[A-Za-z][A-Za-z0-9+.-]*:/.test(name)) return null;
+    const parts = [];
+    for (const p of name.split('/')) {
+        if (p === '' || p === '.') continue;
+        if (p === '..') {
+            if (!parts.length) return null;
+            parts.pop();
+        } else parts.push(p);
+    }
+    return parts.length ? parts.join('/') : null;
+}
+
 const base64Of = async (file) => (await dataUri(file, 'application/octet-stream')).replace(/^data:[^,]*,/, '');
 
+/** Whether a file starts as a PNG or a JPEG does: the images the server decodes. */
+async function isPngOrJpeg(file) {
+    const b = new Uint8Array(await file.slice(0, 8).arrayBuffer());
+    const png = [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a].every((v, k) => b[k] === v);
+    return png || (b[0] === 0xff && b[1] === 0xd8 && b[2] === 0xff);
+}
+
 /** An OBJ dropped with its .mtl and textures: a scene document of one inline mesh object that
- *  carries them in `files` (docs/api.md), keyed by the names the OBJ and MTL give them; the page
- *  finds each by its base name among the dropped files. Null when none of them was dropped (the
- *  OBJ then goes as it is; the server warns about a library it cannot read). */
+ *  carries them in `files` (docs/api.md), keyed by the names the OBJ and MTL give them,
+ *  normalised; the page finds each by its base name among the dropped files. Null when none
+ *  of them was dropped (the OBJ then goes as it is; the server warns about a library it cannot
+ *  read). Images other than PNG and JPEG are left out: the server cannot decode them. */
 async function objDocument(main, companions) {
     const lookup = new Map(companions.map((f) => [f.name.toLowerCase(), f]));
     const files = {};
-    for (const lib of mtlLibraries(await main.text())) {
-        const mtl = lookup.get(baseName(lib));
-        if (!mtl || lib in files) continue;
-        files[lib] = await base64Of(mtl);
-        const dir = lib.includes('/') ? lib.slice(0, lib.lastIndexOf('/') + 1) : '';
-        for (const tex of mtlTextures(await mtl.text())) {
-            const image = lookup.get(baseName(tex));
-            if (image) files[dir + tex] = await base64Of(image);
+    for (const names of mtlLibraries(await main.text())) {
+        // The server takes the whole argument when it reads, else each word that does. Dropped
+        // files have no folders, so a base name alone cannot tell "m1/a.mtl m2/b.mtl" (b.mtl in
+        // a folder "m1/a.mtl m2") from two libraries: the words are taken first here.
+        const found = names.map((n) => [n, lookup.get(baseName(n))]).filter(([n, f]) => f && normalizedName(n));
+        const words = found.filter(([n]) => names.length > 1 && n !== names[0]);
+        const chosen = words.length ? words : found.slice(0, 1);
+        for (const [lib, mtl] of chosen) {
+            files[normalizedName(lib)] = await base64Of(mtl);
+            const dir = lib.includes('/') ? lib.slice(0, lib.lastIndexOf('/') + 1) : '';
+            for (const tex of mtlTextures(await mtl.text())) {
+                const key = normalizedName(dir + tex);
+                const image = lookup.get(baseName(tex));
+                if (key && image && !(key in files) && (await isPngOrJpeg(image))) files[key] = await base64Of(image);
+            }
         }
     }
     if (!Object.keys(files).length) return null;

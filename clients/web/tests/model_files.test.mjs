@@ -86,4 +86,23 @@ test('an .obj takes its dropped .mtl and textures along in an inline mesh\'s fil
 
 test('map_Kd options are skipped as the server skips them', () => {
     assert.deepEqual(mtlTextures('map_Kd -o 0.5 0.5 -mm 0 1 -bm 2 a b.png\nmap_Kd -zz c.png\n'), ['a b.png', '-zz c.png']);
+    // An infinite number is not one (the name starts there); a comment ends the line; a
+    // no-break space is not a blank.
+    assert.deepEqual(mtlTextures('map_Kd -s 1 1 inf.png # tiled\nmap_Kd a\u00a0b.png\n'), ['inf.png', 'a\u00a0b.png']);
+});
+
+test('an .obj\'s names are read as the server reads them, and each file goes once', async () => {
+    // A continued mtllib statement with a comment; two libraries in sibling folders that name
+    // one texture (one key, normalised); a TGA the server cannot decode is left out.
+    const obj = 'mtllib \\\n m1/a.mtl m2/b.mtl # libraries\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n';
+    const png = new Uint8Array([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
+    const u = await prepareUpload([
+        new File([obj], 'x.obj'),
+        new File(['newmtl a\nmap_Kd ../tex/red.png\n'], 'a.mtl'),
+        new File(['newmtl b\nmap_Kd ../tex/red.png\nmap_Kd c.tga\n'], 'b.mtl'),
+        new File([png], 'red.png'),
+        new File([new Uint8Array([0, 0, 2])], 'c.tga'),
+    ]);
+    const mesh = JSON.parse(u.body).objects[0];
+    assert.deepEqual(Object.keys(mesh.files).sort(), ['m1/a.mtl', 'm2/b.mtl', 'tex/red.png']);
 });
