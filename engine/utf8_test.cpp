@@ -8,8 +8,8 @@ namespace {
 const std::string kFffd = "\xEF\xBF\xBD";
 
 TEST(Utf8, WellFormedTextIsKept) {
-    for (const std::string s : {"", "spider.mtl", "caf\xC3\xA9", "\xE2\x82\xAC 5", "\xF0\x9F\x90\x9E",
-                                "\xF4\x8F\xBF\xBF", "\xED\x9F\xBF"}) {
+    for (const std::string s : {"", "spider.mtl", "caf\xC3\xA9", "\xE2\x82\xAC 5",
+                                "\xF0\x9F\x90\x9E", "\xF4\x8F\xBF\xBF", "\xED\x9F\xBF"}) {
         EXPECT_EQ(valid_utf8(s), s);
     }
 }
@@ -19,7 +19,9 @@ TEST(Utf8, IllFormedSequencesBecomeReplacementCharacters) {
     // a surrogate (ED A0 80); above U+10FFFF (F4 90 80 80); a sequence cut short by the end or
     // by an ASCII byte, replaced as one maximal subpart (Unicode §3.9).
     EXPECT_EQ(valid_utf8("caf\xE9.mtl"), "caf" + kFffd + ".mtl");
-    EXPECT_EQ(valid_utf8("a\x80" "b"), "a" + kFffd + "b");
+    EXPECT_EQ(valid_utf8("a\x80"
+                         "b"),
+              "a" + kFffd + "b");
     EXPECT_EQ(valid_utf8("\xC0\xAF"), kFffd + kFffd);
     EXPECT_EQ(valid_utf8("\xF5\x80"), kFffd + kFffd);
     EXPECT_EQ(valid_utf8("\xED\xA0\x80"), kFffd + kFffd + kFffd);

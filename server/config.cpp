@@ -31,7 +31,7 @@ usage: raycastd [options]
   --max-points N          most points per points request (default 16777216)
   --max-pixels N          most width*height*spp per render (default 16777216)
   --max-texture-pixels N  largest texture image, read from its header before decoding; a
-                          larger one, or one past 4*N for a model's images together, is
+                          larger one, or one past 4*N for a scene's images together, is
                           dropped with a warning (default 16777216)
   --max-triangles N       most triangles per scene (default 50000000)
   --max-concurrent N      work requests in flight before 503 busy (default: 8 per hardware

@@ -270,8 +270,7 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             display = n->get<std::string>();
         engine::LoadLimits load = load_limits(limits);
         load.max_texture_pixels_total = texture_budget - texture_pixels;
-        if (!textures)
-            load.max_texture_pixels = 0;
+        load.textures = textures;
         auto loaded = engine::load_model(bytes, *format, resources, display, load);
         if (!loaded.ok())
             throw load_error(loaded.status(), path);

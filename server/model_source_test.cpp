@@ -1,5 +1,9 @@
 #include "server/model_source.h"
 
+#include <map>
+#include <string>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 namespace raycastd::server {
@@ -34,6 +38,26 @@ TEST(ModelSource, AQueriedSceneDecodesNoTexture) {
     EXPECT_FALSE(queried.features().textures);
     EXPECT_EQ(queried.texture_bytes(), 0u);
     EXPECT_EQ(queried.triangle_count(), 1u);
+    EXPECT_TRUE(queried.warnings.empty());  // nothing to say about a texture not asked for
+
+    // Nor is its file read: the same model from the scene root, every read recorded.
+    std::vector<std::string> asked;
+    const std::map<std::string, std::string> root = {{"m/x.obj", *decode_base64(kObj)},
+                                                     {"m/m.mtl", *decode_base64(kMtl)},
+                                                     {"m/t.png", *decode_base64(kPng)}};
+    const FileSource files = [&](const std::string& p) -> engine::Result<std::string> {
+        asked.push_back(p);
+        auto it = root.find(p);
+        if (it == root.end())
+            return engine::Status::error(engine::Code::invalid_scene, "no file " + p);
+        return it->second;
+    };
+    const Json by_uri = {{"objects", {{{"type", "mesh"}, {"uri", "m/x.obj"}}}}};
+    EXPECT_TRUE(scene_from_document(by_uri, "", files, Limits{}).features().textures);
+    EXPECT_EQ(asked, (std::vector<std::string>{"m/x.obj", "m/m.mtl", "m/t.png"}));
+    asked.clear();
+    EXPECT_FALSE(scene_from_document(by_uri, "", files, Limits{}, false).features().textures);
+    EXPECT_EQ(asked, (std::vector<std::string>{"m/x.obj", "m/m.mtl"}));
 }
 
 }  // namespace

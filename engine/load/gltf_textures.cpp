@@ -116,6 +116,8 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
                                                   std::vector<Material>& materials,
                                                   std::vector<std::string>& warnings) {
     std::vector<UvMapping> mappings(m.materials.size());
+    if (!limits.textures)
+        return mappings;  // as if every material had none
     std::map<std::size_t, std::shared_ptr<const TextureImage>> decoded;  // by image index
     std::map<std::size_t, std::string> failed;                           // by image index
     std::size_t decoded_pixels = 0;

@@ -97,6 +97,9 @@ struct LoadLimits {
     /// Pixels of all the texture images of one model together (a file of many small PNGs can
     /// each declare the most one image may have): images past it are dropped the same way.
     std::size_t max_texture_pixels_total = 4 * 16'777'216;
+    /// False: base-colour textures are neither read nor decoded (a scene that is only queried,
+    /// never rendered, as the server's stateless calls are), and nothing is said of them.
+    bool textures = true;
 };
 
 /// Parses `bytes` as `format`. display_name names the parts and appears in messages (a file

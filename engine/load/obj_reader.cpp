@@ -99,8 +99,10 @@ std::optional<DiffuseMap> parse_map(const std::vector<std::string_view>& t,
             continue;
         }
         auto a = kArity.find(opt);
-        if (a == kArity.end())
-            break;  // not an option after all: part of the file name
+        if (a == kArity.end()) {
+            --i;  // not an option after all: the file name starts with it
+            break;
+        }
         if (opt == "-clamp" && i < t.size())
             map.clamp = t[i] == "on";
         i += static_cast<std::size_t>(a->second);
@@ -353,6 +355,8 @@ class ObjReader {
     /// The texture of a diffuse map, decoded once per image file; null (with a warning) when
     /// it cannot be read or decoded.
     std::shared_ptr<const Texture> texture_of(const DiffuseMap& map) {
+        if (!limits_.textures)
+            return nullptr;  // not asked for: neither read nor decoded
         auto cached = textures_.find(map.uri);
         if (cached == textures_.end()) {
             Status allowed = check_resource_uri(map.uri);

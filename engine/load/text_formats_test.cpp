@@ -183,6 +183,30 @@ TEST(ObjReader, BadTextureIndexAndMissingMapAreWarnings) {
     EXPECT_NE(m->warnings[1].find("texture index"), std::string::npos) << m->warnings[1];
 }
 
+// What map_Kd names, word by word: an unknown option is part of the file name (it had been
+// dropped, and "-zz a.png" asked for a.png); a '#' is part of it too (no comment there); a
+// number that is not finite or out of range ends -s's numbers; "+-1" is one (the '+' dropped).
+TEST(ObjReader, DiffuseMapNamesAreReadWordByWord) {
+    for (const auto& [map, name] : {std::pair{"-zz a.png", "-zz a.png"},
+                                    {"tex#1.png", "tex#1.png"},
+                                    {"-s 1 inf a.png", "inf a.png"},
+                                    {"-s 1 1e-400 a.png", "1e-400 a.png"},
+                                    {"-s +-1 1 1 a.png", "a.png"},
+                                    {"-clamp on -bm 2 a b.png", "a b.png"}}) {
+        std::vector<std::string> asked;
+        ResourceReader reader = [&](const std::string& uri) -> Result<std::string> {
+            asked.push_back(uri);
+            if (uri == "a.mtl")
+                return "newmtl t\nmap_Kd " + std::string(map) + "\n";
+            return Status::error(Code::not_found, uri);
+        };
+        auto m = load("mtllib a.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+                      ModelFormat::obj, reader);
+        ASSERT_TRUE(m.ok()) << m.status().message;
+        EXPECT_EQ(asked, (std::vector<std::string>{"a.mtl", name})) << map;
+    }
+}
+
 TEST(ObjReader, RefusesAbsoluteAndSchemeMtllib) {
     bool asked = false;
     ResourceReader reader = [&](const std::string&) -> Result<std::string> {

@@ -575,13 +575,14 @@ def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
 
 # How the server reads an OBJ and its MTL (engine/load/obj_reader.cpp, text_scan.h), so that the
 # client carries exactly the files the server will ask for: lines end at \r, \n or \r\n; in an
-# OBJ a backslash at the end of a line joins the next one (with a space); '#' starts a comment;
-# words are separated by ASCII blanks only.
+# OBJ a backslash at the end of a line joins the next one (with a space); '#' starts a comment,
+# except in a map_Kd line, whose file name may hold one; words are separated by ASCII blanks
+# only.
 _LINE_ENDS = re.compile(r"\r\n|\r|\n")
 _BLANKS = re.compile(r"[ \t\v\f]+")
 _BLANK_CHARS = " \t\v\f"
-# A number as std::from_chars reads one (and finite, as map_Kd's -o, -s and -t take them).
-_DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+# A number as std::from_chars reads one, after the server's parse_double drops one leading '+'.
+_DECIMAL = re.compile(r"-?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?", re.ASCII)
 # RFC 3986 §3.1's scheme, or a drive letter: refused by the server (check_resource_uri).
 _SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
 # map_Kd options and how many arguments each takes (obj_reader.cpp's table); -o, -s and -t
@@ -620,8 +621,8 @@ def _statements(text: str, continued: bool) -> list[str]:
     return out
 
 
-def _tokens(line: str) -> list[str]:
-    return [t for t in _BLANKS.split(line.split("#", 1)[0]) if t]
+def _tokens(line: str, comments: bool = True) -> list[str]:
+    return [t for t in _BLANKS.split(line.split("#", 1)[0] if comments else line) if t]
 
 
 def _rest_of_line(line: str, keyword: str) -> str:
@@ -630,7 +631,17 @@ def _rest_of_line(line: str, keyword: str) -> str:
 
 
 def _is_number(token: str) -> bool:
-    return _DECIMAL.fullmatch(token) is not None and math.isfinite(float(token))
+    """Whether map_Kd's -o, -s and -t take `token` as a number: parse_double reads it (one
+    leading '+' dropped, then std::from_chars, which refuses a value out of double's range) and
+    it is finite."""
+    if token.startswith("+"):
+        token = token[1:]
+    if _DECIMAL.fullmatch(token) is None:
+        return False
+    value = float(token)
+    mantissa = re.split("[eE]", token)[0]
+    underflow = value == 0.0 and re.search("[1-9]", mantissa) is not None
+    return math.isfinite(value) and not underflow
 
 
 def obj_libraries(obj: bytes) -> list[list[str]]:
@@ -655,12 +666,13 @@ def obj_libraries(obj: bytes) -> list[list[str]]:
 def mtl_textures(mtl: str) -> list[str]:
     """The `map_Kd` file names of an MTL (the maps the server samples), relative to the MTL,
     as the server parses them: options skipped by its table, the rest of the words joined by
-    a space, Windows separators turned into '/', leading './' dropped."""
+    a space ('#' included), Windows separators turned into '/', leading './' dropped."""
     out = []
     for line in _statements(mtl, continued=False):
         t = _tokens(line)
         if len(t) < 2 or t[0] != "map_Kd":
             continue
+        t = _tokens(line, comments=False)
         i = 1
         while i < len(t) and len(t[i]) > 1 and t[i][0] == "-":
             opt = t[i]

@@ -290,15 +290,14 @@ class ObjFilesTest(ServerTestCase):
         lines[0] = "mtllib \\\n   sub/tri.mtl # the materials"
         path.write_text("\n".join(lines) + "\n")
         self.assertEqual(self.carried(path), ["sub/tex/red.png", "sub/tri.mtl"])
-        # map_Kd with options (an infinite number is not one: the file name starts there) and
-        # a name with a no-break space, which is not a blank.
+        # map_Kd with options (an infinite number is not one: the file name starts there), a
+        # '#' in the name (no comment in map_Kd) and a no-break space, which is not a blank.
         mtl = self.dir / "sub" / "tri.mtl"
-        (self.dir / "sub" / "inf").mkdir()
-        (self.dir / "sub" / "inf" / "a\u00a0b.png").write_bytes(
+        (self.dir / "sub" / "inf a#\u00a0b.png").write_bytes(
             (self.dir / "sub" / "tex" / "red.png").read_bytes()
         )
-        mtl.write_text("newmtl red\nmap_Kd -s 1 1 inf/a\u00a0b.png\n")
-        self.assertEqual(self.carried(path), ["sub/inf/a\u00a0b.png", "sub/tri.mtl"])
+        mtl.write_text("newmtl red\nmap_Kd -s 1 1 inf a#\u00a0b.png\n")
+        self.assertEqual(self.carried(path), ["sub/inf a#\u00a0b.png", "sub/tri.mtl"])
         summary = self.client.add_scene(path)
         self.assertEqual(summary["warnings"], [])
         self.assertTrue(summary["features"]["textures"])
@@ -325,11 +324,17 @@ class ObjFilesTest(ServerTestCase):
         (self.dir / "sub" / "tex" / "red.tga").write_bytes(b"\x00\x00\x02" + bytes(15))
         mtl.write_text("newmtl red\nmap_Kd tex/red.tga\n")
         self.assertEqual(self.carried(path), ["sub/tri.mtl"])
-        mtl.chmod(0)
-        if os.access(mtl, os.R_OK):
-            return  # running as root: every file reads
-        self.assertEqual(self.carried(path), [])
-        self.assertIsNone(obj_document(path.read_bytes(), self.dir, "tri"))
+        # Unreadable (as root every file reads: the read is made to fail instead of chmod).
+        real = pathlib.Path.read_text
+
+        def refuse(self: pathlib.Path, *args, **kwargs):
+            if self.name == "tri.mtl":
+                raise PermissionError(13, "Permission denied")
+            return real(self, *args, **kwargs)
+
+        with mock.patch.object(pathlib.Path, "read_text", refuse):
+            self.assertEqual(self.carried(path), [])
+            self.assertIsNone(obj_document(path.read_bytes(), self.dir, "tri"))
 
     def test_names_out_of_its_folder_are_left_to_the_server(self) -> None:
         # Only files inside the OBJ's folder travel: a library named by an absolute path, a
@@ -347,7 +352,8 @@ class ObjFilesTest(ServerTestCase):
         path = write_obj_with_files(inner)
         (inner / "sub" / "tri.mtl").write_text("newmtl red\nmap_Kd ../../secret.mtl\n")
         self.assertEqual(self.carried(path), ["sub/tri.mtl"])
-        (inner / "sub" / "out.png").symlink_to(self.dir / "secret.mtl")
+        (self.dir / "secret.png").write_bytes((inner / "sub" / "tex" / "red.png").read_bytes())
+        (inner / "sub" / "out.png").symlink_to(self.dir / "secret.png")
         (inner / "sub" / "tri.mtl").write_text("newmtl red\nmap_Kd out.png\n")
         self.assertEqual(self.carried(path), ["sub/tri.mtl"])
 

@@ -90,14 +90,24 @@ async function embedGltf(doc, companions, name) {
 
 // How the server reads an OBJ and its MTL (engine/load/obj_reader.cpp), so that the page sends
 // exactly the files the server will ask for: lines end at \r, \n or \r\n; in an OBJ a backslash
-// at the end of a line joins the next one (with a space); '#' starts a comment; words are
-// separated by ASCII blanks only. map_Kd options take a fixed number of arguments, except -o,
-// -s and -t, which take up to three (finite) numbers.
+// at the end of a line joins the next one (with a space); '#' starts a comment, except in a
+// map_Kd line, whose file name may hold one; words are separated by ASCII blanks only. map_Kd
+// options take a fixed number of arguments, except -o, -s and -t, which take up to three
+// numbers (as parse_double reads them: one leading '+' dropped, then std::from_chars, which
+// refuses a value out of range; and finite).
 const kMapOptionArity = {
     '-blendu': 1, '-blendv': 1, '-boost': 1, '-mm': 2, '-texres': 1,
     '-clamp': 1, '-bm': 1, '-imfchan': 1, '-cc': 1, '-type': 1,
 };
-const kDecimal = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
+const kDecimal = /^-?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
+
+function isNumber(token) {
+    const t = token.startsWith('+') ? token.slice(1) : token;
+    if (!kDecimal.test(t)) return false;
+    const v = Number(t);
+    const underflow = v === 0 && /[1-9]/.test(t.split(/[eE]/)[0]);
+    return Number.isFinite(v) && !underflow;
+}
 
 function statements(text, continued) {
     const lines = text.split(/\r\n|\r|\n/);
@@ -120,21 +130,22 @@ function statements(text, continued) {
     return out;
 }
 
-const tokens = (line) => line.split('#')[0].split(/[ \t\v\f]+/).filter(Boolean);
+const tokens = (line, comments = true) => (comments ? line.split('#')[0] : line).split(/[ \t\v\f]+/).filter(Boolean);
 const trimBlanks = (s) => s.replace(/^[ \t\v\f]+|[ \t\v\f]+$/g, '');
 
 /** The map_Kd names of an MTL (the maps the server samples), relative to the MTL. */
 export function mtlTextures(text) {
     const out = [];
     for (const line of statements(text, false)) {
-        const t = tokens(line);
-        if (t.length < 2 || t[0] !== 'map_Kd') continue;
+        if (tokens(line)[0] !== 'map_Kd') continue;
+        const t = tokens(line, false);
+        if (t.length < 2) continue;
         let i = 1;
         while (i < t.length && t[i].length > 1 && t[i][0] === '-') {
             const opt = t[i];
             if (opt === '-o' || opt === '-s' || opt === '-t') {
                 i += 1;
-                for (let k = 0; k < 3 && i < t.length && kDecimal.test(t[i]) && Number.isFinite(Number(t[i])); k++) i += 1;
+                for (let k = 0; k < 3 && i < t.length && isNumber(t[i]); k++) i += 1;
                 continue;
             }
             if (!(opt in kMapOptionArity)) break; // not an option: part of the file name
@@ -178,6 +189,9 @@ function normalizedName(name) {
     return parts.length ? parts.join('/') : null;
 }
 
+/** The base name of a path an OBJ or MTL gives (used as written: no URI decoding). */
+const plainBaseName = (name) => name.split('/').pop().toLowerCase();
+
 const base64Of = async (file) => (await dataUri(file, 'application/octet-stream')).replace(/^data:[^,]*,/, '');
 
 /** Whether a file starts as a PNG or a JPEG does: the images the server decodes. */
@@ -198,16 +212,19 @@ async function objDocument(main, companions) {
     for (const names of mtlLibraries(await main.text())) {
         // The server takes the whole argument when it reads, else each word that does. Dropped
         // files have no folders, so a base name alone cannot tell "m1/a.mtl m2/b.mtl" (b.mtl in
-        // a folder "m1/a.mtl m2") from two libraries: the words are taken first here.
-        const found = names.map((n) => [n, lookup.get(baseName(n))]).filter(([n, f]) => f && normalizedName(n));
+        // a folder "m1/a.mtl m2") from two libraries: when the whole argument's base name is
+        // its last word's, the words are taken; otherwise the whole argument comes first.
+        const found = names.map((n) => [n, lookup.get(plainBaseName(n))]).filter(([n, f]) => f && normalizedName(n));
+        const ambiguous = names.length > 1 && plainBaseName(names[0]) === plainBaseName(names[names.length - 1]);
+        const whole = found.filter(([n]) => n === names[0]);
         const words = found.filter(([n]) => names.length > 1 && n !== names[0]);
-        const chosen = words.length ? words : found.slice(0, 1);
+        const chosen = whole.length && !ambiguous ? whole : words.length ? words : whole;
         for (const [lib, mtl] of chosen) {
             files[normalizedName(lib)] = await base64Of(mtl);
             const dir = lib.includes('/') ? lib.slice(0, lib.lastIndexOf('/') + 1) : '';
             for (const tex of mtlTextures(await mtl.text())) {
                 const key = normalizedName(dir + tex);
-                const image = lookup.get(baseName(tex));
+                const image = lookup.get(plainBaseName(tex));
                 if (key && image && !(key in files) && (await isPngOrJpeg(image))) files[key] = await base64Of(image);
             }
         }

@@ -86,9 +86,12 @@ test('an .obj takes its dropped .mtl and textures along in an inline mesh\'s fil
 
 test('map_Kd options are skipped as the server skips them', () => {
     assert.deepEqual(mtlTextures('map_Kd -o 0.5 0.5 -mm 0 1 -bm 2 a b.png\nmap_Kd -zz c.png\n'), ['a b.png', '-zz c.png']);
-    // An infinite number is not one (the name starts there); a comment ends the line; a
-    // no-break space is not a blank.
-    assert.deepEqual(mtlTextures('map_Kd -s 1 1 inf.png # tiled\nmap_Kd a\u00a0b.png\n'), ['inf.png', 'a\u00a0b.png']);
+    // An infinite number is not one, nor one out of range (the name starts there); "+-1" is
+    // one; a '#' is part of the name (no comment in map_Kd); a no-break space is not a blank.
+    assert.deepEqual(
+        mtlTextures('map_Kd -s 1 1 inf a.png\nmap_Kd -s 1e-400 b.png\nmap_Kd -s +-1 1 1 c.png\nmap_Kd tex#1.png\nmap_Kd a\u00a0b.png\n'),
+        ['inf a.png', '1e-400 b.png', 'c.png', 'tex#1.png', 'a\u00a0b.png'],
+    );
 });
 
 test('an .obj\'s names are read as the server reads them, and each file goes once', async () => {
@@ -105,4 +108,17 @@ test('an .obj\'s names are read as the server reads them, and each file goes onc
     ]);
     const mesh = JSON.parse(u.body).objects[0];
     assert.deepEqual(Object.keys(mesh.files).sort(), ['m1/a.mtl', 'm2/b.mtl', 'tex/red.png']);
+});
+
+test('an .obj\'s whole mtllib argument comes before its words, and names are used as written', async () => {
+    const obj = 'mtllib my lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n';
+    const png = new Uint8Array([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
+    const u = await prepareUpload([
+        new File([obj], 'x.obj'),
+        new File(['newmtl a\nmap_Kd a%20b.png\n'], 'my lib.mtl'),
+        new File(['newmtl b\n'], 'lib.mtl'),
+        new File([png], 'a%20b.png'),
+    ]);
+    const mesh = JSON.parse(u.body).objects[0];
+    assert.deepEqual(Object.keys(mesh.files).sort(), ['a%20b.png', 'my lib.mtl']);
 });
