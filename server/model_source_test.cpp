@@ -58,6 +58,48 @@ TEST(ModelSource, AQueriedSceneDecodesNoTexture) {
     asked.clear();
     EXPECT_FALSE(scene_from_document(by_uri, "", files, Limits{}, false).features().textures);
     EXPECT_EQ(asked, (std::vector<std::string>{"m/x.obj", "m/m.mtl"}));
+
+    // The same for a .gltf whose image is a file: its buffer is read, its image is not, and its
+    // texture coordinates are still read and checked (a TEXCOORD_0 of three components is
+    // refused whether the scene is rendered or only queried).
+    const float data[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1};
+    auto gltf = [&](int uv_components) {
+        return std::string(
+                   R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":60,"uri":"b.bin"}],)"
+                   R"("bufferViews":[{"buffer":0,"byteLength":36},)"
+                   R"({"buffer":0,"byteOffset":36,"byteLength":24}],)"
+                   R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,)"
+                   R"("type":"VEC3","min":[0,0,0],"max":[1,1,0]},{"bufferView":1,)"
+                   R"("componentType":5126,"count":)") +
+               (uv_components == 2 ? "3,\"type\":\"VEC2\"" : "2,\"type\":\"VEC3\"") +
+               R"(}],"images":[{"uri":"t.png"}],"textures":[{"source":0}],"materials":)"
+               R"([{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],"meshes":)"
+               R"([{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1},"material":0}]}],)"
+               R"("nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0})";
+    };
+    std::map<std::string, std::string> groot = {
+        {"g/x.gltf", gltf(2)},
+        {"g/b.bin", std::string(reinterpret_cast<const char*>(data), sizeof data)},
+        {"g/t.png", *decode_base64(kPng)}};
+    const FileSource gfiles = [&](const std::string& p) -> engine::Result<std::string> {
+        asked.push_back(p);
+        auto it = groot.find(p);
+        if (it == groot.end())
+            return engine::Status::error(engine::Code::invalid_scene, "no file " + p);
+        return it->second;
+    };
+    const Json gdoc = {{"objects", {{{"type", "mesh"}, {"uri", "g/x.gltf"}}}}};
+    asked.clear();
+    EXPECT_TRUE(scene_from_document(gdoc, "", gfiles, Limits{}).features().textures);
+    EXPECT_EQ(asked, (std::vector<std::string>{"g/x.gltf", "g/b.bin", "g/t.png"}));
+    asked.clear();
+    EXPECT_FALSE(scene_from_document(gdoc, "", gfiles, Limits{}, false).features().textures);
+    EXPECT_EQ(asked, (std::vector<std::string>{"g/x.gltf", "g/b.bin"}));
+    groot["g/x.gltf"] = gltf(3);
+    for (const bool textures : {true, false}) {
+        EXPECT_THROW(scene_from_document(gdoc, "", gfiles, Limits{}, textures), ApiError)
+            << textures;
+    }
 }
 
 }  // namespace

@@ -116,8 +116,6 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
                                                   std::vector<Material>& materials,
                                                   std::vector<std::string>& warnings) {
     std::vector<UvMapping> mappings(m.materials.size());
-    if (!limits.textures)
-        return mappings;  // as if every material had none
     std::map<std::size_t, std::shared_ptr<const TextureImage>> decoded;  // by image index
     std::map<std::size_t, std::string> failed;                           // by image index
     std::size_t decoded_pixels = 0;
@@ -137,6 +135,14 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
             continue;
         }
         const auto source = static_cast<std::size_t>(tex.source);
+        if (!limits.textures) {
+            // Not read nor decoded, but the texture coordinates are still read and checked, so
+            // that a query-only scene accepts or refuses the file as a rendered one does.
+            UvMapping& uv = mappings[i];
+            uv.texcoord = info.texCoord >= 0 && info.texCoord < 16 ? info.texCoord : 0;
+            read_texture_transform(info, uv);
+            continue;
+        }
         if (!decoded.count(source) && !failed.count(source)) {
             auto bytes = image_bytes(m, source, read);
             auto image = bytes ? detail::decode_texture_image(*bytes, limits, decoded_pixels)

@@ -670,9 +670,11 @@ def mtl_textures(mtl: str) -> list[str]:
     out = []
     for line in _statements(mtl, continued=False):
         t = _tokens(line)
-        if len(t) < 2 or t[0] != "map_Kd":
+        if not t or t[0] != "map_Kd":
             continue
-        t = _tokens(line, comments=False)
+        t = _tokens(line, comments=False)  # its first word is map_Kd: no comment cuts it
+        if len(t) < 2:
+            continue
         i = 1
         while i < len(t) and len(t[i]) > 1 and t[i][0] == "-":
             opt = t[i]

@@ -35,7 +35,7 @@ from raycastd import (
     NotFound,
     RaycastdError,
 )
-from raycastd.client import embed_gltf_files, obj_document, obj_files
+from raycastd.client import embed_gltf_files, mtl_textures, obj_document, obj_files
 from raycastd.png import read_png
 
 
@@ -301,6 +301,27 @@ class ObjFilesTest(ServerTestCase):
         summary = self.client.add_scene(path)
         self.assertEqual(summary["warnings"], [])
         self.assertTrue(summary["features"]["textures"])
+
+    def test_map_kd_names_as_the_server_reads_them(self) -> None:
+        # The cases of ObjReader.DiffuseMapNamesAreReadWordByWord: an infinite or out-of-range
+        # number ends -s's numbers, "+-1" is one, '#' is part of a name (also its first letter),
+        # an unknown option starts the name, a no-break space is not a blank.
+        mtl = (
+            "map_Kd -s 1 1 inf a.png\nmap_Kd -s 1e-400 b.png\nmap_Kd -s +-1 1 1 c.png\n"
+            "map_Kd tex#1.png\nmap_Kd #x.png\nmap_Kd -zz d.png\nmap_Kd a\u00a0b.png\n"
+        )
+        self.assertEqual(
+            mtl_textures(mtl),
+            [
+                "inf a.png",
+                "1e-400 b.png",
+                "c.png",
+                "tex#1.png",
+                "#x.png",
+                "-zz d.png",
+                "a\u00a0b.png",
+            ],
+        )
 
     def test_one_texture_of_two_libraries_goes_once(self) -> None:
         # Two libraries in sibling folders naming ../tex/red.png: one file, sent under one
