@@ -194,10 +194,12 @@ TEST(ObjReader, DiffuseMapNamesAreReadWordByWord) {
                                     {"-s +-1 1 1 a.png", "a.png"},
                                     {"-clamp on -bm 2 a b.png", "a b.png"}}) {
         std::vector<std::string> asked;
+        // A copy: C++17 lambdas cannot capture a structured binding (clang refuses it).
+        const std::string line = "newmtl t\nmap_Kd " + std::string(map) + "\n";
         ResourceReader reader = [&](const std::string& uri) -> Result<std::string> {
             asked.push_back(uri);
             if (uri == "a.mtl")
-                return "newmtl t\nmap_Kd " + std::string(map) + "\n";
+                return line;
             return Status::error(Code::not_found, uri);
         };
         auto m = load("mtllib a.mtl\nusemtl t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
