@@ -86,15 +86,20 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
 /// path the model gives, relative to the model, normalised as a scene-root path is ("./a\b"
 /// and "a/b" are one file; an absolute path, a scheme or a ".." above the model is refused, as
 /// for `uri`). Their bytes count against the body limit like the rest of the document.
+/// A path an inline model gives (or a `files` key), as `files` holds it: Windows separators
+/// turned into '/', then normalised as a scene-root path is (uri_resolver.h).
+engine::Result<std::string> inline_file_path(std::string path) {
+    std::replace(path.begin(), path.end(), '\\', '/');
+    return normalize_relative(path);
+}
+
 std::map<std::string, std::string> read_inline_files(const Json& files, const std::string& path) {
     if (!files.is_object())
         throw ApiError(ErrorCode::invalid_scene, path + " must be an object", path);
     std::map<std::string, std::string> out;
     for (const auto& [name, value] : files.items()) {
         const std::string at = child_path(path, name);
-        std::string slashed = name;
-        std::replace(slashed.begin(), slashed.end(), '\\', '/');
-        auto norm = normalize_relative(slashed);
+        auto norm = inline_file_path(name);
         if (!norm.ok()) {
             throw ApiError(ErrorCode::invalid_scene,
                            at + ": not a path relative to the model (it is absolute, has a "
@@ -245,9 +250,8 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
             if (const Json* f = member(obj, "files")) {
                 auto inline_files = std::make_shared<const std::map<std::string, std::string>>(
                     read_inline_files(*f, path + "/files"));
-                resources = [inline_files](std::string ref) -> engine::Result<std::string> {
-                    std::replace(ref.begin(), ref.end(), '\\', '/');
-                    auto norm = normalize_relative(ref);
+                resources = [inline_files](const std::string& ref) -> engine::Result<std::string> {
+                    auto norm = inline_file_path(ref);
                     if (!norm.ok())
                         return norm.status();
                     auto it = inline_files->find(*norm);

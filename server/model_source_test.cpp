@@ -40,11 +40,12 @@ TEST(ModelSource, AQueriedSceneDecodesNoTexture) {
     EXPECT_EQ(queried.triangle_count(), 1u);
     EXPECT_TRUE(queried.warnings.empty());  // nothing to say about a texture not asked for
 
-    // Nor is its file read: the same model from the scene root, every read recorded.
+    // Nor is its file read: the same model from the scene root, every read recorded (and,
+    // below, a .gltf beside it).
     std::vector<std::string> asked;
-    const std::map<std::string, std::string> root = {{"m/x.obj", *decode_base64(kObj)},
-                                                     {"m/m.mtl", *decode_base64(kMtl)},
-                                                     {"m/t.png", *decode_base64(kPng)}};
+    std::map<std::string, std::string> root = {{"m/x.obj", *decode_base64(kObj)},
+                                               {"m/m.mtl", *decode_base64(kMtl)},
+                                               {"m/t.png", *decode_base64(kPng)}};
     const FileSource files = [&](const std::string& p) -> engine::Result<std::string> {
         asked.push_back(p);
         auto it = root.find(p);
@@ -77,27 +78,19 @@ TEST(ModelSource, AQueriedSceneDecodesNoTexture) {
                R"([{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1},"material":0}]}],)"
                R"("nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0})";
     };
-    std::map<std::string, std::string> groot = {
-        {"g/x.gltf", gltf(2)},
-        {"g/b.bin", std::string(reinterpret_cast<const char*>(data), sizeof data)},
-        {"g/t.png", *decode_base64(kPng)}};
-    const FileSource gfiles = [&](const std::string& p) -> engine::Result<std::string> {
-        asked.push_back(p);
-        auto it = groot.find(p);
-        if (it == groot.end())
-            return engine::Status::error(engine::Code::invalid_scene, "no file " + p);
-        return it->second;
-    };
+    root["g/x.gltf"] = gltf(2);
+    root["g/b.bin"] = std::string(reinterpret_cast<const char*>(data), sizeof data);
+    root["g/t.png"] = *decode_base64(kPng);
     const Json gdoc = {{"objects", {{{"type", "mesh"}, {"uri", "g/x.gltf"}}}}};
     asked.clear();
-    EXPECT_TRUE(scene_from_document(gdoc, "", gfiles, Limits{}).features().textures);
+    EXPECT_TRUE(scene_from_document(gdoc, "", files, Limits{}).features().textures);
     EXPECT_EQ(asked, (std::vector<std::string>{"g/x.gltf", "g/b.bin", "g/t.png"}));
     asked.clear();
-    EXPECT_FALSE(scene_from_document(gdoc, "", gfiles, Limits{}, false).features().textures);
+    EXPECT_FALSE(scene_from_document(gdoc, "", files, Limits{}, false).features().textures);
     EXPECT_EQ(asked, (std::vector<std::string>{"g/x.gltf", "g/b.bin"}));
-    groot["g/x.gltf"] = gltf(3);
+    root["g/x.gltf"] = gltf(3);
     for (const bool textures : {true, false}) {
-        EXPECT_THROW(scene_from_document(gdoc, "", gfiles, Limits{}, textures), ApiError)
+        EXPECT_THROW(scene_from_document(gdoc, "", files, Limits{}, textures), ApiError)
             << textures;
     }
 }

@@ -463,6 +463,12 @@ _PURE_POST = re.compile(
 )
 
 
+def _inside(folder: pathlib.Path, path: pathlib.Path) -> bool:
+    """Whether `path`, symlinks resolved, is `folder` or lies inside it."""
+    root, resolved = folder.resolve(), path.resolve()
+    return root == resolved or root in resolved.parents
+
+
 def _gltf_file(folder: pathlib.Path, uri: str, where: str) -> pathlib.Path:
     """The file a glTF `uri` names beside the `.gltf` in `folder`: a relative reference,
     percent-decoded byte by byte (glTF 2.0 §3.2, as the server decodes it). One with a scheme
@@ -479,8 +485,7 @@ def _gltf_file(folder: pathlib.Path, uri: str, where: str) -> pathlib.Path:
             path=where,
         )
     path = folder / relative
-    root = folder.resolve()
-    if root != path.resolve() and root not in path.resolve().parents:
+    if not _inside(folder, path):
         raise ModelLoadFailed(
             f"the glTF file names {uri!r}, outside its folder {folder}",
             code="model_load_failed",
@@ -706,11 +711,7 @@ def _beside(folder: pathlib.Path, name: str) -> tuple[str, pathlib.Path] | None:
     if key == ".." or key.startswith("../") or key.startswith("/"):
         return None
     path = folder / key
-    root = folder.resolve()
-    resolved = path.resolve()
-    if root != resolved and root not in resolved.parents:
-        return None
-    return key, path
+    return (key, path) if _inside(folder, path) else None
 
 
 def _mtime(path: pathlib.Path) -> int:

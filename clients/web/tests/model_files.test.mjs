@@ -14,6 +14,9 @@ globalThis.FileReader ??= class {
     }
 };
 
+// The eight bytes a PNG starts with: what the page checks before it sends an image along.
+const kPngSignature = new Uint8Array([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
+
 const gltf = (uri) => JSON.stringify({ asset: { version: '2.0' }, buffers: [{ uri, byteLength: 3 }], images: [{ uri: 'tex%20one.png' }] });
 
 test('model files go as their own content types', async () => {
@@ -98,12 +101,11 @@ test('an .obj\'s names are read as the server reads them, and each file goes onc
     // A continued mtllib statement with a comment; two libraries in sibling folders that name
     // one texture (one key, normalised); a TGA the server cannot decode is left out.
     const obj = 'mtllib \\\n m1/a.mtl m2/b.mtl # libraries\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n';
-    const png = new Uint8Array([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
     const u = await prepareUpload([
         new File([obj], 'x.obj'),
         new File(['newmtl a\nmap_Kd ../tex/red.png\n'], 'a.mtl'),
         new File(['newmtl b\nmap_Kd ../tex/red.png\nmap_Kd c.tga\n'], 'b.mtl'),
-        new File([png], 'red.png'),
+        new File([kPngSignature], 'red.png'),
         new File([new Uint8Array([0, 0, 2])], 'c.tga'),
     ]);
     const mesh = JSON.parse(u.body).objects[0];
@@ -112,12 +114,11 @@ test('an .obj\'s names are read as the server reads them, and each file goes onc
 
 test('an .obj\'s whole mtllib argument comes before its words, and names are used as written', async () => {
     const obj = 'mtllib my lib.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n';
-    const png = new Uint8Array([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
     const u = await prepareUpload([
         new File([obj], 'x.obj'),
         new File(['newmtl a\nmap_Kd a%20b.png\n'], 'my lib.mtl'),
         new File(['newmtl b\n'], 'lib.mtl'),
-        new File([png], 'a%20b.png'),
+        new File([kPngSignature], 'a%20b.png'),
     ]);
     const mesh = JSON.parse(u.body).objects[0];
     assert.deepEqual(Object.keys(mesh.files).sort(), ['a%20b.png', 'my lib.mtl']);
