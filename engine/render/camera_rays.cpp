@@ -24,12 +24,4 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
     right_ = right_ * (tan_half * width_ / height_);
 }
 
-Ray CameraRays::ray(double x, double y) const {
-    Ray r;
-    r.origin = origin_;
-    r.direction =
-        normalize(forward_ + right_ * (2.0 * x / width_ - 1.0) + up_ * (1.0 - 2.0 * y / height_));
-    return r;
-}
-
 }  // namespace raycastd::engine

@@ -7,6 +7,8 @@
 // direction to the viewer and n the shininess. A light behind the surface (N·L ≤ 0) adds
 // nothing; a highlight facing away (R·V ≤ 0) adds no specular term.
 
+#include <cmath>
+
 #include "engine/math/vec3.h"
 #include "engine/scene/material.h"
 
@@ -28,9 +30,26 @@ inline Vec3d phong_ambient(const Vec3d& ka, const Vec3d& ia) {
 /// The diffuse and specular terms of one light of intensity `ip` in unit direction `l` at a
 /// point with unit normal `n` seen from unit direction `v`, for diffuse colour `kd`, specular
 /// colour `ks` and shininess `shininess`. Zero when n·l ≤ 0. `with_specular = false` skips the
-/// power for materials whose ks is zero.
-PhongLightTerms phong_light(const Vec3d& kd, const Vec3d& ks, double shininess, const Vec3d& n,
-                            const Vec3d& l, const Vec3d& v, const Vec3d& ip, bool with_specular);
+/// power for materials whose ks is zero. Inline: a renderer calls it per light per hit, and its
+/// 48-byte answer, returned through memory from another file, was read back in other-sized
+/// pieces by the caller (its addition into the colour was shade_batch's hottest instruction on
+/// the Duck, perf annotate).
+inline PhongLightTerms phong_light(const Vec3d& kd, const Vec3d& ks, double shininess,
+                                   const Vec3d& n, const Vec3d& l, const Vec3d& v, const Vec3d& ip,
+                                   bool with_specular) {
+    PhongLightTerms out;
+    const double n_dot_l = dot(n, l);
+    if (!(n_dot_l > 0.0))
+        return out;
+    out.diffuse = ip * kd * n_dot_l;
+    if (with_specular) {
+        const Vec3d r = n * (2.0 * n_dot_l) - l;
+        const double r_dot_v = dot(r, v);
+        if (r_dot_v > 0.0)
+            out.specular = ip * ks * std::pow(r_dot_v, shininess);
+    }
+    return out;
+}
 
 /// phong_light() with the material's own colours (a textured surface passes its kd instead:
 /// shade/whitted.cpp).

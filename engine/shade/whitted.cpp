@@ -203,6 +203,20 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
                    depth == 1};
 }
 
+// Inline, as the in-place shadow_ray below: shade_batch calls both per light per hit.
+inline Vec3d Whitted::to_light(const Surface& sp, const Light& light) {
+    return normalize(light.type == LightType::point ? light.position - sp.p : -light.direction);
+}
+
+inline void Whitted::shadow_ray(Ray& r, const Surface& sp, const Light& light,
+                                const Vec3d& l) const {
+    if (light.type == LightType::point) {
+        spawn_ray_to(r, sp.p, sp.p_err, sp.ng, light.position);
+    } else {
+        spawn(r, sp, l);
+    }
+}
+
 void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                          std::vector<Vec3d>& out, RayCounts& counts) const {
     // A scene small enough for the tracer to scan itself traces ray by ray: batches exist for
@@ -228,10 +242,20 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     surfaces.reserve(n);
     std::vector<std::size_t> hit_of;  // surfaces[h] is the hit of rays[hit_of[h]]
     hit_of.reserve(n);
+    // Each Surface is built in its slot: emplace_back constructs the element from the prvalue
+    // the conversion returns, which C++17 elides into the slot, where push_back(surface(...))
+    // had built 200 bytes on the stack and copied them in (perf annotate of shade_batch).
+    struct InSlot {
+        const Whitted& w;
+        const Ray& ray;
+        const Hit& hit;
+        int depth;
+        operator Surface() const { return w.surface(ray, hit, depth); }
+    };
     for (std::size_t i = 0; i < n; ++i) {
         if (!hits[i].valid())
             continue;
-        surfaces.push_back(surface(rays[i], hits[i], depth));
+        surfaces.emplace_back(InSlot{*this, rays[i], hits[i], depth});
         hit_of.push_back(i);
     }
     // Shadow rays light by light, so that the rays of neighbouring hits to one light sit side
@@ -250,7 +274,7 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
             ToLight& t = towards[h * lights + k];
             t.l = to_light(surfaces[h], light);
             if (dot(surfaces[h].n, t.l) > 0.0) {  // direct()'s `facing`
-                shadow.push_back(shadow_ray(surfaces[h], light, t.l));
+                shadow_ray(shadow.emplace_back(), surfaces[h], light, t.l);
                 slot.push_back(h * lights + k);
             }
         }
@@ -279,11 +303,11 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
         for (std::size_t h = 0; h < surfaces.size(); ++h) {
             const SecondaryRays sec = secondary_rays(surfaces[h]);
             if (sec.reflected) {
-                next[0].push_back(spawn(surfaces[h], *sec.reflected));
+                spawn(next[0].emplace_back(), surfaces[h], *sec.reflected);
                 owner[0].push_back(h);
             }
             if (sec.refracted) {
-                next[1].push_back(spawn(surfaces[h], *sec.refracted));
+                spawn(next[1].emplace_back(), surfaces[h], *sec.refracted);
                 owner[1].push_back(h);
             }
         }
@@ -337,13 +361,10 @@ Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& count
     return color;
 }
 
-Vec3d Whitted::to_light(const Surface& sp, const Light& light) {
-    return normalize(light.type == LightType::point ? light.position - sp.p : -light.direction);
-}
-
 Ray Whitted::shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const {
-    return light.type == LightType::point ? spawn_ray_to(sp.p, sp.p_err, sp.ng, light.position)
-                                          : spawn(sp, l);
+    Ray r;
+    shadow_ray(r, sp, light, l);
+    return r;
 }
 
 Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
@@ -428,6 +449,10 @@ Whitted::SecondaryRays Whitted::secondary_rays(const Surface& sp) const {
 
 Ray Whitted::spawn(const Surface& sp, const Vec3d& w) {
     return spawn_ray(sp.p, sp.p_err, sp.ng, w);
+}
+
+void Whitted::spawn(Ray& r, const Surface& sp, const Vec3d& w) {
+    spawn_ray(r, sp.p, sp.p_err, sp.ng, w);
 }
 
 Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
