@@ -46,6 +46,23 @@ TEST(Explain, TutorialQuestion1) {
     EXPECT_EQ(ex.first_point, (Vec3d{0, 0, 7.267949192431123}));
 }
 
+// A ray from the centre of the tutorial's sphere 1 meets it behind and ahead: t = −2 or t = 2
+// (β = 0, where the double-double kernel had given 2 twice), and with tmin = 0 the hit is at 2.
+TEST(Explain, ARayFromASpheresCentreHasRootsOfBothSigns) {
+    Scene scene;
+    scene.materials.push_back(Material{});
+    scene.material_names.push_back("default");
+    scene.objects.push_back(testing::sphere("sphere 1", {0, 0, 10}, 2.0, 0));
+    const Explanation ex = explain(scene, Ray{{0, 0, 10}, {0, 0, 1}}).value();
+    ASSERT_EQ(ex.objects.size(), 1u);
+    const ObjectWork& w = ex.objects[0];
+    ASSERT_TRUE(w.sphere);
+    EXPECT_EQ(w.sphere->roots, (std::vector<double>{-2.0, 2.0}));
+    EXPECT_NE(std::find(w.steps.begin(), w.steps.end(), "t = -2 or t = 2"), w.steps.end());
+    ASSERT_TRUE(w.hit);
+    EXPECT_EQ(*w.t, 2.0);
+}
+
 // The tutorial's Question 3 method on a triangle: n = ac × ab, plane, t, d, cross products.
 TEST(Explain, TriangleByThePlaneMethod) {
     Scene s;

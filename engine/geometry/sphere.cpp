@@ -114,16 +114,22 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
     }
     const DD root = sqrt_dd(disc);
     const double h = div(root, a);
-    double t0 = tc + std::copysign(h, tc);  // the root away from the origin: never cancels
+    // One sign for β decides both roots below: the far one here and q below. Told from
+    // tc = −β/a instead, a ray starting in the plane through the centre (β = 0, tc = ±0, the
+    // rounded quotient's sign of zero not β's) had both roots +h: a ray from the centre of a
+    // radius-2 sphere hit it at t = 2 twice, and never at −2 (found by a helper's review).
+    const bool beta_negative = beta.hi < 0.0;
+    // The root away from the origin, tc − sign(β)·h = q/a: never cancels.
+    double t0 = beta_negative ? tc + h : tc - h;
     double t1;
     if (h <= 0.5 * std::abs(tc)) {
-        t1 = tc - std::copysign(h, tc);
+        t1 = beta_negative ? tc - h : tc + h;
     } else {
         // The origin is near the surface (or inside): the near root is γ/q with
         // q = −(β + sign(β)·√Δ) (Press et al., Numerical Recipes §5.6), a sum of two numbers of
         // one sign, and γ = f·f − r² in double-double, so a root of 1e-12 is still exact to an
         // ulp.
-        const DD q = neg(add(beta, beta.hi < 0.0 ? neg(root) : root));
+        const DD q = neg(add(beta, beta_negative ? neg(root) : root));
         const DD gamma_c = add(add(add(mul(fx, fx), mul(fy, fy)), mul(fz, fz)), neg(r2));
         t1 = div(gamma_c, q);  // q ≠ 0 here: |q| ≥ √disc > 0
     }

@@ -91,6 +91,46 @@ TEST(Sphere, OriginInsideTakesFarRoot) {
     EXPECT_EQ(hit->normal, (Vec3d{0, 0, 1}));
 }
 
+// A ray starting in the plane through the centre (β = (o − c)·d = 0, so t_c = −β/a = ±0) has
+// roots −h and +h, h = √(r² − ρ²)/|d| for an origin ρ from the centre. Both kernels, with β = +0
+// and with β = −0 (every product −0), from the centre and off it; the reference is exact where
+// the square root is (ρ = 0) and long double elsewhere. The double-double kernel had told the
+// far root's sign from t_c's sign of zero and q's from β's, and given +h twice.
+TEST(Sphere, ARayStartingInTheCentrePlaneHasRootsOfBothSigns) {
+    struct Case {
+        Sphere s;
+        Ray ray;
+        long double h;
+    };
+    const long double h_off = std::sqrt(3.75L);  // r = 2, ρ = 0.5
+    const Case cases[] = {
+        {{{0, 0, 10}, 2}, {{0, 0, 10}, {0, 0, 1}}, 2.0L},              // from the centre
+        {{{0, 0, 10}, 2}, {{0, 0, 10}, {0, 0, -4}}, 0.5L},             // a longer direction
+        {{{0, 0, 10}, 2}, {{0, 0.5, 10}, {0, 0, 1}}, h_off},           // off the centre, β = +0
+        {{{0, 0, 10}, 2}, {{-0.0, 0.5, 10}, {1, -0.0, -0.0}}, h_off},  // β = −0
+        {{{-3, 1, -7}, 2}, {{-3, 1.5, -7}, {-0.0, -0.0, -1}}, h_off},  // negative coordinates
+    };
+    for (const Case& c : cases) {
+        for (const bool fast : {false, true}) {
+            const SphereRoots r = fast ? sphere_roots_fast(c.s, c.ray) : sphere_roots(c.s, c.ray);
+            ASSERT_EQ(r.count, 2) << "fast " << fast << " h " << static_cast<double>(c.h);
+            const double want = static_cast<double>(c.h);
+            EXPECT_NEAR(r.t[0], -want, 2 * ulp(want)) << "fast " << fast;
+            EXPECT_NEAR(r.t[1], want, 2 * ulp(want)) << "fast " << fast;
+            EXPECT_LE(std::abs(r.t[1] - c.h), static_cast<long double>(r.t_err));
+            // From tmin = −∞ the first hit is the one behind the origin, and a ray going forward
+            // from the origin meets the sphere once.
+            Ray back = c.ray;
+            back.tmin = -kInfinity;
+            const auto first = intersect_sphere(c.s, back);
+            ASSERT_TRUE(first);
+            EXPECT_LT(first->t, 0.0);
+            Hit out[2];
+            EXPECT_EQ(fast ? sphere_hits_fast(c.s, c.ray, out) : sphere_hits(c.s, c.ray, out), 1);
+        }
+    }
+}
+
 TEST(Sphere, BehindOriginMisses) {
     EXPECT_FALSE(intersect_sphere({{0, 0, -10}, 2}, ray_z()));
 }
