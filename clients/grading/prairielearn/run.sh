@@ -10,7 +10,11 @@ set -uo pipefail
 root="${GRADE_ROOT:-/grade}"
 kit="$root/serverFilesCourse/raycastd"
 export PYTHONPATH="$kit/python${PYTHONPATH:+:$PYTHONPATH}"
-export RAYCASTD_SERVER="${RAYCASTD_SERVER:-$kit/bin/raycastd}"
+# The bundled server when there is one; a $RAYCASTD_SERVER set outside is used as given (the
+# kit stops with an error naming it when it does not exist).
+if [[ -z "${RAYCASTD_SERVER:-}" && -x "$kit/bin/raycastd" ]]; then
+    export RAYCASTD_SERVER="$kit/bin/raycastd"
+fi
 mkdir -p "$root/results"
 exec "${PYTHON:-python3}" -m raycastd grade "$root/tests/questions.toml" \
     --submission "$root/student" \

@@ -1,9 +1,13 @@
 """The `raycastd` command line: `python3 -m raycastd NOUN VERB …` (installed as `rcd`).
 
 Results go to stdout (machine-readable JSON with `--json`), messages and errors to stderr. Exit
-status: 0 done, 1 the API answered an error or could not be reached (its code is printed),
-2 usage. SCENE arguments are a registered id (`sc_…`) or a file (a `.json` scene document or a
-model file), which is registered on the fly (content-addressed: the same file, the same id).
+status: 0 done, 1 the API answered an error or could not be reached (its code is printed), or
+an output file could not be written, 2 usage. SCENE arguments are a registered id (`sc_…`) or a
+file (a `.json` scene document or a model file). The queries (`intersect --ray`, `points`,
+`explain`) send a file inline to the stateless endpoints, so they register nothing and need no
+token; what the API answers only for a registered scene (`render`, `trace`, `intersect --rays`,
+whose binary form needs one) registers the file on the fly (content-addressed: the same file,
+the same id), a write.
 """
 
 from __future__ import annotations
@@ -18,8 +22,8 @@ import re
 import sys
 from typing import Any, Callable, Sequence, TextIO
 
-from raycastd.client import MODEL_TYPES, Client, SceneRef
-from raycastd.errors import RaycastdError
+from raycastd.client import MODEL_FORMATS, MODEL_TYPES, Client, SceneRef, scene_document
+from raycastd.errors import RaycastdError, Unauthorized
 from raycastd.tables import TableError, read_table, write_table
 
 PROG = "raycastd"
@@ -28,6 +32,10 @@ SCENE_ID = re.compile(r"^sc_[0-9A-Za-z]+$")
 
 class UsageError(Exception):
     """A command line that cannot be carried out as written (exit status 2)."""
+
+
+class OutputFailed(Exception):
+    """A result that could not be written to its file (exit status 1)."""
 
 
 # -- argument parsing -----------------------------------------------------------------------
@@ -41,7 +49,9 @@ def vector(text: str, n: int = 3) -> list[float]:
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not {n} comma-separated numbers") from None
     if len(values) != n:
-        raise argparse.ArgumentTypeError(f"{text!r} has {len(values)} numbers, expected {n}")
+        raise argparse.ArgumentTypeError(
+            f"{text!r} has {_plural(len(values), 'number')}, expected {n}"
+        )
     return values
 
 
@@ -179,7 +189,11 @@ def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
     q.add_argument("--precision", choices=["fast", "refined", "exact"])
 
     q = cmd("explain", "the worked solution a student would write")
-    q.add_argument("scene", type=pathlib.Path, metavar="SCENE.json", help="a scene document")
+    q.add_argument(
+        "scene",
+        metavar="SCENE",
+        help="a scene document (.json) or a model file, sent inline (not a registered id)",
+    )
     q.add_argument("--ray", type=ray_arg, required=True, metavar="O:D")
     q.add_argument("--markdown", action="store_true", help="Markdown with LaTeX")
 
@@ -245,6 +259,11 @@ def main(
         return 2
     except RaycastdError as exc:
         err.write(f"{prog}: error: {exc}\n")
+        if isinstance(exc, Unauthorized) and getattr(exc, "hint", None):
+            err.write(f"{prog}: {exc.hint}\n")
+        return 1
+    except OutputFailed as exc:
+        err.write(f"{prog}: error: {exc}\n")
         return 1
     except KeyboardInterrupt:
         err.write(f"{prog}: interrupted\n")
@@ -261,17 +280,68 @@ def scene_ref(text: str) -> SceneRef:
     raise UsageError(f"SCENE {text!r} is neither a file nor a scene id (sc_…)")
 
 
-def scene_arg(client: Client, text: str, io: Output) -> str:
+def scene_arg(client: Client, text: str, io: Output, why: str) -> str:
     """A SCENE argument as a registered scene's id: a file is registered first, and the
     warnings the server has about it are printed as `scene add` prints them (a material library
-    it could not read, an unknown key); an id is taken as it is."""
+    it could not read, an unknown key); an id is taken as it is. Registering is a write: when
+    the server wants its token for it (401), the error says `why` the command needed a
+    registered scene and how to pass the token."""
     ref = scene_ref(text)
     if isinstance(ref, pathlib.Path):
-        summary = client.add_scene(ref)
+        with _write_needed(client, f"{why}, so {ref} is registered first, a write"):
+            summary = client.add_scene(ref)
         for w in summary.get("warnings", []):
             io.message(f"{ref}: warning: {w}")
         return summary["id"]
     return ref
+
+
+def query_scene(client: Client, text: str, io: Output, what: str) -> SceneRef:
+    """A SCENE argument for the stateless queries (`what`: intersect, points): a `.json` scene
+    document is sent inline as it is, so that nothing is registered and no token is needed; an
+    id as it is. A model file is registered, as before: sent inline it would be one mesh object
+    (`scene_document`), where registered its parts are objects of their own, with the names
+    and numbers the server gives them (2CylinderEngine.glb: 67 objects against 1), and a hit
+    should name the part. A file whose extension tells no model format is registered too (the
+    server tells those by their bytes only on registration)."""
+    ref = scene_ref(text)
+    if not isinstance(ref, pathlib.Path):
+        return ref
+    if ref.suffix.lower() != ".json":
+        why = (
+            f"{what} registers a model file, so that its parts are objects of their own as the "
+            "server names them"
+        )
+        return scene_arg(client, text, io, why)
+    doc = _document_arg(ref)
+    assert doc is not None  # a .json file is a document or a ValueError
+    return doc
+
+
+def _document_arg(path: pathlib.Path) -> dict | None:
+    """scene_document(path), its errors as usage errors (one line, exit 2)."""
+    try:
+        return scene_document(path)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    except OSError as exc:
+        raise UsageError(f"cannot read {path}: {exc.strerror or exc}") from None
+
+
+@contextlib.contextmanager
+def _write_needed(client: Client, why: str):
+    """Adds to a 401 on a write why the write was needed and how to pass the token."""
+    try:
+        yield
+    except Unauthorized as exc:
+        if client.token:
+            exc.hint = f"{why}; the server refused the token given (--token or $RAYCASTD_TOKEN)"
+        else:
+            exc.hint = (
+                f"{why}; this server takes writes only with its token: pass --token T "
+                "(or set RAYCASTD_TOKEN=T)"
+            )
+        raise
 
 
 def _rays_from_args(args: argparse.Namespace) -> tuple[list[dict], list[list[float]] | None]:
@@ -291,7 +361,7 @@ def _table(path: pathlib.Path, widths: tuple[int, ...], what: str) -> list[list[
     for i, row in enumerate(rows):
         if len(row) not in widths:
             raise UsageError(
-                f"{path}: row {i + 1} has {len(row)} columns; {what} need {' or '.join(map(str, widths))}"
+                f"{path}: row {i + 1} has {_plural(len(row), 'column')}; {what} need {' or '.join(map(str, widths))}"
             )
     return rows
 
@@ -304,7 +374,8 @@ def cmd_scene(client: Client, args: argparse.Namespace, io: Output) -> int:
                 raise UsageError(f"no such file: {f}")
             if f.suffix.lower() not in MODEL_TYPES:
                 io.message(f"{f}: unknown extension; the server will tell the format by its bytes")
-            summary = client.add_scene(f)
+            with _write_needed(client, "scene add registers scenes"):
+                summary = client.add_scene(f)
             results.append({"file": str(f), **summary})
             for w in summary.get("warnings", []):
                 io.message(f"{f}: warning: {w}")
@@ -320,9 +391,10 @@ def cmd_scene(client: Client, args: argparse.Namespace, io: Output) -> int:
         )
     elif args.verb == "show":
         s = client.get_scene(args.id)
-        io.result(s, lambda: json.dumps(s, indent=2))
+        io.result(s, lambda: scene_text(s))
     else:
-        done = [client.delete_scene(i) for i in args.ids]
+        with _write_needed(client, "scene rm deletes scenes"):
+            done = [client.delete_scene(i) for i in args.ids]
         io.result(
             done if len(done) > 1 else done[0],
             lambda: "\n".join(f"deleted {d['id']}" for d in done),
@@ -330,28 +402,94 @@ def cmd_scene(client: Client, args: argparse.Namespace, io: Output) -> int:
     return 0
 
 
+def _plural(n: Any, word: str, plural: str | None = None) -> str:
+    """`1 object`, `2 objects`, `? objects` (n unknown)."""
+    if n is None:
+        n = "?"
+    return f"{n} {word if n == 1 else plural or word + 's'}"
+
+
 def _summary_line(s: dict) -> str:
     b = s.get("bounds")
     box = f"bounds {b['min']}..{b['max']}" if b else "empty"
-    return f"{s.get('objects')} objects, {s.get('triangles')} triangles, {s.get('spheres')} spheres, {box}"
+    return (
+        f"{_plural(s.get('objects'), 'object')}, {_plural(s.get('triangles'), 'triangle')}, "
+        f"{_plural(s.get('spheres'), 'sphere')}, {box}"
+    )
+
+
+def scene_text(s: dict) -> str:
+    """A scene's summary (`GET /v1/scenes/{id}`) as lines a person reads (`--json`: as it is)."""
+    lines = [f"{s.get('id')}: {_summary_line(s)}"]
+    features = s.get("features") or {}
+    on = [k for k, v in features.items() if v]
+    if features:
+        lines.append(f"features: {', '.join(on) if on else 'none'}")
+    cam = s.get("camera")
+    if cam:
+        lines.append(
+            f"camera: at {_vec(cam['position'])} looking at {_vec(cam['look_at'])}, "
+            f"up {_vec(cam['up'])}, fov_y {cam.get('fov_y_deg'):g}°"
+        )
+    else:
+        lines.append(f"camera: none (renders look from {s.get('default_view', '?')})")
+    extra = []
+    if "memory_bytes" in s:
+        extra.append(f"memory {s['memory_bytes']} bytes")
+    if "build_ms" in s:
+        extra.append(f"built in {s['build_ms']:.3g} ms")
+    if extra:
+        lines.append(", ".join(extra))
+    for t in s.get("topology") or []:
+        shape = (
+            "closed"
+            if t.get("closed")
+            else (
+                f"open ({_plural(t.get('boundary_edges'), 'boundary edge')}, "
+                f"{_plural(t.get('boundary_loops'), 'loop')})"
+            )
+        )
+        lines.append(
+            f"mesh {t.get('object')} {t.get('name')!r}: {_plural(t.get('vertices'), 'vertex', 'vertices')}, "
+            f"{_plural(t.get('triangles'), 'triangle')}, {shape}, "
+            f"{_plural(t.get('components'), 'component')}, inside by {t.get('sign')}"
+        )
+    warnings = s.get("warnings") or []
+    for w in warnings:
+        lines.append(f"warning: {w}")
+    return "\n".join(lines)
 
 
 def cmd_intersect(client: Client, args: argparse.Namespace, io: Output) -> int:
     rays, table = _rays_from_args(args)
-    scene = scene_arg(client, args.scene, io)
     if table is None:
         if args.output:
             raise UsageError("-o/--output writes the results of --rays FILE")
-        fields = args.fields.split(",") if args.fields else None
+        scene = query_scene(client, args.scene, io, "intersect")
+        fields = [f.strip() for f in args.fields.split(",") if f.strip()] if args.fields else None
         ans = client.intersect(scene, rays, mode=args.mode, precision=args.precision, fields=fields)
-        io.result(ans, lambda: _hits_text(ans))
+        io.result(ans, lambda: _hits_text(ans, fields))
         return 0
+    if args.output:
+        check_output(args.output)
+    scene = scene_arg(
+        client,
+        args.scene,
+        io,
+        "intersect --rays sends its rays in the binary form, which the API answers only for a "
+        "registered scene (--ray alone needs none)",
+    )
     rows = [_ray_row(r) for r in rays] + [r if len(r) == 8 else r + [0.0, math.inf] for r in table]
     cols = _batch(client, scene, rows, args.mode, args.precision)
     if args.output:
-        names = list(cols)
-        write_table(args.output, [list(vals) for vals in zip(*cols.values())], ",".join(names))
-        io.message(f"wrote {len(rows)} rows ({', '.join(names)}) to {args.output}")
+        if args.mode == "all":  # one row per hit: the ray's index and the hit's t
+            names = ["ray", "t"]
+            out_rows = [[i, t] for i, ts in enumerate(cols["t"]) for t in ts]
+        else:
+            names = list(cols)
+            out_rows = [list(vals) for vals in zip(*cols.values())]
+        write_output(args.output, lambda: write_table(args.output, out_rows, ",".join(names)))
+        io.message(f"wrote {_plural(len(out_rows), 'row')} ({', '.join(names)}) to {args.output}")
     io.result(
         {
             "mode": args.mode,
@@ -430,37 +568,62 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-def _hits_text(ans: dict) -> str:
+def _hits_text(ans: dict, fields: Sequence[str] | None = None) -> str:
+    """One line a ray, showing the fields of each hit the answer has; `t_err`, `front_face` and
+    `barycentric` only when `fields` asked for them."""
+    asked = set(fields or ())
     lines = []
     for i, h in enumerate(ans["hits"]):
         if "count" in h and "hits" in h:
-            ts = ", ".join(f"{x['t']:.9g} ({x.get('name', x.get('object'))})" for x in h["hits"])
-            lines.append(f"ray {i}: {h['count']} hits" + (f": {ts}" if ts else ""))
+            ts = ", ".join(_short_hit(x) for x in h["hits"])
+            lines.append(f"ray {i}: {_plural(h['count'], 'hit')}" + (f": {ts}" if ts else ""))
         elif "count" in h:
-            lines.append(f"ray {i}: {h['count']} crossings")
+            lines.append(f"ray {i}: {_plural(h['count'], 'crossing')}")
         elif not h.get("hit"):
             lines.append(f"ray {i}: miss")
-        elif "t" not in h and "name" not in h and "object" not in h:
-            lines.append(f"ray {i}: hit")
         else:
-            lines.append(f"ray {i}: " + _hit_text(h))
+            lines.append(f"ray {i}: " + _hit_text(h, asked))
     lines.append(f"(precision: {ans.get('precision')})")
     return "\n".join(lines)
 
 
-def _hit_text(h: dict) -> str:
+def _who(h: dict) -> str:
+    """`sphere 3 (object 2, primitive 0)`, with only the parts the hit record has."""
+    ids = [f"{k} {h[k]}" for k in ("object", "primitive") if k in h]
+    return " ".join(
+        p
+        for p in (str(h["name"]) if "name" in h else "", f"({', '.join(ids)})" if ids else "")
+        if p
+    )
+
+
+def _short_hit(x: dict) -> str:
+    """One hit of `--mode all`: its t and who was hit (name, else object), as far as the record
+    says."""
+    who = str(x["name"]) if "name" in x else (f"object {x['object']}" if "object" in x else "")
+    if "t" in x:
+        return f"{x['t']:.9g}" + (f" ({who})" if who else "")
+    return who or "hit"
+
+
+def _hit_text(h: dict, asked: set[str] = frozenset()) -> str:
     parts = []
-    if "name" in h or "object" in h:
-        parts.append(
-            f"{h.get('name', '')} (object {h.get('object', '?')}, primitive {h.get('primitive', '?')})".strip()
-        )
+    who = _who(h)
+    if who:
+        parts.append(who)
     if "t" in h:
         parts.append(f"t = {h['t']!r}")
+    if "t_err" in h and "t_err" in asked:
+        parts.append(f"t_err = {h['t_err']:.3g}")
     if "point" in h:
         parts.append("point " + _vec(h["point"]))
     if "normal" in h:
         parts.append("normal " + _vec(h["normal"]))
-    return "hit " + ", ".join(parts)
+    if "front_face" in h and "front_face" in asked:
+        parts.append("front face" if h["front_face"] else "back face")
+    if "barycentric" in h and "barycentric" in asked:
+        parts.append("barycentric " + _vec(h["barycentric"]))
+    return "hit" + (" " + ", ".join(parts) if parts else "")
 
 
 def _vec(v: Sequence[float]) -> str:
@@ -474,7 +637,10 @@ def cmd_points(client: Client, args: argparse.Namespace, io: Output) -> int:
     if not pts:
         raise UsageError("give at least one --point or --points FILE")
     ans = client.points(
-        scene_arg(client, args.scene, io), pts, query=args.query, max_distance=args.max_distance
+        query_scene(client, args.scene, io, "points"),
+        pts,
+        query=args.query,
+        max_distance=args.max_distance,
     )
 
     def text() -> str:
@@ -488,8 +654,12 @@ def cmd_points(client: Client, args: argparse.Namespace, io: Output) -> int:
                 )
             elif args.query == "occupancy":
                 desc = ("inside" if r["inside"] else "outside") + f" (winding {r['winding']:.6g})"
-            else:
+            elif r.get("distance") is not None:
                 desc = f"distance {r['distance']:.9g}"
+            elif args.query == "signed_distance":  # it searches the whole scene: an empty one
+                desc = "no surface in the scene"
+            else:
+                desc = "no surface within max_distance"
             lines.append(f"{_vec(p)}: {desc}")
         return "\n".join(lines)
 
@@ -497,7 +667,30 @@ def cmd_points(client: Client, args: argparse.Namespace, io: Output) -> int:
     return 0
 
 
+def check_output(path: pathlib.Path, flag: str = "-o") -> None:
+    """Refuses (usage, before any request) an output file that cannot be created: its folder
+    missing or not a folder, or the path a folder itself."""
+    folder = path.parent
+    if path.is_dir():
+        raise UsageError(f"{flag} {path}: is a folder; give a file name")
+    if not folder.exists():
+        raise UsageError(f"{flag} {path}: no such folder {folder}")
+    if not folder.is_dir():
+        raise UsageError(f"{flag} {path}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"{flag} {path}: cannot write in {folder}")
+
+
+def write_output(path: pathlib.Path, write: Callable[[], Any]) -> None:
+    """Runs `write`; an OSError (disk full, the folder gone meanwhile) is one line, exit 1."""
+    try:
+        write()
+    except OSError as exc:
+        raise OutputFailed(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
 def cmd_render(client: Client, args: argparse.Namespace, io: Output) -> int:
+    check_output(args.output)
     opts: dict[str, Any] = {}
     if args.size:
         opts["width"], opts["height"] = args.size
@@ -520,10 +713,13 @@ def cmd_render(client: Client, args: argparse.Namespace, io: Output) -> int:
     tty = io.err.isatty() if hasattr(io.err, "isatty") else False
     show = args.progress == "always" or (args.progress == "auto" and tty)
     progress: Any = ProgressBar(io.err) if show else False
-    image = client.render(scene_arg(client, args.scene, io), progress=progress, **opts)
+    scene = scene_arg(
+        client, args.scene, io, "render needs a registered scene (the API renders no other)"
+    )
+    image = client.render(scene, progress=progress, **opts)
     if show:
         io.err.write("\n")
-    args.output.write_bytes(image)
+    write_output(args.output, lambda: args.output.write_bytes(image))
     size = f"{opts.get('width', 640)}x{opts.get('height', 480)}"
     io.message(f"wrote {args.output} ({size}, {len(image)} bytes)")
     if io.json_mode:
@@ -547,16 +743,30 @@ class ProgressBar:
 
 
 def _json_arg(text: str, what: str) -> Any:
+    """JSON given inline (`{…}`) or a file holding it."""
     path = pathlib.Path(text)
+    if path.is_file():
+        try:
+            return json.loads(path.read_text())
+        except OSError as exc:
+            raise UsageError(f"{what}: cannot read {path}: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise UsageError(f"{what}: {path}: not JSON ({exc})") from None
+    if not text.lstrip().startswith(("{", "[")):
+        if path.exists():
+            raise UsageError(f"{what}: {path} is not a file")
+        raise UsageError(f"{what}: no such file: {path} (give a file, or the JSON itself)")
     try:
-        return json.loads(path.read_text() if path.is_file() else text)
+        return json.loads(text)
     except ValueError as exc:
         raise UsageError(f"{what}: not JSON ({exc})") from None
 
 
 def cmd_trace(client: Client, args: argparse.Namespace, io: Output) -> int:
     ans = client.trace(
-        scene_arg(client, args.scene, io),
+        scene_arg(
+            client, args.scene, io, "trace needs a registered scene (the API traces no other)"
+        ),
         args.ray,
         max_depth=args.max_depth,
         precision=args.precision,
@@ -595,19 +805,27 @@ def tree_text(ans: dict) -> str:
     node(ans.get("tree"), 0, "")
     s = ans.get("summary", {})
     lines.append(
-        f"{s.get('points', 0)} points; full Phong: {' '.join(s.get('full_phong', [])) or '-'}; "
+        f"{_plural(s.get('points', 0), 'point')}; full Phong: {' '.join(s.get('full_phong', [])) or '-'}; "
         f"ambient only: {' '.join(s.get('ambient_only', [])) or '-'}"
     )
     return "\n".join(lines)
 
 
 def cmd_explain(client: Client, args: argparse.Namespace, io: Output) -> int:
-    if not args.scene.is_file():
-        raise UsageError(f"explain needs a scene document file: {args.scene} not found")
-    try:
-        doc = json.loads(args.scene.read_text())
-    except ValueError as exc:
-        raise UsageError(f"{args.scene}: not JSON ({exc})") from None
+    path = pathlib.Path(args.scene)
+    if not path.is_file():
+        if SCENE_ID.match(args.scene):
+            raise UsageError(
+                f"explain needs the scene itself (a .json document or a model file), not the id "
+                f"{args.scene}: the API explains only a scene sent with the question"
+            )
+        raise UsageError(f"explain needs a scene file: {args.scene} not found")
+    doc = _document_arg(path)
+    if doc is None:
+        raise UsageError(
+            f"{path}: explain takes a .json scene document or a model file named "
+            f"{' '.join(MODEL_FORMATS)}"
+        )
     if args.markdown:
         io.out.write(client.explain(doc, args.ray, markdown=True))
         return 0

@@ -44,6 +44,16 @@ RayLike = Union[Mapping[str, Any], Sequence[Any]]
 #: Called with (progress in [0, 1], the job's status document) while a render job runs.
 ProgressCallback = Callable[[float, dict], None]
 
+#: The `format` of an inline mesh object (`data_base64`) for each model file extension.
+MODEL_FORMATS = {
+    ".glb": "glb",
+    ".gltf": "gltf",
+    ".obj": "obj",
+    ".stl": "stl",
+    ".ply": "ply",
+    ".off": "off",
+}
+
 MODEL_TYPES = {
     ".json": "application/json",
     ".glb": "model/gltf-binary",
@@ -328,8 +338,31 @@ class Client(ArrayQueries):
     def explain(
         self, scene: Mapping[str, Any] | pathlib.Path, ray: RayLike, markdown: bool = False
     ) -> Any:
-        """The worked solution for one ray: a dict, or Markdown with LaTeX (a str)."""
-        doc = json.loads(scene.read_text()) if isinstance(scene, pathlib.Path) else dict(scene)
+        """The worked solution for one ray: a dict, or Markdown with LaTeX (a str).
+
+        `scene` is a scene document (dict) or a file (Path): a `.json` document, or a model file
+        (`.glb .gltf .obj .stl .ply .off`), sent inline as one mesh object (`scene_document`).
+        `POST /v1/explain` takes the scene itself, so a registered id cannot be explained: a
+        str raises ValueError saying so, as does a file that is not a scene."""
+        if isinstance(scene, pathlib.Path):
+            doc = scene_document(scene)
+            if doc is None:
+                raise ValueError(
+                    f"{scene}: explain cannot tell the model format of a {scene.suffix or 'file'} "
+                    f"file; name it {' '.join(MODEL_FORMATS)}, or pass a scene document"
+                )
+        elif isinstance(scene, Mapping):
+            doc = dict(scene)
+        elif isinstance(scene, str) and not scene.startswith("sc_"):
+            raise TypeError(f"explain takes a file as a pathlib.Path: pathlib.Path({scene!r})")
+        elif isinstance(scene, str):
+            raise ValueError(
+                f"explain takes the scene itself (a scene document or a pathlib.Path), not "
+                f"{scene!r}: POST /v1/explain has no form for a registered id; pass the "
+                "document or file the scene was registered from"
+            )
+        else:
+            raise TypeError(f"explain takes a scene document or a pathlib.Path, not {scene!r}")
         query = {"format": "markdown"} if markdown else None
         return self._json("POST", "/v1/explain", {"scene": doc, "ray": ray_json(ray)}, query=query)
 
@@ -534,7 +567,7 @@ def _image_media_type(data: bytes) -> str | None:
     return None
 
 
-def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
+def embed_gltf_files(gltf: bytes, folder: pathlib.Path, images: bool = True) -> bytes:
     """A `.gltf` whose buffers or images are files beside it, with those files carried inside
     it as base64 data URIs (glTF 2.0 §3.6.1.1, §3.8.4.2): the server takes only self-contained
     uploads (a model's `uri`s are read inside its scene root alone, docs/api.md). A file that
@@ -545,13 +578,16 @@ def embed_gltf_files(gltf: bytes, folder: pathlib.Path) -> bytes:
     (`buffers[0].uri`). An image that cannot be read, or is neither PNG nor JPEG, is left as it
     is named: the server then warns that it cannot read it and uses the material's colour
     alone, as it does for any image it cannot decode. The encoded file is about 4/3 of the files'
-    size, which the server's --max-body-mb bounds."""
+    size, which the server's --max-body-mb bounds. With `images=False` only the buffers are
+    carried (for the stateless queries, whose scenes decode no texture)."""
     doc = _gltf_doc(gltf)
     if doc is None:
         return gltf
     changed = False
     read: dict[pathlib.Path, bytes] = {}  # a file named twice is read once
     for kind, i, entry, uri in list(_gltf_references(doc)):
+        if kind == "images" and not images:
+            continue
         where = f"{kind}[{i}].uri"
         path = _gltf_file(folder, uri, where)
         if path not in read:
@@ -792,6 +828,45 @@ def obj_document(obj: bytes, folder: pathlib.Path, name: str) -> dict | None:
         "format": "obj",
         "data_base64": base64.b64encode(obj).decode("ascii"),
         "files": carried,
+    }
+    return {"objects": [mesh]}
+
+
+def scene_document(path: pathlib.Path) -> dict | None:
+    """A file as a scene document that the stateless queries (`/v1/intersect`, `/v1/points`,
+    `/v1/explain`) carry inline, so that nothing is registered: a `.json` file is the document
+    it holds (ValueError when it is not JSON or not an object); a model file
+    (`.glb .gltf .obj .stl .ply .off`) is one inline mesh object named after the file
+    (`data_base64`), a `.gltf` with the buffers beside it embedded (embed_gltf_files; images are
+    left out, as those scenes decode none) and an `.obj` with its material libraries and
+    textures in `files` (obj_document). A glTF is then one object, as a `mesh` object of a
+    document is, where registering the file makes one object per mesh instance. None for an
+    extension that tells no format (the server tells those by their bytes only on
+    registration). OSError when the file cannot be read."""
+    suffix = path.suffix.lower()
+    if suffix == ".json":
+        try:
+            doc = json.loads(path.read_bytes())
+        except ValueError as exc:
+            raise ValueError(f"{path}: not a JSON scene document ({exc})") from None
+        if not isinstance(doc, dict):
+            raise ValueError(f"{path}: a scene document is a JSON object, not {type(doc).__name__}")
+        return doc
+    fmt = MODEL_FORMATS.get(suffix)
+    if fmt is None:
+        return None
+    body = path.read_bytes()
+    if fmt == "obj":
+        doc = obj_document(body, path.parent, path.stem)
+        if doc is not None:
+            return doc
+    elif fmt == "gltf":
+        body = embed_gltf_files(body, path.parent, images=False)
+    mesh = {
+        "type": "mesh",
+        "name": path.stem,
+        "format": fmt,
+        "data_base64": base64.b64encode(body).decode("ascii"),
     }
     return {"objects": [mesh]}
 

@@ -103,7 +103,9 @@ def read_npy(data: bytes, name: str = "<npy>") -> list[list[float]]:
 def write_table(
     path: str | pathlib.Path, rows: Sequence[Sequence[float]], header: str = ""
 ) -> None:
-    """Writes rows as `.npy` (float64, 2-D) or CSV by the file's extension."""
+    """Writes rows as `.npy` (float64, 2-D) or CSV by the file's extension. In CSV an int (an
+    id, a count) is written as an integer (`2`, `-1`), a float as the shortest text that reads
+    back to it, and an infinite float as `inf`."""
     path = pathlib.Path(path)
     if path.suffix.lower() == ".npy":
         path.write_bytes(npy_bytes(rows))
@@ -112,8 +114,14 @@ def write_table(
     if header:
         buf.write(header + "\n")
     for row in rows:
-        buf.write(",".join(repr(float(v)) if math.isfinite(v) else "inf" for v in row) + "\n")
+        buf.write(",".join(_csv_cell(v) for v in row) + "\n")
     path.write_text(buf.getvalue())
+
+
+def _csv_cell(v: float) -> str:
+    if isinstance(v, int) or (hasattr(v, "dtype") and v.dtype.kind in "iub"):
+        return str(int(v))
+    return repr(float(v)) if math.isfinite(v) else "inf"
 
 
 def npy_bytes(rows: Sequence[Sequence[float]]) -> bytes:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import http.server
 import json
 import os
@@ -162,6 +163,57 @@ class EndpointsTest(ServerTestCase):
             "results"
         ]
         self.assertEqual([r["inside"] for r in inside], [True, False])
+
+
+class ExplainFilesTest(ServerTestCase):
+    """explain(doc | Path): a `.json` document or a model file, sent inline (nothing is
+    registered); a registered id cannot be explained, and says so."""
+
+    def setUp(self) -> None:
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.dir = pathlib.Path(tmp.name)
+
+    def test_a_document_file_and_model_files(self) -> None:
+        before = {s["id"] for s in self.client.list_scenes()}
+        doc = self.dir / "spheres.json"
+        doc.write_text(json.dumps(TUTORIAL))
+        self.assertEqual(self.client.explain(doc, RAY)["first_hit"]["name"], "sphere 3")
+        ray = ((0.5, 0.5, 0), (0, 0, 1))
+        obj = write_obj_with_files(self.dir)  # with its .mtl and texture beside it
+        hit = self.client.explain(obj, ray)["first_hit"]
+        self.assertEqual((hit["name"], hit["t"]), ("tri", 5))
+        (self.dir / "plain.obj").write_text("v 0 0 5\nv 2 0 5\nv 0 2 5\nf 1 2 3\n")
+        hit = self.client.explain(self.dir / "plain.obj", ray)["first_hit"]
+        self.assertEqual((hit["name"], hit["t"]), ("plain", 5))
+        gltf = write_gltf_with_files(self.dir)  # its .bin beside it
+        self.assertEqual(self.client.explain(gltf, ray)["first_hit"]["t"], 5)
+        self.assertIn("tri", self.client.explain(obj, ray, markdown=True))
+        self.assertEqual({s["id"] for s in self.client.list_scenes()}, before)
+
+    def test_a_registered_id_or_an_unknown_file_is_a_clear_error(self) -> None:
+        sid = self.client.add_scene(TUTORIAL)["id"]
+        with self.assertRaisesRegex(ValueError, "no form for a registered id"):
+            self.client.explain(sid, RAY)
+        odd = self.dir / "model.xyz"
+        odd.write_text("v 0 0 5\n")
+        with self.assertRaisesRegex(ValueError, "cannot tell the model format"):
+            self.client.explain(odd, RAY)
+        bad = self.dir / "bad.json"
+        bad.write_text("{nope")
+        with self.assertRaisesRegex(ValueError, "not a JSON scene document"):
+            self.client.explain(bad, RAY)
+
+    def test_scene_document_of_a_gltf_carries_its_buffers_not_its_images(self) -> None:
+        from raycastd.client import scene_document
+
+        gltf = write_gltf_with_files(self.dir)
+        mesh = scene_document(gltf)["objects"][0]
+        self.assertEqual((mesh["type"], mesh["format"], mesh["name"]), ("mesh", "gltf", "tri"))
+        inner = json.loads(base64.b64decode(mesh["data_base64"]))
+        self.assertTrue(inner["buffers"][0]["uri"].startswith("data:application/octet-stream"))
+        self.assertEqual(inner["images"][0]["uri"], "red.png")
+        self.assertIsNone(scene_document(self.dir / "tri data.bin"))
 
 
 class GltfFilesTest(ServerTestCase):

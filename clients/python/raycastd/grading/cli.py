@@ -44,7 +44,10 @@ def add_grade_parser(sub: Any, common: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--server-binary",
         metavar="PATH",
-        help="the raycastd server to start (default: $RAYCASTD_SERVER, PATH, the build tree)",
+        help=(
+            "the raycastd server to start (default: $RAYCASTD_SERVER, $RAYCASTD_BINARY, PATH, "
+            "the build tree); a binary named here or in those variables must exist"
+        ),
     )
 
 
@@ -59,21 +62,54 @@ def run_grade(args: argparse.Namespace, io: Any) -> int:
     if url:
         report = grade_files(qset, url, args.answers, args.submission)
     else:
+        try:
+            binary = named_server_binary(args.server_binary)
+        except ValueError as exc:
+            io.message(f"raycastd grade: {exc}")
+            return 1
         scene_root = str(args.questions.resolve().parent)
-        with LocalServer(
-            args.server_binary, ["--scene-root", scene_root, "--threads", "8"]
-        ) as server:
+        with LocalServer(binary, ["--scene-root", scene_root, "--threads", "8"]) as server:
             report = grade_files(qset, server.url, args.answers, args.submission)
     write_outputs(report, args, io)
-    # A reference that failed is the instructor's problem, and must not pass unnoticed as a
-    # student's 0: the results stay written, the exit status says it (1, as for an API error).
+    # A question that could not be graded (its reference failed, its `expected` or program line
+    # is wrong) is the instructor's problem, and must not pass unnoticed as a student's 0: the
+    # results stay written, the exit status says it (1, as for an API error).
     broken = [r for r in report.results if r.instructor_error]
     for r in broken:
         io.message(
-            f"raycastd grade: question {r.question.id} could not be graded: its reference "
-            f"failed ({r.instructor_error})"
+            f"raycastd grade: question {r.question.id} could not be graded: {r.instructor_error}"
         )
     return 1 if broken else 0
+
+
+def named_server_binary(argument: str | None) -> str | None:
+    """The server binary named explicitly (--server-binary, else $RAYCASTD_SERVER, else
+    $RAYCASTD_BINARY: the first one given), checked; None when none is named, for
+    `find_server`'s search. A named binary that does not exist or cannot run is an error naming
+    it, never skipped for another one found elsewhere."""
+    for where, value in (
+        ("--server-binary", argument),
+        ("$RAYCASTD_SERVER", os.environ.get("RAYCASTD_SERVER")),
+        ("$RAYCASTD_BINARY", os.environ.get("RAYCASTD_BINARY")),
+    ):
+        if not value:
+            continue
+        path = pathlib.Path(value)
+        if not path.exists():
+            raise ValueError(f"the server binary {value} ({where}) does not exist")
+        if not path.is_file() or not os.access(path, os.X_OK):
+            raise ValueError(f"the server binary {value} ({where}) is not an executable file")
+        try:
+            with path.open("rb") as f:
+                script = f.read(2) == b"#!"
+        except OSError as exc:
+            raise ValueError(f"the server binary {value} ({where}) cannot be read: {exc}") from None
+        if script:
+            raise ValueError(
+                f"the server binary {value} ({where}) is a script, not the raycastd server"
+            )
+        return value
+    return None
 
 
 def write_outputs(report: Report, args: argparse.Namespace, io: Any) -> None:

@@ -11,6 +11,7 @@ questions that need it 0 with a message saying why, and the results are written 
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import pathlib
@@ -33,6 +34,7 @@ from raycastd.grading import compare as cmp
 from raycastd.grading.images import compare_images
 from raycastd.grading.questions import POINT_ASKS, TREE_ASKS, Question, QuestionSet
 from raycastd.png import PngError, read_png, write_png
+from raycastd.tables import MISS_WORDS as TABLE_MISS_WORDS
 from raycastd.tables import TableError, read_table
 
 MISSING = object()  # no answer given for a question
@@ -158,8 +160,13 @@ class Grader:
                 q, 0.0, f"grading stopped: took longer than {q.timeout_s + GRACE_S:g} s"
             )
         else:
+            # Not the student's doing (their answers and programs are read defensively): a
+            # question the kit cannot grade is the instructor's to see, as a failed reference is.
             exc = failure[0] if failure else RuntimeError("no result")
-            result = QuestionResult(q, 0.0, f"could not be graded: {exc}")
+            why = f"{type(exc).__name__}: {exc}"
+            result = QuestionResult(
+                q, 0.0, f"could not be graded (instructor: {why})", instructor_error=why
+            )
         result.seconds = time.monotonic() - t0
         return result
 
@@ -170,20 +177,23 @@ class Grader:
     ) -> QuestionResult:
         with Client(self.url, timeout=max(1.0, q.timeout_s)) as client:
             try:
-                value = self._answer(q, answers, submission, work, client)
+                # An image question's camera is settled first: the student's program is given
+                # the very camera the reference is rendered with.
+                camera = self._image_camera(q, client) if q.ask == "image" else None
+            except RaycastdError as exc:
+                return _reference_failed(q, exc)
+            try:
+                value = self._answer(q, answers, submission, work, client, camera)
+            except QuestionProblem as p:
+                return QuestionResult(q, 0.0, str(p), instructor_error=str(p))
             except StudentProblem as p:
                 return QuestionResult(q, 0.0, str(p))
             try:
                 if q.ask == "image":
-                    return self._image(q, value, client)
+                    return self._image(q, value, client, camera or {})
                 refs, scale = self._reference(q, client)
             except RaycastdError as exc:
-                return QuestionResult(
-                    q,
-                    0.0,
-                    f"the reference could not be computed (instructor: {exc})",
-                    instructor_error=str(exc),
-                )
+                return _reference_failed(q, exc)
             return self._compare(q, refs, value, scale)
 
     def _answer(
@@ -193,9 +203,10 @@ class Grader:
         submission: pathlib.Path | None,
         work: pathlib.Path,
         client: Client,
+        camera: dict | None = None,
     ) -> Any:
         if q.program:
-            self._run_program(q, submission, work, client)
+            self._run_program(q, submission, work, client, camera)
             return _read_output(q, work / q.answer_file)  # type: ignore[operator]
         if q.answer_file:
             if submission is None:
@@ -213,7 +224,12 @@ class Grader:
         return value
 
     def _run_program(
-        self, q: Question, submission: pathlib.Path | None, work: pathlib.Path, client: Client
+        self,
+        q: Question,
+        submission: pathlib.Path | None,
+        work: pathlib.Path,
+        client: Client,
+        camera: dict | None = None,
     ) -> None:
         """Writes the question's inputs to `work` and runs the student's program on them."""
         (work / "scene.json").write_text(json.dumps(q.scene, indent=1))
@@ -228,7 +244,8 @@ class Grader:
                 "".join(",".join(map(repr, p)) + "\n" for p in q.query_points)
             )
         img = q.image
-        camera = img.camera if img and img.camera else q.scene.get("camera")
+        if camera is None:  # not an image question: the scene's own camera, if it has one
+            camera = q.scene.get("camera")
         (work / "camera.json").write_text(json.dumps(camera or {}))
         fields = {
             "submission": str(submission or work),
@@ -245,7 +262,7 @@ class Grader:
         try:
             cmd = [part.format(**fields) for part in q.program or []]
         except (KeyError, IndexError, ValueError) as exc:
-            raise StudentProblem(
+            raise QuestionProblem(
                 f"the question's program line is wrong (instructor): {exc}"
             ) from None
         try:
@@ -338,10 +355,10 @@ class Grader:
     def _check(self, q: Question, ref: Any, val: Any, scale: float) -> cmp.Check:
         tol = q.tolerance
         if q.ask == "first_hit":
-            if isinstance(ref, (list, tuple)) and len(ref) == 2:
+            # (0-based index, name) or None: the server's, or `expected` as load_questions
+            # resolved it against the scene, so a name and an index are both compared
+            if ref is not None:
                 ref = (int(ref[0]), str(ref[1]))
-            elif isinstance(ref, str):  # an instructor's expected name
-                ref = (-1, ref) if not cmp.is_miss_word(ref) else None
             return cmp.check_first_hit(ref, val, q)
         if q.ask == "t":
             return cmp.check_scalar(math.inf if ref is None else float(ref), val, tol, scale)
@@ -363,12 +380,33 @@ class Grader:
         wanted = set(summary.get(q.ask, []))
         return cmp.check_tree_set(wanted, everything, val, q.ask.replace("_", " "))
 
-    def _image(self, q: Question, value: Any, client: Client) -> QuestionResult:
+    def _image_camera(self, q: Question, client: Client) -> dict:
+        """The camera of an image question, all four fields: the question's, else the scene's
+        own (its document's or its glTF file's, as the scene summary reports it), else the one
+        raycastd frames the scene with (`default_camera`, from the summary's bounds and
+        default_view). The reference is rendered with it, and the program gets it."""
+        spec = q.image
+        assert spec is not None
+        if spec.camera:
+            return _full_camera(spec.camera)
+        summary = client.get_scene(client.scene_id(q.scene))
+        own = summary.get("camera") or q.scene.get("camera")
+        if isinstance(own, dict) and own:
+            return _full_camera(own)
+        view = summary.get("default_view")
+        if view not in ("+z", "-z"):  # a server older than default_view: the same rule
+            objects = q.scene.get("objects") or []
+            mesh = any(isinstance(o, dict) and o.get("type") == "mesh" for o in objects)
+            view = "+z" if mesh else "-z"
+        aspect = spec.width / spec.height if spec.height else 0.0
+        return default_camera(summary.get("bounds"), aspect, view)
+
+    def _image(self, q: Question, value: Any, client: Client, camera: dict) -> QuestionResult:
         spec = q.image
         assert spec is not None
         opts: dict[str, Any] = {"shading": spec.shading}
-        if spec.camera:
-            opts["camera"] = spec.camera
+        if camera:
+            opts["camera"] = camera
         if spec.max_depth:
             opts["max_depth"] = spec.max_depth
         png = client.render(client.scene_id(q.scene), spec.width, spec.height, spec.spp, **opts)
@@ -392,6 +430,56 @@ class StudentProblem(Exception):
     """The student's answer is missing or unreadable; the message is shown as feedback."""
 
 
+class QuestionProblem(StudentProblem):
+    """The question cannot be graded for a reason of the instructor's (`grade` exits 1)."""
+
+
+def _reference_failed(q: Question, exc: RaycastdError) -> QuestionResult:
+    return QuestionResult(
+        q,
+        0.0,
+        f"the reference could not be computed (instructor: {exc})",
+        instructor_error=f"its reference failed ({exc})",
+    )
+
+
+#: raycastd's camera fields and their defaults (engine/scene/camera.h).
+CAMERA_DEFAULTS = {
+    "position": [0.0, 0.0, 0.0],
+    "look_at": [0.0, 0.0, 1.0],
+    "up": [0.0, 1.0, 0.0],
+    "fov_y_deg": 45.0,
+}
+
+
+def _full_camera(camera: dict) -> dict:
+    """A camera with every field, those not written taking raycastd's defaults."""
+    return {k: camera.get(k, v) for k, v in CAMERA_DEFAULTS.items()}
+
+
+def default_camera(bounds: dict | None, aspect: float, view: str) -> dict:
+    """The camera raycastd renders a scene with when neither the request nor the scene has one
+    (engine/scene/scene.cpp `default_camera`, docs/rendering.md "Camera"): it looks at the centre
+    of the bounds, fov_y 45° and +y up, from the distance at which their bounding sphere (half
+    the diagonal) just fills the narrower field of view, on the side `view` ("+z"/"-z") names."""
+    cam = _full_camera({})
+    if not bounds or not bounds.get("min") or not bounds.get("max"):
+        return cam
+    lo, hi = bounds["min"], bounds["max"]
+    if any(a > b for a, b in zip(lo, hi)):
+        return cam
+    centre = [0.5 * (a + b) for a, b in zip(lo, hi)]
+    radius = max(0.5 * math.dist(lo, hi), 1e-9)
+    half_y = 0.5 * cam["fov_y_deg"] * math.pi / 180.0
+    half_x = (
+        math.atan(math.tan(half_y) * aspect) if aspect > 0 and math.isfinite(aspect) else half_y
+    )
+    dist = radius / math.sin(min(half_y, half_x))
+    cam["look_at"] = centre
+    cam["position"] = [centre[0], centre[1], centre[2] + (dist if view == "+z" else -dist)]
+    return cam
+
+
 def _read_output(q: Question, path: pathlib.Path) -> Any:
     """The answer a program wrote (or a file in the submission), as the compare step reads it."""
     if not path.is_file():
@@ -402,9 +490,11 @@ def _read_output(q: Question, path: pathlib.Path) -> Any:
         except (PngError, OSError) as exc:
             raise StudentProblem(f"{path.name} is not a readable PNG: {exc}") from None
     try:
-        rows = read_table(path)
+        rows = _read_rows(q, path)
     except (TableError, OSError) as exc:
         raise StudentProblem(f"{path.name} is not a table of numbers: {exc}") from None
+    if not rows:
+        raise StudentProblem(f"{path.name} is empty (expected {_what_file(q)})")
     if q.ask == "hits":
         values: list[Any] = [[v for v in row if not math.isinf(v)] for row in rows]
     else:
@@ -412,6 +502,53 @@ def _read_output(q: Question, path: pathlib.Path) -> Any:
     if q.ask in ("triangle_hit", "inside"):
         values = [bool(v) and not math.isinf(v) for v in values]
     return values if q.many else (values[0] if values else MISSING)
+
+
+#: The program outputs in which a row may say "nothing here": a miss (t), a ray with no hits
+#: (hits), a ray that misses (triangle_hit). There a blank line is such a row.
+BLANK_ROW_ASKS = {"t", "hits", "triangle_hit"}
+
+
+def _read_rows(q: Question, path: pathlib.Path) -> list[list[float]]:
+    """The rows of a program's output, as `tables.read_table` reads them, except that for the
+    asks of BLANK_ROW_ASKS a blank line is a row of its own (empty: a miss) instead of being
+    skipped, so `8\n\n8\n` is three rays, the second a miss. Blank lines past the number of
+    rays at the end of the file (a trailing newline or two) are not rows."""
+    data = path.read_bytes()
+    if (
+        q.ask not in BLANK_ROW_ASKS
+        or path.suffix.lower() == ".npy"
+        or data.startswith(b"\x93NUMPY")
+    ):
+        return read_table(path)
+    rows: list[list[float]] = []
+    content_seen = False
+    for lineno, line in enumerate(data.decode("utf-8-sig", errors="replace").splitlines(), 1):
+        text = line.strip()
+        if text.startswith("#"):
+            continue
+        if not text:
+            rows.append([])
+            continue
+        cells = next(csv.reader([line])) if "," in line else line.split()
+        try:
+            rows.append([_cell(c) for c in cells])
+        except ValueError:
+            if not content_seen:  # a header row (and any blank lines above it)
+                rows = []
+                content_seen = True
+                continue
+            raise TableError(f"{path}:{lineno}: not a number in {text!r}") from None
+        content_seen = True
+    wanted = len(q.rays or q.query_points) if q.many else 1
+    while len(rows) > wanted and not rows[-1]:
+        rows.pop()
+    return rows
+
+
+def _cell(text: str) -> float:
+    t = text.strip().lower()
+    return math.inf if t in TABLE_MISS_WORDS else float(t)
 
 
 def _what_file(q: Question) -> str:

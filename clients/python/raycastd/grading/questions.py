@@ -21,6 +21,7 @@ with the question's id and key before any student is graded.
 from __future__ import annotations
 
 import json
+import math
 import pathlib
 
 try:
@@ -109,11 +110,15 @@ class Question:
     tolerance: Tolerance = field(default_factory=Tolerance)
     timeout_s: float = 30.0
     index_base: int = 0
+    # triangle_hit's object: a name as written, or an index made 0-based (the file's follows
+    # index_base, as students' answers do)
     object: str | int | None = None
     max_depth: int | None = None
     precision: str | None = None
     answer_file: str | None = None
     program: list[str] | None = None
+    # the instructor's reference, checked and normalised at load time (one value, or one per
+    # item): first_hit's is (0-based index, name) or None, t's a float (inf: a miss), …
     expected: Any = None
     normal_sign: str = "exact"
     image: ImageSpec | None = None
@@ -240,7 +245,143 @@ def _question(
         raise ValueError(
             f"answer_file (program output) is read for t, hits, triangle_hit, inside and image, not {ask}"
         )
+    names = object_names(scene)
+    if question.object is not None:
+        if ask != "triangle_hit":
+            raise ValueError(f"object is read by triangle_hit questions only, not {ask}")
+        if not _has_mesh(scene):
+            question.object = _object(question.object, names, question.index_base, "object")
+        elif not isinstance(question.object, str) or not question.object.strip():
+            # as for first_hit's expected: the server numbers a mesh's parts
+            raise ValueError(
+                "object: in a scene with a mesh the objects are numbered by the server; "
+                "name the object instead"
+            )
+    if question.expected is not None:
+        question.expected = _expected(question, names)
     return question
+
+
+def object_names(scene: Mapping[str, Any]) -> list[str]:
+    """The names raycastd gives a scene document's objects, by index: an object's `name`, else
+    `"<type> <index+1>"` (docs/api.md, "Names"): `sphere 3` is the third object of the scene."""
+    objects = scene.get("objects")
+    names = []
+    for i, o in enumerate(objects if isinstance(objects, list) else []):
+        o = o if isinstance(o, Mapping) else {}
+        name = o.get("name")
+        names.append(name if isinstance(name, str) else f"{o.get('type', 'object')} {i + 1}")
+    return names
+
+
+def _has_mesh(scene: Mapping[str, Any]) -> bool:
+    objects = scene.get("objects")
+    return any(
+        isinstance(o, Mapping) and o.get("type") == "mesh"
+        for o in (objects if isinstance(objects, list) else [])
+    )
+
+
+def _norm_name(s: str) -> str:
+    return "".join(s.split()).lower()
+
+
+def _listing(names: list[str], base: int) -> str:
+    if not names:
+        return "the scene has no objects"
+    shown = ", ".join(f"{i + base} = {n}" for i, n in enumerate(names[:12]))
+    return f"its objects are {shown}" + (", …" if len(names) > 12 else "")
+
+
+def _object(v: Any, names: list[str], base: int, where: str) -> int | str:
+    """An object named in the question file: an index (per index_base, as students answer) is
+    returned 0-based; a name is checked against the scene's and returned as written."""
+    if isinstance(v, int) and not isinstance(v, bool):
+        if base <= v < base + len(names):
+            return v - base
+        raise ValueError(
+            f"{where} = {v} is not an object of the scene (index_base = {base}: "
+            f"{_listing(names, base)})"
+        )
+    if isinstance(v, str) and v.strip():
+        if any(_norm_name(n) == _norm_name(v) for n in names):
+            return v
+        raise ValueError(
+            f"{where} = {v!r} names no object of the scene ({_listing(names, base)}; "
+            "an index is written as a number)"
+        )
+    raise ValueError(f"{where} must be an object's name or index, not {v!r}")
+
+
+def _is_miss(v: Any) -> bool:
+    from raycastd.grading.compare import is_miss_word  # compare imports this module
+
+    return (isinstance(v, str) or v == -1) and is_miss_word(v)
+
+
+def _expected(q: Question, names: list[str]) -> Any:
+    """The instructor's `expected`, checked and put in the form the reference takes (one value,
+    or one per item with `rays` / `points_at`), so that a wrong one stops the run here."""
+    n = len(q.rays or q.query_points)
+    if q.many:
+        if not isinstance(q.expected, list) or len(q.expected) != n:
+            raise ValueError(
+                f"expected must be a list of {n} values, one per "
+                f"{'ray' if q.rays else 'point'}, not {q.expected!r}"
+            )
+        return [_expected_one(q, v, names, f"expected[{i}]") for i, v in enumerate(q.expected)]
+    return _expected_one(q, q.expected, names, "expected")
+
+
+def _expected_one(q: Question, v: Any, names: list[str], where: str) -> Any:
+    ask = q.ask
+    if ask == "first_hit":  # (object index, name), or None for no hit
+        if _is_miss(v):
+            return None
+        if _has_mesh(q.scene):
+            # A mesh object becomes as many objects as its file has parts, named and numbered
+            # by the server: the document's list says neither, so the name is compared as
+            # written (index -1), and an index cannot be resolved here.
+            if isinstance(v, str) and v.strip() and not v.strip().isdigit():
+                return (-1, v)
+            raise ValueError(
+                f"{where} = {v!r}: in a scene with a mesh the objects are numbered by the server; "
+                "name the object instead"
+            )
+        if isinstance(v, str) and v.strip().isdigit():
+            v = int(v)
+        if isinstance(v, int) and not isinstance(v, bool):
+            i = _object(v, names, q.index_base, where)
+            return (i, names[i])  # type: ignore[index]
+        if isinstance(v, str):
+            _object(v, names, q.index_base, where)
+            return next((i, n) for i, n in enumerate(names) if _norm_name(n) == _norm_name(v))
+        raise ValueError(f'{where} must be an object\'s name or index, or "none", not {v!r}')
+    if ask == "t":  # a number; inf for a miss
+        if _is_miss(v):
+            return float("inf")
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            return float(v)
+        raise ValueError(f'{where} must be a number (or "none" for a miss), not {v!r}')
+    if ask in ("hit_point", "normal", "closest_point"):
+        if _is_miss(v):
+            return None
+        return _vec3(v, where)
+    if ask == "hits":
+        if isinstance(v, list) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v
+        ):
+            return [float(x) for x in v if not math.isinf(x)]
+        raise ValueError(f"{where} must be a list of numbers (every t along the ray), not {v!r}")
+    if ask in ("triangle_hit", "inside"):
+        if isinstance(v, bool):
+            return v
+        raise ValueError(f"{where} must be true or false, not {v!r}")
+    if ask == "ray_tree_points":
+        if isinstance(v, int) and not isinstance(v, bool) and v >= 0:
+            return v
+        raise ValueError(f"{where} must be an integer ≥ 0, not {v!r}")
+    raise ValueError(f"expected cannot be given for {ask} (its reference comes from raycastd only)")
 
 
 def _items(q: Mapping[str, Any], one: str, many: str, convert: Any) -> tuple[list, bool]:
