@@ -702,6 +702,13 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const Resour
 
     for (std::size_t i = 0; i < m.materials.size(); ++i) {
         out.materials.push_back(to_phong(m.materials[i]));
+        const std::vector<double>& e = m.materials[i].emissiveFactor;
+        if (m.materials[i].emissiveTexture.index >= 0 &&
+            std::any_of(e.begin(), e.end(), [](double c) { return c > 0.0; })) {
+            out.warnings.push_back("/materials/" + std::to_string(i) +
+                                   ": its emissiveTexture is not read, so its emission is left "
+                                   "out");
+        }
         out.material_names.push_back(m.materials[i].name.empty() ? "material " + std::to_string(i)
                                                                  : m.materials[i].name);
     }

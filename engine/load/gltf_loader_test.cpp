@@ -343,7 +343,8 @@ TEST(GltfLoader, MeshInstancesAreSeparatePartsWithNames) {
     EXPECT_EQ(m->parts[2].mesh.positions[1], Vec3d(6, 0, 0));
 }
 
-// Metallic-roughness → Phong: specular = mix(0.04, base, metallic), shininess =
+// Metallic-roughness → Phong (glTF 2.0 Appendix B): diffuse = base·(1 − metallic), specular =
+// mix(0.04, base, metallic) of which base·metallic is textured, ambient = 0.1·base, shininess =
 // 2/roughness⁴ − 2; a primitive without a material gets an appended default.
 TEST(GltfLoader, MaterialsMapToPhong) {
     Doc d;
@@ -356,13 +357,43 @@ TEST(GltfLoader, MaterialsMapToPhong) {
     ASSERT_TRUE(m.ok()) << m.status().message;
     ASSERT_EQ(m->materials.size(), 2u);
     const Material& mat = m->materials[0];
-    EXPECT_EQ(mat.diffuse, Vec3d(0.5, 0.25, 1));
+    EXPECT_EQ(mat.diffuse, Vec3d(0.25, 0.125, 0.5));
+    EXPECT_EQ(mat.ambient, Vec3d(0.05, 0.025, 0.1));
+    EXPECT_EQ(mat.textured_specular, Vec3d(0.25, 0.125, 0.5));
     EXPECT_NEAR(mat.specular.x, 0.5 * 0.04 + 0.5 * 0.5, 1e-15);
     EXPECT_NEAR(mat.specular.z, 0.5 * 0.04 + 0.5 * 1.0, 1e-15);
     EXPECT_NEAR(mat.shininess, 30.0, 1e-12);
     EXPECT_EQ(mat.emissive, Vec3d(1, 0, 0));
     EXPECT_EQ(m->material_names, (std::vector<std::string>{"half", "default"}));
     EXPECT_EQ(m->parts[0].mesh.triangle_material, (std::vector<std::uint32_t>{0, 1}));
+}
+
+// glTF's default material (metallic 1, roughness 1) is a rough metal: no diffuse, its base
+// colour all in the specular (it had been both, and a head-on textured Cube.gltf came out
+// white); and an emissive factor over an emissiveTexture, which is not read, is left out with a
+// warning rather than lighting the whole surface.
+TEST(GltfLoader, DefaultMetalHasNoDiffuseAndAnUnreadEmissiveTextureNoGlow) {
+    Doc d;
+    d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    auto m = load(d.json(
+        R"("materials":[{"pbrMetallicRoughness":{"baseColorFactor":[1,0.5,0.25,1]}},)"
+        R"({"emissiveFactor":[1,1,1],"emissiveTexture":{"index":0}},{"emissiveFactor":[1,0,0]}],)"
+        R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"material":0}]}],)"
+        R"("nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}])"));
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    ASSERT_EQ(m->materials.size(), 3u);
+    const Material& metal = m->materials[0];
+    EXPECT_EQ(metal.diffuse, Vec3d(0, 0, 0));
+    EXPECT_EQ(metal.specular, Vec3d(1, 0.5, 0.25));
+    EXPECT_EQ(metal.textured_specular, Vec3d(1, 0.5, 0.25));
+    EXPECT_EQ(metal.ambient, Vec3d(0.1, 0.05, 0.025));
+    EXPECT_EQ(metal.shininess, 1.0);
+    EXPECT_EQ(m->materials[1].emissive, Vec3d(0, 0, 0));
+    EXPECT_EQ(m->materials[2].emissive, Vec3d(1, 0, 0));
+    int unread = 0;
+    for (const std::string& w : m->warnings)
+        unread += w == "/materials/1: its emissiveTexture is not read, so its emission is left out";
+    EXPECT_EQ(unread, 1);
 }
 
 // A morph target at weight 0.5 moves the rest pose halfway (glTF 2.0 §3.7.2.2).
@@ -631,7 +662,10 @@ TEST(GltfLoader, BaseColorTextureFromADataUri) {
     ASSERT_TRUE(m->warnings.empty()) << m->warnings[0];
     const Material& mat = m->materials[0];
     ASSERT_TRUE(mat.texture);
-    EXPECT_EQ(mat.diffuse, Vec3d(1, 1, 0.5));  // the factor stays; the texel multiplies it
+    // The factor stays and the texel multiplies it: with glTF's default metallic 1, as the
+    // specular colour's base-colour share (the diffuse is zero).
+    EXPECT_EQ(mat.textured_specular, Vec3d(1, 1, 0.5));
+    EXPECT_EQ(mat.diffuse, Vec3d(0, 0, 0));
     EXPECT_EQ(mat.texture->image->width, 2);
     EXPECT_EQ(mat.texture->image->rgb, kQuad);
     EXPECT_TRUE(mat.texture->nearest);

@@ -57,11 +57,20 @@ Result<Transform> local_transform(const tinygltf::Node& node, int index) {
 // reflectance at normal incidence as F0 = mix(0.04, baseColor, metallic) and the microfacet
 // roughness as α = roughness². Walter et al., "Microfacet Models for Refraction through Rough
 // Surfaces" (EGSR 2007) eq. 33 relates a Beckmann α to the Phong exponent that gives the same
-// highlight width: n = 2/α² − 2, i.e. n = 2/roughness⁴ − 2. Hence:
-//   diffuse   = baseColor.rgb            (× the baseColorTexture at the hit: shade/whitted.cpp)
-//   ambient   = 0.1 · diffuse            (the engine's ambient-to-diffuse ratio)
+// highlight width: n = 2/α² − 2, i.e. n = 2/roughness⁴ − 2. The same appendix gives the
+// diffuse colour as c_diff = mix(baseColor, black, metallic): a metal has none, its colour is
+// all in F0. Hence:
+//   diffuse   = baseColor.rgb · (1 − metallic)
+//   ambient   = 0.1 · baseColor.rgb       (the engine's ambient-to-diffuse ratio, of the base
+//                                          colour: a metal's indirect light is its reflection)
 //   specular  = mix(0.04, baseColor.rgb, metallic)
 //   shininess = clamp(2/roughness⁴ − 2, 1, 1000)
+// and the baseColorTexture at a hit multiplies the diffuse, the ambient and the specular's
+// baseColor·metallic share (Material::textured_specular; shade/whitted.cpp). Until 2026-12-05
+// the diffuse was the whole base colour at every metallic: glTF's default material (metallic 1,
+// roughness 1) then had its base colour twice, as diffuse and as a shininess-1 specular lobe,
+// and a textured Cube.gltf seen head-on under the headlight came out white (a helper's review).
+// Metallic and roughness textures are not read: their factors stand for the whole surface.
 //   emissive  = emissiveFactor (× KHR_materials_emissive_strength)
 //   transparency = 1 − baseColor.a for alphaMode BLEND (alpha blending seen as see-through)
 // Defaults are glTF's (§5.22): baseColor 1, metallic 1, roughness 1.
@@ -75,9 +84,11 @@ Material to_phong(const tinygltf::Material& m) {
     const double metallic = clamp01(pbr.metallicFactor);
     const double roughness = clamp01(pbr.roughnessFactor);
     Material out;
-    out.diffuse = {base[0], base[1], base[2]};
-    out.ambient = out.diffuse * 0.1;
-    out.specular = Vec3d{0.04, 0.04, 0.04} * (1.0 - metallic) + out.diffuse * metallic;
+    const Vec3d base_rgb{base[0], base[1], base[2]};
+    out.diffuse = base_rgb * (1.0 - metallic);
+    out.ambient = base_rgb * 0.1;
+    out.textured_specular = base_rgb * metallic;
+    out.specular = Vec3d{0.04, 0.04, 0.04} * (1.0 - metallic) + out.textured_specular;
     const double r4 = roughness * roughness * roughness * roughness;
     out.shininess = r4 > 0.0 ? std::clamp(2.0 / r4 - 2.0, 1.0, 1000.0) : 1000.0;
     double emissive_strength = 1.0;
@@ -88,7 +99,10 @@ Material to_phong(const tinygltf::Material& m) {
             emissive_strength = v.GetNumberAsDouble();
         }
     }
-    if (m.emissiveFactor.size() == 3) {
+    // The factor multiplies the emissiveTexture (§3.9.3), which is not read: alone it would
+    // make the whole surface glow at the factor (MultiUVTest.gltf, factor 1 over a pattern,
+    // came out white). Left out; build_model says so in a warning.
+    if (m.emissiveFactor.size() == 3 && m.emissiveTexture.index < 0) {
         out.emissive = Vec3d{clamp01(m.emissiveFactor[0]), clamp01(m.emissiveFactor[1]),
                              clamp01(m.emissiveFactor[2])} *
                        emissive_strength;

@@ -19,8 +19,13 @@ struct Material {
     double ior = 1.0;           ///< index of refraction (Snell's law)
     Vec3d emissive{0.0, 0.0, 0.0};
     /// Base-colour texture (glTF baseColorTexture, OBJ map_Kd): where a mesh has texture
-    /// coordinates, its colour multiplies diffuse and ambient (docs/api.md, render). Null: none.
+    /// coordinates, its colour multiplies diffuse and ambient (docs/api.md, render), and
+    /// `textured_specular`'s share of the specular colour. Null: none.
     std::shared_ptr<const Texture> texture;
+    /// The part of `specular` that is the base colour, which the texture multiplies too: a
+    /// metal's reflectance is its base colour (glTF 2.0 Appendix B, F0 = mix(0.04, baseColor,
+    /// metallic): the share baseColor·metallic). Zero for every other source of materials.
+    Vec3d textured_specular{0.0, 0.0, 0.0};
 };
 
 }  // namespace raycastd::engine

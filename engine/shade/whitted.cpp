@@ -163,12 +163,14 @@ struct Whitted::Surface {
     const Hit& hit;
     const Material& m;
     std::uint32_t material;
-    // The material's ambient and diffuse colours times its texture's colour at the hit (its
-    // own where it has no texture). Held here rather than in a textured copy of the Material:
-    // copying one per hit (144 bytes and an atomic count on its texture's shared_ptr) had been
-    // a tenth of a Duck render's shading (perf, bench_render).
+    // The material's ambient and diffuse colours, and its specular colour's base-colour share,
+    // times its texture's colour at the hit (its own where it has no texture). Held here rather
+    // than in a textured copy of the Material: copying one per hit (144 bytes and an atomic count
+    // on its texture's shared_ptr) had been a tenth of a Duck render's shading (perf,
+    // bench_render).
     Vec3d ka;
     Vec3d kd;
+    Vec3d ks;
     Vec3d d;          ///< unit direction of the incoming ray
     Vec3d p;          ///< the hit point
     Vec3d ng;         ///< geometric normal, turned to face the ray (spawned origins move along it)
@@ -180,10 +182,13 @@ struct Whitted::Surface {
 Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) const {
     const std::uint32_t mi = material_of(hit);
     const Material& m = scene().materials[mi];
-    Vec3d ka = m.ambient, kd = m.diffuse;
+    Vec3d ka = m.ambient, kd = m.diffuse, ks = m.specular;
     if (const std::optional<Vec3d> t = texel(hit, m)) {
         ka = m.ambient * *t;
         kd = m.diffuse * *t;
+        // Only a metal's share of the specular colour is its base colour (Material).
+        if (is_nonzero(m.textured_specular))
+            ks = m.specular - m.textured_specular + m.textured_specular * *t;
     }
     const Vec3d d = normalize(ray.direction);
     const Vec3d ng = face_towards_ray(hit.normal, d);
@@ -195,6 +200,7 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
                    mi,
                    ka,
                    kd,
+                   ks,
                    d,
                    ray.at(hit.t),
                    ng,
@@ -425,7 +431,7 @@ Vec3d Whitted::headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) 
 }
 
 Vec3d Whitted::lit_by(const Surface& sp, const Vec3d& l, const Vec3d& intensity) const {
-    return phong_light(sp.kd, sp.m.specular, sp.m.shininess, sp.n, l, -sp.d, intensity,
+    return phong_light(sp.kd, sp.ks, sp.m.shininess, sp.n, l, -sp.d, intensity,
                        plan_.specular[sp.material])
         .sum();
 }

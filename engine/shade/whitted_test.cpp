@@ -254,7 +254,7 @@ TEST(Whitted, MeshesWithoutNormalsAreShadedWithComputedOnes) {
     EXPECT_LT(length(w.shading_normal(*cube) - Vec3d{0, 0, -1}), 1e-6);
 }
 
-TEST(Whitted, TextureColourMultipliesDiffuseAndAmbient) {
+TEST(Whitted, TextureColourMultipliesDiffuseAmbientAndAMetalsSpecular) {
     // A quad at z = 5 (two triangles) whose texture is a red texel left of u = 0.5 and a blue
     // one right of it (nearest), and a scene without lights: ambient 1.0 alone, so the colour
     // is ka · texel, exactly. The corner (u, v) are interpolated with the hit's barycentrics.
@@ -295,6 +295,31 @@ TEST(Whitted, TextureColourMultipliesDiffuseAndAmbient) {
     EXPECT_EQ(colour_at(-0.5, -0.7), Vec3d(0.5, 0, 0));
     EXPECT_EQ(colour_at(0.5, 0.6), Vec3d(0, 0, 1));
     EXPECT_EQ(colour_at(0.5, -0.6), Vec3d(0, 0, 1));
+    // A metal's reflectance is its base colour (Material::textured_specular): the texture
+    // multiplies that share of the specular colour and not the rest. One directional light
+    // head-on (N·L = R·V = 1) and no ambient, so the colour is ks, exactly: 0.25 + 1 · texel.
+    {
+        Scene metal = engine->scene();
+        Material& mm = metal.materials[1];
+        mm.ambient = mm.diffuse = Vec3d{0, 0, 0};
+        mm.specular = {1.25, 1.25, 1.25};
+        mm.textured_specular = {1, 1, 1};
+        mm.shininess = 1;
+        Light light;
+        light.type = LightType::directional;
+        light.direction = {0, 0, 1};
+        light.intensity = {1, 1, 1};
+        metal.lights.push_back(light);
+        auto shiny = prepare(std::move(metal));
+        const Whitted wm(*shiny, WhittedOptions{});
+        Ray r;
+        r.origin = {-0.5, 0.3, 0};
+        r.direction = {0, 0, 1};
+        RayCounts counts;
+        EXPECT_EQ(wm.radiance(r, counts), Vec3d(1.25, 0.25, 0.25));
+        r.origin = {0.5, 0.6, 0};
+        EXPECT_EQ(wm.radiance(r, counts), Vec3d(0.25, 0.25, 1.25));
+    }
     // Without texture coordinates the texture is not sampled: the material's own colour.
     Scene plain = engine->scene();
     auto bare = std::make_shared<TriangleMesh>(*mesh);
