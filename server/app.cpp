@@ -188,8 +188,9 @@ App::App(Config config)
         });
     threads_ = pick_connections(config_);
     max_concurrent_ = pick_max_concurrent(config_);
-    // Connections, deadlines, keep-alive and framing are HttpServer's (server/http/); the
-    // library still checks the body length against the limit for chunked bodies.
+    // Connections, deadlines, keep-alive and framing are HttpServer's (server/http/); a body's
+    // length, decoded and chunked ones included, is read_body()'s to bound (the library checks
+    // only a Content-Length against this, and HttpServer checks that first).
     http_.set_payload_max_length(config_.limits.max_body_bytes);
     install_handlers();
     install_routes();
@@ -212,6 +213,18 @@ void App::install_handlers() {
         r.open = true;
         r.start = std::chrono::steady_clock::now();
         r.metrics = &metrics_;
+        // cpp-httplib reads the body of a request no route of ours takes (inflating it without
+        // limit) before it answers 404: such a request is answered here, its body unread, as
+        // every body is read by a route of ours through read_body(). The methods are those it
+        // reads a body for.
+        const bool has_body = req.method == "POST" || req.method == "PUT" ||
+                              req.method == "PATCH" || req.method == "DELETE" ||
+                              req.method == "PRI";
+        if (has_body && !lists_method(allowed_methods(req.path), req.method)) {
+            res.status = 404;
+            answer_http_error(req, res);
+            return httplib::Server::HandlerResponse::Handled;
+        }
         return httplib::Server::HandlerResponse::Unhandled;
     });
     // Errors raised by httplib itself (no route, body over the limit, ...) get the same JSON
@@ -389,16 +402,123 @@ void App::on_get(const std::string& pattern, httplib::Server::Handler handler) {
     http_.Get(pattern, named_route(remember(pattern, "GET"), std::move(handler)));
 }
 
-void App::on_post(const std::string& pattern, httplib::Server::Handler handler) {
-    http_.Post(pattern, named_route(remember(pattern, "POST"), std::move(handler)));
+httplib::Server::HandlerWithContentReader App::reading_body(httplib::Server::Handler handler,
+                                                            Access access) {
+    // A content-reader route, not a plain one: cpp-httplib reads a plain route's body before
+    // calling it, inflating a Content-Encoding without limit, and before its token is checked.
+    return [this, access, handler = std::move(handler)](const httplib::Request& req,
+                                                        httplib::Response& res,
+                                                        const httplib::ContentReader& read) {
+        try {
+            if (access == Access::write_token)
+                require_write_token(req);
+            // The request is process_request's own (non-const) object, handed to a content
+            // reader as const: its body is filled in as the library's reader would have.
+            std::string& body = const_cast<httplib::Request&>(req).body;
+            if (!read_body(req, read, [&body](const char* data, std::size_t len) {
+                    body.append(data, len);
+                    return true;
+                }))
+                throw body_cut_off();
+        } catch (const ApiError& e) {
+            send_error(res, e);
+            return;
+        }
+        handler(req, res);
+    };
 }
 
-void App::on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler) {
-    http_.Post(pattern, named_route(remember(pattern, "POST"), std::move(handler)));
+void App::on_post(const std::string& pattern, httplib::Server::Handler handler, Access access) {
+    http_.Post(pattern,
+               named_route(remember(pattern, "POST"), reading_body(std::move(handler), access)));
 }
 
-void App::on_delete(const std::string& pattern, httplib::Server::Handler handler) {
-    http_.Delete(pattern, named_route(remember(pattern, "DELETE"), std::move(handler)));
+void App::on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler,
+                  Access access) {
+    httplib::Server::HandlerWithContentReader checked =
+        [this, access, handler = std::move(handler)](const httplib::Request& req,
+                                                     httplib::Response& res,
+                                                     const httplib::ContentReader& read) {
+            if (access == Access::write_token) {
+                try {
+                    require_write_token(req);
+                } catch (const ApiError& e) {
+                    send_error(res, e);
+                    return;
+                }
+            }
+            handler(req, res, read);
+        };
+    http_.Post(pattern, named_route(remember(pattern, "POST"), std::move(checked)));
+}
+
+void App::on_delete(const std::string& pattern, httplib::Server::Handler handler, Access access) {
+    http_.Delete(pattern, named_route(remember(pattern, "DELETE"),
+                                      reading_body(std::move(handler), access)));
+}
+
+bool App::read_body(const httplib::Request& req, const httplib::ContentReader& read,
+                    const std::function<bool(const char*, std::size_t)>& receiver) const {
+    // cpp-httplib would hand a multipart body to a multipart receiver, which no route has.
+    if (req.is_multipart_form_data()) {
+        throw ApiError(ErrorCode::unsupported_format,
+                       "a multipart/form-data body is not read: send the document or file "
+                       "itself as the body");
+    }
+    const std::uint64_t limit = config_.limits.max_body_bytes;
+    MemoryBudget::Lease& lease = HttpServer::body_lease();
+    enum class Stop { none, too_large, busy, refused };
+    Stop stop = Stop::none;
+    std::uint64_t got = 0;
+    const bool ok = read([&](const char* data, std::size_t len) {
+        // Counted as decoded: a 200 KB gzip body may inflate to 200 MB, and what it inflates to
+        // is what is held. Refusing stops the library's decompressor and its reading at once.
+        got += len;
+        if (got > limit) {
+            stop = Stop::too_large;
+            return false;
+        }
+        // The connection layer charged the Content-Length before the body was read; bytes past
+        // it (decoded, or a chunked body, which has none) are charged as they come.
+        if (got > lease.bytes()) {
+            const std::uint64_t step =
+                std::min(limit, (got + kBodyChargeStep - 1) / kBodyChargeStep * kBodyChargeStep);
+            if (!lease.bound() || !lease.resize(step)) {
+                stop = Stop::busy;
+                return false;
+            }
+        }
+        if (!receiver(data, len)) {
+            stop = Stop::refused;
+            return false;
+        }
+        return true;
+    });
+    switch (stop) {
+        case Stop::too_large:
+            throw ApiError(ErrorCode::too_large,
+                           "request body is over the configured limit of " + std::to_string(limit) +
+                               " bytes" +
+                               (req.has_header("Content-Encoding") ? " once decoded" : ""));
+        case Stop::busy:
+            throw ApiError(ErrorCode::busy,
+                           "request bodies in flight are at the server's limit of " +
+                               std::to_string(config_.limits.body_budget_bytes >> 20) +
+                               " MiB (--body-budget-mb); retry shortly");
+        case Stop::refused:
+            return false;
+        case Stop::none:
+            break;
+    }
+    if (ok)
+        HttpServer::body_read();
+    return ok;
+}
+
+ApiError App::body_cut_off() {
+    return ApiError(ErrorCode::invalid_request,
+                    "the request body ended before the end its Content-Length or chunked framing "
+                    "gives, or its Content-Encoding cannot be decoded");
 }
 
 std::string App::allowed_methods(const std::string& path) const {

@@ -28,6 +28,10 @@ namespace raycastd::server {
 /// health, info) takes none.
 enum class Work { light, heavy };
 
+/// Who may call a route: anyone, or (when the server has a --token) only a request with its
+/// bearer token, which is checked before a byte of the body is read.
+enum class Access { open, write_token };
+
 class App {
   public:
     explicit App(Config config);
@@ -52,12 +56,29 @@ class App {
     /// `(.*)`, which is all our paths need and all allowed_methods() reads. GET routes answer HEAD
     /// too.
     void on_get(const std::string& pattern, httplib::Server::Handler handler);
-    /// A POST route; cpp-httplib has read the body into req.body (up to --max-body-mb).
-    void on_post(const std::string& pattern, httplib::Server::Handler handler);
-    /// A POST route that reads its body itself (streamed into pooled buffers).
-    void on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler);
-    /// A DELETE route.
-    void on_delete(const std::string& pattern, httplib::Server::Handler handler);
+    /// A POST route; its body is in req.body, read by read_body() (up to --max-body-mb, decoded)
+    /// after the access check.
+    void on_post(const std::string& pattern, httplib::Server::Handler handler,
+                 Access access = Access::open);
+    /// A POST route that reads its body itself, through read_body() (streamed into pooled
+    /// buffers); called after the access check.
+    void on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler,
+                 Access access = Access::open);
+    /// A DELETE route; a body, if any, is read as on_post's.
+    void on_delete(const std::string& pattern, httplib::Server::Handler handler,
+                   Access access = Access::open);
+    /// Reads the request's body through `read` into `receiver` as it comes out of any
+    /// Content-Encoding (cpp-httplib inflates gzip, deflate and br): too_large as soon as the
+    /// decoded bytes pass --max-body-mb (nothing more is read or inflated), busy when bytes past
+    /// the head's Content-Length (decoded, or chunked) take --body-budget-mb over. True once the
+    /// body has been read to the end its framing gives; false when it was cut off (the client
+    /// stopped short of its Content-Length or last chunk) or cannot be decoded, or `receiver`
+    /// refused bytes: body_cut_off() is the error for the first two.
+    bool read_body(const httplib::Request& req, const httplib::ContentReader& read,
+                   const std::function<bool(const char*, std::size_t)>& receiver) const;
+    static ApiError body_cut_off();
+    /// Decoded or chunked bodies are charged to the body budget this many bytes at a time.
+    static constexpr std::uint64_t kBodyChargeStep = 1u << 20;
     /// The methods the routes serve for `path`, as an Allow header lists them ("GET, HEAD");
     /// empty when no route matches the path.
     std::string allowed_methods(const std::string& path) const;
@@ -120,6 +141,9 @@ class App {
     };
     void install_handlers();
     void install_routes();
+    /// `handler` behind the access check, its body read into req.body by read_body().
+    httplib::Server::HandlerWithContentReader reading_body(httplib::Server::Handler handler,
+                                                           Access access);
     /// Records the route (for Allow and for the metrics); its metrics route index.
     std::size_t remember(const std::string& pattern, const char* method);
     /// Fills in the API's error for a response httplib gave up on (no route, body too large,

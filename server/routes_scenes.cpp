@@ -54,16 +54,20 @@ std::string info_body(const SceneInfo& i) {
 }  // namespace
 
 void install_scene_routes(App& app) {
-    app.on_post("/v1/scenes", [&app](const httplib::Request& req, httplib::Response& res) {
-        app.handle(req, res, Work::heavy, [&] {
-            app.require_write_token(req);
-            SceneSource src{classify_scene_body(req.body, req.get_header_value("Content-Type")),
-                            req.body};
-            SceneRegistry::Added added = app.registry().add(src, app.models().scene_root_files());
-            send_json(res, info_body(added.info), added.created ? 201 : 200);
-            res.set_header("Location", "/v1/scenes/" + added.info.id);
-        });
-    });
+    // Writes: the token is checked before the body is read (App::on_post).
+    app.on_post(
+        "/v1/scenes",
+        [&app](const httplib::Request& req, httplib::Response& res) {
+            app.handle(req, res, Work::heavy, [&] {
+                SceneSource src{classify_scene_body(req.body, req.get_header_value("Content-Type")),
+                                req.body};
+                SceneRegistry::Added added =
+                    app.registry().add(src, app.models().scene_root_files());
+                send_json(res, info_body(added.info), added.created ? 201 : 200);
+                res.set_header("Location", "/v1/scenes/" + added.info.id);
+            });
+        },
+        Access::write_token);
     app.on_get("/v1/scenes", [&app](const httplib::Request& req, httplib::Response& res) {
         app.handle(req, res, Work::light, [&] {
             std::string out = "{\"scenes\":[";
@@ -89,13 +93,13 @@ void install_scene_routes(App& app) {
     app.on_delete(R"(/v1/scenes/([A-Za-z0-9_]+))",
                   [&app](const httplib::Request& req, httplib::Response& res) {
                       app.handle(req, res, Work::light, [&] {
-                          app.require_write_token(req);
                           const std::string id = req.matches[1];
                           if (!app.registry().remove(id))
                               throw App::scene_not_found(id);
                           send_json(res, "{\"id\":\"" + id + "\",\"deleted\":true}");
                       });
-                  });
+                  },
+                  Access::write_token);
 }
 
 }  // namespace raycastd::server

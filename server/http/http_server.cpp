@@ -26,6 +26,23 @@ thread_local int t_current_sock = -1;
 /// The answer lease of the request being served on this thread (HttpServer::answer_lease).
 thread_local MemoryBudget::Lease t_answer_lease;
 
+/// The body lease of the request being served on this thread (HttpServer::body_lease).
+thread_local MemoryBudget::Lease t_body_lease;
+
+/// What the connection loop knows of the request being served on this thread, for the
+/// answer's head (HttpServer::finish_answer_head) and for whether the connection goes on.
+struct ServedRequest {
+    const std::uint64_t* consumed = nullptr;  ///< the connection's bytes read so far
+    std::uint64_t end = 0;                    ///< where its head and Content-Length body end
+    bool chunked = false;
+    bool chunked_read = false;  ///< HttpServer::body_read() said its chunked body was all read
+    bool close = false;         ///< its answer said Connection: close
+    /// Whether the whole request has been read, so that the next one starts where reading
+    /// stopped.
+    bool complete() const { return *consumed >= end && (!chunked || chunked_read); }
+};
+thread_local ServedRequest* t_served = nullptr;
+
 /// Reads are taken from the socket this many bytes at a time (cpp-httplib reads heads a byte
 /// at a time and bodies 4 KiB at a time, so the stream buffers).
 constexpr std::size_t kReadChunk = 64u << 10;
@@ -207,6 +224,7 @@ class HttpServer::ConnStream : public httplib::Stream {
     void set_read_deadline(Clock::time_point t) { deadline_ = t; }
     /// Bytes handed to cpp-httplib by read() so far.
     std::uint64_t consumed() const { return consumed_; }
+    const std::uint64_t& consumed_ref() const { return consumed_; }
     bool timed_out() const { return timed_out_; }
     /// Set when an answer was sent before the whole request was read (close with lingering).
     bool linger = false;
@@ -247,6 +265,24 @@ HttpServer::HttpServer(ConnectionLimits limits)
             threads, [this] { return registry_.evict_oldest(); },
             [this] { registry_.close_all_evictable(); });
     };
+    set_post_routing_handler(
+        [this](const httplib::Request&, httplib::Response& res) { finish_answer_head(res); });
+}
+
+void HttpServer::finish_answer_head(httplib::Response& res) {
+    // cpp-httplib adds it to HEAD answers; Range is never applied (RequestHead::rewritten).
+    res.headers.erase("Accept-Ranges");
+    // The library's own refusals (a request line it cannot parse) come before any handler.
+    if (!res.has_header("X-Request-Id"))
+        res.set_header("X-Request-Id", next_request_id());
+    // The library says keep-alive unless the client asked to close; the loop closes the
+    // connection after a request it has not read to its end, and the answer must say so.
+    if (t_served && !t_served->complete())
+        t_served->close = true;
+    if (t_served && t_served->close) {
+        res.headers.erase("Keep-Alive");
+        res.set_header("Connection", "close");
+    }
 }
 
 HttpServer::~HttpServer() = default;
@@ -265,6 +301,15 @@ ClientProbe HttpServer::current_client() {
 
 MemoryBudget::Lease& HttpServer::answer_lease() {
     return t_answer_lease;
+}
+
+MemoryBudget::Lease& HttpServer::body_lease() {
+    return t_body_lease;
+}
+
+void HttpServer::body_read() {
+    if (t_served)
+        t_served->chunked_read = true;
 }
 
 HttpServer::Stats HttpServer::stats() const {
@@ -331,25 +376,23 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
             return;
         }
         const RequestHead& head = *check.head;
-        if (head.form_content_type) {
-            strm.replace_unread(head.form_content_type->first, head.form_content_type->second,
-                                "text/plain");
+        std::size_t head_bytes = head.head_bytes;
+        if (head.rewritten) {
+            strm.replace_unread(0, head.head_bytes, *head.rewritten);
+            head_bytes = head.rewritten->size();
         }
-        // The body budget: admitted when it fits, or when nothing else is in flight.
+        // The body budget: admitted when it fits, or when nothing else is in flight. The lease
+        // is bound even for no length, for a reader whose body outgrows it (body_lease()).
         const std::uint64_t body = head.content_length;
-        MemoryBudget::Lease body_lease;
-        if (body > 0) {
-            auto granted = bodies_.try_acquire(body);
-            if (!granted) {
-                write_error(strm, 503, ErrorCode::busy,
-                            "request bodies in flight are at the server's limit of " +
-                                std::to_string(limits_.body_budget_bytes >> 20) +
-                                " MiB; retry shortly",
-                            1);
-                return;
-            }
-            body_lease = std::move(*granted);
+        auto granted = bodies_.try_acquire(body);
+        if (!granted) {
+            write_error(strm, 503, ErrorCode::busy,
+                        "request bodies in flight are at the server's limit of " +
+                            std::to_string(limits_.body_budget_bytes >> 20) + " MiB; retry shortly",
+                        1);
+            return;
         }
+        t_body_lease = std::move(*granted);
         registry_.set_phase(h, ConnPhase::active);
         const auto body_time = std::chrono::milliseconds(static_cast<long long>(
             1000.0 * static_cast<double>(body) /
@@ -357,24 +400,31 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         strm.set_read_deadline(Clock::now() + limits_.body_grace + body_time);
         const bool last = served + 1 == limits_.max_requests_per_connection || stopping();
         bool closed = false;
-        const std::uint64_t request_end = strm.consumed() + head.head_bytes + body;
+        ServedRequest served_request;
+        served_request.consumed = &strm.consumed_ref();
+        served_request.end = strm.consumed() + head_bytes + body;
+        served_request.chunked = head.chunked;
+        t_served = &served_request;
         t_current_sock = strm.socket();
         const bool ok = process_request(strm, last, closed, nullptr);
         t_current_sock = -1;
+        t_served = nullptr;
         // The answer has been written (or given up on): its memory is free.
         const std::uint64_t answered = t_answer_lease.bytes();
         t_answer_lease = MemoryBudget::Lease();
         // A handler may answer before it has read the whole body (503 busy on a streamed
         // binary batch): the rest of the body would then be read as the next request. Such a
         // connection ends here (its answer said nothing of keep-alive that the client may rely
-        // on: RFC 9112 §9.6 lets a server close after any response). A chunked body's end is
-        // not tracked, so its connection ends too.
-        const bool body_unread = strm.consumed() < request_end || head.chunked;
+        // on: RFC 9112 §9.6 lets a server close after any response; the answer said
+        // Connection: close, finish_answer_head). A chunked body's end is known only from the
+        // handler that read it (body_read()); otherwise its connection ends too.
+        const bool body_unread = !served_request.complete() || served_request.close;
         if (body_unread)
             strm.linger = true;
         strm.set_read_deadline(Clock::time_point::max());
-        body_lease.release();
-        if (std::max(body, answered) >= kTrimAfterBodyBytes)
+        const std::uint64_t received = std::max(body, t_body_lease.bytes());
+        t_body_lease = MemoryBudget::Lease();
+        if (std::max(received, answered) >= kTrimAfterBodyBytes)
             ::malloc_trim(0);
         if (strm.timed_out())
             timeouts_.fetch_add(1);

@@ -20,6 +20,12 @@
 //   * a form-urlencoded Content-Type (what `curl -d` sends) is read as a plain body: the
 //     library caps such bodies at 8 KiB (a compile-time constant of the Debian build), and no
 //     raycastd endpoint takes a form;
+//   * Range headers are dropped before the library sees them (RequestHead::rewritten): it cut
+//     or multiplied any answer by them, and no raycastd answer is served in parts; no answer
+//     says Accept-Ranges;
+//   * an answer says Connection: close whenever the connection is to close after it (a body
+//     left unread, a chunked body not read to its end through body_read()), and every answer,
+//     the library's own refusals included, carries an X-Request-Id;
 //   * a half-closed client (it shut down its sending side after the request) still gets its
 //     answer: the library's writability test took end-of-file for a dead peer and dropped it;
 //   * the peer of the request being served can be probed from any thread (ClientProbe), so
@@ -97,6 +103,15 @@ class HttpServer : public httplib::Server {
     /// connection loop releases it once that request's answer has been written (or has
     /// failed), streamed answers included. Unbound, and unused, on other threads.
     static MemoryBudget::Lease& answer_lease();
+    /// The body lease of the request served on the calling thread: its Content-Length from the
+    /// head to the answer's last byte, bound to the body budget (0 bytes for a chunked body),
+    /// for a reader whose body outgrows it (a Content-Encoding inflates it, a chunked body has
+    /// no length) to grow. Unbound on other threads.
+    static MemoryBudget::Lease& body_lease();
+    /// Called by a handler that has read the body of the request served on the calling thread
+    /// to its end through its framing: a chunked body's end is known only so (Content-Length
+    /// bodies are checked by their length), and its connection stays open only then.
+    static void body_read();
     /// "rq_<n>": a fresh id for a response's X-Request-Id.
     std::string next_request_id() { return "rq_" + std::to_string(next_id_.fetch_add(1)); }
 
@@ -119,6 +134,10 @@ class HttpServer : public httplib::Server {
     /// Answers an error of this layer as JSON with Connection: close.
     void write_error(ConnStream& strm, int status, ErrorCode code, const std::string& message,
                      int retry_after_s = 0);
+    /// The last word on an answer's head (the post-routing handler, so that a subclass or user
+    /// must not replace it): no Accept-Ranges, an X-Request-Id, Connection: close when the
+    /// connection will close after it.
+    void finish_answer_head(httplib::Response& res);
     bool stopping() const { return svr_sock_ == INVALID_SOCKET; }
 
     ConnectionLimits limits_;

@@ -96,12 +96,28 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
         return true;
     };
 
+    // The head as cpp-httplib is to read it (RequestHead::rewritten), and whether it differs.
+    std::string out;
+    out.reserve(head_bytes + 2);
+    bool changed = false;
+    const auto keep = [&](std::string_view l) {
+        out.append(l.data(), l.size()).append("\r\n");
+        // A line kept as received ends in CRLF right after it.
+        const std::size_t end = static_cast<std::size_t>(l.data() - all.data()) + l.size();
+        if (end >= all.size() || all[end] != '\r')
+            changed = true;
+    };
+
     std::string_view line;
     if (!next_line(line))
         return bad("no request line");
     // RFC 9112 §2.2: a server SHOULD ignore at least one empty line before the request line.
-    if (line.empty() && !next_line(line))
-        return bad("no request line");
+    if (line.empty()) {
+        changed = true;
+        if (!next_line(line))
+            return bad("no request line");
+    }
+    keep(line);
     const std::size_t sp1 = line.find(' ');
     const std::size_t sp2 = sp1 == std::string_view::npos ? sp1 : line.find(' ', sp1 + 1);
     if (sp2 == std::string_view::npos || line.find(' ', sp2 + 1) != std::string_view::npos)
@@ -125,9 +141,16 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
 
     std::optional<std::string_view> content_length;
     bool transfer_encoding = false;
+    bool content_encoding = false;
     while (next_line(line) && !line.empty()) {
         if (line.front() == ' ' || line.front() == '\t')
             return bad("obsolete line folding in the headers");
+        // cpp-httplib refuses a longer line with a bare 400 of its own.
+        if (line.size() + 2 > kMaxHeaderLineBytes) {
+            return refuse(431, ErrorCode::too_large,
+                          "a header line is over the limit of " +
+                              std::to_string(kMaxHeaderLineBytes) + " bytes");
+        }
         const std::size_t colon = line.find(':');
         if (colon == std::string_view::npos)
             return bad("a header line without a colon");
@@ -136,6 +159,29 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
         if (!is_token(name))
             return bad("a header name that is not a token");
         const std::string_view value = trim(line.substr(colon + 1));
+        if (iequals(name, "Range")) {
+            changed = true;
+            continue;
+        }
+        if (iequals(name, "Content-Encoding")) {
+            // What cpp-httplib decodes (App::read_body bounds the decoded bytes), or nothing; it
+            // would take any other coding, or the second of two, for none and read the coded
+            // bytes as the body.
+            std::string coding(value);
+            std::transform(coding.begin(), coding.end(), coding.begin(), [](char c) {
+                return static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            });
+            if (coding != "gzip" && coding != "deflate" && coding != "br" && coding != "identity")
+                return bad("Content-Encoding \"" + std::string(value.substr(0, 40)) +
+                           "\" is not read; send gzip, deflate, br or identity");
+            if (content_encoding)
+                return bad("two Content-Encoding headers");
+            content_encoding = true;
+            if (coding != value)
+                changed = true;
+            out.append(name.data(), name.size()).append(": ").append(coding).append("\r\n");
+            continue;
+        }
         if (iequals(name, "Content-Length")) {
             if (value.empty() || !std::all_of(value.begin(), value.end(),
                                               [](char c) { return c >= '0' && c <= '9'; })) {
@@ -152,11 +198,19 @@ HeadCheck check_request_head(std::string_view bytes, std::size_t head_bytes,
         } else if (iequals(name, "Content-Type")) {
             const std::string_view media = trim(value.substr(0, value.find(';')));
             if (iequals(media, "application/x-www-form-urlencoded")) {
-                const std::size_t at = static_cast<std::size_t>(value.data() - bytes.data());
-                head.form_content_type = std::make_pair(at, value.size());
+                changed = true;
+                out.append(name.data(), name.size()).append(": text/plain\r\n");
+                continue;
             }
         }
+        keep(line);
     }
+    // The blank line that ends the head: a bare LF one too.
+    if (pos < 2 || all[pos - 2] != '\r')
+        changed = true;
+    out.append("\r\n");
+    if (changed)
+        head.rewritten = std::move(out);
     if (transfer_encoding && content_length)
         return bad("both Content-Length and Transfer-Encoding");
     head.chunked = transfer_encoding;

@@ -37,10 +37,19 @@ struct RequestHead {
     std::string target;
     std::uint64_t content_length = 0;  ///< 0 when absent
     bool chunked = false;              ///< Transfer-Encoding: chunked
-    /// Where the value of a `Content-Type: application/x-www-form-urlencoded` header stands in
-    /// the head (offset, length), so the caller can replace it; nullopt when there is none.
-    std::optional<std::pair<std::size_t, std::size_t>> form_content_type;
+    /// The head as cpp-httplib is to read it, when that differs from the bytes received
+    /// (nullopt: as received). Every line ends in CRLF (cpp-httplib 0.11 takes a bare LF for
+    /// no line end and answered such a head a bare 400); Range headers are dropped, since
+    /// raycastd serves no partial content and cpp-httplib cut or multiplied any answer by them
+    /// (a 200 cut short, one copy of the answer per range); a form-urlencoded Content-Type
+    /// reads text/plain (the library caps form bodies at 8 KiB; no endpoint takes a form); a
+    /// Content-Encoding reads lower case, as the library compares it.
+    std::optional<std::string> rewritten;
 };
+
+/// The longest header line cpp-httplib 0.11 reads, terminator included (its
+/// CPPHTTPLIB_HEADER_MAX_LENGTH); a longer one is refused here with 431.
+constexpr std::size_t kMaxHeaderLineBytes = 8192;
 
 /// The length of the head at the start of `bytes` (through its blank line), or nullopt when
 /// it is not complete yet. Accepts bare LF line ends as RFC 9112 §2.2 allows.

@@ -81,15 +81,50 @@ TEST(RequestHead, LimitsTheUrlAndTheHead) {
     EXPECT_EQ(head.error.status, 431);
 }
 
-TEST(RequestHead, FindsAFormContentTypeToReplace) {
-    const std::string h =
-        "POST / HTTP/1.1\r\nContent-Type: application/x-www-form-urlencoded\r\n\r\n";
-    const auto c = check(h);
-    ASSERT_TRUE(c.head && c.head->form_content_type);
-    EXPECT_EQ(h.substr(c.head->form_content_type->first, c.head->form_content_type->second),
-              "application/x-www-form-urlencoded");
+TEST(RequestHead, ReadsAFormContentTypeAsPlainText) {
+    const auto c =
+        check("POST / HTTP/1.1\r\nContent-Type: application/x-www-form-urlencoded\r\n\r\n");
+    ASSERT_TRUE(c.head && c.head->rewritten);
+    EXPECT_EQ(*c.head->rewritten, "POST / HTTP/1.1\r\nContent-Type: text/plain\r\n\r\n");
     EXPECT_FALSE(
-        check("POST / HTTP/1.1\r\nContent-Type: application/json\r\n\r\n").head->form_content_type);
+        check("POST / HTTP/1.1\r\nContent-Type: application/json\r\n\r\n").head->rewritten);
+}
+
+TEST(RequestHead, DropsRangeHeaders) {
+    // cpp-httplib cut or multiplied any answer by a Range (one copy of it per range).
+    const auto c = check(
+        "GET /v1/info HTTP/1.1\r\nHost: x\r\nRange: bytes=0-,0-,0-\r\nrange: "
+        "bytes=0-1\r\nAccept: */*\r\n\r\n");
+    ASSERT_TRUE(c.head && c.head->rewritten);
+    EXPECT_EQ(*c.head->rewritten, "GET /v1/info HTTP/1.1\r\nHost: x\r\nAccept: */*\r\n\r\n");
+}
+
+TEST(RequestHead, EndsEveryLineInCrlfForTheLibrary) {
+    const auto c = check("\r\nGET /v1/health HTTP/1.1\nHost: x\r\nConnection: close\n\n");
+    ASSERT_TRUE(c.head && c.head->rewritten);
+    EXPECT_EQ(*c.head->rewritten,
+              "GET /v1/health HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+}
+
+TEST(RequestHead, RefusesAHeaderLineTheLibraryWouldNotRead) {
+    const auto ok = check("GET / HTTP/1.1\r\nCookie: " + std::string(8000, 'a') + "\r\n\r\n");
+    EXPECT_TRUE(ok.head);
+    const auto c = check("GET / HTTP/1.1\r\nCookie: " + std::string(8300, 'a') + "\r\n\r\n");
+    ASSERT_FALSE(c.head);
+    EXPECT_EQ(c.error.status, 431);
+    EXPECT_EQ(c.error.code, ErrorCode::too_large);
+}
+
+TEST(RequestHead, TakesOnlyTheContentCodingsTheLibraryDecodes) {
+    const auto gz = check("POST / HTTP/1.1\r\nContent-Encoding: GZip\r\nContent-Length: 3\r\n\r\n");
+    ASSERT_TRUE(gz.head && gz.head->rewritten);
+    EXPECT_EQ(*gz.head->rewritten,
+              "POST / HTTP/1.1\r\nContent-Encoding: gzip\r\nContent-Length: 3\r\n\r\n");
+    EXPECT_TRUE(check("POST / HTTP/1.1\r\nContent-Encoding: br\r\n\r\n").head);
+    EXPECT_EQ(check("POST / HTTP/1.1\r\nContent-Encoding: compress\r\n\r\n").error.status, 400);
+    EXPECT_FALSE(
+        check("POST / HTTP/1.1\r\nContent-Encoding: gzip\r\nContent-Encoding: gzip\r\n\r\n").head);
+    EXPECT_FALSE(check("POST / HTTP/1.1\r\nContent-Encoding: gzip, br\r\n\r\n").head);
 }
 
 }  // namespace

@@ -90,25 +90,6 @@ std::shared_ptr<StreamedBatch> plan_streamed(App& app, const httplib::Request& r
     }
 }
 
-/// Reads the body into `stream` when there is one, else appends it to `body` (too_large past
-/// the body limit).
-void read_body(const httplib::ContentReader& read, std::size_t limit, std::string& body,
-               StreamedBatch* stream) {
-    bool over = false;
-    read([&](const char* data, std::size_t len) {
-        if (stream)
-            return stream->append(data, len);
-        if (body.size() + len > limit) {
-            over = true;
-            return false;
-        }
-        body.append(data, len);
-        return true;
-    });
-    if (over)
-        throw ApiError(ErrorCode::too_large, "request body is over the configured limit");
-}
-
 /// POST /v1/scenes/{id}/intersect, on one of the four paths of the file comment.
 void answer_registered(App& app, const httplib::Request& req, httplib::Response& res,
                        const httplib::ContentReader& read, const RequestCancel& cancel) {
@@ -122,7 +103,14 @@ void answer_registered(App& app, const httplib::Request& req, httplib::Response&
     // Refused before a byte of the body is read: the connection then closes (http_server.h).
     if (stream)
         app.charge_answer(stream->answer_bytes());
-    read_body(read, limits.max_body_bytes, scratch->body, stream.get());
+    // Bounded as decoded (a gzip body), and never taken for whole when cut off: a streamed
+    // batch's finish() names how short it fell, any other batch is refused here.
+    const bool complete = app.read_body(req, read, [&](const char* data, std::size_t len) {
+        if (stream)
+            return stream->append(data, len);
+        scratch->body.append(data, len);
+        return true;
+    });
     if (stream) {
         // A client gone mid-upload, or the time limit passed while the body arrived.
         if (cancel.token().cancelled()) {
@@ -135,6 +123,8 @@ void answer_registered(App& app, const httplib::Request& req, httplib::Response&
         send_streamed_answer(std::move(stream), app.extend_work_slot(), res);
         return;
     }
+    if (!complete)
+        throw App::body_cut_off();
     auto engine = app.scene_or_404(req.matches[1]);
     if (is_binary(req)) {
         BinaryQuery q = parse_binary_query(req);
