@@ -86,8 +86,8 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
 /// path the model gives, relative to the model, normalised as a scene-root path is ("./a\b"
 /// and "a/b" are one file; an absolute path, a scheme or a ".." above the model is refused, as
 /// for `uri`). Their bytes count against the body limit like the rest of the document.
-/// A path an inline model gives (or a `files` key), as `files` holds it: Windows separators
-/// turned into '/', then normalised as a scene-root path is (uri_resolver.h).
+/// A path an inline model gives (or a `files` key, or a `uri`), as `files` holds it: Windows
+/// separators turned into '/', then normalised as a scene-root path is (uri_resolver.h).
 engine::Result<std::string> inline_file_path(std::string path) {
     std::replace(path.begin(), path.end(), '\\', '/');
     return normalize_relative(path);
@@ -213,7 +213,9 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         engine::ResourceReader resources = engine::no_resources();
         if (uri) {
             const std::string u = read_string(*uri, path + "/uri", ErrorCode::invalid_scene);
-            auto norm = normalize_relative(u);
+            // Windows separators too, as for `files` keys (docs/api.md: "spider\spider.obj"
+            // had been refused as naming no file, though the docs said it was normalised).
+            auto norm = inline_file_path(u);
             if (!norm.ok())
                 throw ApiError(ErrorCode::invalid_scene, norm.status().message, path + "/uri");
             auto content = files(*norm);
@@ -282,6 +284,9 @@ engine::Scene scene_from_document(const Json& doc, const std::string& prefix,
         texture_pixels += std::min(decoded_texture_pixels(model), texture_budget - texture_pixels);
         if (const Json* t = member(obj, "transform")) {
             engine::apply_transform(model, parse_transform(*t, path + "/transform"));
+            // "rotate" for rotate_deg, "matrix": ignored, so said (a helper's review found
+            // them silent, while a typo one level up was reported).
+            warn_unknown_keys(*t, path + "/transform", {"translate", "rotate_deg", "scale"}, scene);
         }
         std::uint32_t fallback = 0;
         if (const Json* m = member(obj, "material"); m && m->is_string()) {

@@ -9,14 +9,8 @@
 
 namespace raycastd::server {
 
-namespace {
-
-using engine::Scene;
-using engine::Vec3d;
-constexpr ErrorCode kInvalid = ErrorCode::invalid_scene;
-
 void warn_unknown_keys(const Json& j, const std::string& path,
-                       std::initializer_list<const char*> known, Scene& scene) {
+                       std::initializer_list<const char*> known, engine::Scene& scene) {
     for (auto it = j.begin(); it != j.end(); ++it) {
         if (std::none_of(known.begin(), known.end(),
                          [&](const char* k) { return it.key() == k; })) {
@@ -24,6 +18,12 @@ void warn_unknown_keys(const Json& j, const std::string& path,
         }
     }
 }
+
+namespace {
+
+using engine::Scene;
+using engine::Vec3d;
+constexpr ErrorCode kInvalid = ErrorCode::invalid_scene;
 
 double read_in_range(const Json& obj, const char* key, const std::string& path, double fallback,
                      double lo, double hi, const char* what) {

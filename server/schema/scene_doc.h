@@ -5,6 +5,7 @@
 // listed in the scene's warnings, so a typo such as "difuse" does not pass unnoticed.
 
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +24,11 @@ using MeshObjectLoader = std::function<std::shared_ptr<const engine::TriangleMes
 /// A camera object {position, look_at, up, fov_y_deg} (defaults for what is missing); errors
 /// are `code` (invalid_scene in documents, invalid_request in render requests) with pointers.
 engine::Camera parse_camera(const Json& j, const std::string& path, ErrorCode code);
+
+/// Adds "unknown key <path>/<key> ignored" to the scene's warnings for each key of object `j`
+/// not in `known` (docs/api.md: unknown keys are not errors, but typos must not pass silently).
+void warn_unknown_keys(const Json& j, const std::string& path,
+                       std::initializer_list<const char*> known, engine::Scene& scene);
 
 /// The summary's name of a default view: "-z" or "+z", the side of the bounds the default
 /// camera stands on (docs/api.md, "POST /v1/scenes").

@@ -381,6 +381,20 @@ TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
             "transform":{"rotate_deg":[0,90,0],"scale":[1,3,0.5]}}]})",
                                 201);
     EXPECT_NEAR(pivot_off_axis(turned).first, 0.0, 1e-9);
+    EXPECT_TRUE(turned.at("warnings").empty()) << turned.at("warnings").dump();
+    // A typo inside the transform is said, as one anywhere else in the document is.
+    const Json typo = post_ok("/v1/scenes",
+                              R"({"objects":[{"type":"mesh","uri":"Duck/glTF-Binary/Duck.glb",
+            "transform":{"rotate":[0,90,0],"matrix":[1]}}]})",
+                              201);
+    EXPECT_EQ(typo.at("warnings"), Json::array({"unknown key /objects/0/transform/matrix ignored",
+                                                "unknown key /objects/0/transform/rotate ignored"}))
+        << typo.at("warnings").dump();
+    // A uri written with Windows separators names the same file (docs/api.md).
+    const Json windows =
+        post_ok("/v1/scenes",
+                R"({"objects":[{"type":"mesh","uri":"Duck\\glTF-Binary\\.\\Duck.glb"}]})", 201);
+    EXPECT_EQ(windows.at("triangles"), duck.at("triangles"));
     EXPECT_EQ(duck.at("default_view"), "+z");
     Json bunny = post_ok("/v1/scenes", read_file(kModels / "stanford-bunny/stanford-bunny.obj"),
                          201, "model/obj");
