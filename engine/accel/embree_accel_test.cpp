@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/accel/linear_accel.h"
+#include "engine/geometry/triangle.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -224,8 +225,9 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
             ++hits;
             EXPECT_EQ(one->object, packed[i].object);
             if (one->primitive != packed[i].primitive) {
-                // A ray exactly on a shared edge: Embree's packet and single-ray kernels may
-                // report either triangle (only the exact path applies the tie rule).
+                // A ray exactly on a shared edge: fast's packet and single-ray kernels may
+                // report either triangle (Embree's own order); refined and exact apply the
+                // tie rule (RefinedTiesGoToTheLowerObjectThenPrimitive).
                 ++edge_ties;
                 EXPECT_LE(std::abs(one->t - packed[i].t), one->t_err + packed[i].t_err) << i;
                 continue;
@@ -234,6 +236,9 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
             EXPECT_EQ(one->normal, packed[i].normal);
         }
         EXPECT_LT(edge_ties, 64);
+        if (p == Precision::refined) {
+            EXPECT_EQ(edge_ties, 0);
+        }
         EXPECT_GT(hits, 1500);
         EXPECT_FALSE(packed[5].valid());
         EXPECT_TRUE(packed[40].valid());
@@ -362,6 +367,96 @@ TEST(EmbreeAccel, RefinedFindsTrianglesFloatMissesAmongManySpheres) {
     EXPECT_GT(float_misses, 0) << "no ray exercised the confirmation";
     std::printf("[ info ] %d of %d rays just inside the edges missed in float\n", float_misses,
                 rays);
+}
+
+// Exact ties in t go to the lower object, then to the lower primitive (API.md): at refined as at
+// exact and in the linear scan, one ray at a time and in packets. Duplicated meshes (every face
+// tied with its copy), and rays aimed at shared vertices, at edges (a face's diagonal too) and at
+// faces, from outside and from inside, on cubes (axis aligned and tilted) and icospheres, each
+// scene above 16 triangles so that Embree answers. Until 2026-12-05 refined's hit filter kept
+// whichever candidate Embree offered last at the same float t: object 1 on two identical cubes,
+// and the higher-numbered triangle at a shared edge or vertex.
+TEST(EmbreeAccel, RefinedTiesGoToTheLowerObjectThenPrimitive) {
+    auto tilted = [](Object o) {
+        auto mesh = std::make_shared<TriangleMesh>(*o.mesh);
+        const Vec3d ex = normalize(Vec3d{1, 0.3, -0.2});
+        const Vec3d ey = normalize(cross(Vec3d{0.1, 0.4, 1}, ex));
+        const Vec3d ez = cross(ex, ey);
+        for (Vec3d& p : mesh->positions)
+            p = Vec3d{0.2, -0.1, 0.3} + ex * p.x + ey * p.y + ez * p.z;
+        o.mesh = std::move(mesh);
+        return o;
+    };
+    std::vector<std::pair<const char*, Scene>> scenes;
+    auto add = [&](const char* name, std::vector<Object> objects) {
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects = std::move(objects);
+        scenes.emplace_back(name, std::move(s));
+    };
+    const Object cube = testing::cube_object(-1, 1);
+    const Object ico = testing::icosphere_object(2, {0.3, -0.2, 0.1}, 1.7);
+    add("two cubes", {cube, cube});
+    add("a cube and a far icosphere", {cube, testing::icosphere_object(1, {6, 6, 6}, 0.5)});
+    add("two tilted cubes", {tilted(cube), tilted(cube)});
+    add("two icospheres", {ico, ico});
+    for (auto& [name, scene] : scenes) {
+        SCOPED_TRACE(name);
+        Built b = build(scene);
+        ASSERT_TRUE(b.accel);
+        const Scene& sc = *b.scene;
+        const TriangleMesh& mesh = *sc.objects[0].mesh;
+        const Vec3d centre = sc.bounds().center();
+        std::mt19937_64 rng(23);
+        std::uniform_real_distribution<double> u(-1, 1);
+        std::vector<Ray> rays = {{{0.1, 0.2, -2}, {0, 0, 1}}, {{0, 0, -2}, {0, 0, 1}}};
+        for (int x = -2; x <= 2; ++x)
+            for (int y = -2; y <= 2; ++y)
+                rays.push_back(Ray{{0.5 * x, 0.5 * y, -3}, {0, 0, 1}});
+        for (std::size_t t = 0; t < mesh.size(); ++t) {
+            const Triangle tri = mesh.triangle(t);
+            for (const Vec3d& target :
+                 {tri.a, tri.b, (tri.a + tri.b) * 0.5, tri.a + (tri.c - tri.a) * 0.25,
+                  (tri.a + tri.b + tri.c) / 3.0}) {
+                const Vec3d outside = centre + normalize(Vec3d{u(rng), u(rng), u(rng)}) * 5.0;
+                const Vec3d inside = centre + Vec3d{u(rng), u(rng), u(rng)} * 0.3;
+                rays.push_back(Ray{outside, target - outside});
+                rays.push_back(Ray{inside, target - inside});
+            }
+        }
+        std::vector<Hit> packed(rays.size());
+        b.accel->closest_range(rays.data(), rays.size(), Precision::refined, false, packed.data());
+        int hits = 0, tied = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const Ray& ray = rays[i];
+            const auto ref = linear_closest(sc, ray, false);
+            const auto exact = b.accel->closest(ray, Precision::exact, false);
+            const auto refined = b.accel->closest(ray, Precision::refined, false);
+            ASSERT_EQ(ref.has_value(), exact.has_value()) << i;
+            ASSERT_EQ(ref.has_value(), refined.has_value()) << i;
+            ASSERT_EQ(ref.has_value(), packed[i].valid()) << i;
+            if (!ref)
+                continue;
+            ++hits;
+            int at_t = 0;  // primitives whose double t is exactly the closest's
+            for (std::uint32_t o = 0; o < sc.objects.size(); ++o)
+                for (std::size_t p = 0; p < sc.objects[o].mesh->size(); ++p)
+                    if (auto h = intersect_triangle(sc.objects[o].mesh->triangle(p), ray, false))
+                        at_t += h->t == ref->t;
+            tied += at_t > 1;
+            const Hit* const answers[] = {&*exact, &*refined, &packed[i]};
+            const char* const what[] = {"exact", "refined", "refined in a packet"};
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_EQ(answers[k]->object, ref->object) << what[k] << ", ray " << i;
+                EXPECT_EQ(answers[k]->primitive, ref->primitive) << what[k] << ", ray " << i;
+                EXPECT_EQ(answers[k]->t, ref->t) << what[k] << ", ray " << i;
+            }
+        }
+        EXPECT_GT(hits, static_cast<int>(rays.size()) * 9 / 10);
+        EXPECT_GT(tied, static_cast<int>(rays.size()) / 3);
+        std::printf("[ info ] %s: %d rays, %d hits, %d exact ties\n", name,
+                    static_cast<int>(rays.size()), hits, tied);
+    }
 }
 
 TEST(EmbreeAccel, RangeIsInclusiveAndRespected) {

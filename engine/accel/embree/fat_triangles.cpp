@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/accel/embree/float_ray.h"
 #include "engine/accel/embree/impl.h"
 #include "engine/math/float_bounds.h"
 
@@ -13,9 +14,13 @@ namespace {
 /// Decides each float candidate Embree reports on a fat triangle by the double watertight test
 /// on the real triangle (intersect_triangle, which also enforces [tmin, tmax]): a double miss is
 /// rejected (the traversal goes on) and noted in the ray's context (rejected_tf); a double hit is
-/// accepted and becomes the context's `best` (closest), is recorded and rejected (`all`), or
-/// ends the traversal (`any`). Embree orders the candidates by float t, as before: which of two
-/// surfaces whose float t agree comes first stays a float decision (docs/numerics.md).
+/// recorded and rejected (`all`), ends the traversal (`any`), or (closest) competes with the
+/// context's `best` by the API's order (`closer`: double t, then the lower object, then the
+/// lower primitive) and is accepted only if it comes first (keep_if_closer).
+/// Embree offers candidates in no particular order and, on an accepted hit, sets tfar to its
+/// float t, then offers later candidates with t <= tfar: taking every accepted hit (as until
+/// 2026-12-05) gave an exact tie in double t to whichever triangle came last, the higher index
+/// on duplicated meshes and on shared edges (API.md says the lower).
 void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
     RayContext& c = ctx_of(args->context);
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
@@ -27,10 +32,17 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
         RayContext& lane = c.lanes ? c.lanes[RTCRayN_id(args->ray, args->N, i)] : c;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
         auto h = intersect_triangle(mesh.triangle(prim), *lane.ray, /*want_normal=*/false);
-        const float tf = RTCRayN_tfar(args->ray, args->N, i);  // the candidate's float t
+        // Embree set tfar to the candidate's float t; keep_if_closer may move it.
+        float& tfar = RTCRayN_tfar(args->ray, args->N, i);
+        const float tf = tfar;
         if (!h) {
             args->valid[i] = 0;
-            lane.rejected_tf = std::min(lane.rejected_tf, tf);
+            // Only where the candidate would be offered with tfar at best_tf: one seen beyond
+            // it because keep_if_closer leaves tfar above (a neighbour's widening just behind
+            // the hit) is not evidence that the ray slipped in before the hit, and counting
+            // it would send every back face with such a neighbour to the exact path.
+            if (!lane.best || tf <= lane.best_tf)
+                lane.rejected_tf = std::min(lane.rejected_tf, tf);
             continue;
         }
         if (occlusion)
@@ -42,8 +54,8 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
             args->valid[i] = 0;
             continue;
         }
-        lane.best = *h;
-        lane.best_tf = tf;
+        if (!keep_if_closer(lane, *h, tf, tfar))
+            args->valid[i] = 0;  // Embree then restores tfar to the best's
     }
 }
 

@@ -86,6 +86,31 @@ inline float tfar_for(const RayContext& c, double t) {
     return float_up((t - c.shift) * c.len + c.margin);
 }
 
+/// refined's closest on the native BVH (the fat triangles' hit filter and the spheres'
+/// callback): keeps the double hit `h`, whose float t is `tf`, as c.best if it comes first by
+/// the API's order (`closer`: double t, then the lower object, then the lower primitive) and
+/// returns true; false leaves c.best as it is, and the caller rejects `h`.
+/// On keeping, sets `tfar` (the float ray's) a margin above h, as the exact BVH's callback does:
+/// Embree offers a later candidate only where its float t <= tfar, and a triangle whose double t
+/// ties h's at a shared edge or vertex (a widened float triangle of its own) may round to a
+/// float t above h's; it is then still offered, and `closer` decides whatever the traversal's
+/// order. (A candidate so offered that misses in double is not a rejection: see the filter.)
+/// fast's lanes keep tfar at tf: fast reads its t from Embree's tfar. So does a hit away from
+/// its triangle's edges: a triangle tying its double t elsewhere lies in its plane over the
+/// point, a duplicate whose widened copy has the same float t (offered, as t <= tfar), and
+/// raising tfar there had cost refined's camera rays 8–10% (bench_intersect A, paired runs)
+/// for candidates just behind every hit. Spheres (u = v = 0) count as on an edge.
+inline bool keep_if_closer(RayContext& c, const Hit& h, float tf, float& tfar) {
+    if (c.best && !closer(h, *c.best))
+        return false;
+    c.best = h;
+    c.best_tf = tf;
+    constexpr double kEdge = 1e-6;  // barycentric: far above the double kernel's rounding
+    const bool on_edge = h.u <= kEdge || h.v <= kEdge || 1.0 - h.u - h.v <= kEdge;
+    tfar = c.fast || !on_edge ? tf : std::max(tf, tfar_for(c, h.t));
+    return true;
+}
+
 /// Where prepare_ray starts the float ray.
 enum class RayStart {
     at_entry,    ///< where the segment enters the padded bounds (the native BVHs)

@@ -75,8 +75,9 @@ struct RayContext {
     double len = 1;            ///< |direction|: float t' (unit direction) ↔ t = shift + t'/len
     double margin = 0;         ///< slack added to tfar, in unit-direction length
     double origin_err = 0;     ///< bound on the double rounding of the float ray's start point
-    /// Closest so far: the exact path's, or on `native` the last candidate accepted by float t
-    /// (a sphere's double hit, or a fat triangle's double hit from the hit filter).
+    /// Closest so far: the exact path's, or on `native` the first by `closer` of the double
+    /// hits Embree offered within its float tfar (a sphere's, or a fat triangle's from the hit
+    /// filter; keep_if_closer in float_ray.h).
     std::optional<Hit> best;
     std::vector<Hit>* collect = nullptr;  ///< all/count: every hit goes here
     bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar

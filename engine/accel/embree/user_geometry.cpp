@@ -79,17 +79,19 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
             }
             return true;
         }
-        // The native BVH: a sphere competes with Embree's float triangle hits by float t'.
+        // The native BVH: a sphere is offered within Embree's float tfar, as a triangle is,
+        // and competes with the best so far in double (keep_if_closer).
         const float tf = to_float((h.t - c.shift) * c.len);
         if (!(tf <= rh->ray.tfar))
             return true;
-        rh->ray.tfar = tf;
-        rh->hit.geomID = h.object;
-        rh->hit.primID = h.primitive;
-        rh->hit.u = rh->hit.v = 0.0f;
-        c.best = h;
-        c.best_tf = tf;
-        return false;  // the nearer root came first: the far one cannot be closer
+        float tfar = tf;
+        if (keep_if_closer(c, h, tf, tfar)) {
+            rh->ray.tfar = std::min(rh->ray.tfar, tfar);
+            rh->hit.geomID = h.object;
+            rh->hit.primID = h.primitive;
+            rh->hit.u = rh->hit.v = 0.0f;
+        }
+        return false;  // the nearer root came first: the far one cannot come before it
     });
 }
 
