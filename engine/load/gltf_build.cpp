@@ -700,8 +700,11 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const Resour
     if (!placed)
         return placed.status();
 
+    std::size_t decoded_pixels = 0;  // the model's images together, against the scene's budget
+    const auto metallic_roughness =
+        metallic_roughness_means(m, read, limits, decoded_pixels, out.warnings);
     for (std::size_t i = 0; i < m.materials.size(); ++i) {
-        out.materials.push_back(to_phong(m.materials[i]));
+        out.materials.push_back(to_phong(m.materials[i], metallic_roughness[i]));
         const std::vector<double>& e = m.materials[i].emissiveFactor;
         if (m.materials[i].emissiveTexture.index >= 0 &&
             std::any_of(e.begin(), e.end(), [](double c) { return c > 0.0; })) {
@@ -713,7 +716,7 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const Resour
                                                                  : m.materials[i].name);
     }
     const std::vector<UvMapping> uv_maps =
-        attach_base_color_textures(m, read, limits, out.materials, out.warnings);
+        attach_base_color_textures(m, read, limits, out.materials, out.warnings, decoded_pixels);
     // Joints need the global transform of nodes that the scene may not place (a skeleton can
     // live outside the scene's roots), so every node's is computed from every root.
     std::vector<Transform> node_world(m.nodes.size());

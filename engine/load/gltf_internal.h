@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,7 +50,19 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& model,
                                                   const ResourceReader& read,
                                                   const LoadLimits& limits,
                                                   std::vector<Material>& materials,
-                                                  std::vector<std::string>& warnings);
+                                                  std::vector<std::string>& warnings,
+                                                  std::size_t& decoded_pixels);
+
+/// Per glTF material, the mean (metallic, roughness) of its metallicRoughnessTexture's image
+/// (B and G channels, linear, over all texels), which the factors multiply; none where it has
+/// no such texture, where the image cannot be used (a warning), or where limits.textures is
+/// false. The texture is not sampled per hit: its mean stands for the surface, where the factor
+/// alone (glTF's default 1, left so because the texture carries the values) had made
+/// TwoSidedPlane.gltf's wood a rough metal, black under the headlight. Decoded images count in
+/// `decoded_pixels` against limits.max_texture_pixels_total and are not kept.
+std::vector<std::optional<std::array<double, 2>>> metallic_roughness_means(
+    const tinygltf::Model& model, const ResourceReader& read, const LoadLimits& limits,
+    std::size_t& decoded_pixels, std::vector<std::string>& warnings);
 
 /// Instances every mesh of the default scene (else scene 0, else every root node) with its
 /// world transform into out.parts, and fills materials, lights, camera and warnings
@@ -83,7 +96,8 @@ Result<Transform> local_transform(const tinygltf::Node& node, int index);
 
 /// The Phong approximation of a metallic-roughness material (see gltf_scene.cpp for the
 /// mapping and its sources).
-Material to_phong(const tinygltf::Material& material);
+Material to_phong(const tinygltf::Material& material,
+                  const std::optional<std::array<double, 2>>& metallic_roughness = std::nullopt);
 
 /// A pinhole camera from a perspective camera placed by `world` (glTF cameras look down their
 /// local −Z with +Y up, glTF 2.0 §3.10.1). nullopt for orthographic or malformed cameras.

@@ -396,6 +396,36 @@ TEST(GltfLoader, DefaultMetalHasNoDiffuseAndAnUnreadEmissiveTextureNoGlow) {
     EXPECT_EQ(unread, 1);
 }
 
+// A metallicRoughnessTexture is not sampled per hit: the means of its B (metallic) and G
+// (roughness) channels, linear, multiply the factors. Here B averages 0.5 and G 64/255 over two
+// texels, so the default factors (1) give a half-metal; an image that cannot be decoded leaves
+// the factors alone, with a warning.
+TEST(GltfLoader, AMetallicRoughnessTextureScalesTheFactorsByItsMean) {
+    Doc d;
+    d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::vector<std::uint8_t> texels = {0, 128, 255, 0, 0, 0};
+    auto m = load(d.json(
+        R"("materials":[{"pbrMetallicRoughness":{"metallicRoughnessTexture":{"index":0}}},)"
+        R"({"pbrMetallicRoughness":{"metallicRoughnessTexture":{"index":1}}}],)"
+        R"("textures":[{"source":0},{"source":1}],"images":[{"uri":"data:image/png;base64,)" +
+        base64(testing::png(2, 1, texels)) +
+        R"("},{"uri":"data:image/png;base64,AAAA"}],)"
+        R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"material":0}]}],)"
+        R"("nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}])"));
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    const Material& half = m->materials[0];
+    EXPECT_EQ(half.diffuse, Vec3d(0.5, 0.5, 0.5));
+    EXPECT_EQ(half.textured_specular, Vec3d(0.5, 0.5, 0.5));
+    const double r = 64.0 / 255.0;
+    EXPECT_NEAR(half.shininess, 2.0 / (r * r * r * r) - 2.0, 1e-9);
+    EXPECT_EQ(m->materials[1].diffuse, Vec3d(0, 0, 0));  // metallic 1: the factor alone
+    bool warned = false;
+    for (const std::string& w : m->warnings)
+        warned =
+            warned || w.find("uses its metallic and roughness factors alone") != std::string::npos;
+    EXPECT_TRUE(warned);
+}
+
 // A morph target at weight 0.5 moves the rest pose halfway (glTF 2.0 §3.7.2.2).
 TEST(GltfLoader, MorphTargetsAtDefaultWeights) {
     Doc d;

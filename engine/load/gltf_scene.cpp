@@ -70,19 +70,24 @@ Result<Transform> local_transform(const tinygltf::Node& node, int index) {
 // the diffuse was the whole base colour at every metallic: glTF's default material (metallic 1,
 // roughness 1) then had its base colour twice, as diffuse and as a shininess-1 specular lobe,
 // and a textured Cube.gltf seen head-on under the headlight came out white (a helper's review).
-// Metallic and roughness textures are not read: their factors stand for the whole surface.
+// A metallicRoughnessTexture is not sampled per hit: its mean multiplies the factors.
 //   emissive  = emissiveFactor (× KHR_materials_emissive_strength)
 //   transparency = 1 − baseColor.a for alphaMode BLEND (alpha blending seen as see-through)
 // Defaults are glTF's (§5.22): baseColor 1, metallic 1, roughness 1.
-Material to_phong(const tinygltf::Material& m) {
+Material to_phong(const tinygltf::Material& m,
+                  const std::optional<std::array<double, 2>>& metallic_roughness) {
     const auto& pbr = m.pbrMetallicRoughness;
     std::array<double, 4> base{1, 1, 1, 1};
     if (pbr.baseColorFactor.size() == 4) {
         for (std::size_t i = 0; i < 4; ++i)
             base[i] = clamp01(pbr.baseColorFactor[i]);
     }
-    const double metallic = clamp01(pbr.metallicFactor);
-    const double roughness = clamp01(pbr.roughnessFactor);
+    // The factors times the metallicRoughnessTexture's mean, where it has one
+    // (metallic_roughness_means).
+    const double metallic =
+        clamp01(pbr.metallicFactor) * (metallic_roughness ? (*metallic_roughness)[0] : 1.0);
+    const double roughness =
+        clamp01(pbr.roughnessFactor) * (metallic_roughness ? (*metallic_roughness)[1] : 1.0);
     Material out;
     const Vec3d base_rgb{base[0], base[1], base[2]};
     out.diffuse = base_rgb * (1.0 - metallic);

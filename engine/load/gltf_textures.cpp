@@ -6,8 +6,10 @@
 // Everything here degrades to a warning: a texture that cannot be used leaves the material
 // with its baseColorFactor alone, as the issue asks and as glTF viewers do.
 
+#include <array>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "engine/load/gltf_internal.h"
 #include "engine/load/loaders.h"
@@ -110,15 +112,64 @@ void read_texture_transform(const tinygltf::TextureInfo& info, UvMapping& out) {
 
 }  // namespace
 
+std::vector<std::optional<std::array<double, 2>>> metallic_roughness_means(
+    const tinygltf::Model& m, const ResourceReader& read, const LoadLimits& limits,
+    std::size_t& decoded_pixels, std::vector<std::string>& warnings) {
+    std::vector<std::optional<std::array<double, 2>>> means(m.materials.size());
+    if (!limits.textures)
+        return means;  // a query-only scene is never shaded
+    std::map<std::size_t, std::optional<std::array<double, 2>>> by_image;
+    for (std::size_t i = 0; i < m.materials.size(); ++i) {
+        const tinygltf::TextureInfo& info =
+            m.materials[i].pbrMetallicRoughness.metallicRoughnessTexture;
+        if (info.index < 0)
+            continue;
+        const std::string where = "/materials/" + std::to_string(i);
+        if (!in_range(info.index, m.textures.size()) ||
+            !in_range(m.textures[static_cast<std::size_t>(info.index)].source, m.images.size())) {
+            warnings.push_back(where +
+                               ": its metallicRoughnessTexture has no image we can read; its "
+                               "metallic and roughness factors stand alone");
+            continue;
+        }
+        const auto source =
+            static_cast<std::size_t>(m.textures[static_cast<std::size_t>(info.index)].source);
+        if (!by_image.count(source)) {
+            auto bytes = image_bytes(m, source, read);
+            auto image = bytes ? detail::decode_texture_image(*bytes, limits, decoded_pixels)
+                               : Result<std::shared_ptr<const TextureImage>>(bytes.status());
+            std::optional<std::array<double, 2>> mean;
+            if (image) {
+                // glTF 2.0 §3.9.2: metalness in B, roughness in G, linear values (no sRGB).
+                const std::vector<std::uint8_t>& rgb = (*image)->rgb;
+                double g = 0.0, b = 0.0;
+                for (std::size_t k = 0; k + 2 < rgb.size(); k += 3) {
+                    g += rgb[k + 1];
+                    b += rgb[k + 2];
+                }
+                const double n = 255.0 * static_cast<double>(rgb.size() / 3);
+                mean = std::array<double, 2>{b / n, g / n};
+            } else {
+                warnings.push_back("/images/" + std::to_string(source) + ": " +
+                                   image.status().message + "; material " + std::to_string(i) +
+                                   " uses its metallic and roughness factors alone");
+            }
+            by_image[source] = mean;
+        }
+        means[i] = by_image[source];
+    }
+    return means;
+}
+
 std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
                                                   const ResourceReader& read,
                                                   const LoadLimits& limits,
                                                   std::vector<Material>& materials,
-                                                  std::vector<std::string>& warnings) {
+                                                  std::vector<std::string>& warnings,
+                                                  std::size_t& decoded_pixels) {
     std::vector<UvMapping> mappings(m.materials.size());
     std::map<std::size_t, std::shared_ptr<const TextureImage>> decoded;  // by image index
     std::map<std::size_t, std::string> failed;                           // by image index
-    std::size_t decoded_pixels = 0;
     for (std::size_t i = 0; i < m.materials.size() && i < materials.size(); ++i) {
         const tinygltf::TextureInfo& info = m.materials[i].pbrMetallicRoughness.baseColorTexture;
         if (info.index < 0)
