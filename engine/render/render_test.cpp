@@ -93,6 +93,34 @@ TEST(Camera, DefaultFramingFillsTheNarrowerFieldOfView) {
     }
 }
 
+TEST(Camera, AFlatSceneIsSeenFromAboveNotEdgeOn) {
+    // A quad in the xz plane (TwoSidedPlane.gltf, a ground plane): from ±z it is edge-on and the
+    // image was black. It is seen from 45° above on the default view's side, at the same
+    // distance, and its centre is in the middle of the picture; flat in x, from 45° beside.
+    const Bounds3 ground{{-1, 0, -1}, {1, 0, 1}};
+    const double dist = length(default_camera({{-1, -1, -1}, {1, 1, 1}}, 1.0,
+                                              DefaultView::from_plus_z)
+                                   .position) *
+                        std::sqrt(2.0 / 3.0);  // the same radius: √2 against √3
+    for (const DefaultView view : {DefaultView::from_plus_z, DefaultView::from_minus_z}) {
+        const Camera cam = default_camera(ground, 1.0, view);
+        EXPECT_EQ(cam.look_at, Vec3d(0, 0, 0));
+        EXPECT_NEAR(cam.position.y, dist / std::sqrt(2.0), 1e-12);
+        EXPECT_NEAR(cam.position.z, (view == DefaultView::from_plus_z ? 1 : -1) * cam.position.y,
+                    1e-12);
+        EXPECT_EQ(cam.position.x, 0.0);
+        const Ray mid = CameraRays(cam, 40, 40).ray(20, 20);
+        EXPECT_NEAR(distance_to_line(mid, cam.look_at), 0.0, 1e-12);
+    }
+    const Camera wall = default_camera({{0, -1, -1}, {0, 1, 1}}, 1.0, DefaultView::from_plus_z);
+    EXPECT_GT(wall.position.x, 0.0);
+    EXPECT_NEAR(wall.position.x, wall.position.z, 1e-12);
+    EXPECT_EQ(wall.position.y, 0.0);
+    // Bounds with height are seen straight from ±z, as before.
+    EXPECT_EQ(default_camera({{-1, 0, -1}, {1, 1e-3, 1}}, 1.0, DefaultView::from_plus_z).position.y,
+              5e-4);
+}
+
 TEST(Camera, ModelFilesAreFramedFromTheirFront) {
     // DefaultView::from_plus_z (a model file, whose front faces +z): the same distance on the
     // other side, looking along −z with +y up, so +x is on the right of the picture, as in a

@@ -149,8 +149,20 @@ Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view) {
                                   ? std::atan(std::tan(half_fov_y) * aspect)
                                   : half_fov_y;
     const double dist = radius / std::sin(std::min(half_fov_y, half_fov_x));
+    // A scene flat across the image's up or right axis (a ground plane; TwoSidedPlane.gltf, whose
+    // bounds have no height) is edge-on from ±z and shows nothing: it is seen from 45° above
+    // (flat in y) or beside (flat in x) instead, on the side of the default view. Mirrored by
+    // the preview page (clients/web/js/camera.js) and the grading kit (grader.py).
+    const Vec3d e = bounds.diagonal();
+    const double flat = kDefaultCameraFlat * length(e);
+    Vec3d dir{0.0, 0.0, view == DefaultView::from_plus_z ? 1.0 : -1.0};
+    if (e.y <= flat) {
+        dir.y = 1.0;
+    } else if (e.x <= flat) {
+        dir.x = 1.0;
+    }
     cam.look_at = c;
-    cam.position = c + Vec3d{0.0, 0.0, view == DefaultView::from_plus_z ? dist : -dist};
+    cam.position = c + normalize(dir) * dist;
     return cam;
 }
 

@@ -77,7 +77,11 @@ Status validate(const Scene& scene);
 /// The default camera for an image of `aspect` = width / height: looks at the centre of the
 /// bounds from the side `view` names (+y up), from the distance at which their bounding sphere
 /// (centre, half the diagonal) just fills the narrower of the two fields of view
-/// (engine/scene/scene.cpp). The camera at the origin looking along +z for empty bounds.
+/// (engine/scene/scene.cpp); bounds flat in y (or x) are seen from 45° above (or beside), on the
+/// same side. The camera at the origin looking along +z for empty bounds.
 Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view);
+/// Bounds whose extent along y (or x) is at most this times their diagonal are flat there, and
+/// default_camera looks at them from 45° above (or beside) rather than edge-on.
+constexpr double kDefaultCameraFlat = 1e-6;
 
 }  // namespace raycastd::engine

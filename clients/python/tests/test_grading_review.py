@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 import os
 import pathlib
 import shutil
@@ -26,7 +27,7 @@ from support import GRADING, TUTORIAL, TUTORIAL7, ServerTestCase
 from raycastd.cli import main
 from raycastd.grading import load_questions
 from raycastd.grading import cli as grading_cli
-from raycastd.grading.grader import Answers, Grader, _read_output, grade_files
+from raycastd.grading.grader import Answers, Grader, _read_output, default_camera, grade_files
 from raycastd.grading.questions import QuestionFileError, parse_questions
 from raycastd.png import read_png
 
@@ -102,6 +103,23 @@ class BlankRowTest(unittest.TestCase):
             path = pathlib.Path(tmp) / "out.csv"
             path.write_text("1\n\n0\n")
             self.assertEqual(_read_output(q, path), [True, False])
+
+
+class DefaultCameraTest(unittest.TestCase):
+    """grader.default_camera mirrors engine/scene/scene.cpp default_camera (render_test.cpp
+    Camera.AFlatSceneIsSeenFromAboveNotEdgeOn): a flat scene from 45° above or beside."""
+
+    def test_a_flat_scene_is_seen_from_above(self) -> None:
+        dist = math.sqrt(2) / math.sin(math.radians(22.5))
+        ground = default_camera({"min": [-1, 0, -1], "max": [1, 0, 1]}, 1.0, "+z")
+        self.assertEqual(ground["look_at"], [0, 0, 0])
+        for got, want in zip(ground["position"], [0, dist / math.sqrt(2), dist / math.sqrt(2)]):
+            self.assertAlmostEqual(got, want, places=12)
+        wall = default_camera({"min": [0, -1, -1], "max": [0, 1, 1]}, 1.0, "-z")
+        for got, want in zip(wall["position"], [dist / math.sqrt(2), 0, -dist / math.sqrt(2)]):
+            self.assertAlmostEqual(got, want, places=12)
+        box = default_camera({"min": [-1, -1, -1], "max": [1, 1, 1]}, 1.0, "+z")
+        self.assertEqual(box["position"][:2], [0.0, 0.0])
 
 
 class ObjectFieldTest(unittest.TestCase):

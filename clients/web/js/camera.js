@@ -33,7 +33,10 @@ export function normalize(v) {
  *  width / height (engine/scene/scene.cpp default_camera): the bounds' centre seen from the
  *  side `view` names (the summary's `default_view`: '+z' for a scene with a model file, whose
  *  front faces +z; '-z' for spheres and triangles only), their bounding sphere (half the
- *  diagonal) just filling the narrower field of view. */
+ *  diagonal) just filling the narrower field of view; bounds flat in y (or x) from 45° above
+ *  (or beside). */
+export const DEFAULT_CAMERA_FLAT = 1e-6; // engine/scene/scene.h kDefaultCameraFlat
+
 export function defaultCamera(bounds, aspect = 4 / 3, view = '-z') {
     const cam = { position: [0, 0, 0], look_at: [0, 0, 1], up: [0, 1, 0], fov_y_deg: 45 };
     if (!bounds || !bounds.min || !bounds.max) return cam;
@@ -44,8 +47,15 @@ export function defaultCamera(bounds, aspect = 4 / 3, view = '-z') {
     const halfFovY = (0.5 * cam.fov_y_deg * Math.PI) / 180.0;
     const halfFovX = aspect > 0 && Number.isFinite(aspect) ? Math.atan(Math.tan(halfFovY) * aspect) : halfFovY;
     const dist = radius / Math.sin(Math.min(halfFovY, halfFovX));
+    // Bounds flat in y (a ground plane) or x are edge-on from ±z: seen from 45° above or beside
+    // instead, as the server does (kDefaultCameraFlat).
+    const e = sub(hi, lo);
+    const flat = DEFAULT_CAMERA_FLAT * length(e);
+    const dir = [0, 0, view === '+z' ? 1 : -1];
+    if (e[1] <= flat) dir[1] = 1;
+    else if (e[0] <= flat) dir[0] = 1;
     cam.look_at = c;
-    cam.position = add(c, [0, 0, view === '+z' ? dist : -dist]);
+    cam.position = add(c, scale(normalize(dir), dist));
     return cam;
 }
 

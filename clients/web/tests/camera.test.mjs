@@ -51,6 +51,17 @@ test('default framing of a model file: from +z, +x on the right of the picture, 
     assert.ok(cameraRay(back, 640, 480, 640, 240).direction[0] < 0);
 });
 
+test('default framing of a flat model: from 45° above (or beside), not edge-on (as the server frames it)', () => {
+    const ground = defaultCamera({ min: [-1, 0, -1], max: [1, 0, 1] }, 1, '+z');
+    const dist = Math.sqrt(2) / Math.sin((22.5 * Math.PI) / 180);
+    assert.deepEqual(ground.look_at, [0, 0, 0]);
+    assert.ok(close(ground.position, [0, dist / Math.sqrt(2), dist / Math.sqrt(2)], 1e-12));
+    const under = defaultCamera({ min: [-1, 0, -1], max: [1, 0, 1] }, 1, '-z');
+    assert.ok(close(under.position, [0, dist / Math.sqrt(2), -dist / Math.sqrt(2)], 1e-12));
+    const wall = defaultCamera({ min: [0, -1, -1], max: [0, 1, 1] }, 1, '+z');
+    assert.ok(close(wall.position, [dist / Math.sqrt(2), 0, dist / Math.sqrt(2)], 1e-12));
+});
+
 test('default framing, portrait: the bounding sphere fills the width (as engine/render/render_test.cpp checks)', () => {
     const bounds = { min: [-1, 0, 2], max: [3, 1, 4] };
     const c = [1, 0.5, 3];

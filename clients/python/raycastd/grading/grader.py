@@ -457,11 +457,15 @@ def _full_camera(camera: dict) -> dict:
     return {k: camera.get(k, v) for k, v in CAMERA_DEFAULTS.items()}
 
 
+DEFAULT_CAMERA_FLAT = 1e-6
+
+
 def default_camera(bounds: dict | None, aspect: float, view: str) -> dict:
     """The camera raycastd renders a scene with when neither the request nor the scene has one
     (engine/scene/scene.cpp `default_camera`, docs/rendering.md "Camera"): it looks at the centre
     of the bounds, fov_y 45° and +y up, from the distance at which their bounding sphere (half
-    the diagonal) just fills the narrower field of view, on the side `view` ("+z"/"-z") names."""
+    the diagonal) just fills the narrower field of view, on the side `view` ("+z"/"-z") names;
+    bounds flat in y (or x) from 45° above (or beside) on that side."""
     cam = _full_camera({})
     if not bounds or not bounds.get("min") or not bounds.get("max"):
         return cam
@@ -475,8 +479,18 @@ def default_camera(bounds: dict | None, aspect: float, view: str) -> dict:
         math.atan(math.tan(half_y) * aspect) if aspect > 0 and math.isfinite(aspect) else half_y
     )
     dist = radius / math.sin(min(half_y, half_x))
+    # bounds flat in y (a ground plane) or x are edge-on from ±z: seen from 45° above or beside
+    # (engine/scene/scene.h kDefaultCameraFlat)
+    e = [b - a for a, b in zip(lo, hi)]
+    flat = DEFAULT_CAMERA_FLAT * math.sqrt(sum(x * x for x in e))
+    d = [0.0, 0.0, 1.0 if view == "+z" else -1.0]
+    if e[1] <= flat:
+        d[1] = 1.0
+    elif e[0] <= flat:
+        d[0] = 1.0
+    n = math.sqrt(sum(x * x for x in d))
     cam["look_at"] = centre
-    cam["position"] = [centre[0], centre[1], centre[2] + (dist if view == "+z" else -dist)]
+    cam["position"] = [c + (x / n) * dist for c, x in zip(centre, d)]
     return cam
 
 
