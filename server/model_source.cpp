@@ -460,7 +460,14 @@ std::shared_ptr<const engine::QueryEngine> ModelSource::build_scene(const SceneS
 std::string classify_scene_body(std::string_view body, const std::string& content_type) {
     if (body.empty())
         return "application/json";
-    const std::string ct = content_type.substr(0, content_type.find(';'));
+    // The media type without its parameters, trimmed and lower-cased (RFC 9110 §8.3.1: type and
+    // subtype are case-insensitive): it is hashed into the scene's id, and 'Model/OBJ' had given
+    // another id than 'model/obj' for the same bytes (an adversarial review).
+    std::string ct = content_type.substr(0, content_type.find(';'));
+    ct.erase(0, ct.find_first_not_of(" \t"));
+    ct.erase(ct.find_last_not_of(" \t") + 1);
+    std::transform(ct.begin(), ct.end(), ct.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (ct == "application/json")
         return ct;
     if (format_from_content_type(ct))

@@ -410,6 +410,17 @@ TEST_F(Scenes, RawModelsAndCountsAndWarnings) {
     EXPECT_EQ(ply.at("triangles"), 3732);
 }
 
+// RFC 9110 §8.3.1: a media type's type and subtype are case-insensitive. The id hashes the
+// type with the bytes, and 'Model/OBJ' had given the same triangle another scene.
+TEST_F(Scenes, AMediaTypesCaseAndSpacesDoNotChangeTheId) {
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    const Json a = post_ok("/v1/scenes", obj, 201, "model/obj");
+    for (const char* type : {"Model/OBJ", "MODEL/obj", " model/obj ; charset=utf-8"}) {
+        const Json b = post_ok("/v1/scenes", obj, 200, type);
+        EXPECT_EQ(b.at("id"), a.at("id")) << type;
+    }
+}
+
 TEST_F(Scenes, SameGeometryInThreeGltfVariantsGivesIdenticalHits) {
     REQUIRE_MODELS();
     std::vector<std::string> ids;
