@@ -14,6 +14,7 @@ constexpr ErrorCode kInvalid = ErrorCode::invalid_request;
 constexpr int kMaxSide = 16384;
 constexpr int kMaxSpp = 4096;
 constexpr int kMaxDepth = 32;
+constexpr double kMaxBackground = 1e6;  ///< a linear intensity, far above any display
 
 int read_int(const Json& body, const char* key, int fallback, int lo, int hi) {
     const Json* v = member(body, key);
@@ -100,7 +101,16 @@ void read_render_members(const Json& body, RenderRequest& r) {
     o.whitted.max_depth = read_int(body, "max_depth", o.whitted.max_depth, 1, kMaxDepth);
     o.whitted.precision = read_precision(body, o.whitted.precision);
     if (const Json* v = member(body, "background")) {
-        o.whitted.background = read_vec3(*v, "/background", kInvalid);
+        // A linear colour, as a material's: not negative, and not so large that a float image
+        // (PFM, EXR) holds inf for it (1e308 had been written so; an adversarial review).
+        const engine::Vec3d c = read_vec3(*v, "/background", kInvalid);
+        for (const double x : {c.x, c.y, c.z}) {
+            if (!(x >= 0.0 && x <= kMaxBackground)) {
+                throw ApiError(kInvalid, "/background must be three numbers in [0, 1e6]",
+                               "/background");
+            }
+        }
+        o.whitted.background = c;
     }
     if (const Json* v = member(body, "camera"))
         o.camera = parse_camera(*v, "/camera", kInvalid);

@@ -92,6 +92,12 @@ TEST(RenderDoc, ErrorsNameTheField) {
     EXPECT_EQ(parse(R"({"sampling": "stochastic"})").path, "/sampling");
     EXPECT_EQ(parse(R"({"sampling": true})").path, "/sampling");
     EXPECT_EQ(parse(R"([1])").code, ErrorCode::invalid_request);
+    // A background is a linear colour: not negative, and finite in a float image.
+    EXPECT_EQ(parse(R"({"background": [-0.1, 0, 0]})").path, "/background");
+    EXPECT_EQ(parse(R"({"background": [0, 1e308, 0]})").path, "/background");
+    EXPECT_EQ(parse_render_request(Json::parse(R"({"background": [0, 1e6, 2]})"), kMaxPixels)
+                  .options.whitted.background,
+              engine::Vec3d(0, 1e6, 2));
 }
 
 TEST(RenderDoc, PixelLimitCountsSamples) {
