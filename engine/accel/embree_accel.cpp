@@ -251,7 +251,10 @@ void fast_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool want
             continue;
         }
         RTCScene s = a.fast_scene();
-        if (fast_packet(a, s, rays + i, m, want_normal, out + i))
+        // fast_packet hands Embree a plain context, which only fast's own BVH may see: where it
+        // could not be built, fast_scene() is the native BVH, whose hit filter reads a
+        // RayContext (found by a helper's review; closest_packet below gives each lane one).
+        if (s != a.native.get() && fast_packet(a, s, rays + i, m, want_normal, out + i))
             continue;
         closest_packet(
             a, s, rays + i, m,
