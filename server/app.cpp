@@ -465,6 +465,15 @@ bool App::read_body(const httplib::Request& req, const httplib::ContentReader& r
                        "a multipart/form-data body is not read: send the document or file "
                        "itself as the body");
     }
+    // Neither a Content-Length nor chunked framing: RFC 9112 §6.3 gives a request body length
+    // 0. cpp-httplib would read to the end of the connection instead, so that `curl -X POST`
+    // with no data waited out the body's grace period for a 400, and a request sent after it
+    // on the connection was swallowed as its body (a helper's review).
+    std::string coding = req.get_header_value("Transfer-Encoding");
+    std::transform(coding.begin(), coding.end(), coding.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (!req.has_header("Content-Length") && coding.find("chunked") == std::string::npos)
+        return true;
     const std::uint64_t limit = config_.limits.max_body_bytes;
     MemoryBudget::Lease& lease = HttpServer::body_lease();
     enum class Stop { none, too_large, busy, refused };
@@ -510,8 +519,6 @@ bool App::read_body(const httplib::Request& req, const httplib::ContentReader& r
         case Stop::none:
             break;
     }
-    if (ok)
-        HttpServer::body_read();
     return ok;
 }
 

@@ -205,23 +205,45 @@ TEST(App, ACutOffIntersectBodyIsRefused) {
     }
 }
 
-TEST(App, AConnectionGoesOnAfterAChunkedBody) {
+// A chunked body is read and answered, and its connection closes, saying so: cpp-httplib's chunk
+// reader takes a chunk not followed by CRLF as the body's end and reports success, so a
+// connection kept open after one (as 75c8f90 did) would read what follows as a request: here a
+// GET smuggled behind a two-byte chunk (a helper's review).
+TEST(App, AChunkedBodyClosesItsConnection) {
     Running r(Config{});
     const std::string body =
         R"({"scene":)" + kSphere + R"(,"rays":[{"origin":[0,0,0],"direction":[0,0,1]}]})";
     char size[16];
     std::snprintf(size, sizeof(size), "%zx", body.size());
+    const std::string head =
+        "POST /v1/intersect HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+        "Transfer-Encoding: chunked\r\n\r\n";
     const int s = connect_loopback(r.port());
-    send_all(s,
-             "POST /v1/intersect HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
-             "Transfer-Encoding: chunked\r\n\r\n" +
-                 std::string(size) + "\r\n" + body + "\r\n0\r\n\r\n");
+    send_all(s, head + std::string(size) + "\r\n" + body + "\r\n0\r\n\r\n");
     const std::string a = read_answer(s);
     EXPECT_EQ(status_of(a), 200) << a;
-    EXPECT_EQ(header_of(a, "Connection"), "") << a;
+    EXPECT_EQ(header_of(a, "Connection"), "close") << a;
+    ::close(s);
+    const int t = connect_loopback(r.port());
+    send_all(t, head + "2\r\n{}X\r\nGET /v1/scenes HTTP/1.1\r\nHost: x\r\n\r\n");
+    const std::string b = read_answer(t);
+    EXPECT_EQ(header_of(b, "Connection"), "close") << b;
+    EXPECT_EQ(b.find("HTTP/1.1", 1), std::string::npos) << "a second answer: " << b;
+    ::close(t);
+}
+
+// A POST with neither Content-Length nor chunked framing has an empty body (RFC 9112 §6.3): it
+// is answered at once, and the connection goes on (cpp-httplib read to the connection's end,
+// waiting out the body's grace period and swallowing the next request as the body).
+TEST(App, APostWithoutALengthHasAnEmptyBody) {
+    Running r(Config{});
+    const int s = connect_loopback(r.port());
+    send_all(s, "POST /v1/intersect HTTP/1.1\r\nHost: x\r\n\r\n");
+    const std::string a = read_answer(s, std::chrono::seconds(2));
+    EXPECT_EQ(status_of(a), 400) << a;  // an empty body is not a query
+    EXPECT_NE(a.find("bad_json"), std::string::npos) << a;
     send_all(s, "GET /v1/health HTTP/1.1\r\nHost: x\r\n\r\n");
-    const std::string b = read_answer(s);
-    EXPECT_EQ(status_of(b), 200) << b;
+    EXPECT_EQ(status_of(read_answer(s, std::chrono::seconds(2))), 200);
     ::close(s);
 }
 

@@ -35,11 +35,13 @@ struct ServedRequest {
     const std::uint64_t* consumed = nullptr;  ///< the connection's bytes read so far
     std::uint64_t end = 0;                    ///< where its head and Content-Length body end
     bool chunked = false;
-    bool chunked_read = false;  ///< HttpServer::body_read() said its chunked body was all read
-    bool close = false;         ///< its answer said Connection: close
+    bool close = false;  ///< its answer said Connection: close
     /// Whether the whole request has been read, so that the next one starts where reading
-    /// stopped.
-    bool complete() const { return *consumed >= end && (!chunked || chunked_read); }
+    /// stopped. Never after a chunked body: cpp-httplib's chunk reader ends a body at a chunk
+    /// not followed by CRLF and reports success, so what follows ('2\r\n{}X\r\nGET …') would be
+    /// read as a request of its own (a helper's review of 75c8f90, which had kept such
+    /// connections open).
+    bool complete() const { return *consumed >= end && !chunked; }
 };
 thread_local ServedRequest* t_served = nullptr;
 
@@ -307,11 +309,6 @@ MemoryBudget::Lease& HttpServer::body_lease() {
     return t_body_lease;
 }
 
-void HttpServer::body_read() {
-    if (t_served)
-        t_served->chunked_read = true;
-}
-
 HttpServer::Stats HttpServer::stats() const {
     Stats s;
     s.open_connections = registry_.size();
@@ -416,8 +413,8 @@ void HttpServer::serve(ConnStream& strm, ConnectionRegistry::Handle h) {
         // binary batch): the rest of the body would then be read as the next request. Such a
         // connection ends here (its answer said nothing of keep-alive that the client may rely
         // on: RFC 9112 §9.6 lets a server close after any response; the answer said
-        // Connection: close, finish_answer_head). A chunked body's end is known only from the
-        // handler that read it (body_read()); otherwise its connection ends too.
+        // Connection: close, finish_answer_head). So does every connection that carried a
+        // chunked body (ServedRequest::complete).
         const bool body_unread = !served_request.complete() || served_request.close;
         if (body_unread)
             strm.linger = true;

@@ -24,7 +24,9 @@
 //     or multiplied any answer by them, and no raycastd answer is served in parts; no answer
 //     says Accept-Ranges;
 //   * an answer says Connection: close whenever the connection is to close after it (a body
-//     left unread, a chunked body not read to its end through body_read()), and every answer,
+//     left unread; any chunked body: the library's chunk reader takes a chunk not followed by
+//     CRLF as the end, so the bytes after it would be read as the next request, a smuggled one),
+//     and every answer,
 //     the library's own refusals included, carries an X-Request-Id;
 //   * a half-closed client (it shut down its sending side after the request) still gets its
 //     answer: the library's writability test took end-of-file for a dead peer and dropped it;
@@ -108,10 +110,6 @@ class HttpServer : public httplib::Server {
     /// for a reader whose body outgrows it (a Content-Encoding inflates it, a chunked body has
     /// no length) to grow. Unbound on other threads.
     static MemoryBudget::Lease& body_lease();
-    /// Called by a handler that has read the body of the request served on the calling thread
-    /// to its end through its framing: a chunked body's end is known only so (Content-Length
-    /// bodies are checked by their length), and its connection stays open only then.
-    static void body_read();
     /// "rq_<n>": a fresh id for a response's X-Request-Id.
     std::string next_request_id() { return "rq_" + std::to_string(next_id_.fetch_add(1)); }
 
