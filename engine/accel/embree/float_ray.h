@@ -96,10 +96,14 @@ inline float tfar_for(const RayContext& c, double t) {
 /// float t above h's; it is then still offered, and `closer` decides whatever the traversal's
 /// order. (A candidate so offered that misses in double is not a rejection: see the filter.)
 /// fast's lanes keep tfar at tf: fast reads its t from Embree's tfar. So does a hit away from
-/// its triangle's edges: a triangle tying its double t elsewhere lies in its plane over the
-/// point, a duplicate whose widened copy has the same float t (offered, as t <= tfar), and
-/// raising tfar there had cost refined's camera rays 8–10% (bench_intersect A, paired runs)
-/// for candidates just behind every hit. Spheres (u = v = 0) count as on an edge.
+/// its triangle's edges: a triangle tying its double t there lies in the same plane over the
+/// point, a duplicate (whose widened copy has the same float t, offered as t <= tfar) or another
+/// object's overlapping coplanar face, whose widened float triangle may round its t a few ulps
+/// higher and then not be offered: between such faces refined's choice stays a float decision
+/// (docs/numerics.md; exact applies the tie rule). Raising tfar for them costs every hit:
+/// measured with bench_intersect A, paired runs, intersect_blocks on camera rays went from
+/// 0.95–1.04x of rtcIntersect1 to 0.74–0.94x with 4 ulps, 0.79–0.82x with 16 ulps and
+/// 0.82–0.90x with the exact margin. Spheres (u = v = 0) count as on an edge.
 inline bool keep_if_closer(RayContext& c, const Hit& h, float tf, float& tfar) {
     if (c.best && !closer(h, *c.best))
         return false;
