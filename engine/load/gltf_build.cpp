@@ -700,11 +700,8 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const Resour
     if (!placed)
         return placed.status();
 
-    std::size_t decoded_pixels = 0;  // the model's images together, against the scene's budget
-    const auto metallic_roughness =
-        metallic_roughness_means(m, read, limits, decoded_pixels, out.warnings);
     for (std::size_t i = 0; i < m.materials.size(); ++i) {
-        out.materials.push_back(to_phong(m.materials[i], metallic_roughness[i]));
+        out.materials.push_back(to_phong(m.materials[i]));
         const std::vector<double>& e = m.materials[i].emissiveFactor;
         if (m.materials[i].emissiveTexture.index >= 0 &&
             std::any_of(e.begin(), e.end(), [](double c) { return c > 0.0; })) {
@@ -715,8 +712,22 @@ Status build_model(const tinygltf::Model& m, std::string_view name, const Resour
         out.material_names.push_back(m.materials[i].name.empty() ? "material " + std::to_string(i)
                                                                  : m.materials[i].name);
     }
+    // The model's images together count against the scene's texture budget: the base colours
+    // first, which change how the model looks most (four 4096² metallic-roughness maps decoded
+    // first had left none for them: a helper's review), then the metallic-roughness means, with
+    // which each material is mapped again, keeping its base-colour texture.
+    std::size_t decoded_pixels = 0;
     const std::vector<UvMapping> uv_maps =
         attach_base_color_textures(m, read, limits, out.materials, out.warnings, decoded_pixels);
+    const auto metallic_roughness =
+        metallic_roughness_means(m, read, limits, decoded_pixels, out.warnings);
+    for (std::size_t i = 0; i < m.materials.size(); ++i) {
+        if (!metallic_roughness[i])
+            continue;
+        Material mapped = to_phong(m.materials[i], metallic_roughness[i]);
+        mapped.texture = out.materials[i].texture;
+        out.materials[i] = std::move(mapped);
+    }
     // Joints need the global transform of nodes that the scene may not place (a skeleton can
     // live outside the scene's roots), so every node's is computed from every root.
     std::vector<Transform> node_world(m.nodes.size());

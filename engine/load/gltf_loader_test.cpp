@@ -808,6 +808,34 @@ TEST(GltfLoader, UnusableTexturesAreWarnings) {
     }
 }
 
+// The model's images share the scene's texture budget, base colours first: with room for one
+// 2×2 image, the base-colour texture is decoded and the metallic-roughness map (listed first)
+// is the one refused, its factors standing alone.
+TEST(GltfLoader, BaseColourTexturesComeFirstInTheBudget) {
+    Doc d;
+    const std::string png = base64(testing::png(2, 2, kQuad));
+    std::string doc = textured_doc(d, R"({"uri":"data:image/png;base64,)" + png + R"("})");
+    // The material gains a metallicRoughnessTexture of its own image, listed before the base's.
+    const std::string base_ref = R"("baseColorTexture":{"index":0)";
+    doc.replace(doc.find(base_ref), base_ref.size(),
+                R"("metallicRoughnessTexture":{"index":1},"baseColorTexture":{"index":0)");
+    doc.replace(doc.find(R"("textures":[)"), std::string(R"("textures":[)").size(),
+                R"("textures":[{"source":0},)");
+    doc.replace(doc.find(R"("source":0,"sampler":0)"),
+                std::string(R"("source":0,"sampler":0)").size(), R"("source":1,"sampler":0)");
+    doc.replace(doc.find(R"("images":[)"), std::string(R"("images":[)").size(),
+                R"("images":[{"uri":"data:image/png;base64,)" + png + R"("},)");
+    LoadLimits limits;
+    limits.max_texture_pixels_total = 4;
+    auto m = load_model(doc, ModelFormat::gltf, no_resources(), "t", limits);
+    ASSERT_TRUE(m.ok()) << m.status().message;
+    EXPECT_TRUE(m->materials[0].texture);
+    bool refused = false;
+    for (const std::string& w : m->warnings)
+        refused = refused || w.find("metallic and roughness factors alone") != std::string::npos;
+    EXPECT_TRUE(refused);
+}
+
 TEST(GltfLoader, TriangleLimitIsEnforced) {
     Doc d;
     d.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});

@@ -206,12 +206,12 @@ class Whitted {
     /// The same, written into `r` (a batch's own slot: spawn.h says why).
     static void spawn(Ray& r, const Surface& sp, const Vec3d& w);
     /// The unit direction from a surface point to a point or directional light.
-    static Vec3d to_light(const Surface& sp, const Light& light);
+    static inline Vec3d to_light(const Surface& sp, const Light& light);
     /// The shadow ray from a surface point to a light whose direction is `l` (to_light()); only
     /// traced when the light is in front of the shading normal.
     Ray shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const;
     /// The same, written into `r`.
-    void shadow_ray(Ray& r, const Surface& sp, const Light& light, const Vec3d& l) const;
+    inline void shadow_ray(Ray& r, const Surface& sp, const Light& light, const Vec3d& l) const;
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
     /// `traced`, when given, holds for each plan().shadow_lights[k] its to_light() direction
