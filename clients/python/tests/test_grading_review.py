@@ -25,6 +25,7 @@ from unittest import mock
 from support import GRADING, TUTORIAL, TUTORIAL7, ServerTestCase
 
 from raycastd.cli import main
+from raycastd.grading import compare as cmp
 from raycastd.grading import load_questions
 from raycastd.grading import cli as grading_cli
 from raycastd.grading.grader import Answers, Grader, _read_output, default_camera, grade_files
@@ -84,6 +85,9 @@ class BlankRowTest(unittest.TestCase):
         self.assertEqual(self.read("t", "8\n\n8\n\n\n"), [8.0, inf, 8.0])  # trailing blank lines
         self.assertEqual(self.read("t", "t\n8\n\n8\n"), [8.0, inf, 8.0])  # a header row
         self.assertEqual(self.read("t", "# t\n8\n\n8\n"), [8.0, inf, 8.0])  # a comment
+        # Blank lines above the answers, past the number of rays, are not rows either.
+        self.assertEqual(self.read("t", "\n7.25\n", rays=[THREE_RAYS[0]]), [7.25])
+        self.assertEqual(self.read("t", "\n\n8\n8\n8\n"), [8.0, 8.0, 8.0])
 
     def test_a_blank_line_is_a_ray_with_no_hits_or_a_miss(self) -> None:
         self.assertEqual(self.read("hits", "8,12\n\n8,12\n"), [[8.0, 12.0], [], [8.0, 12.0]])
@@ -169,6 +173,13 @@ class ObjectFieldTest(unittest.TestCase):
                     pathlib.Path("."),
                 )
             self.assertIn("numbered by the server; name the object instead", str(cm.exception))
+
+    def test_a_name_in_a_mesh_scene_is_matched_by_name_only(self) -> None:
+        # (-1, name): an index answer cannot be matched; 0 with index_base 1 had equalled -1.
+        q = one({"id": "q", "scene": BALL, "ray": RAY, "ask": "first_hit"}, {"index_base": 1})
+        self.assertEqual(cmp.check_first_hit((-1, "Cylinder"), 0, q).credit, 0.0)
+        self.assertEqual(cmp.check_first_hit((-1, "Cylinder"), " cylinder", q).credit, 1.0)
+        self.assertEqual(cmp.check_first_hit((-1, "Cylinder"), "none", q).credit, 0.0)
 
     def test_first_hit_expected_is_resolved_against_the_scene(self) -> None:
         base = {"id": "q", "scene": TUTORIAL, "ray": RAY, "ask": "first_hit"}

@@ -104,6 +104,12 @@ def check_first_hit(ref: tuple[int, str] | None, value: Any, q: Question) -> Che
     expected = ref[1] if ref else None
     if is_miss_word(value):
         got_index = None
+    elif ref is not None and ref[0] < 0:
+        # an instructor's name in a scene whose objects the server numbers: names only (an
+        # index answer cannot be matched, and 0 with index_base 1 had equalled the -1)
+        if isinstance(value, str) and _norm_name(value) == _norm_name(ref[1]):
+            return Check(1.0, f"{expected}")
+        return Check(0.0, f"expected {fmt(expected)} (by name), got {value}")
     elif isinstance(value, int) and not isinstance(value, bool):
         got_index = value - q.index_base
     elif isinstance(value, str):

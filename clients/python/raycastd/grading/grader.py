@@ -557,6 +557,8 @@ def _read_rows(q: Question, path: pathlib.Path) -> list[list[float]]:
     wanted = len(q.rays or q.query_points) if q.many else 1
     while len(rows) > wanted and not rows[-1]:
         rows.pop()
+    while len(rows) > wanted and not rows[0]:  # blank lines above the answers, likewise
+        rows.pop(0)
     return rows
 
 
