@@ -38,6 +38,29 @@ bool tiny_direction(const Vec3d& d) {
     return m > 0.0 && m < kTinyDirection;
 }
 
+/// Origins, centres and radii past 2⁵⁰⁰ are scaled by 2⁻⁶⁰⁰ first: r² and |f|² overflow past
+/// ~1.3e154, where a ray from the origin inside a sphere of radius 1e155 was taken for a miss
+/// (an adversarial review). Scaling the geometry by a power of two keeps the direction:
+/// s·o + t'·d = s·(o + t·d) with t' = s·t, so the roots are scaled_back's, as for a tiny
+/// direction. (A coordinate below 2⁻⁴²² then becomes subnormal and rounds: next to a length
+/// of 2⁵⁰⁰, far below its ulp.)
+constexpr double kHugeLength = 0x1p500;
+constexpr double kLengthScale = 0x1p-600;
+
+bool huge_lengths(const Sphere& s, const Ray& ray) {
+    return std::max({max_abs(ray.origin), max_abs(s.center), s.radius}) > kHugeLength;
+}
+
+Sphere scaled_sphere(const Sphere& s) {
+    return {s.center * kLengthScale, s.radius * kLengthScale};
+}
+
+Ray with_scaled_origin(const Ray& ray) {
+    Ray r = ray;
+    r.origin = ray.origin * kLengthScale;
+    return r;
+}
+
 Ray with_scaled_direction(const Ray& ray) {
     Ray r = ray;
     r.direction = ray.direction * kDirectionScale;
@@ -56,6 +79,8 @@ SphereRoots scaled_back(SphereRoots r) {
 RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
     if (tiny_direction(ray.direction))
         return scaled_back(sphere_roots(s, with_scaled_direction(ray)));
+    if (huge_lengths(s, ray))  // scaled_back's 2⁶⁰⁰ undoes kLengthScale's 2⁻⁶⁰⁰
+        return scaled_back(sphere_roots(scaled_sphere(s), with_scaled_origin(ray)));
     SphereRoots out;
     const Vec3d& d = ray.direction;
     {
@@ -190,9 +215,10 @@ SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
     // the roots move by δdisc/(2√disc) near tangency (√u behaviour), plus the rounding of the
     // distance scale elsewhere.
     const double f_len = std::sqrt(dot(f, f));
-    // Past ~1e154 from the centre |f|² overflows, and below radius ~1e-162 r² underflows: the
-    // plain-double form is meaningless there, and the double-double kernel handles both.
-    if (!std::isfinite(f_len) || !(r2 > 0.0))
+    // Past ~1e154 from the centre |f|² overflows, past radius ~1e154 r² does, and below radius
+    // ~1e-162 r² underflows: the plain-double form is meaningless there, and the double-double
+    // kernel handles all three (scaling huge lengths first).
+    if (!std::isfinite(f_len) || !(r2 > 0.0) || !std::isfinite(r2))
         return sphere_roots(s, ray);
     const double len = std::sqrt(a);
     const double scale = (f_len + s.radius) / len;

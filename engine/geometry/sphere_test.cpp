@@ -131,6 +131,31 @@ TEST(Sphere, ARayStartingInTheCentrePlaneHasRootsOfBothSigns) {
     }
 }
 
+// Radii and distances past ~1.3e154 overflow r² and |f|²: the kernels scale such geometry by
+// 2⁻⁶⁰⁰ first (the roots scale back exactly). A ray from inside a sphere of radius 1e155 leaves
+// it at t ≈ 1e155 (it had been a miss), and one from 1e300 away meets a sphere of radius 1e299.
+TEST(Sphere, HugeSpheresAreHit) {
+    for (const bool fast : {false, true}) {
+        auto roots = [&](const Sphere& s, const Ray& r) {
+            return fast ? sphere_roots_fast(s, r) : sphere_roots(s, r);
+        };
+        const SphereRoots a = roots({{0, 0, 5}, 1e155}, ray_z());
+        ASSERT_EQ(a.count, 2) << fast;
+        EXPECT_NEAR(a.t[1], 1e155 + 5, 1e155 * 1e-15) << fast;
+        EXPECT_NEAR(a.t[0], -1e155 + 5, 1e155 * 1e-15) << fast;
+        EXPECT_LE(std::abs(a.t[1] - 1e155), a.t_err + 1e155 * 1e-15);
+        const Ray far{{0, 0, -1e300}, {0, 0, 1}};
+        const SphereRoots b = roots({{0, 0, 0}, 1e299}, far);
+        ASSERT_EQ(b.count, 2) << fast;
+        EXPECT_NEAR(b.t[0], 0.9e300, 0.9e300 * 1e-15) << fast;
+        EXPECT_NEAR(b.t[1], 1.1e300, 1.1e300 * 1e-15) << fast;
+    }
+    const auto hit = intersect_sphere({{0, 0, 5}, 1e155}, ray_z());
+    ASSERT_TRUE(hit);
+    EXPECT_NEAR(hit->t, 1e155, 1e140);
+    EXPECT_NEAR(length(hit->normal), 1.0, 1e-15);
+}
+
 TEST(Sphere, BehindOriginMisses) {
     EXPECT_FALSE(intersect_sphere({{0, 0, -10}, 2}, ray_z()));
 }

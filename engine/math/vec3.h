@@ -54,12 +54,6 @@ template <class T>
 T length(const Vec3<T>& v) {
     return std::sqrt(dot(v, v));
 }
-/// v / |v|; the zero vector stays zero rather than becoming NaN.
-template <class T>
-Vec3<T> normalize(const Vec3<T>& v) {
-    T len = length(v);
-    return len > T(0) ? v / len : v;
-}
 template <class T>
 Vec3<T> abs(const Vec3<T>& v) {
     return {std::abs(v.x), std::abs(v.y), std::abs(v.z)};
@@ -76,6 +70,25 @@ template <class T>
 T max_abs(const Vec3<T>& v) {
     const T x = std::abs(v.x), y = std::abs(v.y), z = std::abs(v.z);
     return std::max(x, std::max(y, z));
+}
+/// v / |v|; the zero vector stays zero rather than becoming NaN. Where |v|² overflows or
+/// underflows (double components past ~1e150 or below ~1e-150, float past ~1e18 or below
+/// ~1e-18), v is divided by its largest component first, so that the answer is still a unit
+/// vector: a triangle 1e78 across had the normal (0, 0, 0) from v / ∞, and one 1e-170 across
+/// kept its unnormalised cross product (an adversarial review). Ordinary vectors take the first
+/// branch and are divided as before, bit for bit.
+template <class T>
+Vec3<T> normalize(const Vec3<T>& v) {
+    constexpr T kSmall = T(sizeof(T) == sizeof(float) ? 0x1p-60 : 0x1p-500);
+    constexpr T kLarge = T(sizeof(T) == sizeof(float) ? 0x1p60 : 0x1p500);
+    const T len = length(v);
+    if (len >= kSmall && len <= kLarge)
+        return v / len;
+    const T m = max_abs(v);
+    if (!(m > T(0)) || !std::isfinite(m))
+        return len > T(0) ? v / len : v;  // zero, NaN or infinite components: as they were
+    const Vec3<T> w = v / m;              // exact in direction: its largest component is ±1
+    return w / length(w);
 }
 /// Index (0..2) of the component with the largest absolute value; ties go to the lower index.
 template <class T>
