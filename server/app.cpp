@@ -402,16 +402,12 @@ void App::on_get(const std::string& pattern, httplib::Server::Handler handler) {
     http_.Get(pattern, named_route(remember(pattern, "GET"), std::move(handler)));
 }
 
-httplib::Server::HandlerWithContentReader App::reading_body(httplib::Server::Handler handler,
-                                                            Access access) {
+httplib::Server::HandlerWithContentReader App::reading_body(httplib::Server::Handler handler) {
     // A content-reader route, not a plain one: cpp-httplib reads a plain route's body before
     // calling it, inflating a Content-Encoding without limit, and before its token is checked.
-    return [this, access, handler = std::move(handler)](const httplib::Request& req,
-                                                        httplib::Response& res,
-                                                        const httplib::ContentReader& read) {
+    return [this, handler = std::move(handler)](const httplib::Request& req, httplib::Response& res,
+                                                const httplib::ContentReader& read) {
         try {
-            if (access == Access::write_token)
-                require_write_token(req);
             // The request is process_request's own (non-const) object, handed to a content
             // reader as const: its body is filled in as the library's reader would have.
             std::string& body = const_cast<httplib::Request&>(req).body;
@@ -428,33 +424,35 @@ httplib::Server::HandlerWithContentReader App::reading_body(httplib::Server::Han
     };
 }
 
+httplib::Server::HandlerWithContentReader App::guarded(
+    httplib::Server::HandlerWithContentReader handler, Access access) {
+    if (access == Access::open)
+        return handler;
+    return [this, handler = std::move(handler)](const httplib::Request& req, httplib::Response& res,
+                                                const httplib::ContentReader& read) {
+        try {
+            require_write_token(req);  // before a byte of the body is read
+        } catch (const ApiError& e) {
+            send_error(res, e);
+            return;
+        }
+        handler(req, res, read);
+    };
+}
+
 void App::on_post(const std::string& pattern, httplib::Server::Handler handler, Access access) {
-    http_.Post(pattern,
-               named_route(remember(pattern, "POST"), reading_body(std::move(handler), access)));
+    on_post(pattern, reading_body(std::move(handler)), access);
 }
 
 void App::on_post(const std::string& pattern, httplib::Server::HandlerWithContentReader handler,
                   Access access) {
-    httplib::Server::HandlerWithContentReader checked =
-        [this, access, handler = std::move(handler)](const httplib::Request& req,
-                                                     httplib::Response& res,
-                                                     const httplib::ContentReader& read) {
-            if (access == Access::write_token) {
-                try {
-                    require_write_token(req);
-                } catch (const ApiError& e) {
-                    send_error(res, e);
-                    return;
-                }
-            }
-            handler(req, res, read);
-        };
-    http_.Post(pattern, named_route(remember(pattern, "POST"), std::move(checked)));
+    http_.Post(pattern,
+               named_route(remember(pattern, "POST"), guarded(std::move(handler), access)));
 }
 
 void App::on_delete(const std::string& pattern, httplib::Server::Handler handler, Access access) {
     http_.Delete(pattern, named_route(remember(pattern, "DELETE"),
-                                      reading_body(std::move(handler), access)));
+                                      guarded(reading_body(std::move(handler)), access)));
 }
 
 bool App::read_body(const httplib::Request& req, const httplib::ContentReader& read,
@@ -465,14 +463,12 @@ bool App::read_body(const httplib::Request& req, const httplib::ContentReader& r
                        "a multipart/form-data body is not read: send the document or file "
                        "itself as the body");
     }
-    // Neither a Content-Length nor chunked framing: RFC 9112 §6.3 gives a request body length
-    // 0. cpp-httplib would read to the end of the connection instead, so that `curl -X POST`
-    // with no data waited out the body's grace period for a 400, and a request sent after it
-    // on the connection was swallowed as its body (a helper's review).
-    std::string coding = req.get_header_value("Transfer-Encoding");
-    std::transform(coding.begin(), coding.end(), coding.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (!req.has_header("Content-Length") && coding.find("chunked") == std::string::npos)
+    // Neither a Content-Length nor chunked framing (the only Transfer-Encoding the connection
+    // layer lets through, request_head.cpp): RFC 9112 §6.3 gives a request body length 0.
+    // cpp-httplib would read to the end of the connection instead, so that `curl -X POST` with
+    // no data waited out the body's grace period for a 400, and a request sent after it on the
+    // connection was swallowed as its body (a helper's review).
+    if (!req.has_header("Content-Length") && !req.has_header("Transfer-Encoding"))
         return true;
     const std::uint64_t limit = config_.limits.max_body_bytes;
     MemoryBudget::Lease& lease = HttpServer::body_lease();

@@ -141,9 +141,11 @@ class App {
     };
     void install_handlers();
     void install_routes();
-    /// `handler` behind the access check, its body read into req.body by read_body().
-    httplib::Server::HandlerWithContentReader reading_body(httplib::Server::Handler handler,
-                                                           Access access);
+    /// `handler` with its body read into req.body by read_body() first.
+    httplib::Server::HandlerWithContentReader reading_body(httplib::Server::Handler handler);
+    /// `handler` behind the access check (the token, before a byte of the body is read).
+    httplib::Server::HandlerWithContentReader guarded(
+        httplib::Server::HandlerWithContentReader handler, Access access);
     /// Records the route (for Allow and for the metrics); its metrics route index.
     std::size_t remember(const std::string& pattern, const char* method);
     /// Fills in the API's error for a response httplib gave up on (no route, body too large,

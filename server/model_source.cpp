@@ -81,11 +81,6 @@ std::shared_ptr<engine::TriangleMesh> merge_parts(const engine::LoadedModel& mod
     return mesh;
 }
 
-/// The `files` of an inline mesh object: {relative path: base64 bytes}, the files its model
-/// names (an OBJ's .mtl and map_Kd images, a .gltf's buffers and images), each looked up by the
-/// path the model gives, relative to the model, normalised as a scene-root path is ("./a\b"
-/// and "a/b" are one file; an absolute path, a scheme or a ".." above the model is refused, as
-/// for `uri`). Their bytes count against the body limit like the rest of the document.
 /// A path an inline model gives (or a `files` key, or a `uri`), as `files` holds it: Windows
 /// separators turned into '/', then normalised as a scene-root path is (uri_resolver.h).
 engine::Result<std::string> inline_file_path(std::string path) {
@@ -93,6 +88,11 @@ engine::Result<std::string> inline_file_path(std::string path) {
     return normalize_relative(path);
 }
 
+/// The `files` of an inline mesh object: {relative path: base64 bytes}, the files its model
+/// names (an OBJ's .mtl and map_Kd images, a .gltf's buffers and images), each looked up by the
+/// path the model gives, relative to the model, normalised as a scene-root path is ("./a\b"
+/// and "a/b" are one file; an absolute path, a scheme or a ".." above the model is refused, as
+/// for `uri`). Their bytes count against the body limit like the rest of the document.
 std::map<std::string, std::string> read_inline_files(const Json& files, const std::string& path) {
     if (!files.is_object())
         throw ApiError(ErrorCode::invalid_scene, path + " must be an object", path);
@@ -337,12 +337,23 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
     return scene;
 }
 
-std::optional<engine::ModelFormat> format_from_content_type(const std::string& content_type) {
+namespace {
+
+/// A Content-Type's media type without its parameters, trimmed and lower-cased (RFC 9110
+/// §8.3.1: type and subtype are case-insensitive).
+std::string media_type(const std::string& content_type) {
     std::string ct = content_type.substr(0, content_type.find(';'));
-    while (!ct.empty() && std::isspace(static_cast<unsigned char>(ct.back())))
-        ct.pop_back();
+    ct.erase(0, ct.find_first_not_of(" \t"));
+    ct.erase(ct.find_last_not_of(" \t") + 1);
     std::transform(ct.begin(), ct.end(), ct.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ct;
+}
+
+}  // namespace
+
+std::optional<engine::ModelFormat> format_from_content_type(const std::string& content_type) {
+    const std::string ct = media_type(content_type);
     using F = engine::ModelFormat;
     if (ct == "model/gltf-binary")
         return F::glb;
@@ -460,14 +471,9 @@ std::shared_ptr<const engine::QueryEngine> ModelSource::build_scene(const SceneS
 std::string classify_scene_body(std::string_view body, const std::string& content_type) {
     if (body.empty())
         return "application/json";
-    // The media type without its parameters, trimmed and lower-cased (RFC 9110 §8.3.1: type and
-    // subtype are case-insensitive): it is hashed into the scene's id, and 'Model/OBJ' had given
-    // another id than 'model/obj' for the same bytes (an adversarial review).
-    std::string ct = content_type.substr(0, content_type.find(';'));
-    ct.erase(0, ct.find_first_not_of(" \t"));
-    ct.erase(ct.find_last_not_of(" \t") + 1);
-    std::transform(ct.begin(), ct.end(), ct.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    // Normalised, as it is hashed into the scene's id: 'Model/OBJ' had given another id than
+    // 'model/obj' for the same bytes (an adversarial review).
+    const std::string ct = media_type(content_type);
     if (ct == "application/json")
         return ct;
     if (format_from_content_type(ct))

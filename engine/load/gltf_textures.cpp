@@ -110,6 +110,18 @@ void read_texture_transform(const tinygltf::TextureInfo& info, UvMapping& out) {
     }
 }
 
+/// Image `source` read (image_bytes) and decoded against the model's budget (decoded_pixels).
+Result<std::shared_ptr<const TextureImage>> decoded_image(const tinygltf::Model& m,
+                                                          std::size_t source,
+                                                          const ResourceReader& read,
+                                                          const LoadLimits& limits,
+                                                          std::size_t& decoded_pixels) {
+    auto bytes = image_bytes(m, source, read);
+    if (!bytes)
+        return bytes.status();
+    return detail::decode_texture_image(*bytes, limits, decoded_pixels);
+}
+
 }  // namespace
 
 std::vector<std::optional<std::array<double, 2>>> metallic_roughness_means(
@@ -135,9 +147,7 @@ std::vector<std::optional<std::array<double, 2>>> metallic_roughness_means(
         const auto source =
             static_cast<std::size_t>(m.textures[static_cast<std::size_t>(info.index)].source);
         if (!by_image.count(source)) {
-            auto bytes = image_bytes(m, source, read);
-            auto image = bytes ? detail::decode_texture_image(*bytes, limits, decoded_pixels)
-                               : Result<std::shared_ptr<const TextureImage>>(bytes.status());
+            auto image = decoded_image(m, source, read, limits, decoded_pixels);
             std::optional<std::array<double, 2>> mean;
             if (image) {
                 // glTF 2.0 §3.9.2: metalness in B, roughness in G, linear values (no sRGB).
@@ -195,9 +205,7 @@ std::vector<UvMapping> attach_base_color_textures(const tinygltf::Model& m,
             continue;
         }
         if (!decoded.count(source) && !failed.count(source)) {
-            auto bytes = image_bytes(m, source, read);
-            auto image = bytes ? detail::decode_texture_image(*bytes, limits, decoded_pixels)
-                               : Result<std::shared_ptr<const TextureImage>>(bytes.status());
+            auto image = decoded_image(m, source, read, limits, decoded_pixels);
             if (image)
                 decoded[source] = *image;
             else

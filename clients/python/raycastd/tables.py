@@ -25,26 +25,33 @@ class TableError(ValueError):
     """A file that is not a table of numbers; the message names the file and the place."""
 
 
-def read_table(path: str | pathlib.Path) -> list[list[float]]:
-    """Rows of floats from a `.npy` or a CSV/text file (1-D `.npy`: one value a row)."""
+def read_table(path: str | pathlib.Path, blank_rows: bool = False) -> list[list[float]]:
+    """Rows of floats from a `.npy` or a CSV/text file (1-D `.npy`: one value a row).
+    `blank_rows`: a blank line of a text file is an empty row instead of being skipped."""
     path = pathlib.Path(path)
     data = path.read_bytes()
     if path.suffix.lower() == ".npy" or data.startswith(b"\x93NUMPY"):
         return read_npy(data, str(path))
-    return read_csv(data.decode("utf-8-sig", errors="replace"), str(path))
+    return read_csv(data.decode("utf-8-sig", errors="replace"), str(path), blank_rows)
 
 
-def read_csv(text: str, name: str = "<csv>") -> list[list[float]]:
-    """Rows of floats from CSV text (commas, or whitespace when a line has no comma)."""
+def read_csv(text: str, name: str = "<csv>", blank_rows: bool = False) -> list[list[float]]:
+    """Rows of floats from CSV text (commas, or whitespace when a line has no comma). A blank
+    line is skipped, or with `blank_rows` an empty row; a `#` line is a comment; a first line
+    that is not numbers is a header."""
     rows: list[list[float]] = []
     for lineno, line in enumerate(text.splitlines(), 1):
-        if not line.strip() or line.lstrip().startswith("#"):
+        if not line.strip():
+            if blank_rows:
+                rows.append([])
+            continue
+        if line.lstrip().startswith("#"):
             continue
         cells = next(csv.reader([line])) if "," in line else line.split()
         try:
             rows.append([_cell(c) for c in cells])
         except ValueError:
-            if not rows and lineno == _first_line(text):
+            if lineno == _first_line(text):
                 continue  # a header row
             raise TableError(f"{name}:{lineno}: not a number in {line.strip()!r}") from None
     return rows

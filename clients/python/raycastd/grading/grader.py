@@ -11,7 +11,6 @@ questions that need it 0 with a message saying why, and the results are written 
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import pathlib
@@ -34,7 +33,6 @@ from raycastd.grading import compare as cmp
 from raycastd.grading.images import compare_images
 from raycastd.grading.questions import POINT_ASKS, TREE_ASKS, Question, QuestionSet
 from raycastd.png import PngError, read_png, write_png
-from raycastd.tables import MISS_WORDS as TABLE_MISS_WORDS
 from raycastd.tables import TableError, read_table
 
 MISSING = object()  # no answer given for a question
@@ -524,47 +522,17 @@ BLANK_ROW_ASKS = {"t", "hits", "triangle_hit"}
 
 
 def _read_rows(q: Question, path: pathlib.Path) -> list[list[float]]:
-    """The rows of a program's output, as `tables.read_table` reads them, except that for the
-    asks of BLANK_ROW_ASKS a blank line is a row of its own (empty: a miss) instead of being
-    skipped, so `8\n\n8\n` is three rays, the second a miss. Blank lines past the number of
-    rays at the end of the file (a trailing newline or two) are not rows."""
-    data = path.read_bytes()
-    if (
-        q.ask not in BLANK_ROW_ASKS
-        or path.suffix.lower() == ".npy"
-        or data.startswith(b"\x93NUMPY")
-    ):
-        return read_table(path)
-    rows: list[list[float]] = []
-    content_seen = False
-    for lineno, line in enumerate(data.decode("utf-8-sig", errors="replace").splitlines(), 1):
-        text = line.strip()
-        if text.startswith("#"):
-            continue
-        if not text:
-            rows.append([])
-            continue
-        cells = next(csv.reader([line])) if "," in line else line.split()
-        try:
-            rows.append([_cell(c) for c in cells])
-        except ValueError:
-            if not content_seen:  # a header row (and any blank lines above it)
-                rows = []
-                content_seen = True
-                continue
-            raise TableError(f"{path}:{lineno}: not a number in {text!r}") from None
-        content_seen = True
+    """The rows of a program's output (`tables.read_table`); for the asks of BLANK_ROW_ASKS a
+    blank line is a row of its own (empty: a miss) instead of being skipped, so `8\n\n8\n` is
+    three rays, the second a miss. Blank lines past the number of rays at either end of the
+    file (a trailing newline, an empty first line) are not rows."""
+    rows = read_table(path, blank_rows=q.ask in BLANK_ROW_ASKS)
     wanted = len(q.rays or q.query_points) if q.many else 1
     while len(rows) > wanted and not rows[-1]:
         rows.pop()
-    while len(rows) > wanted and not rows[0]:  # blank lines above the answers, likewise
+    while len(rows) > wanted and not rows[0]:
         rows.pop(0)
     return rows
-
-
-def _cell(text: str) -> float:
-    t = text.strip().lower()
-    return math.inf if t in TABLE_MISS_WORDS else float(t)
 
 
 def _what_file(q: Question) -> str:
