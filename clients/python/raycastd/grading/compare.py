@@ -15,7 +15,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-from raycastd.grading.questions import Question
+from raycastd.grading.questions import Question, norm_name
 from raycastd.grading.tolerance import Tolerance
 
 MISS_WORDS = {"none", "miss", "nothing", "no hit", "null", "", "inf", "infinity", "n/a", "-"}
@@ -95,10 +95,6 @@ def fmt(v: Any) -> str:
     return str(v)
 
 
-def _norm_name(s: str) -> str:
-    return re.sub(r"\s+", "", s.strip().lower())
-
-
 def check_first_hit(ref: tuple[int, str] | None, value: Any, q: Question) -> Check:
     """ref: (object index, name) or None for a miss."""
     expected = ref[1] if ref else None
@@ -107,13 +103,13 @@ def check_first_hit(ref: tuple[int, str] | None, value: Any, q: Question) -> Che
     elif ref is not None and ref[0] < 0:
         # an instructor's name in a scene whose objects the server numbers: names only (an
         # index answer cannot be matched, and 0 with index_base 1 had equalled the -1)
-        if isinstance(value, str) and _norm_name(value) == _norm_name(ref[1]):
+        if isinstance(value, str) and norm_name(value) == norm_name(ref[1]):
             return Check(1.0, f"{expected}")
         return Check(0.0, f"expected {fmt(expected)} (by name), got {value}")
     elif isinstance(value, int) and not isinstance(value, bool):
         got_index = value - q.index_base
     elif isinstance(value, str):
-        if ref is not None and _norm_name(value) == _norm_name(ref[1]):
+        if ref is not None and norm_name(value) == norm_name(ref[1]):
             return Check(1.0, f"{expected}")
         if value.strip().lstrip("-").isdigit():
             got_index = int(value) - q.index_base

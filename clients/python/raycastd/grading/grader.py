@@ -31,7 +31,7 @@ from raycastd.client import Client
 from raycastd.errors import RaycastdError
 from raycastd.grading import compare as cmp
 from raycastd.grading.images import compare_images
-from raycastd.grading.questions import POINT_ASKS, TREE_ASKS, Question, QuestionSet
+from raycastd.grading.questions import POINT_ASKS, TREE_ASKS, Question, QuestionSet, has_mesh
 from raycastd.png import PngError, read_png, write_png
 from raycastd.tables import TableError, read_table
 
@@ -393,9 +393,7 @@ class Grader:
             return _full_camera(own)
         view = summary.get("default_view")
         if view not in ("+z", "-z"):  # a server older than default_view: the same rule
-            objects = q.scene.get("objects") or []
-            mesh = any(isinstance(o, dict) and o.get("type") == "mesh" for o in objects)
-            view = "+z" if mesh else "-z"
+            view = "+z" if has_mesh(q.scene) else "-z"
         aspect = spec.width / spec.height if spec.height else 0.0
         return default_camera(summary.get("bounds"), aspect, view)
 

@@ -249,7 +249,7 @@ def _question(
     if question.object is not None:
         if ask != "triangle_hit":
             raise ValueError(f"object is read by triangle_hit questions only, not {ask}")
-        if not _has_mesh(scene):
+        if not has_mesh(scene):
             question.object = _object(question.object, names, question.index_base, "object")
         elif not isinstance(question.object, str) or not question.object.strip():
             # as for first_hit's expected: the server numbers a mesh's parts
@@ -274,7 +274,8 @@ def object_names(scene: Mapping[str, Any]) -> list[str]:
     return names
 
 
-def _has_mesh(scene: Mapping[str, Any]) -> bool:
+def has_mesh(scene: Mapping[str, Any]) -> bool:
+    """Whether a scene document has a mesh object, whose parts the server names and numbers."""
     objects = scene.get("objects")
     return any(
         isinstance(o, Mapping) and o.get("type") == "mesh"
@@ -282,7 +283,8 @@ def _has_mesh(scene: Mapping[str, Any]) -> bool:
     )
 
 
-def _norm_name(s: str) -> str:
+def norm_name(s: str) -> str:
+    """An object's name as names are compared: case and whitespace ignored."""
     return "".join(s.split()).lower()
 
 
@@ -304,7 +306,7 @@ def _object(v: Any, names: list[str], base: int, where: str) -> int | str:
             f"{_listing(names, base)})"
         )
     if isinstance(v, str) and v.strip():
-        if any(_norm_name(n) == _norm_name(v) for n in names):
+        if any(norm_name(n) == norm_name(v) for n in names):
             return v
         raise ValueError(
             f"{where} = {v!r} names no object of the scene ({_listing(names, base)}; "
@@ -338,7 +340,7 @@ def _expected_one(q: Question, v: Any, names: list[str], where: str) -> Any:
     if ask == "first_hit":  # (object index, name), or None for no hit
         if _is_miss(v):
             return None
-        if _has_mesh(q.scene):
+        if has_mesh(q.scene):
             # A mesh object becomes as many objects as its file has parts, named and numbered
             # by the server: the document's list says neither, so the name is compared as
             # written (index -1), and an index cannot be resolved here.
@@ -355,7 +357,7 @@ def _expected_one(q: Question, v: Any, names: list[str], where: str) -> Any:
             return (i, names[i])  # type: ignore[index]
         if isinstance(v, str):
             _object(v, names, q.index_base, where)
-            return next((i, n) for i, n in enumerate(names) if _norm_name(n) == _norm_name(v))
+            return next((i, n) for i, n in enumerate(names) if norm_name(n) == norm_name(v))
         raise ValueError(f'{where} must be an object\'s name or index, or "none", not {v!r}')
     if ask == "t":  # a number; inf for a miss
         if _is_miss(v):
