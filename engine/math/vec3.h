@@ -71,6 +71,18 @@ T max_abs(const Vec3<T>& v) {
     const T x = std::abs(v.x), y = std::abs(v.y), z = std::abs(v.z);
     return std::max(x, std::max(y, z));
 }
+/// normalize()'s rare branch: v, whose length `len` overflowed, underflowed or is 0 or NaN,
+/// divided by its largest component first. Out of line and cold, so that normalize() itself
+/// stays small enough to inline: the branch in line had made it a call, 7% of a Duck render
+/// (perf, bench_render --scenes duck --precisions fast).
+template <class T>
+[[gnu::cold, gnu::noinline]] Vec3<T> normalize_rescaled(const Vec3<T>& v, T len) {
+    const T m = max_abs(v);
+    if (!(m > T(0)) || !std::isfinite(m))
+        return len > T(0) ? v / len : v;  // zero, NaN or infinite components: as they were
+    const Vec3<T> w = v / m;              // exact in direction: its largest component is ±1
+    return w / length(w);
+}
 /// v / |v|; the zero vector stays zero rather than becoming NaN. Where |v|² overflows or
 /// underflows (double components past ~1e150 or below ~1e-150, float past ~1e18 or below
 /// ~1e-18), v is divided by its largest component first, so that the answer is still a unit
@@ -78,17 +90,13 @@ T max_abs(const Vec3<T>& v) {
 /// kept its unnormalised cross product (an adversarial review). Ordinary vectors take the first
 /// branch and are divided as before, bit for bit.
 template <class T>
-Vec3<T> normalize(const Vec3<T>& v) {
+inline Vec3<T> normalize(const Vec3<T>& v) {
     constexpr T kSmall = T(sizeof(T) == sizeof(float) ? 0x1p-60 : 0x1p-500);
     constexpr T kLarge = T(sizeof(T) == sizeof(float) ? 0x1p60 : 0x1p500);
     const T len = length(v);
     if (len >= kSmall && len <= kLarge)
         return v / len;
-    const T m = max_abs(v);
-    if (!(m > T(0)) || !std::isfinite(m))
-        return len > T(0) ? v / len : v;  // zero, NaN or infinite components: as they were
-    const Vec3<T> w = v / m;              // exact in direction: its largest component is ±1
-    return w / length(w);
+    return normalize_rescaled(v, len);
 }
 /// Index (0..2) of the component with the largest absolute value; ties go to the lower index.
 template <class T>
