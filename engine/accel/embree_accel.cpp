@@ -276,8 +276,12 @@ void fast_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) {
                 out[i + k] = any_answer(fast_any(a, rays[i + k]));
             continue;
         }
+        RTCScene s = a.fast_scene();
+        // Only fast's own BVH takes a plain context (fast_closest_range says why).
+        if (s != a.native.get() && fast_any_packet(a, s, rays + i, m, out + i))
+            continue;
         any_packet(
-            a, a.fast_scene(), rays + i, m,
+            a, s, rays + i, m,
             [&](const Ray& ray, RayContext& c, FloatRay& f) {
                 return prepare_fast_native_ray(a, ray, c, f);
             },

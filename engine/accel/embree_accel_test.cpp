@@ -242,6 +242,23 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
         EXPECT_GT(hits, 1500);
         EXPECT_FALSE(packed[5].valid());
         EXPECT_TRUE(packed[40].valid());
+        // `any` in packets (fast's lean occlusion packet, fast_any_packet, and the general
+        // one), against single rays; some segments stop short of what they would hit.
+        std::vector<Ray> shadow = rays;
+        for (std::size_t i = 0; i < shadow.size(); i += 3)
+            shadow[i].tmax = 5.5 + 0.002 * static_cast<double>(i % 500);
+        std::vector<Hit> occluded(shadow.size());
+        b.accel->any_range(shadow.data(), shadow.size(), p, occluded.data());
+        int blocked = 0, free = 0;
+        for (std::size_t i = 0; i < shadow.size(); ++i) {
+            const bool one = b.accel->any(shadow[i], p);
+            EXPECT_EQ(one, occluded[i].valid()) << i;
+            ++(one ? blocked : free);
+        }
+        EXPECT_GT(blocked, 1000);
+        EXPECT_GT(free, 500);
+        EXPECT_FALSE(occluded[5].valid());
+        EXPECT_TRUE(occluded[40].valid());
     }
 }
 

@@ -5,7 +5,7 @@
 // one ray at a time, so a packet's lanes are never handed to our callbacks.
 //
 //   fast_packet     fast's common case: every lane takes the unclipped float ray, so the lanes
-//                   are filled straight from the double rays and answered straight from
+//   fast_any_packet are filled straight from the double rays and answered straight from
 //                   Embree's hits;
 //   closest_packet  any float set-up (fast's clipped rays, refined's), each lane with its own
 //   any_packet      RayContext (the packet's context points to them, for refined's hit filter);
@@ -65,6 +65,14 @@ RTCIntersectContext packet_context(const Ray* rays, std::size_t m, double scene_
 /// with nothing written, when some ray needs prepare_ray.
 bool fast_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, bool want_normal,
                  Hit* out);
+
+/// fast_packet's `any`: the occlusion packet of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene)
+/// on `scene` with lanes filled straight from the double rays, each answer any_answer(Embree's
+/// float answer). Renders trace their shadow rays through it: the general any_packet's 16
+/// RayContexts and coherence test in double had been 9% of a Duck render (perf). False, with
+/// nothing written, when some ray needs prepare_ray. `scene` is fast's own BVH, which has no
+/// hit filter (the packet's context is a plain one).
+bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Hit* out);
 
 /// Lanes 0..16 of a packet from rays[0..m): lane k < m is on (valid −1) when prepare(ray,
 /// lanes[k], float_ray) set it up; lanes past m, and rays whose segment misses the bounds, are
