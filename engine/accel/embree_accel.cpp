@@ -109,6 +109,8 @@ Hit kept_sphere_hit(const Object& o, const Ray& ray, const std::optional<Hit>& s
     Hit h = *sphere_hit;
     if (want_normal)
         sphere_normal(o.sphere, ray, h.t, h);
+    else
+        h.normal = Vec3d{};  // sphere_hits fills it for front_face: not asked, not answered
     return h;
 }
 
@@ -138,6 +140,8 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
         } else {
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
         }
+    } else {
+        h.normal = Vec3d{};  // a sphere's candidate came with one (sphere_hits)
     }
     return h;
 }
@@ -174,6 +178,8 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
         const Object& o = a.scene->objects[h.object];
         if (want_normal && o.kind != ObjectKind::sphere) {
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
+        } else if (!want_normal) {
+            h.normal = Vec3d{};  // a sphere's hits came with one (sphere_hits)
         }
     }
     sort_and_merge_edge_duplicates(out);
@@ -227,6 +233,8 @@ void fast_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>&
         const Object& o = a.scene->objects[h.object];
         if (want_normal && o.kind != ObjectKind::sphere)
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
+        else if (!want_normal)
+            h.normal = Vec3d{};  // a sphere's hits came with one (sphere_hits)
     }
     sort_and_merge_edge_duplicates(out);
 }

@@ -98,6 +98,8 @@ void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vecto
             const int n = sphere_hits(o.sphere, ray, hits);  // front_face is needed for merging
             for (int k = 0; k < n; ++k) {
                 hits[k].object = i;
+                if (!want_normal)
+                    hits[k].normal = Vec3d{};  // not asked, not answered
                 out.push_back(hits[k]);
             }
             continue;

@@ -1,5 +1,7 @@
 #include "engine/query/intersect.h"
 
+#include <set>
+
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
@@ -39,6 +41,44 @@ TEST(Query, ModesOnTutorialScene) {
     r = engine->intersect(rays, opt);
     EXPECT_EQ(r.offsets, (std::vector<std::uint32_t>{0, 4, 4}));
     EXPECT_EQ(r.hits[1].t, 8.0);
+}
+
+// A normal not asked for is not answered: zeros on every path, spheres included (whose
+// candidates come with one for front_face). The binary form's ?fields without `normal` had
+// returned spheres' normals at exact (api_intersect_test's BinaryFieldsAreTheJsonNames).
+TEST(Query, NormalsAreZeroUnlessAskedFor) {
+    for (int big = 0; big < 2; ++big) {
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects.push_back(testing::sphere("ball", {0, 0, 4}, 1.0, 0));
+        // 320 triangles put the scene on Embree's BVHs; a cube keeps it brute force.
+        s.objects.push_back(big ? testing::icosphere_object(2, {2.5, 0, 4}, 1.0)
+                                : testing::cube_object(2.0, 3.0));
+        auto engine = build(std::move(s));
+        std::vector<Ray> rays;
+        for (int k = 0; k < 64; ++k) {
+            rays.push_back(Ray{{-0.5 + 0.05 * k, 0.1, -3}, {0, 0.01, 1}});  // ball, icosphere
+            rays.push_back(Ray{{2.1 + 0.01 * k, 2.5, -3}, {0, 0.001, 1}});  // the cube
+        }
+        for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+            for (Mode mode : {Mode::closest, Mode::all}) {
+                QueryOptions opt;
+                opt.precision = p;
+                opt.mode = mode;
+                opt.want_normal = false;
+                const QueryResult r = engine->intersect(rays, opt);
+                std::set<std::uint32_t> objects;
+                for (const Hit& h : r.hits) {
+                    if (!h.valid())
+                        continue;
+                    objects.insert(h.object);
+                    EXPECT_EQ(h.normal, Vec3d{}) << big << " " << to_string(p) << " "
+                                                 << to_string(mode) << " object " << h.object;
+                }
+                EXPECT_EQ(objects.size(), 2u) << big << " " << to_string(p);
+            }
+        }
+    }
 }
 
 // A batch big enough to run in parallel gives the same answers as one ray at a time.

@@ -26,9 +26,10 @@ BinaryQuery parse_binary_query(const httplib::Request& req) {
     q.dtype = parse_dtype(param("dtype"));
     opt.want_normal = true;
     if (req.has_param("fields")) {
-        // ?fields=t,object: normals are left out (zeros) unless asked for.
-        const std::string f = param("fields");
-        opt.want_normal = f.find("normal") != std::string::npos;
+        // ?fields=t,object: normals are left out (zeros) unless asked for. The names are the
+        // JSON form's; an unknown one is refused (until 2026-12-05 any text was taken, and
+        // ?fields=normals asked for normals).
+        opt.want_normal = parse_field_list(param("fields"), "fields").normal;
     }
     return q;
 }

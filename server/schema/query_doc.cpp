@@ -42,40 +42,64 @@ engine::Ray parse_ray(const Json& j, const std::string& path, std::size_t index)
 
 }  // namespace
 
+namespace {
+
+/// Sets the part of `m` that field name `f` asks for; invalid_request at `path` for an unknown
+/// name.
+void add_field(FieldMask& m, const std::string& f, const std::string& path) {
+    if (f == "t")
+        m.t = true;
+    else if (f == "t_err")
+        m.t_err = true;
+    else if (f == "point")
+        m.point = true;
+    else if (f == "normal")
+        m.normal = m.front_face = true;
+    else if (f == "front_face")
+        m.front_face = true;
+    else if (f == "object")
+        m.object = true;
+    else if (f == "name")
+        m.name = true;
+    else if (f == "primitive")
+        m.primitive = true;
+    else if (f == "barycentric")
+        m.barycentric = true;
+    else
+        throw ApiError(kInvalidRequest,
+                       "unknown field \"" + f +
+                           "\" (expected t, t_err, point, normal, front_face, object, name, "
+                           "primitive, barycentric)",
+                       path);
+}
+
+constexpr FieldMask kNoFields{false, false, false, false, false, false, false, false, false};
+
+}  // namespace
+
 FieldMask parse_fields(const Json& j, const std::string& path) {
     if (!j.is_array())
         throw ApiError(kInvalidRequest, path + " must be an array of names", path);
-    FieldMask m{false, false, false, false, false, false, false, false, false};
+    FieldMask m = kNoFields;
     for (std::size_t i = 0; i < j.size(); ++i) {
         const std::string p = child_path(path, i);
-        const std::string f = read_string(j.at(i), p, kInvalidRequest);
-        if (f == "t")
-            m.t = true;
-        else if (f == "t_err")
-            m.t_err = true;
-        else if (f == "point")
-            m.point = true;
-        else if (f == "normal")
-            m.normal = m.front_face = true;
-        else if (f == "front_face")
-            m.front_face = true;
-        else if (f == "object")
-            m.object = true;
-        else if (f == "name")
-            m.name = true;
-        else if (f == "primitive")
-            m.primitive = true;
-        else if (f == "barycentric")
-            m.barycentric = true;
-        else {
-            throw ApiError(kInvalidRequest,
-                           "unknown field \"" + f +
-                               "\" (expected t, t_err, point, normal, front_face, object, name, "
-                               "primitive, barycentric)",
-                           p);
-        }
+        add_field(m, read_string(j.at(i), p, kInvalidRequest), p);
     }
     return m;
+}
+
+FieldMask parse_field_list(const std::string& list, const std::string& path) {
+    FieldMask m = kNoFields;
+    if (list.empty())
+        return m;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t comma = list.find(',', start);
+        add_field(m, list.substr(start, comma - start), path);
+        if (comma == std::string::npos)
+            return m;
+        start = comma + 1;
+    }
 }
 
 namespace {

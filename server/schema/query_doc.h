@@ -32,6 +32,9 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
 engine::Mode parse_mode(const std::string& s, const std::string& path);
 /// The `fields` array (invalid_request naming the unknown entry).
 FieldMask parse_fields(const Json& j, const std::string& path);
+/// The same names as a comma-separated list (the binary form's `?fields=t,object`); an empty
+/// list asks for none, an empty or unknown entry is invalid_request at `path`.
+FieldMask parse_field_list(const std::string& list, const std::string& path);
 engine::Precision parse_precision(const std::string& s, const std::string& path);
 
 /// {"precision": ..., "hits": [...]} with the record shape of the mode.
