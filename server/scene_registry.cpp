@@ -150,6 +150,73 @@ bool writer_alive(const fs::path& lock) {
     return held;
 }
 
+/// What a saved copy (meta.json and body, and with `files` every file's copy) read from `dir`
+/// holds, and what is wrong with it ("" when whole). The id is the hash of the request and of
+/// every file (scene_id), so each byte is checked against it.
+struct SavedCopy {
+    std::map<std::string, std::string> names, file_sha;
+    std::string content_type, request_key;
+    std::optional<std::string> body;
+    std::string damage;
+    bool meta_missing = false;
+};
+
+/// What is wrong with the saved copy of file `path` of `c` ("" when it has its bytes, which go
+/// to `bytes` if given).
+std::string saved_file_damage(const fs::path& dir, const SavedCopy& c, const std::string& path,
+                              std::string* bytes) {
+    const auto name = c.names.find(path);
+    const auto sha = c.file_sha.find(path);
+    const std::optional<std::string> read =
+        name == c.names.end() ? std::nullopt : read_file(dir / name->second);
+    if (!read)
+        return "its copy of \"" + path + "\" is missing";
+    if (sha == c.file_sha.end() || sha256_hex(*read) != sha->second)
+        return "its copy of \"" + path + "\" does not have the bytes it was read with";
+    if (bytes)
+        *bytes = *read;
+    return {};
+}
+
+SavedCopy read_saved_copy(const fs::path& dir, const std::string& id, bool files) {
+    SavedCopy c;
+    const auto meta_text = read_file(dir / "meta.json");
+    c.body = read_file(dir / "body");
+    if (!meta_text) {
+        c.meta_missing = true;
+        c.damage = "its meta.json is missing";
+        return c;
+    }
+    if (!c.body) {
+        c.damage = "its body is missing";
+        return c;
+    }
+    try {
+        const std::optional<Json> meta = try_parse_json(*meta_text);
+        if (!meta)
+            throw std::runtime_error("not JSON");
+        c.names = meta->at("files").get<std::map<std::string, std::string>>();
+        c.file_sha = meta->at("file_sha").get<std::map<std::string, std::string>>();
+        c.content_type = meta->at("content_type").get<std::string>();
+        c.request_key = meta->at("request_key").get<std::string>();
+    } catch (const std::exception& ex) {
+        c.damage = std::string("its meta.json is unreadable: ") + ex.what();
+        return c;
+    }
+    if (scene_request_key(c.content_type, *c.body) != c.request_key) {
+        c.damage = "its body does not have the bytes it was registered with";
+    } else if (scene_id(c.request_key, c.file_sha) != id) {
+        c.damage = "its meta.json does not match the scene's id";
+    } else if (files) {
+        for (const auto& [path, sha] : c.file_sha) {
+            c.damage = saved_file_damage(dir, c, path, nullptr);
+            if (!c.damage.empty())
+                break;
+        }
+    }
+    return c;
+}
+
 }  // namespace
 
 SceneRegistry::SceneRegistry(std::string data_dir, std::size_t memory_budget, Builder builder)
@@ -406,8 +473,18 @@ SceneRegistry::Saved SceneRegistry::persist(const std::string& id, const SceneSo
     const fs::path scenes = fs::path(data_dir_) / "scenes";
     const fs::path final_dir = scenes / id;
     std::error_code ec;
-    if (fs::exists(final_dir / "meta.json", ec))
-        return Saved::already;
+    if (fs::exists(final_dir / "meta.json", ec)) {
+        const std::string damage = read_saved_copy(final_dir, id, /*files=*/true).damage;
+        if (damage.empty())
+            return Saved::already;
+        // A damaged copy (rebuild says how it shows) is moved aside and replaced by this one.
+        // Two writers may both find it damaged: the second rename finds it gone, which is fine.
+        std::fprintf(stderr, "raycastd: replacing the damaged saved copy %s (%s)\n",
+                     final_dir.c_str(), damage.c_str());
+        const fs::path aside = fs::path(data_dir_) / "tmp" / unique_tmp_name(id + ".damaged");
+        fs::rename(final_dir, aside, ec);
+        fs::remove_all(aside, ec);
+    }
     const fs::path tmp = fs::path(data_dir_) / "tmp" / unique_tmp_name(id);
     fs::create_directories(tmp, ec);
     if (ec) {
@@ -453,29 +530,52 @@ SceneRegistry::Saved SceneRegistry::persist(const std::string& id, const SceneSo
 
 std::shared_ptr<const engine::QueryEngine> SceneRegistry::rebuild(const std::string& id) {
     const fs::path dir = fs::path(data_dir_) / "scenes" / id;
-    auto meta_text = read_file(dir / "meta.json");
-    auto body = read_file(dir / "body");
-    if (!meta_text || !body) {
+    // A copy damaged on disk (a file removed or changed by hand, a bad sector) is refused rather
+    // than built: built, it would answer as a different scene under this id. The scene stays
+    // registered; DELETE removes the copy, and registering the scene again saves a new one (so
+    // does registering it again where the copy's meta.json is unreadable, which makes the scene
+    // unknown: persist replaces a damaged copy).
+    const auto damaged = [&](const std::string& what) {
+        std::fprintf(stderr, "raycastd: the saved copy of %s is damaged: %s\n", dir.c_str(),
+                     what.c_str());
+        return ApiError(ErrorCode::internal, "the saved copy of scene " + id +
+                                                 " in the data dir is damaged (" + what +
+                                                 "): DELETE the scene and register it again");
+    };
+    const SavedCopy copy = read_saved_copy(dir, id, /*files=*/false);
+    if (copy.meta_missing || !copy.body) {
         std::error_code ec;
         if (!fs::exists(dir, ec))
             return nullptr;  // deleted through another replica sharing the data dir
-        throw ApiError(ErrorCode::internal, "saved copy of " + id + " is missing");
     }
-    const Json meta = Json::parse(*meta_text);
-    const auto names = meta.at("files").get<std::map<std::string, std::string>>();
-    // Replay exactly the bytes the scene was built from, not today's files under the root.
+    if (!copy.damage.empty())
+        throw damaged(copy.damage);
+    // Replay exactly the bytes the scene was built from, not today's files under the root. A
+    // damaged file is an error Status to the loader (which may turn it into its own error or
+    // carry on without the file) and the rebuild's answer after it.
+    std::string damage;
     FileSource saved = [&](const std::string& path) -> engine::Result<std::string> {
-        auto it = names.find(path);
-        if (it == names.end()) {
+        if (copy.names.count(path) == 0 || copy.file_sha.count(path) == 0) {
             return engine::Status::error(engine::Code::invalid_scene,
                                          "\"" + path + "\" was not part of the saved scene");
         }
-        auto bytes = read_file(dir / it->second);
-        if (!bytes)
-            return engine::Status::error(engine::Code::internal, "saved file missing");
-        return *bytes;
+        std::string bytes;
+        damage = saved_file_damage(dir, copy, path, &bytes);
+        if (!damage.empty())
+            return engine::Status::error(engine::Code::internal, damage);
+        return bytes;
     };
-    return builder_(SceneSource{meta.at("content_type").get<std::string>(), *body}, saved);
+    std::shared_ptr<const engine::QueryEngine> engine;
+    try {
+        engine = builder_(SceneSource{copy.content_type, *copy.body}, saved);
+    } catch (...) {
+        if (!damage.empty())
+            throw damaged(damage);
+        throw;
+    }
+    if (!damage.empty())
+        throw damaged(damage);
+    return engine;
 }
 
 std::shared_ptr<const engine::QueryEngine> SceneRegistry::get(const std::string& id) {
