@@ -96,7 +96,7 @@ ApiError from_status(const engine::Status& st, const std::string& path_prefix) {
 }
 
 std::string error_body(const ApiError& e) {
-    nlohmann::json err = {{"code", std::string(to_string(e.code))}, {"message", e.what()}};
+    nlohmann::json err = {{"code", std::string(to_string(e.code))}, {"message", e.message}};
     if (!e.path.empty())
         err["path"] = e.path;
     return nlohmann::json{{"error", err}}.dump(-1, ' ', false,

@@ -42,9 +42,15 @@ std::ostream& operator<<(std::ostream& os, ErrorCode code);
 struct ApiError : std::runtime_error {
     ErrorCode code;
     std::string path;  ///< JSON pointer into the request body, empty when not applicable
+    /// The whole message: what() is a C string, which a NUL byte from the request (a key
+    /// quoted in the message) would cut short.
+    std::string message;
 
-    ApiError(ErrorCode code_, std::string message, std::string path_ = {})
-        : std::runtime_error(std::move(message)), code(code_), path(std::move(path_)) {}
+    ApiError(ErrorCode code_, std::string message_, std::string path_ = {})
+        : std::runtime_error(message_),
+          code(code_),
+          path(std::move(path_)),
+          message(std::move(message_)) {}
 
     int http_status() const { return http_status_of(code); }
 };

@@ -90,6 +90,13 @@ TEST(ApiError, BodyCarriesCodeMessageAndPath) {
                         R"({"error":{"code":"invalid_ray","message":"bad","path":"/rays/3"}})"));
     const auto no_path = nlohmann::json::parse(error_body(ApiError(ErrorCode::busy, "later")));
     EXPECT_FALSE(no_path.at("error").contains("path"));
+    // A NUL from the request (an inline `files` key quoted in the message) does not cut the
+    // message short: what() had ended it there ("/objects/0/files/a").
+    const std::string key = std::string("/objects/0/files/a") + '\0' + "b.mtl";
+    const auto nul = nlohmann::json::parse(
+        error_body(ApiError(ErrorCode::invalid_scene, key + ": not a path", key)));
+    EXPECT_EQ(nul.at("error").at("message"), key + ": not a path");
+    EXPECT_EQ(nul.at("error").at("path"), key);
 }
 
 }  // namespace
