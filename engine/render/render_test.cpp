@@ -184,6 +184,24 @@ TEST(Camera, AimAtMovesLookAtAlongTheAxisToTheTarget) {
     EXPECT_FALSE(has_view(none));
 }
 
+// A camera whose look_at is 1e-300 from its position, or 1e300, sees along that direction: its
+// rays are unit and finite (normalize() rescales such vectors).
+TEST(Render, CameraRaysAtExtremeViewLengths) {
+    for (double len : {1e-300, 1.0, 1e300}) {
+        Camera c;
+        c.position = {0, 0, 0};
+        c.look_at = Vec3d{1, 0, 1} * len;
+        c.up = {0, 1, 0};
+        const Ray centre = CameraRays(c, 64, 48).ray(32, 24);
+        EXPECT_NEAR(length(centre.direction), 1.0, 1e-15) << len;
+        EXPECT_NEAR(centre.direction.x, std::sqrt(0.5), 1e-15) << len;
+        EXPECT_NEAR(centre.direction.z, std::sqrt(0.5), 1e-15) << len;
+        const Ray corner = CameraRays(c, 64, 48).ray(0, 0);
+        EXPECT_TRUE(is_finite(corner.direction)) << len;
+        EXPECT_GT(corner.direction.y, 0.0) << len;  // the top row looks up
+    }
+}
+
 TEST(Render, NoLightsTracesNoShadowRays) {
     auto engine = prepare(testing::tutorial_spheres());
     RenderOptions o = small();

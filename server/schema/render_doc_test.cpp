@@ -88,6 +88,13 @@ TEST(RenderDoc, ErrorsNameTheField) {
     EXPECT_EQ(parse(R"({"camera": {"position": [0,0,0], "look_at": [0,0,0]}})").path,
               "/camera/look_at");
     EXPECT_EQ(parse(R"({"camera": {"up": [0,0,1]}})").path, "/camera/up");
+    // look_at − position must be finite; a tiny one is a direction like any other (its cross
+    // product with up had underflowed, and it was refused as parallel).
+    EXPECT_EQ(parse(R"({"camera": {"position": [-1e308,0,0], "look_at": [1e308,0,0]}})").path,
+              "/camera/look_at");
+    EXPECT_NO_THROW(parse_render_request(
+        Json::parse(R"({"camera": {"position": [0,0,0], "look_at": [1e-300,0,1e-300]}})"),
+        kMaxPixels));
     EXPECT_EQ(parse(R"({"async": 1})").path, "/async");
     EXPECT_EQ(parse(R"({"sampling": "stochastic"})").path, "/sampling");
     EXPECT_EQ(parse(R"({"sampling": true})").path, "/sampling");

@@ -219,7 +219,15 @@ engine::Camera parse_camera(const Json& j, const std::string& path, ErrorCode co
     if (c.look_at == c.position) {
         throw ApiError(code, path + "/look_at must differ from position", path + "/look_at");
     }
-    if (length(cross(c.look_at - c.position, c.up)) == 0.0) {
+    const engine::Vec3d view = c.look_at - c.position;
+    if (!is_finite(view)) {
+        throw ApiError(code,
+                       path + "/look_at is too far from position (their difference overflows)",
+                       path + "/look_at");
+    }
+    // On unit vectors (normalize() rescales tiny and huge ones): the cross product of a view
+    // direction 1e-300 long with up underflowed to 0, and such a camera was refused as parallel.
+    if (length(cross(normalize(view), normalize(c.up))) == 0.0) {
         throw ApiError(code, path + "/up must not be parallel to the view direction", path + "/up");
     }
     return c;
