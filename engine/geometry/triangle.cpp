@@ -16,6 +16,16 @@ using namespace dd;
 
 namespace {
 
+/// The power of two that brings a length m into [2⁻²⁵⁰, 2²⁵⁰], or 1 when it is there already
+/// (or is 0, inf or NaN). A kernel multiplies up to three lengths (n·(v − o), the edge functions
+/// times a sheared z): their products then stay far inside double's range. Scaling by a power
+/// of two is exact (a part that becomes subnormal rounds, far below the ulp of the rest).
+double unit_scale(double m) {
+    if ((m >= 0x1p-250 && m <= 0x1p250) || !(m > 0.0) || !std::isfinite(m))
+        return 1.0;
+    return std::ldexp(1.0, -std::ilogb(m));
+}
+
 /// The ray's shear frame: kz is the dominant axis of the direction; kx, ky are chosen so that
 /// the winding (and therefore the sign convention of U, V, W) is preserved (Woop et al. §3).
 struct ShearFrame {
@@ -69,8 +79,13 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
     const Vec3d& v = anchor_vertex(tri, ray.origin);
     const DD vo[3] = {two_sum(v.x, -ray.origin.x), two_sum(v.y, -ray.origin.y),
                       two_sum(v.z, -ray.origin.z)};
+    // t is the same for any multiple of n: the edges are brought to unit scale (unit_scale),
+    // so that n's products neither overflow nor underflow for a triangle far larger or
+    // smaller than its distance (or than 1).
+    const Vec3d e1_raw = tri.b - tri.a, e2_raw = tri.c - tri.a;
+    const double ke = unit_scale(std::max(max_abs(e1_raw), max_abs(e2_raw)));
     {
-        const Vec3d e1 = tri.b - tri.a, e2 = tri.c - tri.a;
+        const Vec3d e1 = e1_raw * ke, e2 = e2_raw * ke;
         const Vec3d n = cross(e1, e2);
         const DD num = add(add(mul(vo[0], n.x), mul(vo[1], n.y)), mul(vo[2], n.z));
         const DD den = add(add(two_prod(n.x, d.x), two_prod(n.y, d.y)), two_prod(n.z, d.z));
@@ -104,10 +119,11 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
                 return t;
         }
     }
-    const DD e1[3] = {two_sum(tri.b.x, -tri.a.x), two_sum(tri.b.y, -tri.a.y),
-                      two_sum(tri.b.z, -tri.a.z)};
-    const DD e2[3] = {two_sum(tri.c.x, -tri.a.x), two_sum(tri.c.y, -tri.a.y),
-                      two_sum(tri.c.z, -tri.a.z)};
+    const auto scaled = [ke](DD x) { return DD{x.hi * ke, x.lo * ke}; };  // exact: a power of 2
+    const DD e1[3] = {scaled(two_sum(tri.b.x, -tri.a.x)), scaled(two_sum(tri.b.y, -tri.a.y)),
+                      scaled(two_sum(tri.b.z, -tri.a.z))};
+    const DD e2[3] = {scaled(two_sum(tri.c.x, -tri.a.x)), scaled(two_sum(tri.c.y, -tri.a.y)),
+                      scaled(two_sum(tri.c.z, -tri.a.z))};
     const DD n[3] = {sub(mul(e1[1], e2[2]), mul(e1[2], e2[1])),
                      sub(mul(e1[2], e2[0]), mul(e1[0], e2[2])),
                      sub(mul(e1[0], e2[1]), mul(e1[1], e2[0]))};
@@ -120,12 +136,30 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
 
 }  // namespace
 
+namespace {
+
+/// (b − a) × (c − a), its edges brought to unit scale (unit_scale) where the plain product
+/// would overflow or lose its digits to underflow: its direction is all triangle_normal and
+/// is_degenerate ask of it. (A triangle 1e155 across had a NaN normal, one 1e-170 across was
+/// taken for degenerate.)
+Vec3d edge_cross(const Triangle& tri) {
+    const Vec3d e1 = tri.b - tri.a, e2 = tri.c - tri.a;
+    const Vec3d n = cross(e1, e2);
+    const double m = max_abs(n);
+    if (m >= 0x1p-1000 && m <= std::numeric_limits<double>::max())
+        return n;  // an ordinary triangle: as before, bit for bit
+    const double k = unit_scale(std::max(max_abs(e1), max_abs(e2)));
+    return k == 1.0 ? n : cross(e1 * k, e2 * k);
+}
+
+}  // namespace
+
 Vec3d triangle_normal(const Triangle& tri) {
-    return normalize(cross(tri.b - tri.a, tri.c - tri.a));
+    return normalize(edge_cross(tri));
 }
 
 bool is_degenerate(const Triangle& tri) {
-    return cross(tri.b - tri.a, tri.c - tri.a) == Vec3d{0.0, 0.0, 0.0};
+    return edge_cross(tri) == Vec3d{0.0, 0.0, 0.0};
 }
 
 namespace {
@@ -136,14 +170,48 @@ enum class TFrom {
     shear,  ///< Woop's own sheared z, interpolated (pbrt-v4 §6.8.4): within its t_err
 };
 
-/// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
-/// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere).
 std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
-                        TFrom t_from = TFrom::plane) {
-    const ShearFrame s = make_shear(ray.direction);
+                        TFrom t_from = TFrom::plane, bool rescaled = false);
+
+/// woop() with the triangle and the ray's origin scaled by kl and its direction by kd (powers of
+/// two, unit_scale): kl·o + t'·kd·d = kl·(o + t·d) with t' = t·kl/kd, so the range goes in
+/// scaled and t and t_err come back scaled, exactly (unless the true t is itself out of
+/// double's range); barycentrics and the side do not change.
+std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_normal,
+                                 bool require_inside, TFrom t_from, double kl, double kd) {
+    const Triangle scaled{tri.a * kl, tri.b * kl, tri.c * kl};
+    Ray r;
+    r.origin = ray.origin * kl;
+    r.direction = ray.direction * kd;
+    r.tmin = ray.tmin * kl / kd;  // in this order: kl/kd alone may overflow
+    r.tmax = ray.tmax * kl / kd;
+    std::optional<Hit> h = woop(scaled, r, want_normal, require_inside, t_from, true);
+    if (h) {
+        h->t = h->t * kd / kl;
+        h->t_err = h->t_err * kd / kl;
+    }
+    return h;
+}
+
+/// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
+/// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere). `rescaled`:
+/// called by woop_rescaled, which is not asked again.
+std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
+                        TFrom t_from, bool rescaled) {
     const Vec3d A = tri.a - ray.origin;
     const Vec3d B = tri.b - ray.origin;
     const Vec3d C = tri.c - ray.origin;
+    if (!rescaled) {
+        // The edge functions are products of two lengths, their error bound times a sheared z
+        // of three, and plane_t divides lengths by the direction: beyond 2^±250 those products
+        // overflowed or underflowed (a triangle 1e110 from the origin missed, one 1e-110 away
+        // was hit at t = 0). Such rays and triangles are brought to unit scale first.
+        const double kl = unit_scale(std::max({max_abs(A), max_abs(B), max_abs(C)}));
+        const double kd = unit_scale(max_abs(ray.direction));
+        if (kl != 1.0 || kd != 1.0)
+            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, kl, kd);
+    }
+    const ShearFrame s = make_shear(ray.direction);
 
     // Shear the vertices so the ray runs along +z (Woop et al., eq. 2).
     const double ax = A[s.kx] - s.sx * A[s.kz], ay = A[s.ky] - s.sy * A[s.kz];

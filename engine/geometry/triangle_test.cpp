@@ -83,6 +83,47 @@ TEST(Triangle, DegenerateNeverHitsNorNaN) {
     }
 }
 
+// Triangles and rays at every scale. The plane crossing multiplies three lengths (n·(v − o))
+// and the edge functions two: before 2026-12-05 a triangle 1e110 away missed, one 1e-110 away
+// was hit at t = 0, past ~1e154 the normal was NaN and below ~1e-154 a triangle counted as
+// degenerate. Lengths and directions beyond 2^±250 are brought to unit scale by a power of two
+// (woop_rescaled, unit_scale), so t, the barycentrics and the normal are those of the same
+// triangle at scale 1.
+TEST(Triangle, HugeAndTinyTrianglesAreHit) {
+    for (double s : {1e-300, 1e-200, 1e-160, 1e-155, 1e-150, 1e-120, 1e-110, 1e-100, 1.0, 1e100,
+                     1e110, 1e120, 1e150, 1e155, 1e200, 1e300}) {
+        const Triangle tri{{-s, -s, 2 * s}, {s, -s, 2 * s}, {0, s, 2 * s}};
+        EXPECT_FALSE(is_degenerate(tri)) << s;
+        EXPECT_EQ(triangle_normal(tri), (Vec3d{0, 0, 1})) << s;
+        // A unit direction (t = 2s), one of the triangle's own scale (t = 2), and an origin off
+        // to the side at the triangle's scale.
+        const Ray rays[] = {Ray{{0, 0, 0}, {0, 0, 1}}, Ray{{0, 0, 0}, {0, 0, s}},
+                            Ray{{-3 * s, 0, 0}, {3 * s, 0, 2 * s}}};
+        const double ts[] = {2 * s, 2.0, 1.0};
+        for (int k = 0; k < 3; ++k) {
+            for (bool fast : {false, true}) {
+                const auto h = fast ? intersect_triangle_fast(tri, rays[k], true)
+                                    : intersect_triangle(tri, rays[k], true);
+                ASSERT_TRUE(h) << s << " ray " << k << " fast " << fast;
+                EXPECT_NEAR(h->t, ts[k], h->t_err) << s << " ray " << k << " fast " << fast;
+                EXPECT_LE(h->t_err, 1e-12 * ts[k]) << s << " ray " << k;
+                if (!fast) {
+                    EXPECT_EQ(h->t, ts[k]) << s << " ray " << k;  // exact here: an ulp at most
+                }
+                EXPECT_NEAR(h->u, 0.25, 1e-12) << s << " ray " << k;
+                EXPECT_NEAR(h->v, 0.5, 1e-12) << s << " ray " << k;
+                EXPECT_FALSE(h->front_face) << s;
+                EXPECT_EQ(h->normal, (Vec3d{0, 0, 1})) << s;
+            }
+            // And a ray beside it still misses.
+            Ray beside = rays[k];
+            beside.origin.x += 2 * s;
+            EXPECT_FALSE(intersect_triangle(tri, beside)) << s << " ray " << k;
+            EXPECT_FALSE(intersect_triangle_fast(tri, beside, false)) << s << " ray " << k;
+        }
+    }
+}
+
 TEST(Triangle, NonUnitDirection) {
     Ray ray{{0.5, 0.5, 0}, {0, 0, 10}};
     auto hit = intersect_triangle(kTri, ray);
