@@ -27,8 +27,7 @@ constexpr std::size_t kBytesPerUserPrimitive = 64;
 // ---------------------------------------------------------------------------------------------
 // The builds.
 
-GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
-                                      const Vec3d& center) {
+GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a) {
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0,
                                                           RTC_FORMAT_FLOAT3, 3 * sizeof(float),
@@ -39,9 +38,8 @@ GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh
     if (!v || !idx)
         return g;  // the error callback has recorded why; commit reports it
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
-        const Vec3d q = mesh.positions[i] - center;
-        // to_float: a scene may be finite in double and still span more than float can hold
-        // (±inf then, which Embree ignores; refined and exact decide such triangles in double).
+        const Vec3d q = a.frame(mesh.positions[i]);
+        // to_float, should a coordinate exceed float's range all the same.
         v[3 * i + 0] = to_float(q.x);
         v[3 * i + 1] = to_float(q.y);
         v[3 * i + 2] = to_float(q.z);
@@ -91,7 +89,7 @@ void Impl::build_fast() const {
             rtcAttachGeometryByID(s.get(), rtcGetGeometry(native.get(), i), i);
             continue;
         }
-        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, center);
+        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, *this);
         rtcCommitGeometry(g.get());
         rtcAttachGeometryByID(s.get(), g.get(), i);
     }
@@ -515,6 +513,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
         impl->center = b.center();
         impl->float_scale = 2.0 * length(b.diagonal()) + 1e-300;
         impl->pad = 8.0 * kFloatUnitRoundoff * impl->float_scale + 1e-300;
+        impl->unit = std::ldexp(1.0, -std::ilogb(impl->float_scale));
         impl->padded_bounds = b;
         impl->padded_bounds.lo -= Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
         impl->padded_bounds.hi += Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
@@ -538,7 +537,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
             ++impl->spheres;
         } else {
             bool capped = false;
-            g = embree::make_fat_triangle_geometry(device, *o.mesh, impl->center, widen_by,
+            g = embree::make_fat_triangle_geometry(device, *o.mesh, *impl, widen_by,
                                                    &impl->geoms.back(), capped);
             impl->certified_misses = impl->certified_misses && !capped;
             impl->triangles += o.mesh->size();

@@ -25,16 +25,21 @@ constexpr std::size_t kSerialBatch = 64;
 /// bench/bench_intersect (see docs/benchmarks.md).
 constexpr std::size_t kBruteForceMaxPrimitives = 16;
 
-/// Embree works in float, relative to the scene's centre: a scene wider than this (finite in
-/// double, but its float vertices, boxes and ray origins would overflow to infinity, which
-/// Embree drops) is answered by brute force in double whatever its size. 1e36 leaves room for
-/// the boxes' padding and the fast path's origins (up to 8 diagonals from the centre) below
-/// float's 3.4e38.
-constexpr double kMaxFloatSceneDiagonal = 1e36;
+/// Embree works in float, relative to the scene's centre and scaled to unit size
+/// (embree::Impl::unit), so any scene size fits, bar the extremes: past 1e290 its padding and
+/// twice its diagonal approach double's own range, and below 1e-290 its coordinates relative to
+/// the centre are subnormal in double. Such scenes are answered by brute force in double
+/// whatever their size. (Until 2026-12-05 Embree saw coordinates unscaled, and only scenes
+/// between ~1e-12 and ~1e12 across were answered right: see Impl::unit.)
+constexpr double kMaxFloatSceneDiagonal = 1e290;
+constexpr double kMinFloatSceneDiagonal = 1e-290;
 
 bool fits_float(const Scene& s) {
     const Bounds3 b = s.bounds();
-    return b.empty() || length(b.diagonal()) <= kMaxFloatSceneDiagonal;
+    if (b.empty())
+        return true;
+    const double diagonal = length(b.diagonal());
+    return diagonal <= kMaxFloatSceneDiagonal && diagonal >= kMinFloatSceneDiagonal;
 }
 
 /// f(i) for i in [0, n), over TBB's threads for more than kSerialBatch rays. `cancel` is asked

@@ -1,5 +1,7 @@
 #include "engine/query/intersect.h"
 
+#include <cmath>
+#include <random>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -271,31 +273,94 @@ TEST(Query, BatchesOnManyThreadsKeepTheirBlocksApart) {
     EXPECT_EQ(wrong, 0u);
 }
 
-// A scene finite in double but wider than float can hold (±1e39): Embree would see its
-// vertices and boxes as infinities and drop them, so the engine answers it by brute force in
-// double, at every precision.
-TEST(EmbreeAccel, SceneWiderThanFloatIsAnsweredInDouble) {
-    Scene s;
-    s.materials.push_back(Material{});
-    for (int i = 0; i < 20; ++i) {
-        const double x = i % 2 ? 1e39 : -1e39;
-        const double z = 10.0 + i;
-        s.objects.push_back(testing::mesh_object(
-            "t" + std::to_string(i), {{x - 1e30, -1e30, z}, {x + 1e30, -1e30, z}, {x, 1e30, z}},
-            {{0, 1, 2}}));
+// Scenes of every size from 1e-40 to 1e40 across, on Embree's BVHs: fast and refined agree
+// with exact on random rays, some with directions of the scene's own length. Unscaled (before
+// embree::Impl::unit, 2026-12-05) Embree's float tests had answered only between ~1e-12 and
+// ~1e12: smaller meshes were missed at fast and refined, larger ones answered t = inf at
+// fast, one 1e18 across aborted the process (an assertion in Embree), and past 1e20 every
+// precision missed.
+TEST(EmbreeAccel, ScenesOfEverySizeAreAnswered) {
+    for (int e = -40; e <= 40; e += 4) {
+        const double s = std::pow(10.0, e);
+        Scene scene;
+        scene.materials.push_back(Material{});
+        scene.objects.push_back(testing::icosphere_object(3, {0, 0, 0}, s));
+        scene.objects.push_back(testing::icosphere_object(1, {3 * s, 0, 0}, s));
+        scene.objects.push_back(testing::sphere("ball", {0, 3 * s, 0}, s, 0));
+        auto engine = QueryEngine::build(std::make_shared<Scene>(std::move(scene)));
+        ASSERT_TRUE(engine.ok());
+        EXPECT_FALSE((*engine)->brute_force()) << s;
+        std::mt19937_64 rng(static_cast<std::uint64_t>(e + 100));
+        std::uniform_real_distribution<double> u(-1, 1);
+        std::vector<Ray> rays;
+        for (int i = 0; i < 300; ++i) {
+            const Vec3d o{u(rng) * 6 * s, u(rng) * 6 * s, u(rng) * 6 * s};
+            // Aimed at one of the three objects' neighbourhoods, so that most rays hit.
+            const Vec3d target = Vec3d{i % 3 == 1 ? 3 * s : 0, i % 3 == 2 ? 3 * s : 0, 0} +
+                                 Vec3d{u(rng), u(rng), u(rng)} * (0.8 * s);
+            const Vec3d d = target - o;
+            rays.push_back(Ray{o, i % 2 ? d : d * (1.0 / s)});
+        }
+        const QueryResult exact =
+            (*engine)->intersect(rays, QueryOptions{Mode::closest, Precision::exact, true});
+        int hits = 0;
+        for (Precision p : {Precision::fast, Precision::refined}) {
+            const QueryResult r = (*engine)->intersect(rays, QueryOptions{Mode::closest, p, true});
+            EXPECT_EQ(r.precision, p);
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const Hit& a = r.hits[i];
+                const Hit& b = exact.hits[i];
+                ASSERT_EQ(a.valid(), b.valid()) << s << " " << to_string(p) << " ray " << i;
+                if (!b.valid())
+                    continue;
+                hits += p == Precision::refined;
+                EXPECT_EQ(a.object, b.object) << s << " " << to_string(p) << " ray " << i;
+                EXPECT_NEAR(a.t, b.t, a.t_err + b.t_err) << s << " " << to_string(p) << " " << i;
+                EXPECT_NEAR(length(a.normal), 1.0, 1e-6) << s << " " << to_string(p) << " " << i;
+            }
+        }
+        EXPECT_GT(hits, 150) << s;
     }
-    auto engine = QueryEngine::build(std::make_shared<Scene>(s));
-    ASSERT_TRUE(engine.ok());
-    EXPECT_TRUE((*engine)->brute_force());
-    const std::vector<Ray> rays = {Ray{{-1e39, 0, 0}, {0, 0, 1}}, Ray{{1e39, 0, 100}, {0, 0, -1}}};
-    for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
-        const QueryResult r = (*engine)->intersect(rays, QueryOptions{Mode::closest, p, true});
-        EXPECT_EQ(r.precision, Precision::exact);
-        ASSERT_TRUE(r.hits[0].valid() && r.hits[1].valid()) << to_string(p);
-        EXPECT_EQ(r.hits[0].object, 0u);
-        EXPECT_EQ(r.hits[0].t, 10.0);
-        EXPECT_EQ(r.hits[1].object, 19u);
-        EXPECT_EQ(r.hits[1].t, 71.0);
+}
+
+// A scene finite in double but wider than float can hold (±1e39): Embree sees it scaled to unit
+// size (embree::Impl::unit), and refined and exact answer it as in double. Its triangles are 1e-9
+// of its size and 1e-38 apart in depth, below float's resolution there: fast, which takes
+// Embree's float answer, may miss them, but answers without NaNs or infinities. (Until
+// 2026-12-05 such a scene was brute force: Embree saw its coordinates unscaled.) Past 1e290
+// across a scene is still brute force, at every precision.
+TEST(EmbreeAccel, SceneWiderThanFloatIsAnswered) {
+    for (double scale : {1.0, 1e260}) {
+        Scene s;
+        s.materials.push_back(Material{});
+        for (int i = 0; i < 20; ++i) {
+            const double x = (i % 2 ? 1e39 : -1e39) * scale;
+            const double z = (10.0 + i) * scale;
+            const double h = 1e30 * scale;
+            s.objects.push_back(testing::mesh_object(
+                "t" + std::to_string(i), {{x - h, -h, z}, {x + h, -h, z}, {x, h, z}}, {{0, 1, 2}}));
+        }
+        auto engine = QueryEngine::build(std::make_shared<Scene>(s));
+        ASSERT_TRUE(engine.ok());
+        EXPECT_EQ((*engine)->brute_force(), scale > 1.0);
+        const std::vector<Ray> rays = {Ray{{-1e39 * scale, 0, 0}, {0, 0, 1}},
+                                       Ray{{1e39 * scale, 0, 100 * scale}, {0, 0, -1}}};
+        for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+            const QueryResult r = (*engine)->intersect(rays, QueryOptions{Mode::closest, p, true});
+            if (p == Precision::fast && scale == 1.0) {
+                for (const Hit& h : r.hits) {
+                    if (h.valid()) {
+                        EXPECT_TRUE(std::isfinite(h.t) && is_finite(h.normal));
+                    }
+                }
+                continue;
+            }
+            ASSERT_TRUE(r.hits[0].valid() && r.hits[1].valid()) << to_string(p) << " " << scale;
+            EXPECT_EQ(r.hits[0].object, 0u);
+            EXPECT_EQ(r.hits[0].t, 10.0 * scale);
+            EXPECT_EQ(r.hits[1].object, 19u);
+            EXPECT_EQ(r.hits[1].t, 71.0 * scale);
+        }
     }
 }
 

@@ -494,9 +494,10 @@ TEST_F(Intersect, MemoryBytesCountTheBvhsQueriesBuild) {
     EXPECT_GT(memory_bytes(*server_, id), with_exact);
 }
 
-// A scene finite in double but wider than float can hold is answered by brute force in double,
-// whatever the precision asked (Embree would drop its vertices as infinities).
-TEST_F(Intersect, SceneWiderThanFloatIsAnsweredInDouble) {
+// A scene wider than float can hold (±1e39) is Embree's, scaled to unit size in its float
+// frame: refined and exact answer it exactly, fast answers (its float test cannot resolve
+// triangles 1e-9 of the scene, and may miss them). Until 2026-12-05 it was brute force.
+TEST_F(Intersect, SceneWiderThanFloatIsAnswered) {
     Json objects = Json::array();
     for (int i = 0; i < 20; ++i) {
         const double x = i % 2 ? 1e39 : -1e39, z = 10.0 + i;
@@ -515,7 +516,9 @@ TEST_F(Intersect, SceneWiderThanFloatIsAnsweredInDouble) {
         ASSERT_TRUE(res);
         ASSERT_EQ(res->status, 200) << res->body;
         const Json r = Json::parse(res->body);
-        EXPECT_EQ(r.at("precision"), "exact") << precision;
+        EXPECT_EQ(r.at("precision"), precision);
+        if (std::string(precision) == "fast")
+            continue;
         EXPECT_EQ(r.at("hits").at(0).at("object"), 0) << precision;
         EXPECT_EQ(r.at("hits").at(0).at("t"), 10.0) << precision;
         EXPECT_EQ(r.at("hits").at(1).at("object"), 19) << precision;

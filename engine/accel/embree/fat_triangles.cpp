@@ -100,9 +100,8 @@ void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped) {
     }
 }
 
-GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
-                                          const Vec3d& center, double widen_by, GeomData* data,
-                                          bool& capped) {
+GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
+                                          double widen_by, GeomData* data, bool& capped) {
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
     const std::size_t n = mesh.size();
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -113,15 +112,17 @@ GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& 
         return g;  // the error callback has recorded why; commit reports it
     for (std::size_t i = 0; i < n; ++i) {
         const Triangle t = mesh.triangle(i);
+        const Vec3d& center = a.center;
         const Triangle rel{t.a - center, t.b - center, t.c - center};
         Vec3d out[3] = {rel.a, rel.b, rel.c};
         if (!is_degenerate(t))  // a degenerate triangle is never hit in double: left as it is
             widen_triangle(rel, widen_by, out, capped);
         for (std::size_t k = 0; k < 3; ++k) {
-            // to_float: see make_triangle_geometry.
-            v[9 * i + 3 * k + 0] = to_float(out[k].x);
-            v[9 * i + 3 * k + 1] = to_float(out[k].y);
-            v[9 * i + 3 * k + 2] = to_float(out[k].z);
+            // In Embree's frame (Impl::unit, exact); to_float: see make_triangle_geometry.
+            const Vec3d q = out[k] * a.unit;
+            v[9 * i + 3 * k + 0] = to_float(q.x);
+            v[9 * i + 3 * k + 1] = to_float(q.y);
+            v[9 * i + 3 * k + 2] = to_float(q.z);
             idx[3 * i + k] = static_cast<unsigned>(3 * i + k);
         }
     }

@@ -34,6 +34,7 @@
 namespace raycastd::engine::embree {
 
 struct GeomData;
+struct Impl;
 
 /// The in-plane widening of refined's triangles, in units of Impl::pad (8·u_f·S): 32 pads, 256
 /// u_f·S, 16× the float displacement Δ above (sin β ≥ 1/16: β ≥ 3.6°).
@@ -47,12 +48,11 @@ constexpr double kMinCornerSine = 1.0 / 32.0;
 /// `tri` must not be degenerate.
 void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped);
 
-/// The float triangle geometry of `mesh` (coordinates relative to `center`) with each triangle
+/// The float triangle geometry of `mesh` (in a's frame: Impl::frame) with each triangle
 /// widened by `widen` in its plane (three vertices of its own, so neighbours may overlap), the
 /// hit filters below attached, user data `data`. `capped` is set when a sliver could not be
 /// widened fully (see above). Not yet committed.
-GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh,
-                                          const Vec3d& center, double widen, GeomData* data,
-                                          bool& capped);
+GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
+                                          double widen, GeomData* data, bool& capped);
 
 }  // namespace raycastd::engine::embree

@@ -35,9 +35,10 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     if (!clip_to_bounds(a, ray, t0, t1))
         return false;
     c.ray = &ray;
-    c.len = length(ray.direction);
-    c.margin = 4.0 * a.pad;
-    c.shift = start == RayStart::backed_off ? t0 - c.margin / c.len : t0;
+    const double dlen = length(ray.direction);
+    c.len = dlen * a.unit;  // float t in Embree's frame (Impl::unit)
+    c.margin = 4.0 * a.pad * a.unit;
+    c.shift = start == RayStart::backed_off ? t0 - 4.0 * a.pad / dlen : t0;
     // (o − centre) + s·d rather than (o + s·d) − centre: the first difference is exact or nearly
     // so when the origin is near the scene (Sterbenz), so the float origin is accurate to the
     // scene's size even when the scene sits far from the world origin. Its rounding is about
@@ -45,7 +46,7 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     // BVH's box padding, and the start point is then formed in double-double instead (TwoSum
     // and TwoProduct are exact, their sum is off by a few u² of the terms: Ogita, Rump & Oishi
     // 2005), which keeps it within the padding out to ~1e15 scene sizes.
-    const double far = length(ray.origin - a.center) + std::abs(c.shift) * c.len;
+    const double far = length(ray.origin - a.center) + std::abs(c.shift) * dlen;
     Vec3d org;
     if (8.0 * kDoubleUnitRoundoff * far <= 0.25 * a.pad) {
         org = (ray.origin - a.center) + ray.direction * c.shift;
@@ -60,8 +61,9 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
         c.origin_err = 8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * far +
                        2.0 * kDoubleUnitRoundoff * length(org);
     }
-    const Vec3d dir = ray.direction * (1.0 / c.len);  // rounded to float next: one more u
-    f.org_x = to_float(org.x);  // inside the bounds, which may exceed float's range
+    const Vec3d dir = ray.direction * (1.0 / dlen);  // rounded to float next: one more u
+    org = org * a.unit;  // into Embree's frame (Impl::unit): inside the scaled bounds
+    f.org_x = to_float(org.x);
     f.org_y = to_float(org.y);
     f.org_z = to_float(org.z);
     f.dir_x = static_cast<float>(dir.x);

@@ -142,15 +142,17 @@ inline bool unclipped_float_ray(const Impl& a, const Ray& ray, FloatRay& f) {
     const Vec3d org = ray.origin - a.center;
     if (!fast_ray_applies(a, ray, org))
         return false;
-    // In float's range: see fast_ray_applies.
-    f.org_x = static_cast<float>(org.x);
-    f.org_y = static_cast<float>(org.y);
-    f.org_z = static_cast<float>(org.z);
+    // In float's range: within 4 scene sizes of the centre, which Impl::unit brings to 8 at
+    // most (see fast_ray_applies); the direction as it is, so float t is t·unit.
+    const Vec3d q = org * a.unit;
+    f.org_x = static_cast<float>(q.x);
+    f.org_y = static_cast<float>(q.y);
+    f.org_z = static_cast<float>(q.z);
     f.dir_x = static_cast<float>(ray.direction.x);
     f.dir_y = static_cast<float>(ray.direction.y);
     f.dir_z = static_cast<float>(ray.direction.z);
-    f.tnear = to_float(ray.tmin);
-    f.tfar = to_float(ray.tmax);  // +inf stays +inf
+    f.tnear = to_float(ray.tmin * a.unit);
+    f.tfar = to_float(ray.tmax * a.unit);  // +inf stays +inf
     return true;
 }
 
@@ -162,7 +164,7 @@ inline bool prepare_ray_fast(const Impl& a, const Ray& ray, RayContext& c, Float
         return false;
     c.ray = &ray;
     c.shift = 0.0;
-    c.len = 1.0;
+    c.len = a.unit;  // float t = t·unit (unclipped_float_ray)
     c.margin = 0.0;
     return true;
 }

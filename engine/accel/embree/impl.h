@@ -41,6 +41,16 @@ struct Impl {
     /// Embree sees every coordinate relative to this point (the centre of the scene bounds):
     /// float precision then follows the scene's size, not its distance from the origin.
     Vec3d center;
+    /// ... and times this power of two, which brings the scene's size to [1, 2) (frame()):
+    /// Embree's float tests multiply up to three coordinates and use absolute constants (its
+    /// rays must lie within 1.8e18, and it flushes subnormals to zero), so they are right only
+    /// for scenes of moderate size. Unscaled, a mesh 1e-14 across was missed at fast and refined
+    /// alike, one 1e14 across answered t = inf at fast, one 1e18 across aborted the process on
+    /// an assertion in Embree, and from 1e20 every precision missed. Float t is in units of the
+    /// frame too: RayContext::len includes `unit`.
+    double unit = 1.0;
+    /// p in Embree's frame: (p − center)·unit (exact scaling: unit is a power of two).
+    Vec3d frame(const Vec3d& p) const { return (p - center) * unit; }
     double pad = 0;          ///< absolute padding of every box, in scene units (see build)
     double float_scale = 0;  ///< magnitude of scene coordinates, for the fast path's t_err
     std::size_t triangles = 0, spheres = 0;
@@ -72,9 +82,9 @@ struct RayContext {
     const Impl* accel = nullptr;
     const Ray* ray = nullptr;  ///< the double-precision ray
     double shift = 0;          ///< the float ray starts at ray.at(shift)
-    double len = 1;            ///< |direction|: float t' (unit direction) ↔ t = shift + t'/len
-    double margin = 0;         ///< slack added to tfar, in unit-direction length
-    double origin_err = 0;     ///< bound on the double rounding of the float ray's start point
+    double len = 1;     ///< |direction|·Impl::unit: float t' (frame units) ↔ t = shift + t'/len
+    double margin = 0;  ///< slack added to tfar, in frame units (Impl::unit)
+    double origin_err = 0;  ///< bound on the double rounding of the float ray's start point
     /// Closest so far: the exact path's, or on `native` the first by `closer` of the double
     /// hits Embree offered within its float tfar (a sphere's, or a fat triangle's from the hit
     /// filter; keep_if_closer in float_ray.h).

@@ -48,7 +48,7 @@ std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* ray
         [&r16](std::size_t k) {
             return Vec3f{r16.org_x[k], r16.org_y[k], r16.org_z[k]};
         },
-        to_float(0.0025 * a.float_scale * a.float_scale));  // may exceed FLT_MAX
+        to_float(0.0025 * (a.float_scale * a.unit) * (a.float_scale * a.unit)));
     return flagged_context(together);
 }
 
@@ -69,7 +69,7 @@ bool fast_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, 
             out[k] = Hit{};  // fast takes a float miss as it is
             continue;
         }
-        fast_hit(a, rays[k], 0.0, 1.0, native_hit(rh, k), want_normal, out[k]);
+        fast_hit(a, rays[k], 0.0, a.unit, native_hit(rh, k), want_normal, out[k]);
     }
     return true;
 }

@@ -40,7 +40,7 @@ struct PointContext {
             return std::numeric_limits<float>::infinity();
         const double slack =
             accel->pad + 8.0 * kFloatUnitRoundoff * (from_centre + d + accel->float_scale);
-        return float_up(d + slack);
+        return float_up((d + slack) * accel->unit);  // in Embree's frame (Impl::unit)
     }
 };
 
@@ -59,11 +59,11 @@ bool point_callback(RTCPointQueryFunctionArguments* args) {
 
 std::optional<PointHit> EmbreeAccel::closest_point(const Vec3d& p, double max_distance) const {
     const embree::Impl& a = *impl_;
-    const Vec3d q = p - a.center;
+    const Vec3d q = a.frame(p);
     // The padded bounds contain the scene's: a bound on every candidate's err all the same.
-    PointContext c{&a, p, max_distance, length(q),
+    PointContext c{&a, p, max_distance, length(p - a.center),
                    PointCandidates(candidate_err_bound(p, a.padded_bounds))};
-    if (!(c.from_centre <= kMaxFloatQueryDistance))
+    if (!(c.from_centre * a.unit <= kMaxFloatQueryDistance))
         return linear_closest_point(*a.scene, p, max_distance);
     RTCPointQuery query;
     query.x = static_cast<float>(q.x);

@@ -51,12 +51,13 @@ void user_bounds(const RTCBoundsFunctionArguments* args) {
     b.lo -= g->accel->center;
     b.hi -= g->accel->center;
     RTCBounds* out = args->bounds_o;
-    out->lower_x = float_down(b.lo.x - p);
-    out->lower_y = float_down(b.lo.y - p);
-    out->lower_z = float_down(b.lo.z - p);
-    out->upper_x = float_up(b.hi.x + p);
-    out->upper_y = float_up(b.hi.y + p);
-    out->upper_z = float_up(b.hi.z + p);
+    const double u = g->accel->unit;  // Embree's frame: exact scaling
+    out->lower_x = float_down((b.lo.x - p) * u);
+    out->lower_y = float_down((b.lo.y - p) * u);
+    out->lower_z = float_down((b.lo.z - p) * u);
+    out->upper_x = float_up((b.hi.x + p) * u);
+    out->upper_y = float_up((b.hi.y + p) * u);
+    out->upper_z = float_up((b.hi.z + p) * u);
 }
 
 void user_intersect(const RTCIntersectFunctionNArguments* args) {
