@@ -71,6 +71,16 @@ T max_abs(const Vec3<T>& v) {
     const T x = std::abs(v.x), y = std::abs(v.y), z = std::abs(v.z);
     return std::max(x, std::max(y, z));
 }
+/// |v| where |v|² may overflow or underflow (components past ~1e154 or below ~1e-154): v is
+/// divided by its largest component first, as std::hypot does. For lengths that must hold at
+/// every scale (a scene's size), not for kernels: length() is the fast one.
+template <class T>
+T scaled_length(const Vec3<T>& v) {
+    const T m = max_abs(v);
+    if (!(m > T(0)) || !std::isfinite(m))
+        return length(v);
+    return m * length(v / m);
+}
 /// normalize()'s rare branch: v, whose length `len` overflowed, underflowed or is 0 or NaN,
 /// divided by its largest component first. Out of line and cold, so that normalize() itself
 /// stays small enough to inline: the branch in line had made it a call, 7% of a Duck render

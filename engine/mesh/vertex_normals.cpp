@@ -27,9 +27,22 @@ CornerNormals compute_corner_normals(const TriangleMesh& mesh) {
     // zero for a degenerate face (two welded corners alike make b − a or c − a exactly zero).
     std::vector<Vec3d> unit(nt);
     std::vector<double> area(nt);
+    // A mesh beyond 2^±250 across has its edges brought to unit size by a power of two first
+    // (the areas keep their ratios): a cross product of edges 1e300 long overflows, one of edges
+    // 1e-300 long underflows, and every face of such a mesh had counted as degenerate (flat
+    // shading). Ordinary meshes are computed as before, bit for bit.
+    double edge_scale = 1.0;
+    {
+        Bounds3 b;
+        for (const Vec3d& p : mesh.positions)
+            b.extend(p);
+        const double m = b.empty() ? 0.0 : max_abs(b.diagonal());
+        if (m > 0.0 && std::isfinite(m) && (m < 0x1p-250 || m > 0x1p250))
+            edge_scale = std::ldexp(1.0, -std::ilogb(m));
+    }
     for (std::size_t t = 0; t < nt; ++t) {
         const Triangle tri = mesh.triangle(t);
-        const Vec3d n = cross(tri.b - tri.a, tri.c - tri.a);
+        const Vec3d n = cross((tri.b - tri.a) * edge_scale, (tri.c - tri.a) * edge_scale);
         const double len = length(n);
         const bool ok = len > 0.0 && std::isfinite(len);
         area[t] = ok ? len : 0.0;

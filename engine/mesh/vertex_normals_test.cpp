@@ -38,6 +38,23 @@ TEST(VertexNormals, IcosphereIsSmoothAndRadial) {
     }
 }
 
+// The same icosphere at 1e-300 and 1e300 (and between) has the same normals: its cross products
+// underflowed or overflowed, every face counted as degenerate, and renders were flat.
+TEST(VertexNormals, EveryScaleGivesTheSameNormals) {
+    const CornerNormals unit = compute_corner_normals(*testing::icosphere_object(2).mesh);
+    for (double s : {1e-300, 1e-160, 1e160, 1e300}) {
+        const Object ico = testing::icosphere_object(2, {0, 0, 0}, s);
+        const CornerNormals n = compute_corner_normals(*ico.mesh);
+        ASSERT_EQ(n.normals.size(), unit.normals.size()) << s;
+        for (std::size_t t = 0; t < ico.mesh->size(); ++t) {
+            for (int k = 0; k < 3; ++k) {
+                EXPECT_LT(angle_deg(corner_normal(n, t, k), corner_normal(unit, t, k)), 1e-4)
+                    << s << " " << t << " " << k;
+            }
+        }
+    }
+}
+
 TEST(VertexNormals, CubeKeepsItsCreases) {
     // Faces meet at 90° > 60°: each corner of the cube has three groups, one per side, and every
     // corner normal is its face's normal, for the indexed cube and for the STL-style soup (which

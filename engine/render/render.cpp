@@ -350,7 +350,7 @@ Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
     }
     const Whitted whitted(engine, wo);
     const Bounds3 b = scene.bounds();
-    const double radius = b.empty() ? 1.0 : 0.5 * length(b.diagonal());
+    const double radius = b.empty() ? 1.0 : 0.5 * scaled_length(b.diagonal());
     const double dist = b.empty() ? 0.0 : length(b.center() - cam.position);
     const int nx = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(opt.spp))));
     const Frame frame{whitted,

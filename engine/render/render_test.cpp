@@ -121,6 +121,20 @@ TEST(Camera, AFlatSceneIsSeenFromAboveNotEdgeOn) {
               5e-4);
 }
 
+// A scene 1e-20 across is framed as one 1 across, scaled: the distance follows its size (a floor
+// of 1e-9 on the radius had put the camera 1e11 sizes away, and the render was black). A point
+// (bounds of no size) is seen from 1e-9 / sin(22.5°).
+TEST(Camera, TinyScenesAreFramedAtTheirOwnSize) {
+    for (double s : {1e-300, 1e-20, 1e-9, 1.0, 1e20, 1e300}) {
+        const Camera cam =
+            default_camera({{-s, -s, -s}, {s, s, s}}, 1.0, DefaultView::from_minus_z);
+        EXPECT_NEAR(-cam.position.z / s, std::sqrt(3.0) / std::sin(M_PI / 8), 1e-12) << s;
+    }
+    const Camera point = default_camera({{1, 2, 3}, {1, 2, 3}}, 1.0, DefaultView::from_minus_z);
+    EXPECT_NEAR(length(point.position - point.look_at), 1e-9 / std::sin(M_PI / 8),
+                2e-15);  // ulps of 3
+}
+
 TEST(Camera, ModelFilesAreFramedFromTheirFront) {
     // DefaultView::from_plus_z (a model file, whose front faces +z): the same distance on the
     // other side, looking along −z with +y up, so +x is on the right of the picture, as in a

@@ -139,7 +139,10 @@ Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view) {
     if (bounds.empty())
         return cam;
     const Vec3d c = bounds.center();
-    const double radius = std::max(0.5 * length(bounds.diagonal()), 1e-9);
+    // Half the diagonal; 1e-9 only for bounds of no size (a point): as a floor it had framed a
+    // mesh 1e-20 across from 1e-9 away, where it covered no pixel.
+    const double half = 0.5 * scaled_length(bounds.diagonal());  // |d|² underflows at 1e-300
+    const double radius = half > 0.0 ? half : 1e-9;
     // A sphere of radius r seen from distance d fills a cone of half-angle asin(r/d); it just
     // fills the image when that is the narrower half-angle of the pinhole's view. The vertical
     // one is fov_y/2; the horizontal one is atan(tan(fov_y/2)·W/H), since the image plane at
@@ -154,7 +157,7 @@ Camera default_camera(const Bounds3& bounds, double aspect, DefaultView view) {
     // (flat in y) or beside (flat in x) instead, on the side of the default view. Mirrored by
     // the preview page (clients/web/js/camera.js) and the grading kit (grader.py).
     const Vec3d e = bounds.diagonal();
-    const double flat = kDefaultCameraFlat * length(e);
+    const double flat = kDefaultCameraFlat * scaled_length(e);
     Vec3d dir{0.0, 0.0, view == DefaultView::from_plus_z ? 1.0 : -1.0};
     if (e.y <= flat) {
         dir.y = 1.0;

@@ -125,6 +125,13 @@ class DefaultCameraTest(unittest.TestCase):
         box = default_camera({"min": [-1, -1, -1], "max": [1, 1, 1]}, 1.0, "+z")
         self.assertEqual(box["position"][:2], [0.0, 0.0])
 
+    def test_a_tiny_scene_is_framed_at_its_own_size(self) -> None:
+        # as Camera.TinyScenesAreFramedAtTheirOwnSize: a floor of 1e-9 had framed it from afar
+        for s in (1e-300, 1e-20, 1.0, 1e20, 1e300):
+            cam = default_camera({"min": [-s, -s, -s], "max": [s, s, s]}, 1.0, "-z")
+            want = math.sqrt(3) / math.sin(math.radians(22.5))
+            self.assertAlmostEqual(-cam["position"][2] / s, want, places=12)
+
 
 class ObjectFieldTest(unittest.TestCase):
     """Items 2 and 3, at load time: `object` and first_hit's `expected` follow index_base and

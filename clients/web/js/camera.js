@@ -21,7 +21,9 @@ export const cross = (a, b) => [
     a[2] * b[0] - a[0] * b[2],
     a[0] * b[1] - a[1] * b[0],
 ];
-export const length = (a) => Math.sqrt(dot(a, a));
+// hypot rather than √(a·a), which underflows below ~1e-154 (a scene 1e-300 across) and
+// overflows above ~1e154: the page's lengths are per interaction, never per pixel.
+export const length = (a) => Math.hypot(a[0], a[1], a[2]);
 
 /** v / |v|, the zero vector staying zero (engine/math/vec3.h normalize). */
 export function normalize(v) {
@@ -43,7 +45,8 @@ export function defaultCamera(bounds, aspect = 4 / 3, view = '-z') {
     const { min: lo, max: hi } = bounds;
     if (lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]) return cam;
     const c = scale(add(lo, hi), 0.5);
-    const radius = Math.max(0.5 * length(sub(hi, lo)), 1e-9);
+    const half = 0.5 * length(sub(hi, lo));
+    const radius = half > 0 ? half : 1e-9; // 1e-9 for a point only, as the server does
     const halfFovY = (0.5 * cam.fov_y_deg * Math.PI) / 180.0;
     const halfFovX = aspect > 0 && Number.isFinite(aspect) ? Math.atan(Math.tan(halfFovY) * aspect) : halfFovY;
     const dist = radius / Math.sin(Math.min(halfFovY, halfFovX));
@@ -138,11 +141,14 @@ export function pan(camera, dx, dy, viewHeight) {
 }
 
 /** Moves the camera towards look_at (factor < 1) or away from it (> 1); the distance stays
- *  above `minDistance`. */
-export function zoom(camera, factor, minDistance = 1e-9) {
+ *  above `minDistance`, by default 1e-12 of look_at's largest coordinate (so that position still
+ *  differs from it) and 1e-300 at least. Not a fixed length: a mesh 1e-20 across is framed
+ *  from ~1e-20, and a floor of 1e-9 had thrown the camera out on the first zoom. */
+export function zoom(camera, factor, minDistance = undefined) {
     const offset = sub(camera.position, camera.look_at);
     const dist = length(offset);
-    const next = Math.max(dist * factor, minDistance);
+    const floor = minDistance ?? Math.max(1e-300, 1e-12 * Math.max(...camera.look_at.map(Math.abs)));
+    const next = Math.max(dist * factor, floor);
     return { ...camera, position: add(camera.look_at, scale(offset, next / dist)) };
 }
 

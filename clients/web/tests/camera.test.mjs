@@ -39,6 +39,16 @@ test('default framing: the bounds\' centre seen from -z, the bounding sphere fil
     assert.deepEqual(defaultCamera({ min: [1, 1, 1], max: [0, 0, 0] }).position, [0, 0, 0]);
 });
 
+test('default framing of a tiny scene: the distance follows its size (as the server frames it)', () => {
+    for (const s of [1e-300, 1e-20, 1, 1e20, 1e300]) {
+        const cam = defaultCamera({ min: [-s, -s, -s], max: [s, s, s] });
+        assert.ok(Math.abs(-cam.position[2] / s - Math.sqrt(3) / Math.sin(Math.PI / 8)) < 1e-12);
+        // and a zoom in moves towards it rather than out to a fixed floor
+        const closer = zoom(cam, 0.5);
+        assert.ok(Math.abs(closer.position[2] / cam.position[2] - 0.5) < 1e-12);
+    }
+});
+
 test('default framing of a model file: from +z, +x on the right of the picture, as glTF viewers show it', () => {
     const bounds = { min: [-2, -2, 6], max: [2, 5, 12] };
     const back = defaultCamera(bounds, 4 / 3, '-z');

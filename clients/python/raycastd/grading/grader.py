@@ -469,7 +469,8 @@ def default_camera(bounds: dict | None, aspect: float, view: str) -> dict:
     if any(a > b for a, b in zip(lo, hi)):
         return cam
     centre = [0.5 * (a + b) for a, b in zip(lo, hi)]
-    radius = max(0.5 * math.dist(lo, hi), 1e-9)
+    half = 0.5 * math.dist(lo, hi)
+    radius = half if half > 0 else 1e-9  # 1e-9 for a point only, as the server does
     half_y = 0.5 * cam["fov_y_deg"] * math.pi / 180.0
     half_x = (
         math.atan(math.tan(half_y) * aspect) if aspect > 0 and math.isfinite(aspect) else half_y
@@ -478,7 +479,7 @@ def default_camera(bounds: dict | None, aspect: float, view: str) -> dict:
     # bounds flat in y (a ground plane) or x are edge-on from ±z: seen from 45° above or beside
     # (engine/scene/scene.h kDefaultCameraFlat)
     e = [b - a for a, b in zip(lo, hi)]
-    flat = DEFAULT_CAMERA_FLAT * math.sqrt(sum(x * x for x in e))
+    flat = DEFAULT_CAMERA_FLAT * math.hypot(*e)  # hypot: |e|² underflows at 1e-300
     d = [0.0, 0.0, 1.0 if view == "+z" else -1.0]
     if e[1] <= flat:
         d[1] = 1.0
