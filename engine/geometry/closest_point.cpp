@@ -124,7 +124,21 @@ std::optional<ClosestPoint> closest_point_on_triangle(const Triangle& tri, const
 
 ClosestPoint closest_point_on_valid_triangle(const Triangle& tri, const Vec3d& p) {
     assert(!is_degenerate(tri) && is_finite(p));
-    ClosestPoint out = regions(tri, p);
+    // Ericson's region tests multiply two dot products, four lengths: beyond 2^±240 they
+    // overflow or underflow (a triangle and point 1e78 across had a null barycentric, 1e155 a
+    // null distance). The triangle and p are then scaled to unit size by a power of two, which
+    // is exact and leaves the barycentrics as they are; the point and distance scale back.
+    // (A point far from a small triangle, lengths of both kinds at once, is not helped.)
+    const double m = std::max({max_abs(tri.b - tri.a), max_abs(tri.c - tri.a), max_abs(p - tri.a)});
+    ClosestPoint out;
+    if (m > 0x1p240 || m < 0x1p-240) {
+        const double k = std::ldexp(1.0, -std::ilogb(m));
+        out = regions(Triangle{tri.a * k, tri.b * k, tri.c * k}, p * k);
+        out.point = out.point / k;
+        out.distance = out.distance / k;
+    } else {
+        out = regions(tri, p);
+    }
     const double scale =
         std::max({max_abs(p), max_abs(tri.a), max_abs(tri.b), max_abs(tri.c), 1e-300});
     out.err = kErrScale * scale;
@@ -134,7 +148,10 @@ ClosestPoint closest_point_on_valid_triangle(const Triangle& tri, const Vec3d& p
 ClosestPoint closest_point_on_sphere(const Sphere& s, const Vec3d& p) {
     ClosestPoint out;
     const Vec3d f = p - s.center;
-    const double len = length(f);
+    // |f| by its largest component where |f|² over- or underflows (a point 1e155 from the
+    // centre had an infinite distance).
+    const double f2 = dot(f, f);
+    const double len = f2 > 0x1p-1000 && f2 < 0x1p1000 ? std::sqrt(f2) : scaled_length(f);
     if (len == 0.0) {
         out.point = s.center + Vec3d{s.radius, 0.0, 0.0};
         out.distance = s.radius;

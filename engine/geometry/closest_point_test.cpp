@@ -63,6 +63,34 @@ TEST(ClosestPoint, EdgeRegions) {
     EXPECT_DOUBLE_EQ(bc.v, 0.5);
 }
 
+// The regions of FaceRegion, VertexRegions and EdgeRegions with the triangle and the point scaled
+// from 1e-300 to 1e300: the same barycentrics, the point and distance scaled (four lengths are
+// multiplied in the region tests; at 1e78 they had overflowed into a null barycentric, at 1e155
+// into a null distance). A sphere likewise.
+TEST(ClosestPoint, EveryScaleGivesTheSameAnswer) {
+    const Vec3d points[] = {{0.5, 0.5, 3}, {-1, -1, 1},  {5, -1, 0},
+                            {1, -2, 0},    {-3, 1.5, 4}, {2, 2, 0}};
+    for (double s : {1e-300, 1e-160, 1e-78, 1.0, 1e78, 1e155, 1e300}) {
+        const Triangle tri{kTri.a * s, kTri.b * s, kTri.c * s};
+        for (const Vec3d& p : points) {
+            const ClosestPoint want = *closest_point_on_triangle(kTri, p);
+            const auto got = closest_point_on_triangle(tri, p * s);
+            ASSERT_TRUE(got) << s;
+            EXPECT_NEAR(got->u, want.u, 1e-15) << s;
+            EXPECT_NEAR(got->v, want.v, 1e-15) << s;
+            EXPECT_NEAR(got->distance / s, want.distance, 1e-15 * want.distance) << s;
+            EXPECT_NEAR(got->point.x / s, want.point.x, 1e-15) << s;
+            EXPECT_NEAR(got->point.y / s, want.point.y, 1e-15) << s;
+            EXPECT_TRUE(std::isfinite(got->err)) << s;
+        }
+        const Sphere ball{{s, 0, 0}, s};
+        const ClosestPoint c = closest_point_on_sphere(ball, Vec3d{s, 3 * s, 4 * s});
+        EXPECT_NEAR(c.distance / s, 4.0, 1e-15) << s;
+        EXPECT_NEAR(c.point.y / s, 0.6, 1e-15) << s;
+        EXPECT_NEAR(c.point.z / s, 0.8, 1e-15) << s;
+    }
+}
+
 TEST(ClosestPoint, FarPointsKeepTheirDigits) {
     const ClosestPoint face = on_tri({0.5, 0.25, 1e12});
     EXPECT_EQ(face.distance, 1e12);
