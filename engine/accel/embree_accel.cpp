@@ -189,6 +189,8 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
 /// fast's answer from what the native traversal found (sphere_hit: the sphere callback's hit).
 std::optional<Hit> fast_answer(const Impl& a, const Ray& ray, const RayContext& c,
                                const NativeHit& nh, bool want_normal) {
+    if (unplaced(c))
+        return exact_closest(a, ray, want_normal);  // not traced in float (prepare_ray)
     if (nh.geom == RTC_INVALID_GEOMETRY_ID)
         return std::nullopt;
     const Object& o = a.scene->objects[nh.geom];
@@ -214,6 +216,8 @@ bool fast_any(const Impl& a, const Ray& ray) {
     FloatRay f;
     if (!prepare_fast_native_ray(a, ray, c, f))
         return false;
+    if (unplaced(c))
+        return exact_any(a, ray);  // not traced in float (prepare_ray)
     return occluded1(s, c, f);
 }
 
@@ -225,6 +229,8 @@ void fast_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>&
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
         return;
+    if (unplaced(c))
+        return exact_all(a, ray, want_normal, out);  // not traced in float (prepare_ray)
     c.fast = true;
     intersect1(a.native.get(), c, f);  // every double hit goes to c.collect
     for (Hit& h : out) {
@@ -291,7 +297,10 @@ void fast_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) {
             [&](const Ray& ray, RayContext& c, FloatRay& f) {
                 return prepare_fast_native_ray(a, ray, c, f);
             },
-            [](std::size_t, const RayContext&) { return false; }, out + i);
+            [&](std::size_t k, const RayContext& c) {
+                return unplaced(c) && exact_any(a, rays[i + k]);  // not traced in float
+            },
+            out + i);
     }
 }
 
@@ -511,7 +520,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
     const Bounds3 b = scene.bounds();
     if (!b.empty()) {
         impl->center = b.center();
-        impl->float_scale = 2.0 * length(b.diagonal()) + 1e-300;
+        impl->float_scale = 2.0 * scaled_length(b.diagonal()) + 1e-300;
         impl->pad = 8.0 * kFloatUnitRoundoff * impl->float_scale + 1e-300;
         impl->unit = std::ldexp(1.0, -std::ilogb(impl->float_scale));
         impl->padded_bounds = b;

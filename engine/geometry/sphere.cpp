@@ -67,6 +67,46 @@ Ray with_scaled_direction(const Ray& ray) {
     return r;
 }
 
+/// The largest of the lengths the kernel multiplies (origin, centre, radius).
+double max_length(const Sphere& s, const Ray& ray) {
+    return std::max({max_abs(ray.origin), max_abs(s.center), s.radius});
+}
+
+/// Lengths below 2⁻⁴⁰⁰ (but not all zero) are scaled by 2⁶⁰⁰ first: r² and |f|² would be
+/// subnormal. The roots then come back times 2⁻⁶⁰⁰.
+bool tiny_lengths(const Sphere& s, const Ray& ray) {
+    const double m = max_length(s, ray);
+    return m > 0.0 && m < 0x1p-400;
+}
+
+/// Where lengths times the direction's length leave 2^±500 (|f × d|² and a·r² are products of
+/// four: a sphere 1e80 across hit by a ray whose direction is 1e80 long was taken for a miss,
+/// one 1e-80 across with a direction 1e-80 long got roots off by 1e-6), the direction is
+/// brought to [1, 2) by a power of two: the roots scale by the same power, exactly.
+/// A direction already in [1, 2) is not scaled again (lengths are at most 2⁵⁰⁰ by then, after
+/// huge_lengths): that would recurse for ever.
+bool extreme_products(const Sphere& s, const Ray& ray) {
+    const double dm = max_abs(ray.direction);
+    const double p = max_length(s, ray) * dm;
+    return (p > 0x1p500 || (p < 0x1p-500 && p > 0.0)) && !(dm >= 1.0 && dm < 2.0);
+}
+
+/// The ray with its direction brought to [1, 2) (huge_products), and the power of two applied,
+/// which the roots are multiplied by.
+Ray with_unit_direction(const Ray& ray, double& k) {
+    k = std::ldexp(1.0, -std::ilogb(max_abs(ray.direction)));
+    Ray r = ray;
+    r.direction = ray.direction * k;
+    return r;
+}
+
+SphereRoots times(SphereRoots r, double k) {
+    r.t[0] *= k;
+    r.t[1] *= k;
+    r.t_err *= k;
+    return r;
+}
+
 SphereRoots scaled_back(SphereRoots r) {
     r.t[0] *= kDirectionScale;
     r.t[1] *= kDirectionScale;
@@ -81,6 +121,17 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
         return scaled_back(sphere_roots(s, with_scaled_direction(ray)));
     if (huge_lengths(s, ray))  // scaled_back's 2⁶⁰⁰ undoes kLengthScale's 2⁻⁶⁰⁰
         return scaled_back(sphere_roots(scaled_sphere(s), with_scaled_origin(ray)));
+    if (tiny_lengths(s, ray)) {
+        Ray r = ray;
+        r.origin = ray.origin * 0x1p600;
+        const Sphere grown{s.center * 0x1p600, s.radius * 0x1p600};
+        return times(sphere_roots(grown, r), 0x1p-600);  // 2⁶⁰⁰·o + t'·d: t = 2⁻⁶⁰⁰·t'
+    }
+    if (extreme_products(s, ray)) {
+        double k;
+        const Ray r = with_unit_direction(ray, k);
+        return times(sphere_roots(s, r), k);  // o + t'·(k·d): t = k·t'
+    }
     SphereRoots out;
     const Vec3d& d = ray.direction;
     {
@@ -207,6 +258,15 @@ SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
     // subtract two huge squares for a far origin (RTG 2019, eq. 7.5).
     const Vec3d l = f - d * (beta / a);
     const double r2 = s.radius * s.radius;
+    const double f2 = dot(f, f);
+    // Squares of lengths (or of the direction) beyond 2^±900 are near overflow or have lost
+    // digits to underflow (past ~1e154 from the centre |f|² overflows, and so does r² past a
+    // radius of ~1e154, which a sphere 1e155 across had taken for a miss before this test came
+    // first): the plain-double form is meaningless there, and the double-double kernel handles
+    // them (scaling lengths and the direction first). A zero |f|² is fine: an origin at the
+    // centre.
+    if (!(r2 >= 0x1p-900 && r2 <= 0x1p900 && f2 <= 0x1p900 && a >= 0x1p-900 && a <= 0x1p900))
+        return sphere_roots(s, ray);
     const double l2 = dot(l, l);
     const double disc = r2 - l2;  // Δ/(4a)
     if (!(disc >= 0.0))
@@ -214,12 +274,7 @@ SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
     // Error of disc: l carries ~u·|f| per component, so |l|² is off by ~4u·|f|·|l| + u·|l|²;
     // the roots move by δdisc/(2√disc) near tangency (√u behaviour), plus the rounding of the
     // distance scale elsewhere.
-    const double f_len = std::sqrt(dot(f, f));
-    // Past ~1e154 from the centre |f|² overflows, past radius ~1e154 r² does, and below radius
-    // ~1e-162 r² underflows: the plain-double form is meaningless there, and the double-double
-    // kernel handles all three (scaling huge lengths first).
-    if (!std::isfinite(f_len) || !(r2 > 0.0) || !std::isfinite(r2))
-        return sphere_roots(s, ray);
+    const double f_len = std::sqrt(f2);
     const double len = std::sqrt(a);
     const double scale = (f_len + s.radius) / len;
     const double ddisc = 8.0 * kDoubleUnitRoundoff * (f_len * std::sqrt(l2) + l2 + r2);

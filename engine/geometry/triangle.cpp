@@ -173,10 +173,10 @@ enum class TFrom {
 std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
                         TFrom t_from = TFrom::plane, bool rescaled = false);
 
-/// woop() with the triangle and the ray's origin scaled by kl and its direction by kd (powers of
-/// two, unit_scale): kl·o + t'·kd·d = kl·(o + t·d) with t' = t·kl/kd, so the range goes in
-/// scaled and t and t_err come back scaled, exactly (unless the true t is itself out of
-/// double's range); barycentrics and the side do not change.
+/// woop() with the triangle and the ray's origin scaled by kl and its direction by kd (powers
+/// of two): kl·o + t'·kd·d = kl·(o + t·d) with t' = t·kl/kd, so the range goes in scaled and t
+/// and t_err come back scaled, exactly (unless the true t is itself out of double's range);
+/// barycentrics and the side do not change. Nothing when both are 1 (nothing would change).
 std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_normal,
                                  bool require_inside, TFrom t_from, double kl, double kd) {
     const Triangle scaled{tri.a * kl, tri.b * kl, tri.c * kl};
@@ -193,6 +193,20 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
     return h;
 }
 
+/// The power of two woop_rescaled scales lengths by: the one that brings the triangle's size E
+/// to 1, the edge functions of a hit being products of lengths of E's order; the corners'
+/// distance from the origin L then stays below 2⁹⁰⁰. 1 where L/E exceeds that (a triangle
+/// 1e-200 across seen from 1e300 away: no single scale serves both, and unscaled its corners
+/// are no better known than its size anyway). Scaling by L (the first version) had taken a
+/// small triangle far away to underflow (a helper's review).
+double woop_scale(const Vec3d& A, const Vec3d& B, const Vec3d& C) {
+    const double L = std::max({max_abs(A), max_abs(B), max_abs(C)});
+    const double E = std::max(max_abs(B - A), max_abs(C - A));
+    if (!(L > 0.0 && E > 0.0 && std::isfinite(L) && std::isfinite(E)) || L > 0x1p900 * E)
+        return 1.0;
+    return std::ldexp(1.0, -std::ilogb(E));
+}
+
 /// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
 /// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere). `rescaled`:
 /// called by woop_rescaled, which is not asked again.
@@ -201,16 +215,6 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     const Vec3d A = tri.a - ray.origin;
     const Vec3d B = tri.b - ray.origin;
     const Vec3d C = tri.c - ray.origin;
-    if (!rescaled) {
-        // The edge functions are products of two lengths, their error bound times a sheared z
-        // of three, and plane_t divides lengths by the direction: beyond 2^±250 those products
-        // overflowed or underflowed (a triangle 1e110 from the origin missed, one 1e-110 away
-        // was hit at t = 0). Such rays and triangles are brought to unit scale first.
-        const double kl = unit_scale(std::max({max_abs(A), max_abs(B), max_abs(C)}));
-        const double kd = unit_scale(max_abs(ray.direction));
-        if (kl != 1.0 || kd != 1.0)
-            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, kl, kd);
-    }
     const ShearFrame s = make_shear(ray.direction);
 
     // Shear the vertices so the ray runs along +z (Woop et al., eq. 2).
@@ -222,6 +226,22 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     double u = cx * by - cy * bx;
     double v = ax * cy - ay * cx;
     double w = bx * ay - by * ax;
+    if (!rescaled) {
+        // The edge functions are products of two lengths, the sheared t and t_err multiply
+        // them by a third, and t_err's bound mixes lengths with the sheared z (lengths over the
+        // direction's): beyond 2^±600 for the first, or a direction beyond 2^±250, those have
+        // overflowed or lost their digits to underflow (a triangle 1e-160 across was missed,
+        // one 1e155 across too; one 1e-110 across hit at t = 0 by the sheared t; a direction
+        // 1e-100 long had t_err 1e85 times t). Such a triangle and ray are brought to unit
+        // scale (woop_scale, unit_scale). Ordinary ones pay four comparisons.
+        const double m = std::max({std::abs(u), std::abs(v), std::abs(w)});
+        const double dm = std::abs(ray.direction[s.kz]);  // max_abs(direction)
+        if (!(m >= 0x1p-600 && m <= 0x1p600 && dm >= 0x1p-250 && dm <= 0x1p250)) {
+            const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));
+            if (kl != 1.0 || kd != 1.0)
+                return woop_rescaled(tri, ray, want_normal, require_inside, t_from, kl, kd);
+        }
+    }
     if (u == 0.0 || v == 0.0 || w == 0.0) {
         // An edge function that rounds to zero may have the wrong sign; recompute it with the
         // 64-bit significand of long double, where the products of two doubles are far closer
@@ -259,8 +279,11 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         const double delta_y = gamma(5) * (max_y + max_z);
         const double delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
         const double max_e = max_abs(Vec3d{u, v, w});
-        return 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) *
-               std::abs(inv_det);
+        // Divided by det before the lengths multiply: max_e·max_z is a product of three
+        // lengths, which underflowed to t_err = 0 for a triangle 1e-150 across.
+        const double inv = std::abs(inv_det);
+        return 3.0 * (gamma(3) * (max_e * inv) * max_z + (delta_e * inv) * max_z +
+                      delta_z * (max_e * inv));
     };
 
     double t, t_err;
@@ -279,6 +302,14 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         // the sheared t, off by up to t_err, could put in front.
         if (require_inside && !(t - t_err >= ray.tmin && t <= ray.tmax))
             return std::nullopt;
+    }
+
+    if (!std::isfinite(t_err) && !rescaled) {
+        // t_err multiplies the sheared z (distance over direction length) by lengths: a
+        // direction far shorter or longer than the distances (1e-300 against 1) overflowed it.
+        const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));
+        if (kl != 1.0 || kd != 1.0)
+            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, kl, kd);
     }
 
     Hit hit;

@@ -38,7 +38,7 @@ bool fits_float(const Scene& s) {
     const Bounds3 b = s.bounds();
     if (b.empty())
         return true;
-    const double diagonal = length(b.diagonal());
+    const double diagonal = scaled_length(b.diagonal());  // |d|² over- or underflows past 1e±154
     return diagonal <= kMaxFloatSceneDiagonal && diagonal >= kMinFloatSceneDiagonal;
 }
 

@@ -280,7 +280,18 @@ TEST(Query, BatchesOnManyThreadsKeepTheirBlocksApart) {
 // fast, one 1e18 across aborted the process (an assertion in Embree), and past 1e20 every
 // precision missed.
 TEST(EmbreeAccel, ScenesOfEverySizeAreAnswered) {
-    for (int e = -40; e <= 40; e += 4) {
+    // Every fourth power of ten to ±40, then to ±280 by twenties: past ~1e±105 refined's widened
+    // triangles had been formed in scene units, whose cross products under- or overflowed (no
+    // widening: missed hits near edges), and past ~1e±154 the diagonal itself (a helper's
+    // review).
+    std::vector<int> exponents;
+    for (int e = -40; e <= 40; e += 4)
+        exponents.push_back(e);
+    for (int e = 60; e <= 280; e += 20) {
+        exponents.push_back(e);
+        exponents.push_back(-e);
+    }
+    for (int e : exponents) {
         const double s = std::pow(10.0, e);
         Scene scene;
         scene.materials.push_back(Material{});

@@ -112,14 +112,17 @@ GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& 
         return g;  // the error callback has recorded why; commit reports it
     for (std::size_t i = 0; i < n; ++i) {
         const Triangle t = mesh.triangle(i);
-        const Vec3d& center = a.center;
-        const Triangle rel{t.a - center, t.b - center, t.c - center};
+        // Widened in Embree's frame (Impl::frame, an exact scaling): its cross products are of
+        // unit-sized edges. In scene units they underflowed for meshes below ~1e-105 across (no
+        // widening, so refined missed hits near edges while certifying its misses) and
+        // overflowed above ~5e102 (every corner capped: nothing certified). A helper's review.
+        const Triangle rel{a.frame(t.a), a.frame(t.b), a.frame(t.c)};
         Vec3d out[3] = {rel.a, rel.b, rel.c};
         if (!is_degenerate(t))  // a degenerate triangle is never hit in double: left as it is
-            widen_triangle(rel, widen_by, out, capped);
+            widen_triangle(rel, widen_by * a.unit, out, capped);
         for (std::size_t k = 0; k < 3; ++k) {
-            // In Embree's frame (Impl::unit, exact); to_float: see make_triangle_geometry.
-            const Vec3d q = out[k] * a.unit;
+            // to_float: see make_triangle_geometry.
+            const Vec3d& q = out[k];
             v[9 * i + 3 * k + 0] = to_float(q.x);
             v[9 * i + 3 * k + 1] = to_float(q.y);
             v[9 * i + 3 * k + 2] = to_float(q.z);

@@ -1,5 +1,7 @@
 #include "engine/accel/embree/float_ray.h"
 
+#include <limits>
+
 #include "engine/math/double_double.h"
 
 namespace raycastd::engine::embree {
@@ -35,8 +37,10 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     if (!clip_to_bounds(a, ray, t0, t1))
         return false;
     c.ray = &ray;
-    const double dlen = length(ray.direction);
-    c.len = dlen * a.unit;  // float t in Embree's frame (Impl::unit)
+    double dlen = length(ray.direction);
+    if (!(dlen > 0x1p-500 && dlen < 0x1p500))
+        dlen = scaled_length(ray.direction);  // |d|² over- or underflowed (a direction 1e160 long)
+    c.len = dlen * a.unit;                    // float t in Embree's frame (Impl::unit)
     c.margin = 4.0 * a.pad * a.unit;
     c.shift = start == RayStart::backed_off ? t0 - 4.0 * a.pad / dlen : t0;
     // (o − centre) + s·d rather than (o + s·d) − centre: the first difference is exact or nearly
@@ -62,6 +66,19 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
                        2.0 * kDoubleUnitRoundoff * length(org);
     }
     const Vec3d dir = ray.direction * (1.0 / dlen);  // rounded to float next: one more u
+    if (!(max_abs(org) <= 4.0 * a.float_scale)) {
+        // The slab test's t0 is widened by γ₃·|t0|, relative to the distance: from an origin
+        // more than ~1e16 scene sizes away the start point lies that far outside the bounds,
+        // where the float ray's rounding exceeds the boxes' padding (and past 1.8e18 in Embree's
+        // frame Embree asserts and aborts the process: a helper's review, 2026-12-05). Such a
+        // ray is not traced in float: an empty segment, and an origin_err that sends it to the
+        // linear scan (unplaced()).
+        c.origin_err = std::numeric_limits<double>::infinity();
+        f = FloatRay{};
+        f.dir_z = 1.0f;
+        f.tfar = -1.0f;
+        return true;
+    }
     org = org * a.unit;  // into Embree's frame (Impl::unit): inside the scaled bounds
     f.org_x = to_float(org.x);
     f.org_y = to_float(org.y);

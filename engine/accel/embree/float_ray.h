@@ -132,8 +132,9 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
 /// scenes get no Embree BVH, QueryEngine::build), and |d|² in [1e-12, 1e12].
 inline bool fast_ray_applies(const Impl& a, const Ray& ray, const Vec3d& org) {
     const double d2 = dot(ray.direction, ray.direction);
-    const double scale = a.float_scale;
-    return ray.tmin >= 0.0 && dot(org, org) <= 16.0 * scale * scale && d2 >= 1e-12 && d2 <= 1e12;
+    // max_abs, not |org|² against 16·scale²: that overflowed for scenes past ~1.7e153 across,
+    // and any origin passed (a helper's review).
+    return ray.tmin >= 0.0 && max_abs(org) <= 4.0 * a.float_scale && d2 >= 1e-12 && d2 <= 1e12;
 }
 
 /// The unclipped float ray of `ray` (origin relative to the scene centre, direction and range
@@ -184,6 +185,13 @@ inline bool prepare_fast_native_ray(const Impl& a, const Ray& ray, RayContext& c
 /// well inside the padding. Rays where it does not take the linear scan.
 inline bool exact_ray_within_padding(const Impl& a, const RayContext& c) {
     return c.origin_err <= 0.25 * a.pad;
+}
+
+/// Whether prepare_ray could not place the float ray near the scene (an origin so far that the
+/// slab test's rounding puts the start point outside the bounds): its float segment is empty,
+/// and the exact answer comes from the linear scan (exact_ray_within_padding is false too).
+inline bool unplaced(const RayContext& c) {
+    return c.origin_err == std::numeric_limits<double>::infinity();
 }
 
 /// One float ray traced on `scene` for its closest hit; the callbacks see `c`.
