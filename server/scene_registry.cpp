@@ -519,8 +519,10 @@ SceneRegistry::Saved SceneRegistry::persist(const std::string& id, const SceneSo
         return Saved::now;
     fs::remove_all(tmp, ec);
     // rename(2) onto a directory that is not empty fails (ENOTEMPTY, or EEXIST): another writer
-    // published the same id first. Its copy has the same bytes (the id is their hash), and it
-    // is never replaced, so that a replica reading it meanwhile reads whole files.
+    // published the same id first. Its copy has the same bytes (the id is their hash), and a
+    // whole copy is never replaced, so that a replica reading it meanwhile reads whole files
+    // (a damaged one is moved aside above: a replica rebuilding from it at that moment finds
+    // it gone and answers 404 for that request).
     if (fs::exists(final_dir / "meta.json", ec)) {
         error = {};
         return Saved::already;

@@ -1,14 +1,16 @@
 #pragma once
 // The float ray Embree traces for a double ray, and Embree's float hit read back.
 //
-// Two set-ups (both relative to the scene centre, Impl::center):
+// Two set-ups (both in Embree's frame, Impl::frame: relative to the scene centre and scaled to
+// unit size):
 //   prepare_ray       the ray's segment clipped to the padded scene bounds (Kay & Kajiya slabs,
 //                     in double), starting where it enters them, with a unit direction: a far
 //                     origin or an extreme direction length then costs no float precision. The
 //                     start point is formed in double-double when plain double would round it
 //                     beyond the exact BVH's box padding.
-//   prepare_ray_fast  the ray as it is (no clipping, no renormalisation; t in the client's
-//                     units), for fast, where that loses nothing the float kernel had anyway.
+//   prepare_ray_fast  the ray as it is (no clipping, no renormalisation; float t is the
+//                     client's t times Impl::unit), for fast, where that loses nothing the float
+//                     kernel had anyway.
 // Either way the 12 fields of Embree's ray are written by one helper, fill_lane, for a single
 // RTCRay or for lane k of an RTCRay16; intersect1 and occluded1 trace a single one.
 
@@ -23,8 +25,8 @@
 
 namespace raycastd::engine::embree {
 
-/// A float ray's geometry as Embree takes it: origin relative to the scene centre, direction,
-/// and the range [tnear, tfar] in units of that direction.
+/// A float ray's geometry as Embree takes it: origin in Embree's frame (Impl::frame), direction,
+/// and the range [tnear, tfar] (RayContext::len maps it to the double ray's t).
 struct FloatRay {
     float org_x = 0.0f, org_y = 0.0f, org_z = 0.0f;
     float dir_x = 0.0f, dir_y = 0.0f, dir_z = 0.0f;
@@ -128,8 +130,8 @@ enum class RayStart {
 bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f);
 
 /// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org:
-/// tmin ≥ 0, an origin within 4 scene diagonals of the centre (so in float's range: wider
-/// scenes get no Embree BVH, QueryEngine::build), and |d|² in [1e-12, 1e12].
+/// tmin ≥ 0, an origin within 4 scene sizes of the centre on every axis (at most 8 in Embree's
+/// frame), and |d|² in [1e-12, 1e12].
 inline bool fast_ray_applies(const Impl& a, const Ray& ray, const Vec3d& org) {
     const double d2 = dot(ray.direction, ray.direction);
     // max_abs, not |org|² against 16·scale²: that overflowed for scenes past ~1.7e153 across,
@@ -137,8 +139,8 @@ inline bool fast_ray_applies(const Impl& a, const Ray& ray, const Vec3d& org) {
     return ray.tmin >= 0.0 && max_abs(org) <= 4.0 * a.float_scale && d2 >= 1e-12 && d2 <= 1e12;
 }
 
-/// The unclipped float ray of `ray` (origin relative to the scene centre, direction and range
-/// as given) in `f`; false, with `f` untouched, where fast_ray_applies does not hold.
+/// The unclipped float ray of `ray` (origin in Embree's frame, direction as given, range times
+/// Impl::unit) in `f`; false, with `f` untouched, where fast_ray_applies does not hold.
 inline bool unclipped_float_ray(const Impl& a, const Ray& ray, FloatRay& f) {
     const Vec3d org = ray.origin - a.center;
     if (!fast_ray_applies(a, ray, org))
@@ -158,8 +160,8 @@ inline bool unclipped_float_ray(const Impl& a, const Ray& ray, FloatRay& f) {
 }
 
 /// The fast path's float ray: the double ray as it is (unclipped_float_ray), with shift 0 and
-/// len 1 in `c`, used when that loses nothing the float kernel had anyway; false where it does
-/// not apply (then prepare_ray).
+/// len Impl::unit in `c`, used when that loses nothing the float kernel had anyway; false where
+/// it does not apply (then prepare_ray).
 inline bool prepare_ray_fast(const Impl& a, const Ray& ray, RayContext& c, FloatRay& f) {
     if (!unclipped_float_ray(a, ray, f))
         return false;
@@ -172,8 +174,8 @@ inline bool prepare_ray_fast(const Impl& a, const Ray& ray, RayContext& c, Float
 
 /// fast's float ray on its BVH: prepare_ray_fast where it applies, else prepare_ray; spheres
 /// are then decided by the plain-double kernel (c.fast). Spheres take the unclipped ray too:
-/// their callback works in the client's t units with shift 0 and len 1, and a sphere culled by
-/// its box within the float rounding of the unclipped ray is within what fast promises.
+/// their callback works in the client's t units with shift 0 and len Impl::unit, and a sphere
+/// culled by its box within the float rounding of the unclipped ray is within what fast promises.
 /// Measured: clipping and normalising cost 17% of a fast render of spheres.
 inline bool prepare_fast_native_ray(const Impl& a, const Ray& ray, RayContext& c, FloatRay& f) {
     c.fast = true;
