@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "engine/geometry/target_clones.h"
 #include "engine/math/double_double.h"
@@ -72,11 +73,12 @@ double max_length(const Sphere& s, const Ray& ray) {
     return std::max({max_abs(ray.origin), max_abs(s.center), s.radius});
 }
 
-/// Lengths below 2⁻⁴⁰⁰ (but not all zero) are scaled by 2⁶⁰⁰ first: r² and |f|² would be
-/// subnormal. The roots then come back times 2⁻⁶⁰⁰.
-bool tiny_lengths(const Sphere& s, const Ray& ray) {
-    const double m = max_length(s, ray);
-    return m > 0.0 && m < 0x1p-400;
+/// A radius below 2⁻⁴⁰⁰ (r² subnormal; a false tangent hit once r² and |f × d|² both underflow
+/// to 0, a helper's review) scales the lengths up by k first, as far as the largest stays below
+/// 2⁵⁰⁰; a sphere smaller than 2⁻⁹⁰⁰ of its distance or of the origin's coordinates is missed
+/// (below double's resolution there). The roots come back times 1/k.
+bool tiny_radius(const Sphere& s) {
+    return s.radius > 0.0 && s.radius < 0x1p-400;
 }
 
 /// Where lengths times the direction's length leave 2^±500 (|f × d|² and a·r² are products of
@@ -91,7 +93,7 @@ bool extreme_products(const Sphere& s, const Ray& ray) {
     return (p > 0x1p500 || (p < 0x1p-500 && p > 0.0)) && !(dm >= 1.0 && dm < 2.0);
 }
 
-/// The ray with its direction brought to [1, 2) (huge_products), and the power of two applied,
+/// The ray with its direction brought to [1, 2) (extreme_products), and the power of two applied,
 /// which the roots are multiplied by.
 Ray with_unit_direction(const Ray& ray, double& k) {
     k = std::ldexp(1.0, -std::ilogb(max_abs(ray.direction)));
@@ -114,23 +116,50 @@ SphereRoots scaled_back(SphereRoots r) {
     return r;
 }
 
-}  // namespace
-
-RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
+/// sphere_roots for a sphere and ray beyond the plain kernel's ranges, by the first rule of
+/// those above that applies (each recursion leaves its quantity in range, so at most a few
+/// levels); nullopt when none does.
+std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray) {
     if (tiny_direction(ray.direction))
         return scaled_back(sphere_roots(s, with_scaled_direction(ray)));
     if (huge_lengths(s, ray))  // scaled_back's 2⁶⁰⁰ undoes kLengthScale's 2⁻⁶⁰⁰
         return scaled_back(sphere_roots(scaled_sphere(s), with_scaled_origin(ray)));
-    if (tiny_lengths(s, ray)) {
+    if (tiny_radius(s)) {
+        // r to 1, or less where the largest length would pass 2⁵⁰⁰ that way, as long as r stays
+        // at 2⁻⁴⁰⁰ or more.
+        const double L = max_length(s, ray);
+        double k = std::ldexp(1.0, -std::ilogb(s.radius));
+        if (!(L * k <= 0x1p500))
+            k = std::ldexp(1.0, 499 - std::ilogb(L));
+        if (!(s.radius * k >= 0x1p-400))
+            return SphereRoots{};
         Ray r = ray;
-        r.origin = ray.origin * 0x1p600;
-        const Sphere grown{s.center * 0x1p600, s.radius * 0x1p600};
-        return times(sphere_roots(grown, r), 0x1p-600);  // 2⁶⁰⁰·o + t'·d: t = 2⁻⁶⁰⁰·t'
+        r.origin = ray.origin * k;
+        const Sphere grown{s.center * k, s.radius * k};
+        return times(sphere_roots(grown, r), 1.0 / k);  // k·o + t'·d: t = t'/k
     }
     if (extreme_products(s, ray)) {
         double k;
         const Ray r = with_unit_direction(ray, k);
         return times(sphere_roots(s, r), k);  // o + t'·(k·d): t = k·t'
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
+    {
+        // One test for the ordinary case (a helper measured three separate ones at +20% of a
+        // miss): lengths, radius, direction and their product in range.
+        const double L = max_length(s, ray), D = max_abs(ray.direction), p = L * D;
+        const bool ordinary = D >= kTinyDirection && L <= kHugeLength &&
+                              !(s.radius > 0.0 && s.radius < 0x1p-400) && p <= 0x1p500 &&
+                              (p >= 0x1p-500 || p == 0.0);
+        if (!ordinary) {
+            if (const std::optional<SphereRoots> r = sphere_roots_rescaled(s, ray))
+                return *r;
+        }
     }
     SphereRoots out;
     const Vec3d& d = ray.direction;

@@ -134,6 +134,25 @@ TEST(Sphere, ARayStartingInTheCentrePlaneHasRootsOfBothSigns) {
 // Radii and distances past ~1.3e154 overflow r² and |f|²: the kernels scale such geometry by
 // 2⁻⁶⁰⁰ first (the roots scale back exactly). A ray from inside a sphere of radius 1e155 leaves
 // it at t ≈ 1e155 (it had been a miss), and one from 1e300 away meets a sphere of radius 1e299.
+// A sphere far smaller than its distance from the origin: r² and |f × d|² both underflowed to
+// 0 and every ray near it was a tangent hit (a second review). Now a ray 0.5 radii from the
+// centre crosses twice and one 2 radii away misses, at both kernels.
+TEST(Sphere, TinySpheresSeenFromAfarAreHitOnlyByRaysThatMeetThem) {
+    for (double r : {1e-150, 1e-170, 1e-200, 1e-250}) {
+        const Sphere s{{0, 0, 1}, r};
+        for (const bool fast : {false, true}) {
+            const auto roots = [&](const Ray& ray) {
+                return fast ? sphere_roots_fast(s, ray) : sphere_roots(s, ray);
+            };
+            const SphereRoots in = roots(Ray{{0.5 * r, 0, 0}, {0, 0, 1}});
+            ASSERT_EQ(in.count, 2) << r << " " << fast;
+            EXPECT_NEAR(in.t[0], 1.0, 1e-15) << r;
+            EXPECT_LE(in.t[0], in.t[1]) << r;  // 1 ∓ 0.87r: equal in double below ~1e-16
+            EXPECT_EQ(roots(Ray{{2 * r, 0, 0}, {0, 0, 1}}).count, 0) << r << " " << fast;
+        }
+    }
+}
+
 TEST(Sphere, HugeSpheresAreHit) {
     for (const bool fast : {false, true}) {
         auto roots = [&](const Sphere& s, const Ray& r) {

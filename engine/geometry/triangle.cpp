@@ -183,28 +183,34 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
     Ray r;
     r.origin = ray.origin * kl;
     r.direction = ray.direction * kd;
-    r.tmin = ray.tmin * kl / kd;  // in this order: kl/kd alone may overflow
-    r.tmax = ray.tmax * kl / kd;
+    const int e = std::ilogb(kl) - std::ilogb(kd);  // kl/kd, which may itself overflow
+    r.tmin = std::ldexp(ray.tmin, e);
+    r.tmax = std::ldexp(ray.tmax, e);
     std::optional<Hit> h = woop(scaled, r, want_normal, require_inside, t_from, true);
     if (h) {
-        h->t = h->t * kd / kl;
-        h->t_err = h->t_err * kd / kl;
+        // One power of two, kd/kl: applied in two steps t·kd/kl could overflow where the
+        // result fits (a helper's review).
+        h->t = std::ldexp(h->t, -e);
+        h->t_err = std::ldexp(h->t_err, -e);
     }
     return h;
 }
 
-/// The power of two woop_rescaled scales lengths by: the one that brings the triangle's size E
-/// to 1, the edge functions of a hit being products of lengths of E's order; the corners'
-/// distance from the origin L then stays below 2⁹⁰⁰. 1 where L/E exceeds that (a triangle
-/// 1e-200 across seen from 1e300 away: no single scale serves both, and unscaled its corners
-/// are no better known than its size anyway). Scaling by L (the first version) had taken a
-/// small triangle far away to underflow (a helper's review).
+/// The power of two woop_rescaled scales lengths by: the one that brings the geometric mean of
+/// the triangle's size E and the corners' distance from the origin L to 1 (the edge functions
+/// of a hit are products of lengths of E's order, t_err multiplies them by L's). 1 where L/E
+/// exceeds 2⁶⁰⁰ (a triangle 1e-150 across seen from 1e50 away: no single scale serves both;
+/// unscaled its edge functions are still normal numbers, and beyond ~2¹⁰⁰⁰ its corners are no
+/// better known than its size anyway). Scaling by L (the first version) took a small triangle
+/// far away to underflow, by E (the second) overflowed t_err (two helpers' reviews).
 double woop_scale(const Vec3d& A, const Vec3d& B, const Vec3d& C) {
     const double L = std::max({max_abs(A), max_abs(B), max_abs(C)});
     const double E = std::max(max_abs(B - A), max_abs(C - A));
-    if (!(L > 0.0 && E > 0.0 && std::isfinite(L) && std::isfinite(E)) || L > 0x1p900 * E)
+    if (!(L > 0.0 && E > 0.0 && std::isfinite(L) && std::isfinite(E)) || L > 0x1p600 * E)
         return 1.0;
-    return std::ldexp(1.0, -std::ilogb(E));
+    // The geometric mean of E and L to 1: E·k ≥ 2⁻³⁰⁰ and L·k ≤ 2³⁰⁰, so that t_err's products
+    // (up to L²/E in the scaled units) stay finite too.
+    return std::ldexp(1.0, -((std::ilogb(E) + std::ilogb(L)) / 2));
 }
 
 /// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
@@ -234,7 +240,9 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         // one 1e155 across too; one 1e-110 across hit at t = 0 by the sheared t; a direction
         // 1e-100 long had t_err 1e85 times t). Such a triangle and ray are brought to unit
         // scale (woop_scale, unit_scale). Ordinary ones pay four comparisons.
-        const double m = std::max({std::abs(u), std::abs(v), std::abs(w)});
+        // A sum, not std::max, which drops a NaN (inf − inf at a corner of a triangle 1e160
+        // across): the NaN then fails the test and is rescaled.
+        const double m = std::abs(u) + std::abs(v) + std::abs(w);
         const double dm = std::abs(ray.direction[s.kz]);  // max_abs(direction)
         if (!(m >= 0x1p-600 && m <= 0x1p600 && dm >= 0x1p-250 && dm <= 0x1p250)) {
             const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));

@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include "engine/accel/linear_accel.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -331,6 +332,47 @@ TEST(EmbreeAccel, ScenesOfEverySizeAreAnswered) {
             }
         }
         EXPECT_GT(hits, 150) << s;
+    }
+}
+
+// Directions far longer or shorter than the scene (1e150 against a mesh 1e-200 across, 1e-160
+// against one 1e-50 across seen from 1e100 away): prepare_ray's float length overflowed, its
+// tfar was NaN and Embree aborted the process on its assertion (a second review). Every
+// precision, mode and batch size now answers, as the linear scan does.
+TEST(EmbreeAccel, ExtremeDirectionsAreAnsweredWithoutAborting) {
+    struct Case {
+        double size, distance, direction;
+    };
+    for (const Case& c : {Case{1e-200, 3, 1e150}, Case{1e-170, 1e6, 1e154},
+                          Case{1e-50, 1e150, 1e-160}, Case{1, 3, 1e300}}) {
+        Scene scene;
+        scene.materials.push_back(Material{});
+        scene.objects.push_back(testing::icosphere_object(2, {0, 0, 0}, c.size));
+        scene.objects.push_back(testing::sphere("a", {1.5 * c.size, 0, 0}, 0.4 * c.size, 0));
+        const auto shared = std::make_shared<Scene>(std::move(scene));
+        auto engine = QueryEngine::build(shared);
+        ASSERT_TRUE(engine.ok());
+        std::vector<Ray> rays;
+        for (int k = 0; k < 16; ++k) {
+            rays.push_back(
+                Ray{{0.01 * k * c.size, 0.02 * c.size, c.distance * c.size}, {0, 0, -c.direction}});
+        }
+        const std::optional<Hit> want = linear_closest(*shared, rays[0], false);
+        ASSERT_TRUE(want) << c.size;
+        for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+            for (Mode mode : {Mode::closest, Mode::any, Mode::count}) {
+                const QueryResult r = (*engine)->intersect(rays, QueryOptions{mode, p, false});
+                if (mode == Mode::closest) {
+                    ASSERT_TRUE(r.hits[0].valid()) << c.size << " " << to_string(p);
+                    EXPECT_NEAR(r.hits[0].t, want->t, r.hits[0].t_err + want->t_err)
+                        << c.size << " " << to_string(p);
+                } else if (mode == Mode::any) {
+                    EXPECT_TRUE(r.hits[0].valid()) << c.size << " " << to_string(p);
+                } else {
+                    EXPECT_EQ(r.counts[0], 2u) << c.size << " " << to_string(p);
+                }
+            }
+        }
     }
 }
 

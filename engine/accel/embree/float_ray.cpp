@@ -66,13 +66,16 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
                        2.0 * kDoubleUnitRoundoff * length(org);
     }
     const Vec3d dir = ray.direction * (1.0 / dlen);  // rounded to float next: one more u
-    if (!(max_abs(org) <= 4.0 * a.float_scale)) {
+    if (!(max_abs(org) <= 4.0 * a.float_scale) || !is_finite(org) || !(c.len > 0.0) ||
+        !(c.len < std::numeric_limits<double>::infinity()) || !std::isfinite(c.margin / c.len)) {
         // The slab test's t0 is widened by γ₃·|t0|, relative to the distance: from an origin
         // more than ~1e16 scene sizes away the start point lies that far outside the bounds,
         // where the float ray's rounding exceeds the boxes' padding (and past 1.8e18 in Embree's
         // frame Embree asserts and aborts the process: a helper's review, 2026-12-05). Such a
         // ray is not traced in float: an empty segment, and an origin_err that sends it to the
-        // linear scan (unplaced()).
+        // linear scan (unplaced()). So is a direction whose length in Embree's frame over- or
+        // underflows (1e150 long against a scene 1e-200 across), where t1 − t0 made tfar NaN
+        // and Embree asserted (a second review).
         c.origin_err = std::numeric_limits<double>::infinity();
         f = FloatRay{};
         f.dir_z = 1.0f;
@@ -88,6 +91,12 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     f.dir_z = static_cast<float>(dir.z);
     f.tnear = 0.0f;
     f.tfar = std::isinf(t1) ? std::numeric_limits<float>::infinity() : tfar_for(c, t1);
+    if (std::isnan(f.tfar)) {  // never handed to Embree, which asserts on it
+        c.origin_err = std::numeric_limits<double>::infinity();
+        f = FloatRay{};
+        f.dir_z = 1.0f;
+        f.tfar = -1.0f;
+    }
     return true;
 }
 
