@@ -44,10 +44,10 @@ struct Impl {
     /// ... and times this power of two, which brings the scene's size to [1, 2) (frame()):
     /// Embree's float tests multiply up to three coordinates and use absolute constants (its
     /// rays must lie within 1.8e18, and it flushes subnormals to zero), so they are right only
-    /// for scenes of moderate size. Unscaled, a mesh 1e-14 across was missed at fast and refined
-    /// alike, one 1e14 across answered t = inf at fast, one 1e18 across aborted the process on
-    /// an assertion in Embree, and from 1e20 every precision missed. Float t is in units of the
-    /// frame too: RayContext::len includes `unit`.
+    /// for scenes of moderate size. Unscaled, a mesh 1e-14 across was missed at fast, one 1e-20
+    /// across at refined too, one 1e14 across answered t = inf at fast, one 1e18 across aborted the
+    /// process on an assertion in Embree, and from 1e20 every precision missed. Float t is in units
+    /// of the frame too: RayContext::len includes `unit`.
     double unit = 1.0;
     /// p in Embree's frame: (p − center)·unit (exact scaling: unit is a power of two).
     Vec3d frame(const Vec3d& p) const { return (p - center) * unit; }
