@@ -48,17 +48,23 @@ bool tiny_direction(const Vec3d& d) {
 constexpr double kHugeLength = 0x1p500;
 constexpr double kLengthScale = 0x1p-600;
 
+/// The largest of the lengths the kernel multiplies (origin, centre, radius).
+double max_length(const Sphere& s, const Ray& ray) {
+    return std::max({max_abs(ray.origin), max_abs(s.center), s.radius});
+}
+
 bool huge_lengths(const Sphere& s, const Ray& ray) {
-    return std::max({max_abs(ray.origin), max_abs(s.center), s.radius}) > kHugeLength;
+    return max_length(s, ray) > kHugeLength;
 }
 
-Sphere scaled_sphere(const Sphere& s) {
-    return {s.center * kLengthScale, s.radius * kLengthScale};
+/// The sphere, and the ray's origin, times k (a power of two): the roots are then k times the
+/// unscaled ones, the direction being kept.
+Sphere sphere_times(const Sphere& s, double k) {
+    return {s.center * k, s.radius * k};
 }
-
-Ray with_scaled_origin(const Ray& ray) {
+Ray origin_times(const Ray& ray, double k) {
     Ray r = ray;
-    r.origin = ray.origin * kLengthScale;
+    r.origin = ray.origin * k;
     return r;
 }
 
@@ -66,11 +72,6 @@ Ray with_scaled_direction(const Ray& ray) {
     Ray r = ray;
     r.direction = ray.direction * kDirectionScale;
     return r;
-}
-
-/// The largest of the lengths the kernel multiplies (origin, centre, radius).
-double max_length(const Sphere& s, const Ray& ray) {
-    return std::max({max_abs(ray.origin), max_abs(s.center), s.radius});
 }
 
 /// A radius below 2⁻⁴⁰⁰ (r² subnormal; a false tangent hit once r² and |f × d|² both underflow
@@ -110,10 +111,7 @@ SphereRoots times(SphereRoots r, double k) {
 }
 
 SphereRoots scaled_back(SphereRoots r) {
-    r.t[0] *= kDirectionScale;
-    r.t[1] *= kDirectionScale;
-    r.t_err *= kDirectionScale;
-    return r;
+    return times(r, kDirectionScale);
 }
 
 /// sphere_roots for a sphere and ray beyond the plain kernel's ranges, by the first rule of
@@ -123,7 +121,8 @@ std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray
     if (tiny_direction(ray.direction))
         return scaled_back(sphere_roots(s, with_scaled_direction(ray)));
     if (huge_lengths(s, ray))  // scaled_back's 2⁶⁰⁰ undoes kLengthScale's 2⁻⁶⁰⁰
-        return scaled_back(sphere_roots(scaled_sphere(s), with_scaled_origin(ray)));
+        return scaled_back(
+            sphere_roots(sphere_times(s, kLengthScale), origin_times(ray, kLengthScale)));
     if (tiny_radius(s)) {
         // r to 1, or less where the largest length would pass 2⁵⁰⁰ that way, as long as r stays
         // at 2⁻⁴⁰⁰ or more.
@@ -133,10 +132,7 @@ std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray
             k = std::ldexp(1.0, 499 - std::ilogb(L));
         if (!(s.radius * k >= 0x1p-400))
             return SphereRoots{};
-        Ray r = ray;
-        r.origin = ray.origin * k;
-        const Sphere grown{s.center * k, s.radius * k};
-        return times(sphere_roots(grown, r), 1.0 / k);  // k·o + t'·d: t = t'/k
+        return times(sphere_roots(sphere_times(s, k), origin_times(ray, k)), 1.0 / k);
     }
     if (extreme_products(s, ray)) {
         double k;
@@ -153,9 +149,8 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
         // One test for the ordinary case (a helper measured three separate ones at +20% of a
         // miss): lengths, radius, direction and their product in range.
         const double L = max_length(s, ray), D = max_abs(ray.direction), p = L * D;
-        const bool ordinary = D >= kTinyDirection && L <= kHugeLength &&
-                              !(s.radius > 0.0 && s.radius < 0x1p-400) && p <= 0x1p500 &&
-                              (p >= 0x1p-500 || p == 0.0);
+        const bool ordinary = D >= kTinyDirection && L <= kHugeLength && !tiny_radius(s) &&
+                              p <= 0x1p500 && (p >= 0x1p-500 || p == 0.0);
         if (!ordinary) {
             if (const std::optional<SphereRoots> r = sphere_roots_rescaled(s, ray))
                 return *r;
