@@ -173,29 +173,6 @@ enum class TFrom {
 std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
                         TFrom t_from = TFrom::plane, bool rescaled = false);
 
-/// woop() with the triangle and the ray's origin scaled by kl and its direction by kd (powers
-/// of two): kl·o + t'·kd·d = kl·(o + t·d) with t' = t·kl/kd, so the range goes in scaled and t
-/// and t_err come back scaled, exactly (unless the true t is itself out of double's range);
-/// barycentrics and the side do not change. Nothing when both are 1 (nothing would change).
-std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_normal,
-                                 bool require_inside, TFrom t_from, double kl, double kd) {
-    const Triangle scaled{tri.a * kl, tri.b * kl, tri.c * kl};
-    Ray r;
-    r.origin = ray.origin * kl;
-    r.direction = ray.direction * kd;
-    const int e = std::ilogb(kl) - std::ilogb(kd);  // kl/kd, which may itself overflow
-    r.tmin = std::ldexp(ray.tmin, e);
-    r.tmax = std::ldexp(ray.tmax, e);
-    std::optional<Hit> h = woop(scaled, r, want_normal, require_inside, t_from, true);
-    if (h) {
-        // One power of two, kd/kl: applied in two steps t·kd/kl could overflow where the
-        // result fits (a helper's review).
-        h->t = std::ldexp(h->t, -e);
-        h->t_err = std::ldexp(h->t_err, -e);
-    }
-    return h;
-}
-
 /// The power of two woop_rescaled scales lengths by: the one that brings the geometric mean of
 /// the triangle's size E and the corners' distance from the origin L to 1 (the edge functions
 /// of a hit are products of lengths of E's order, t_err multiplies them by L's). 1 where L/E
@@ -211,6 +188,33 @@ double woop_scale(const Vec3d& A, const Vec3d& B, const Vec3d& C) {
     // The geometric mean of E and L to 1: E·k ≥ 2⁻³⁰⁰ and L·k ≤ 2³⁰⁰, so that t_err's products
     // (up to L²/E in the scaled units) stay finite too.
     return std::ldexp(1.0, -((std::ilogb(E) + std::ilogb(L)) / 2));
+}
+
+/// woop() with the triangle and the ray's origin scaled by kl and its direction by kd (powers
+/// of two): kl·o + t'·kd·d = kl·(o + t·d) with t' = t·kl/kd, so the range goes in scaled and t
+/// and t_err come back scaled, exactly (unless the true t is itself out of double's range);
+/// barycentrics and the side do not change. kl is woop_scale's for the corners relative to the
+/// origin (A, B, C), kd brings the direction to unit size where it lies beyond 2^±250
+/// (unit_scale); where both are 1 this is woop() again, unscaled, not asked to rescale.
+std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_normal,
+                                 bool require_inside, TFrom t_from, const Vec3d& A, const Vec3d& B,
+                                 const Vec3d& C) {
+    const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));
+    const Triangle scaled{tri.a * kl, tri.b * kl, tri.c * kl};
+    Ray r;
+    r.origin = ray.origin * kl;
+    r.direction = ray.direction * kd;
+    const int e = std::ilogb(kl) - std::ilogb(kd);  // kl/kd, which may itself overflow
+    r.tmin = std::ldexp(ray.tmin, e);
+    r.tmax = std::ldexp(ray.tmax, e);
+    std::optional<Hit> h = woop(scaled, r, want_normal, require_inside, t_from, true);
+    if (h) {
+        // One power of two, kd/kl: applied in two steps t·kd/kl could overflow where the
+        // result fits (a helper's review).
+        h->t = std::ldexp(h->t, -e);
+        h->t_err = std::ldexp(h->t_err, -e);
+    }
+    return h;
 }
 
 /// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
@@ -245,9 +249,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         const double m = std::abs(u) + std::abs(v) + std::abs(w);
         const double dm = std::abs(ray.direction[s.kz]);  // max_abs(direction)
         if (!(m >= 0x1p-600 && m <= 0x1p600 && dm >= 0x1p-250 && dm <= 0x1p250)) {
-            const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));
-            if (kl != 1.0 || kd != 1.0)
-                return woop_rescaled(tri, ray, want_normal, require_inside, t_from, kl, kd);
+            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
         }
     }
     if (u == 0.0 || v == 0.0 || w == 0.0) {
@@ -315,9 +317,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     if (!std::isfinite(t_err) && !rescaled) {
         // t_err multiplies the sheared z (distance over direction length) by lengths: a
         // direction far shorter or longer than the distances (1e-300 against 1) overflowed it.
-        const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));
-        if (kl != 1.0 || kd != 1.0)
-            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, kl, kd);
+        return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
     }
 
     Hit hit;
