@@ -134,9 +134,12 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
 /// frame), and |d|² in [1e-12, 1e12].
 inline bool fast_ray_applies(const Impl& a, const Ray& ray, const Vec3d& org) {
     const double d2 = dot(ray.direction, ray.direction);
-    // max_abs, not |org|² against 16·scale²: that overflowed for scenes past ~1.7e153 across,
-    // and any origin passed (a helper's review).
-    return ray.tmin >= 0.0 && max_abs(org) <= 4.0 * a.float_scale && d2 >= 1e-12 && d2 <= 1e12;
+    // Each coordinate, not |org|² against 16·scale²: that overflowed for scenes past ~1.7e153
+    // across, and any origin passed (a helper's review). Not max_abs either: its std::max drops
+    // a NaN in some positions, and such an origin would pass.
+    const double reach = 4.0 * a.float_scale;
+    return ray.tmin >= 0.0 && std::abs(org.x) <= reach && std::abs(org.y) <= reach &&
+           std::abs(org.z) <= reach && d2 >= 1e-12 && d2 <= 1e12;
 }
 
 /// The unclipped float ray of `ray` (origin in Embree's frame, direction as given, range times

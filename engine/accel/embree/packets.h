@@ -15,6 +15,7 @@
 // float on the filled lanes (fast_packet), from the same template.
 
 #include <cstddef>
+#include <optional>
 
 #include <embree3/rtcore.h>
 
@@ -54,6 +55,21 @@ bool coherent(std::size_t n, const Dir& dir, const Org& org, T max_spread2) {
 /// The context of a packet of rays[0..m): flagged coherent when they are (coherent() in double,
 /// scene_scale = Impl::float_scale).
 RTCIntersectContext packet_context(const Ray* rays, std::size_t m, double scene_scale);
+
+/// How fast_packet fills its lanes from the double rays: one ray at a time, or four at a time
+/// in AVX's registers where the processor has it (the same lanes: packets.cpp).
+enum class FastLanes { one_by_one, avx };
+/// The widest this processor runs: avx where it has AVX.
+FastLanes widest_fast_lanes();
+
+/// fast_packet's and fast_any_packet's lanes: lane k < m from rays[k]'s unclipped float ray
+/// (unclipped_float_ray), lanes past m repeating the last ray, switched off (valid 0), so that the
+/// coherence test needs no mask. Returns the packet's context, flagged by that test in float, or
+/// nothing (with the lanes partly written) when some ray needs prepare_ray. `how`: avx is taken
+/// as one_by_one where widest_fast_lanes() says the processor has no AVX. Public for tests.
+std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* rays, std::size_t m,
+                                                   RTCRay16& r16, int* valid,
+                                                   FastLanes how = FastLanes::avx);
 
 /// fast's packet of m (4 ≤ m ≤ 16) rays of a triangle-only scene on `scene` when every one of
 /// them takes the unclipped float ray (unclipped_float_ray), i.e. almost always: t needs no
