@@ -17,15 +17,22 @@ TrianglePlane TrianglePlane::of(const Triangle& tri) {
     p.n = cross(e1, e2);
     // plane_t's bound on the rounded normal (cross_magnitudes).
     const Vec3d m = cross_magnitudes(e1, e2);
-    p.n_err = gamma(5) * m;
+    const Vec3d n_err = gamma(5) * m;
     const Vec3d an = abs(p.n);
-    p.dd_scale = 0x1p-96 * (an.x + an.y + an.z + m.x + m.y + m.z);
+    const double dd_scale = 0x1p-96 * (an.x + an.y + an.z + m.x + m.y + m.z);
+    // left_behind's bounds, per unit of |o − a| and of |d| by component: the rounded normal's
+    // error times the other factor, and the rounding of o − a and of the dot products (γ₅ and γ₄
+    // of the magnitudes), and for s plane_t's double-double resolution, whose dd_scale·|o − a|∞
+    // is at most dd_scale·Σ|o − a|ᵢ. The factor 1.0001 leaves room for the rounding of these sums
+    // and of the ray's dot products with them (a few ulps).
+    p.s_err = 1.0001 * (n_err + gamma(5) * an + Vec3d{dd_scale, dd_scale, dd_scale});
+    p.sd_err = 1.0001 * (n_err + gamma(4) * an);
     // A product that underflows breaks the relative bounds above (and the kernels' own): such
     // a triangle (edge components below ~1e-150) is never skipped. A zero factor is exact.
     const Vec3d a1 = abs(e1), a2 = abs(e2);
     const double f1[6] = {a1.y, a1.z, a1.z, a1.x, a1.x, a1.y};
     const double f2[6] = {a2.z, a2.y, a2.x, a2.z, a2.y, a2.x};
-    p.usable = std::isfinite(p.dd_scale);
+    p.usable = std::isfinite(dd_scale) && is_finite(p.s_err);
     for (int k = 0; k < 6; ++k)
         p.usable = p.usable && (f1[k] == 0.0 || f2[k] == 0.0 || f1[k] * f2[k] >= 0x1p-1000);
     return p;
@@ -42,16 +49,20 @@ bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
     // t = −s/(n·d) < 0, strictly before the origin, and plane_t's t keeps that sign (its
     // plain-double path is within u·|t|/8 of it, its double-double path has the numerator's
     // sign), as the fast kernel's t − t_err does: neither reports a hit at tmin ≥ 0.
+    // The bounds' factors are summed once per triangle (TrianglePlane::of). n·d first: a ray
+    // moving along the plane's side it starts on is rarer than one that is not, and that test
+    // needs no origin.
     if (!usable || !(ray.tmin >= 0.0))
         return false;
-    const Vec3d oa = ray.origin - a;
     const Vec3d& d = ray.direction;
-    const double s = dot(n, oa), sd = dot(n, d);
-    const Vec3d an = abs(n), aoa = abs(oa), ad = abs(d);
-    const double s_err =
-        1.0001 * (dot(n_err, aoa) + gamma(5) * dot(an, aoa) + dd_scale * max_abs(oa)) + 0x1p-1000;
-    const double sd_err = 1.0001 * (dot(n_err, ad) + gamma(4) * dot(an, ad)) + 0x1p-1000;
-    return (s > s_err && sd > sd_err) || (s < -s_err && sd < -sd_err);
+    const double sd = dot(n, d);
+    const double sd_bound = dot(sd_err, abs(d)) + 0x1p-1000;
+    if (!(std::abs(sd) > sd_bound))
+        return false;
+    const Vec3d oa = ray.origin - a;
+    const double s = dot(n, oa);
+    const double s_bound = dot(s_err, abs(oa)) + 0x1p-1000;
+    return sd > 0.0 ? s > s_bound : s < -s_bound;
 }
 
 SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
@@ -60,7 +71,8 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
         const Object& o = scene.objects[i];
         if (o.kind == ObjectKind::sphere) {
             const std::uint32_t k = spheres++;
-            prims_.push_back(Primitive{Triangle{}, TrianglePlane{}, o.sphere, i, k, true, true});
+            prims_.push_back(
+                Primitive{Triangle{}, Vec3d{}, TrianglePlane{}, o.sphere, i, k, true, true});
             if (k % 4 == 0)
                 spheres_.push_back(SphereQuad{});
             SphereQuad& quad = spheres_.back();
@@ -78,7 +90,7 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
         const TriangleMesh& mesh = *o.mesh;
         for (std::size_t p = 0; p < mesh.size(); ++p) {
             const Triangle t = mesh.triangle(p);
-            prims_.push_back(Primitive{t, TrianglePlane::of(t), Sphere{}, i,
+            prims_.push_back(Primitive{t, triangle_normal(t), TrianglePlane::of(t), Sphere{}, i,
                                        static_cast<std::uint32_t>(p), false, p + 1 == mesh.size()});
         }
     }
@@ -296,7 +308,7 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
         if (winner->is_sphere)
             sphere_normal(winner->sphere, ray_in, best.t, best);
         else
-            best.normal = triangle_normal(winner->tri);
+            best.normal = winner->normal;
     }
     return best;
 }

@@ -28,9 +28,12 @@ namespace raycastd::engine {
 /// rounding of this test and of the kernels', tmin ≥ 0), in which case neither
 /// intersect_triangle nor intersect_triangle_fast reports a hit.
 struct TrianglePlane {
-    Vec3d n;              ///< (b − a)×(c − a), rounded
-    Vec3d n_err;          ///< bound on |n − the exact normal|, per component
-    double dd_scale = 0;  ///< 2⁻⁹⁶·(Σ|nᵢ| + Σ|products|): plane_t's double-double resolution
+    Vec3d n;  ///< (b − a)×(c − a), rounded
+    /// Per component, what s = n·(o − a) may be off by per unit of |o − a|: the rounded
+    /// normal's error, the rounding of o − a and of the dot product, and plane_t's double-double
+    /// resolution (see left_behind), summed once here rather than per ray.
+    Vec3d s_err;
+    Vec3d sd_err;         ///< the same for n·d per unit of |d|
     bool usable = false;  ///< no product of the normal underflows (else never left behind)
 
     static TrianglePlane of(const Triangle& tri);
@@ -79,6 +82,7 @@ class SceneScan {
   private:
     struct Primitive {
         Triangle tri;          ///< a triangle's corners (unused for a sphere)
+        Vec3d normal;          ///< triangle_normal(tri), made once (unused for a sphere)
         TrianglePlane plane;   ///< the triangle's plane (unused for a sphere)
         Sphere sphere;         ///< a sphere (unused for a triangle)
         std::uint32_t object;  ///< the scene's object index
