@@ -47,6 +47,9 @@ ShadingPlan plan_shading(const Scene& s, const std::optional<Vec3d>& headlight) 
             plan.ambient += s.lights[i].intensity;
         } else if (is_nonzero(s.lights[i].intensity) && !s.objects.empty()) {
             plan.shadow_lights.push_back(i);
+            plan.towards_directional.push_back(s.lights[i].type == LightType::directional
+                                                   ? normalize(-s.lights[i].direction)
+                                                   : Vec3d{});
         }
     }
     return plan;
@@ -210,8 +213,9 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
 }
 
 // Inline, as the in-place shadow_ray below: shade_batch calls both per light per hit.
-inline Vec3d Whitted::to_light(const Surface& sp, const Light& light) {
-    return normalize(light.type == LightType::point ? light.position - sp.p : -light.direction);
+inline Vec3d Whitted::to_light(const Surface& sp, const Light& light, std::size_t k) const {
+    return light.type == LightType::point ? normalize(light.position - sp.p)
+                                          : plan_.towards_directional[k];
 }
 
 inline void Whitted::shadow_ray(Ray& r, const Surface& sp, const Light& light,
@@ -279,7 +283,7 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
         const Light& light = scene().lights[plan_.shadow_lights[k]];
         for (std::size_t h = 0; h < surfaces.size(); ++h) {
             ToLight& t = towards[h * lights + k];
-            t.l = to_light(surfaces[h], light);
+            t.l = to_light(surfaces[h], light, k);
             if (dot(surfaces[h].n, t.l) > 0.0) {  // direct()'s `facing`
                 shadow_ray(shadow.emplace_back(), surfaces[h], light, t.l);
                 slot.push_back(h * lights + k);
@@ -381,7 +385,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
     for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
-        const Vec3d l = traced ? traced[k].l : to_light(sp, light);
+        const Vec3d l = traced ? traced[k].l : to_light(sp, light, k);
         ShadowRayRecord rec;
         rec.light = li;
         rec.facing = dot(sp.n, l) > 0.0;

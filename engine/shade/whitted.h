@@ -81,6 +81,11 @@ struct ShadingPlan {
     Vec3d ambient;
     /// indices of the point and directional lights (none with a headlight)
     std::vector<std::uint32_t> shadow_lights;
+    /// per shadow_lights[k]: for a directional light the unit direction towards it,
+    /// normalize(−direction), the same at every point and so made once here (it had been made
+    /// per hit, a normalisation of the Duck's directional light at each of its hits); unused
+    /// (zero) for a point light
+    std::vector<Vec3d> towards_directional;
     std::optional<Light> headlight;  ///< the directional headlight, in place of the scene's lights
     bool reflection = false;         ///< some material reflects
     bool refraction = false;         ///< some material is transparent
@@ -205,8 +210,9 @@ class Whitted {
     static Ray spawn(const Surface& sp, const Vec3d& w);
     /// The same, written into `r` (a batch's own slot: spawn.h says why).
     static void spawn(Ray& r, const Surface& sp, const Vec3d& w);
-    /// The unit direction from a surface point to a point or directional light.
-    static inline Vec3d to_light(const Surface& sp, const Light& light);
+    /// The unit direction from a surface point to plan().shadow_lights[k], a point or
+    /// directional light.
+    inline Vec3d to_light(const Surface& sp, const Light& light, std::size_t k) const;
     /// The shadow ray from a surface point to a light whose direction is `l` (to_light()); only
     /// traced when the light is in front of the shading normal.
     Ray shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const;
