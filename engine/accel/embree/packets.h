@@ -71,6 +71,13 @@ std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* ray
                                                    RTCRay16& r16, int* valid,
                                                    FastLanes how = FastLanes::avx);
 
+/// fast_packet's answers from Embree's: out[k] for k < m is fast_hit of lane k (t = its float t
+/// over Impl::unit, clamped into [tmin, tmax], with its t_err and, if `want_normal`, the unit
+/// normal), or Hit{} where the lane found nothing. `how` as in fill_fast_lanes (the same Hits
+/// either way). Public for tests.
+void fast_packet_answers(const Impl& a, const Ray* rays, std::size_t m, const RTCRayHit16& rh,
+                         bool want_normal, Hit* out, FastLanes how = FastLanes::avx);
+
 /// fast's packet of m (4 ≤ m ≤ 16) rays of a triangle-only scene on `scene` when every one of
 /// them takes the unclipped float ray (unclipped_float_ray), i.e. almost always: t needs no
 /// shift or rescale, so the lanes are filled straight from the double rays and the answers

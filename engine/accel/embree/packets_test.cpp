@@ -1,5 +1,6 @@
-// fast's packet lanes (packets.h): filled four at a time in AVX's registers they are the lanes
-// filled one ray at a time, bit for bit, with the same coherence flag and the same refusals.
+// fast's packets (packets.h): lanes filled four at a time in AVX's registers are the lanes
+// filled one ray at a time, bit for bit, with the same coherence flag and the same refusals; and
+// answers made four lanes at a time are the Hits fast_hit makes lane by lane.
 
 #include "engine/accel/embree/packets.h"
 
@@ -137,6 +138,71 @@ TEST(FastLanes, AvxFillsTheLanesOneByOneFills) {
             EXPECT_FALSE(fill(a, rays, FastLanes::avx, 0).ok) << which << " at " << at;
         }
     }
+}
+
+bool same_bits(double a, double b) {
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+TEST(FastLanes, AvxAnswersAsOneByOne) {
+    if (widest_fast_lanes() != FastLanes::avx)
+        GTEST_SKIP() << "this processor has no AVX: only the one-by-one answers run here";
+    Impl a;
+    a.center = {-2.0, 0.5, 1e3};
+    a.unit = 0x1p-3;
+    a.float_scale = 7.0;
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> in(-20.0, 20.0), unit(-1.0, 1.0), expo(-4.0, 4.0);
+    std::uniform_real_distribution<float> tf(0.0f, 30.0f), bary(0.0f, 1.0f), ng(-3.0f, 3.0f);
+    int hits = 0, misses = 0, clamped = 0;
+    for (int round = 0; round < 300; ++round) {
+        const std::size_t m = 4 + round % 13;
+        std::vector<Ray> rays(m);
+        alignas(64) RTCRayHit16 rh;
+        std::memset(&rh, 0, sizeof rh);
+        for (std::size_t k = 0; k < kLanes; ++k) {
+            Ray& r = rays[std::min(k, m - 1)];
+            if (k < m) {
+                r.origin = a.center + Vec3d{in(rng), in(rng), in(rng)};
+                r.direction = Vec3d{unit(rng), unit(rng), unit(rng)} * std::pow(10.0, expo(rng));
+                r.tmin = rng() % 2 ? 0.0 : 0.5;
+                r.tmax = rng() % 2 ? kInfinity : 2.0;
+            }
+            rh.ray.tfar[k] = tf(rng);
+            rh.hit.u[k] = bary(rng);
+            rh.hit.v[k] = bary(rng);
+            // Now and then a zero normal (the zero vector is answered) or a miss.
+            const bool flat = rng() % 17 == 0;
+            rh.hit.Ng_x[k] = flat ? 0.0f : ng(rng);
+            rh.hit.Ng_y[k] = flat ? 0.0f : ng(rng);
+            rh.hit.Ng_z[k] = flat ? 0.0f : ng(rng);
+            rh.hit.geomID[k] = rng() % 5 == 0 ? RTC_INVALID_GEOMETRY_ID : 3u;
+            rh.hit.primID[k] = static_cast<unsigned>(rng() % 1000);
+        }
+        for (const bool normals : {false, true}) {
+            std::vector<Hit> one(m), avx(m);
+            for (std::size_t k = 0; k < m; ++k)  // junk the answers must overwrite
+                one[k].t = avx[k].t = -7.0, one[k].on_edge = avx[k].on_edge = true;
+            fast_packet_answers(a, rays.data(), m, rh, normals, one.data(), FastLanes::one_by_one);
+            fast_packet_answers(a, rays.data(), m, rh, normals, avx.data(), FastLanes::avx);
+            for (std::size_t k = 0; k < m; ++k) {
+                const Hit& x = one[k];
+                const Hit& y = avx[k];
+                EXPECT_TRUE(
+                    same_bits(x.t, y.t) && same_bits(x.t_err, y.t_err) && x.object == y.object &&
+                    x.primitive == y.primitive && same_bits(x.u, y.u) && same_bits(x.v, y.v) &&
+                    same_bits(x.normal.x, y.normal.x) && same_bits(x.normal.y, y.normal.y) &&
+                    same_bits(x.normal.z, y.normal.z) && x.front_face == y.front_face &&
+                    x.on_edge == y.on_edge)
+                    << "round " << round << " lane " << k << ": t " << x.t << " / " << y.t;
+                (x.valid() ? hits : misses) += 1;
+                clamped += x.valid() && (x.t == rays[k].tmin || x.t == rays[k].tmax);
+            }
+        }
+    }
+    EXPECT_GT(hits, 3000);  // both kinds of lane, and t clamped at both ends, were compared
+    EXPECT_GT(misses, 500);
+    EXPECT_GT(clamped, 500);
 }
 
 }  // namespace
