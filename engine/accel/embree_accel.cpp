@@ -12,6 +12,7 @@
 #include "engine/accel/embree/packets.h"
 #include "engine/accel/embree/user_geometry.h"
 #include "engine/accel/linear_accel.h"
+#include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
 
@@ -522,7 +523,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
         impl->center = b.center();
         impl->float_scale = 2.0 * scaled_length(b.diagonal()) + 1e-300;
         impl->pad = 8.0 * kFloatUnitRoundoff * impl->float_scale + 1e-300;
-        impl->unit = std::ldexp(1.0, -std::ilogb(impl->float_scale));
+        impl->unit = power_to_unit(impl->float_scale);
         impl->padded_bounds = b;
         impl->padded_bounds.lo -= Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
         impl->padded_bounds.hi += Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;

@@ -132,7 +132,7 @@ ClosestPoint closest_point_on_valid_triangle(const Triangle& tri, const Vec3d& p
     const double m = std::max({max_abs(tri.b - tri.a), max_abs(tri.c - tri.a), max_abs(p - tri.a)});
     ClosestPoint out;
     if (m > 0x1p240 || m < 0x1p-240) {
-        const double k = std::ldexp(1.0, -std::ilogb(m));
+        const double k = power_to_unit(m);
         out = regions(Triangle{tri.a * k, tri.b * k, tri.c * k}, p * k);
         out.point = out.point / k;
         out.distance = out.distance / k;

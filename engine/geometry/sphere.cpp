@@ -97,7 +97,7 @@ bool extreme_products(const Sphere& s, const Ray& ray) {
 /// The ray with its direction brought to [1, 2) (extreme_products), and the power of two applied,
 /// which the roots are multiplied by.
 Ray with_unit_direction(const Ray& ray, double& k) {
-    k = std::ldexp(1.0, -std::ilogb(max_abs(ray.direction)));
+    k = power_to_unit(max_abs(ray.direction));
     Ray r = ray;
     r.direction = ray.direction * k;
     return r;
@@ -127,7 +127,7 @@ std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray
         // r to 1, or less where the largest length would pass 2⁵⁰⁰ that way, as long as r stays
         // at 2⁻⁴⁰⁰ or more.
         const double L = max_length(s, ray);
-        double k = std::ldexp(1.0, -std::ilogb(s.radius));
+        double k = power_to_unit(s.radius);
         if (!(L * k <= 0x1p500))
             k = std::ldexp(1.0, 499 - std::ilogb(L));
         if (!(s.radius * k >= 0x1p-400))

@@ -23,7 +23,7 @@ namespace {
 double unit_scale(double m) {
     if ((m >= 0x1p-250 && m <= 0x1p250) || !(m > 0.0) || !std::isfinite(m))
         return 1.0;
-    return std::ldexp(1.0, -std::ilogb(m));
+    return power_to_unit(m);
 }
 
 /// The ray's shear frame: kz is the dominant axis of the direction; kx, ky are chosen so that

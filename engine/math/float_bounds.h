@@ -35,6 +35,13 @@ inline float to_float(double v) {
     return static_cast<float>(v);
 }
 
+/// 2^−⌊log₂ m⌋ for a positive finite m: the power of two that brings m into [1, 2). Multiplying
+/// lengths by it (or by a power of two made from it) is exact, short of results that leave
+/// double's normal range; the kernels and frames that rescale extreme lengths use it.
+inline double power_to_unit(double m) {
+    return std::ldexp(1.0, -std::ilogb(m));
+}
+
 /// The largest float ≤ v: v rounded to the nearest float, stepped down when rounding went up.
 /// Lower corners of float boxes that must contain the double box. v must lie within float's
 /// range (beyond it the conversion is undefined; use to_float).

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "engine/math/float_bounds.h"
 #include "engine/mesh/weld.h"
 
 namespace raycastd::engine {
@@ -38,7 +39,7 @@ CornerNormals compute_corner_normals(const TriangleMesh& mesh) {
             b.extend(p);
         const double m = b.empty() ? 0.0 : max_abs(b.diagonal());
         if (m > 0.0 && std::isfinite(m) && (m < 0x1p-250 || m > 0x1p250))
-            edge_scale = std::ldexp(1.0, -std::ilogb(m));
+            edge_scale = power_to_unit(m);
     }
     for (std::size_t t = 0; t < nt; ++t) {
         const Triangle tri = mesh.triangle(t);
