@@ -52,15 +52,22 @@ bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
     // The bounds' factors are summed once per triangle (TrianglePlane::of). n·d first: a ray
     // moving along the plane's side it starts on is rarer than one that is not, and that test
     // needs no origin.
+    // A dot product that overflowed has no trustworthy sign (one product +inf, the others huge
+    // and negative): the kernels decide (a helper's probe: a triangle 1e100 across seen from
+    // 1e108 had s = +inf for a true s of −1e308, and was skipped though hit, where the bound
+    // summed per ray had overflowed with s and never skipped).
+    constexpr double kMax = std::numeric_limits<double>::max();
     if (!usable || !(ray.tmin >= 0.0))
         return false;
     const Vec3d& d = ray.direction;
     const double sd = dot(n, d);
     const double sd_bound = dot(sd_err, abs(d)) + 0x1p-1000;
-    if (!(std::abs(sd) > sd_bound))
+    if (!(std::abs(sd) > sd_bound && std::abs(sd) <= kMax))
         return false;
     const Vec3d oa = ray.origin - a;
     const double s = dot(n, oa);
+    if (!(std::abs(s) <= kMax))
+        return false;
     const double s_bound = dot(s_err, abs(oa)) + 0x1p-1000;
     return sd > 0.0 ? s > s_bound : s < -s_bound;
 }

@@ -233,6 +233,32 @@ TEST(SceneScan, OriginsWithinTheKernelsResolutionAreLeftToThem) {
     }
 }
 
+// A triangle 1e100 across seen from 1e108: n·(o − a) overflows to +inf though its true value is
+// about −1e308 (a product rounds to +inf, the others are huge and negative). The shortcut's
+// bound, its factors summed once per triangle, stays finite there: it took the plane for left
+// behind and the scan missed a triangle the kernels hit (a helper's probe). An overflowed dot
+// product is left to the kernels.
+TEST(SceneScan, OverflowedPlaneProductsAreLeftToTheKernels) {
+    const double L = 1e100;
+    const Triangle tri{{0, 0, 0}, {L, L, 0}, {L, 0, L}};
+    Ray ray;
+    ray.origin = Vec3d{1.85e108, 1.5e108, 1.5e108};
+    ray.direction = normalize(Vec3d{2 * L / 3, L / 3, L / 3} - ray.origin);
+    EXPECT_FALSE(std::isfinite(dot(TrianglePlane::of(tri).n, ray.origin - tri.a)));
+    EXPECT_FALSE(TrianglePlane::of(tri).left_behind(ray, tri.a));
+    Scene one;
+    one.materials.push_back(Material{});
+    one.objects.push_back(mesh_object("t", {tri.a, tri.b, tri.c}, {{0, 1, 2}}));
+    const auto want = linear_closest(one, ray, true);
+    ASSERT_TRUE(want.has_value());
+    const auto got = SceneScan(one, false).closest(ray, true);
+    ASSERT_TRUE(got.has_value());
+    expect_identical(*got, *want, 0);
+    EXPECT_TRUE(SceneScan(one, false).any(ray));
+    EXPECT_TRUE(SceneScan(one, true).closest(ray, false).has_value());
+    EXPECT_TRUE(SceneScan(one, true).any(ray));
+}
+
 TEST(SceneScan, FastFindsTheSameSurfacesWithinItsBounds) {
     const Scene s = tie_scene();
     const SceneScan scan(s, /*fast=*/true);

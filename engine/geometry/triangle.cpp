@@ -207,12 +207,18 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
     const int e = std::ilogb(kl) - std::ilogb(kd);  // kl/kd, which may itself overflow
     r.tmin = std::ldexp(ray.tmin, e);
     r.tmax = std::ldexp(ray.tmax, e);
-    std::optional<Hit> h = woop(scaled, r, want_normal, require_inside, t_from, true);
+    std::optional<Hit> h = woop(scaled, r, /*want_normal=*/false, require_inside, t_from, true);
     if (h) {
         // One power of two, kd/kl: applied in two steps t·kd/kl could overflow where the
         // result fits (a helper's review).
         h->t = std::ldexp(h->t, -e);
         h->t_err = std::ldexp(h->t_err, -e);
+        // The triangle's own normal, not the scaled copy's: normalising a cross product past
+        // 2⁵⁰⁰ divides by its largest component first, and the scaled copy's came out an ulp
+        // away, so a triangle's normal had depended on the ray (SceneScan, which keeps each
+        // triangle's normal, differed from the linear scan by that ulp).
+        if (want_normal)
+            h->normal = triangle_normal(tri);
     }
     return h;
 }

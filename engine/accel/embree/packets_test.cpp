@@ -82,6 +82,11 @@ TEST(FastLanes, AvxFillsTheLanesOneByOneFills) {
             rays[rng() % m].tmax = 1e300;  // past float's range: +inf in both
         if (round % 11 == 5)
             rays[rng() % m].tmax = std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
+        if (round % 13 == 6) {  // tnear past float's range too
+            Ray& r = rays[rng() % m];
+            r.tmin = std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
+            r.tmax = kInfinity;
+        }
         expect_same_lanes(a, rays, "ordinary rays");
         const Filled f = fill(a, rays, FastLanes::avx, 0);
         ASSERT_TRUE(f.ok);
@@ -154,7 +159,7 @@ TEST(FastLanes, AvxAnswersAsOneByOne) {
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> in(-20.0, 20.0), unit(-1.0, 1.0), expo(-4.0, 4.0);
     std::uniform_real_distribution<float> tf(0.0f, 30.0f), bary(0.0f, 1.0f), ng(-3.0f, 3.0f);
-    int hits = 0, misses = 0, clamped = 0;
+    int hits = 0, misses = 0, clamped = 0, zero_segments = 0;
     for (int round = 0; round < 300; ++round) {
         const std::size_t m = 4 + round % 13;
         std::vector<Ray> rays(m);
@@ -169,6 +174,13 @@ TEST(FastLanes, AvxAnswersAsOneByOne) {
                 r.tmax = rng() % 2 ? kInfinity : 2.0;
             }
             rh.ray.tfar[k] = tf(rng);
+            if (k < m && rng() % 11 == 0) {
+                // A segment [0, −0]: t is +0 as std::min(+0, −0) gives it (min_pd with its
+                // operands the other way round would give −0).
+                r.tmin = 0.0;
+                r.tmax = -0.0;
+                rh.ray.tfar[k] = 0.0f;
+            }
             rh.hit.u[k] = bary(rng);
             rh.hit.v[k] = bary(rng);
             // Now and then a zero normal (the zero vector is answered) or a miss.
@@ -197,12 +209,14 @@ TEST(FastLanes, AvxAnswersAsOneByOne) {
                     << "round " << round << " lane " << k << ": t " << x.t << " / " << y.t;
                 (x.valid() ? hits : misses) += 1;
                 clamped += x.valid() && (x.t == rays[k].tmin || x.t == rays[k].tmax);
+                zero_segments += x.valid() && std::signbit(rays[k].tmax);
             }
         }
     }
     EXPECT_GT(hits, 3000);  // both kinds of lane, and t clamped at both ends, were compared
     EXPECT_GT(misses, 500);
     EXPECT_GT(clamped, 500);
+    EXPECT_GT(zero_segments, 50);
 }
 
 }  // namespace
