@@ -91,6 +91,19 @@ void expect_identical(const Hit& got, const Hit& want, std::size_t i) {
     EXPECT_EQ(got.on_edge, want.on_edge) << i;
 }
 
+/// `count` one-triangle meshes added to `s`, their corners drawn within `scale` of the origin
+/// on every axis (a corner may be up to twice that away).
+void add_random_triangles(Scene& s, std::mt19937_64& rng, double scale, int count) {
+    std::uniform_real_distribution<double> dir(-1.0, 1.0);
+    const auto random_point = [&] { return Vec3d{dir(rng), dir(rng), dir(rng)} * scale; };
+    for (int i = 0; i < count; ++i) {
+        const Vec3d a = random_point();
+        const Vec3d b = a + random_point();
+        const Vec3d c = a + random_point();
+        s.objects.push_back(mesh_object("t" + std::to_string(i), {a, b, c}, {{0, 1, 2}}));
+    }
+}
+
 TEST(SceneScan, ExactIsTheLinearScanBitForBit) {
     const Scene s = tie_scene();
     const SceneScan scan(s, /*fast=*/false);
@@ -207,13 +220,7 @@ TEST(SceneScan, OriginsWithinTheKernelsResolutionAreLeftToThem) {
     for (const double scale : {0x1p-355, 0x1p-500, 1.0}) {
         Scene s;
         s.materials.push_back(Material{});
-        for (int i = 0; i < 12; ++i) {
-            const Vec3d a = Vec3d{dir(rng), dir(rng), dir(rng)} * scale;
-            s.objects.push_back(mesh_object("t" + std::to_string(i),
-                                            {a, a + Vec3d{dir(rng), dir(rng), dir(rng)} * scale,
-                                             a + Vec3d{dir(rng), dir(rng), dir(rng)} * scale},
-                                            {{0, 1, 2}}));
-        }
+        add_random_triangles(s, rng, scale, 12);
         const SceneScan scan(s, false);
         int hits = 0;
         for (int k = 0; k < 4000; ++k) {
@@ -270,13 +277,7 @@ TEST(SceneScan, ExactIsTheLinearScanAtEveryScale) {
     for (const double scale : {1e-280, 1e-150, 1e-100, 1e-30, 1e30, 1e100, 1e150, 1e250}) {
         Scene s;
         s.materials.push_back(Material{});
-        for (int i = 0; i < 10; ++i) {
-            const Vec3d a = Vec3d{dir(rng), dir(rng), dir(rng)} * scale;
-            s.objects.push_back(mesh_object("t" + std::to_string(i),
-                                            {a, a + Vec3d{dir(rng), dir(rng), dir(rng)} * scale,
-                                             a + Vec3d{dir(rng), dir(rng), dir(rng)} * scale},
-                                            {{0, 1, 2}}));
-        }
+        add_random_triangles(s, rng, scale, 10);
         s.objects.push_back(
             sphere("s0", Vec3d{dir(rng), dir(rng), dir(rng)} * scale, 0.3 * scale, 0));
         s.objects.push_back(
