@@ -32,6 +32,19 @@ bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1) {
     return t0 <= t1;
 }
 
+namespace {
+
+/// A ray prepare_ray does not trace in float: an empty segment (a unit direction, tfar −1), and
+/// an origin_err that unplaced() recognises, which sends it to the exact answer.
+void leave_unplaced(RayContext& c, FloatRay& f) {
+    c.origin_err = std::numeric_limits<double>::infinity();
+    f = FloatRay{};
+    f.dir_z = 1.0f;
+    f.tfar = -1.0f;
+}
+
+}  // namespace
+
 bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f) {
     double t0, t1;
     if (!clip_to_bounds(a, ray, t0, t1))
@@ -76,10 +89,7 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
         // linear scan (unplaced()). So is a direction whose length in Embree's frame over- or
         // underflows (1e150 long against a scene 1e-200 across), where t1 − t0 made tfar NaN
         // and Embree asserted (a second review).
-        c.origin_err = std::numeric_limits<double>::infinity();
-        f = FloatRay{};
-        f.dir_z = 1.0f;
-        f.tfar = -1.0f;
+        leave_unplaced(c, f);
         return true;
     }
     org = org * a.unit;  // into Embree's frame (Impl::unit): inside the scaled bounds
@@ -91,12 +101,8 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     f.dir_z = static_cast<float>(dir.z);
     f.tnear = 0.0f;
     f.tfar = std::isinf(t1) ? std::numeric_limits<float>::infinity() : tfar_for(c, t1);
-    if (std::isnan(f.tfar)) {  // never handed to Embree, which asserts on it
-        c.origin_err = std::numeric_limits<double>::infinity();
-        f = FloatRay{};
-        f.dir_z = 1.0f;
-        f.tfar = -1.0f;
-    }
+    if (std::isnan(f.tfar))  // never handed to Embree, which asserts on it
+        leave_unplaced(c, f);
     return true;
 }
 
