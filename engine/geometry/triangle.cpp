@@ -16,16 +16,6 @@ using namespace dd;
 
 namespace {
 
-/// The power of two that brings a length m into [2⁻²⁵⁰, 2²⁵⁰], or 1 when it is there already
-/// (or is 0, inf or NaN). A kernel multiplies up to three lengths (n·(v − o), the edge functions
-/// times a sheared z): their products then stay far inside double's range. Scaling by a power
-/// of two is exact (a part that becomes subnormal rounds, far below the ulp of the rest).
-double unit_scale(double m) {
-    if ((m >= 0x1p-250 && m <= 0x1p250) || !(m > 0.0) || !std::isfinite(m))
-        return 1.0;
-    return power_to_unit(m);
-}
-
 /// The ray's shear frame: kz is the dominant axis of the direction; kx, ky are chosen so that
 /// the winding (and therefore the sign convention of U, V, W) is preserved (Woop et al. §3).
 struct ShearFrame {

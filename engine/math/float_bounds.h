@@ -42,6 +42,17 @@ inline double power_to_unit(double m) {
     return std::ldexp(1.0, -std::ilogb(m));
 }
 
+/// The power of two that brings a length m into [2⁻²⁵⁰, 2²⁵⁰] (power_to_unit), or 1 when it is
+/// there already (or is 0, inf or NaN). A kernel multiplies up to three lengths (n·(v − o), the
+/// edge functions times a sheared z; a mesh's cross products of edges): their products then stay
+/// far inside double's range. Scaling by a power of two is exact (a part that becomes subnormal
+/// rounds, far below the ulp of the rest).
+inline double unit_scale(double m) {
+    if ((m >= 0x1p-250 && m <= 0x1p250) || !(m > 0.0) || !std::isfinite(m))
+        return 1.0;
+    return power_to_unit(m);
+}
+
 /// The largest float ≤ v: v rounded to the nearest float, stepped down when rounding went up.
 /// Lower corners of float boxes that must contain the double box. v must lie within float's
 /// range (beyond it the conversion is undefined; use to_float).

@@ -32,15 +32,8 @@ CornerNormals compute_corner_normals(const TriangleMesh& mesh) {
     // (the areas keep their ratios): a cross product of edges 1e300 long overflows, one of edges
     // 1e-300 long underflows, and every face of such a mesh had counted as degenerate (flat
     // shading). Ordinary meshes are computed as before, bit for bit.
-    double edge_scale = 1.0;
-    {
-        Bounds3 b;
-        for (const Vec3d& p : mesh.positions)
-            b.extend(p);
-        const double m = b.empty() ? 0.0 : max_abs(b.diagonal());
-        if (m > 0.0 && std::isfinite(m) && (m < 0x1p-250 || m > 0x1p250))
-            edge_scale = power_to_unit(m);
-    }
+    const Bounds3 b = mesh.bounds();
+    const double edge_scale = unit_scale(b.empty() ? 0.0 : max_abs(b.diagonal()));
     for (std::size_t t = 0; t < nt; ++t) {
         const Triangle tri = mesh.triangle(t);
         const Vec3d n = cross((tri.b - tri.a) * edge_scale, (tri.c - tri.a) * edge_scale);
