@@ -7,6 +7,7 @@
 
 #include <immintrin.h>
 
+#include "engine/geometry/target_clones.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
@@ -210,10 +211,7 @@ std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n,
 }  // namespace
 
 SceneScan::Lanes SceneScan::widest_lanes() {
-    // GCC's and clang's runtime check, which also asks whether the system saves AVX's
-    // registers (XGETBV).
-    static const Lanes lanes = __builtin_cpu_supports("avx") ? Lanes::four : Lanes::two;
-    return lanes;
+    return cpu_has_avx() ? Lanes::four : Lanes::two;
 }
 
 std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {

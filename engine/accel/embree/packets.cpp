@@ -7,6 +7,8 @@
 
 #include <immintrin.h>
 
+#include "engine/geometry/target_clones.h"
+
 namespace raycastd::engine::embree {
 
 namespace {
@@ -283,11 +285,7 @@ void fast_packet_answers(const Impl& a, const Ray* rays, std::size_t m, const RT
 }
 
 FastLanes widest_fast_lanes() {
-    // GCC's and clang's runtime check, which also asks whether the system saves AVX's
-    // registers (XGETBV).
-    static const FastLanes lanes =
-        __builtin_cpu_supports("avx") ? FastLanes::avx : FastLanes::one_by_one;
-    return lanes;
+    return cpu_has_avx() ? FastLanes::avx : FastLanes::one_by_one;
 }
 
 std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* rays, std::size_t m,
