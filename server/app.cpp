@@ -260,7 +260,9 @@ void App::close_request(const httplib::Request& req, const httplib::Response& re
     const double seconds =
         r.open ? std::chrono::duration<double>(std::chrono::steady_clock::now() - r.start).count()
                : 0.0;
-    const std::size_t route = r.open ? r.route : 0;
+    // Route 0 until a handler names its own: no route matched, counted by method.
+    const std::size_t route =
+        r.open && r.route != 0 ? r.route : metrics_.unmatched_route(r.open ? req.method : "");
     metrics_.observe_request(route, res.status, seconds);
     if (logs_request(config_.log_level, res.status)) {
         RequestLogEntry e;

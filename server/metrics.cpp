@@ -107,7 +107,18 @@ void Histogram::write(std::string& out, const std::string& name, const std::stri
 }
 
 Metrics::Metrics() {
-    add_route("", "unmatched");
+    add_route("other", "unmatched");
+    for (const char* method : kUnmatchedMethods)
+        add_route(method, "unmatched");
+}
+
+std::size_t Metrics::unmatched_route(const std::string& method) const {
+    const std::string m = method == "HEAD" ? "GET" : method;
+    for (std::size_t i = 0; i < kUnmatchedMethods.size(); ++i) {
+        if (m == kUnmatchedMethods[i])
+            return i + 1;  // after route 0, in the constructor's order
+    }
+    return 0;
 }
 
 std::string Metrics::route_label(const std::string& pattern) {

@@ -56,8 +56,16 @@ class Metrics {
 
     /// The route index for `method` and a route pattern (cpp-httplib's regex, written out as a
     /// label with "{id}" for an id group and "{path}" for a final "(.*)"). Call before serving:
-    /// routes are not guarded by a lock. Index 0 is "unmatched" (no route: 404, 405).
+    /// routes are not guarded by a lock. Index 0 is "unmatched" (no route: 404, 405) of a
+    /// method outside kUnmatchedMethods (or none: a request line httplib could not read).
     std::size_t add_route(const std::string& method, const std::string& pattern);
+    /// The methods whose unmatched requests are counted apart, under their own name; any other
+    /// is "other" (route 0). A fixed list: a client's own text as a label would make a new series
+    /// with every method it invents. HEAD counts with GET, as on the routes.
+    static constexpr std::array<const char*, 6> kUnmatchedMethods = {"GET",    "POST",  "PUT",
+                                                                     "DELETE", "PATCH", "OPTIONS"};
+    /// The "unmatched" route index `method` is counted under.
+    std::size_t unmatched_route(const std::string& method) const;
     /// The label a route pattern is reported under ("/v1/scenes/{id}/intersect").
     static std::string route_label(const std::string& pattern);
     const std::string& route_name(std::size_t route) const;

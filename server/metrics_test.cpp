@@ -34,7 +34,8 @@ TEST(Metrics, CountsRequestsByRouteAndStatus) {
     EXPECT_EQ(sample(t, "raycastd_http_requests_total{" + route + R"(,status="200"})"), 2);
     EXPECT_EQ(sample(t, "raycastd_http_requests_total{" + route + R"(,status="404"})"), 1);
     EXPECT_EQ(
-        sample(t, R"(raycastd_http_requests_total{method="",route="unmatched",status="404"})"), 1);
+        sample(t, R"(raycastd_http_requests_total{method="other",route="unmatched",status="404"})"),
+        1);
     // Cumulative buckets: 0.0002 ≤ 0.0005; 0.003 ≤ 0.005; 0.02 ≤ 0.025.
     const std::string h = "raycastd_http_request_duration_seconds";
     EXPECT_EQ(sample(t, h + "_bucket{" + route + R"(,le="0.0005"})"), 1);
@@ -46,6 +47,29 @@ TEST(Metrics, CountsRequestsByRouteAndStatus) {
     // A status the table does not know is clamped into range, not dropped.
     m.observe_request(get, 999, 0.0);
     EXPECT_EQ(sample(m.render(), "raycastd_http_requests_total{" + route + R"(,status="599"})"), 1);
+}
+
+TEST(Metrics, UnmatchedRoutesAreAFixedSetOfMethods) {
+    Metrics m;
+    EXPECT_EQ(m.unmatched_route("BREW"), 0u);
+    EXPECT_EQ(m.unmatched_route(""), 0u);
+    EXPECT_EQ(m.unmatched_route("HEAD"), m.unmatched_route("GET"));
+    EXPECT_NE(m.unmatched_route("GET"), m.unmatched_route("POST"));
+    for (const char* method : Metrics::kUnmatchedMethods) {
+        const std::size_t r = m.unmatched_route(method);
+        EXPECT_NE(r, 0u) << method;
+        EXPECT_EQ(m.route_name(r), "unmatched");
+        m.observe_request(r, 405, 0.0);
+    }
+    const std::string t = m.render();
+    EXPECT_EQ(
+        sample(t,
+               R"(raycastd_http_requests_total{method="DELETE",route="unmatched",status="405"})"),
+        1);
+    EXPECT_EQ(
+        sample(t,
+               R"(raycastd_http_requests_total{method="OPTIONS",route="unmatched",status="405"})"),
+        1);
 }
 
 TEST(Metrics, RaysErrorsAndGauges) {

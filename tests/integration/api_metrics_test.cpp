@@ -106,5 +106,36 @@ TEST_F(Metrics, CountersMoveWithTheRequestsServed) {
               1);
 }
 
+TEST_F(Metrics, UnmatchedRequestsAreCountedByAKnownMethodOrOther) {
+    // A path no route serves, by a method the server knows, by HEAD (counted with GET), and by
+    // methods it does not (which cpp-httplib answers 400 before routing): those share "other",
+    // so a client inventing methods makes no series.
+    auto c = server.client();
+    ASSERT_TRUE(c->Get("/v1/nothing-here"));
+    ASSERT_TRUE(c->Head("/v1/nothing-here"));
+    ASSERT_TRUE(c->Patch("/v1/nothing-here", "{}", "application/json"));
+    for (const char* method : {"BREW", "PROPFIND"}) {
+        httplib::Request req;
+        req.method = method;
+        req.path = "/v1/nothing-here";
+        ASSERT_TRUE(c->send(req));
+    }
+    const auto unmatched = [](const char* method, const char* status = "404") {
+        return std::string(R"(raycastd_http_requests_total{method=")") + method +
+               R"(",route="unmatched",status=")" + status + "\"}";
+    };
+    std::string after = scrape();
+    for (int i = 0; i < 100 && sample(after, unmatched("other", "400")) < 2; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        after = scrape();
+    }
+    EXPECT_EQ(sample(after, unmatched("GET")), 2);
+    EXPECT_EQ(sample(after, unmatched("PATCH")), 1);
+    EXPECT_EQ(sample(after, unmatched("other", "400")), 2);
+    EXPECT_EQ(after.find("BREW"), std::string::npos);
+    EXPECT_EQ(after.find("PROPFIND"), std::string::npos);
+    EXPECT_EQ(after.find(R"(method="")"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace raycastd
