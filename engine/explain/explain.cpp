@@ -53,6 +53,15 @@ std::string quadratic(double a, double b, double c) {
     return term(a, "t^2", true) + term(b, "t", false) + term(c, "", false) + " = 0";
 }
 
+/// The step written in place of the algebra whose numbers double cannot hold.
+constexpr const char* kOutOfRange =
+    "at this scale the products of these coordinates leave double precision's range (about "
+    "1e-308 to 1.8e308), so they are not written out: the engine's kernels rescale the "
+    "coordinates by a power of two first and decide";
+
+/// Below this a square (A = |v|²) has lost digits to the subnormal range.
+constexpr double kSmallestSquare = 0x1p-1000;
+
 ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     ObjectWork w;
     const Vec3d& p = ray.origin;
@@ -74,8 +83,16 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     const Vec3d l = f - v * (dot(f, v) / sw.a);
     const double len_l = length(l);
     sw.discriminant = 4.0 * sw.a * ((s.radius - len_l) * (s.radius + len_l));
-    w.steps.push_back(quadratic(sw.a, sw.b, sw.c));
-    w.steps.push_back("discriminant B^2-4AC = " + num(sw.discriminant));
+    // Past ~1e154 (or below ~1e-154) the squares leave double's range: written out they were
+    // "inf" and "nan". The roots do not need them: sphere_roots scales lengths first.
+    sw.representable = std::isfinite(sw.a) && std::isfinite(sw.b) && std::isfinite(sw.c) &&
+                       std::isfinite(sw.discriminant) && sw.a >= kSmallestSquare;
+    if (sw.representable) {
+        w.steps.push_back(quadratic(sw.a, sw.b, sw.c));
+        w.steps.push_back("discriminant B^2-4AC = " + num(sw.discriminant));
+    } else {
+        w.steps.push_back(kOutOfRange);
+    }
 
     const SphereRoots r = sphere_roots(s, ray);
     for (int i = 0; i < r.count; ++i)
@@ -110,7 +127,30 @@ ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
     // Step 1: the plane ⟨n,x⟩ = ⟨n,a⟩ with n = ac × ab (tutorial, Question 3).
     tw.normal = cross(tri.c - tri.a, tri.b - tri.a);
     tw.plane_d = dot(tw.normal, tri.a);
+    tw.n_dot_v = dot(tw.normal, v);
     w.steps.push_back("l(t) = " + vec(p) + " + t*" + vec(v));
+    // n and ⟨n,a⟩ are products of two and three coordinates: past ~1e102 (or for edges below
+    // ~1e-150) they overflow or underflow, and the plane method's numbers were inf, nan or a
+    // zero normal. The watertight test rescales and decides instead (intersect_triangle).
+    const double magnitude = std::abs(tw.normal.x) + std::abs(tw.normal.y) + std::abs(tw.normal.z);
+    tw.representable = std::isfinite(tw.plane_d) && std::isfinite(dot(tw.normal, p)) &&
+                       std::isfinite(tw.n_dot_v) && std::isfinite(magnitude * max_abs(v)) &&
+                       (magnitude >= kSmallestSquare || is_degenerate(tri));
+    if (!tw.representable) {
+        w.steps.push_back(kOutOfRange);
+        if (const std::optional<Hit> h = intersect_triangle(tri, ray, false)) {
+            w.hit = true;
+            w.t = h->t;
+            tw.t = h->t;
+            tw.point = ray.at(h->t);
+            w.steps.push_back("the watertight test: hit at t = " + num(h->t));
+        } else {
+            w.reason = "the watertight test: the ray misses";
+            w.steps.push_back(w.reason);
+        }
+        w.triangle = tw;
+        return w;
+    }
     w.steps.push_back("n = ac x ab = " + vec(tw.normal));
     w.steps.push_back("plane: <n,x> = <n,a> = " + num(tw.plane_d));
     if (tw.normal == Vec3d{0.0, 0.0, 0.0}) {
@@ -120,7 +160,6 @@ ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
         return w;
     }
     // Step 2: substitute l(t): ⟨n,p⟩ + t·⟨n,v⟩ = ⟨n,a⟩.
-    tw.n_dot_v = dot(tw.normal, v);
     if (tw.n_dot_v == 0.0) {
         w.reason = "<n,v> = 0: the ray is parallel to the plane and misses";
         w.steps.push_back(w.reason);

@@ -23,6 +23,9 @@ struct SphereWork {
     double a = 0, b = 0, c = 0;  ///< A·t² + B·t + C = 0
     double discriminant = 0;     ///< B² − 4AC
     std::vector<double> roots;   ///< ascending; empty when there are no real roots
+    /// False when A, B, C or the discriminant leave double's range (coordinates past ~1e154):
+    /// they are not shown, and the roots come from the engine's rescaled kernel alone.
+    bool representable = true;
 };
 
 struct TriangleWork {
@@ -33,6 +36,10 @@ struct TriangleWork {
     std::optional<Vec3d> point;  ///< d = l(t)
     Vec3d cross[3];              ///< da×db, db×dc, dc×da
     bool same_direction = false;
+    /// False when n, ⟨n,a⟩ or ⟨n,v⟩ leave double's range (coordinates past ~1e102, or edges
+    /// below ~1e-150): the plane method is not worked, the watertight test decides (t and
+    /// point are its answer, cross products are not computed).
+    bool representable = true;
 };
 
 struct ObjectWork {

@@ -1,6 +1,7 @@
 #include "engine/explain/explain.h"
 
 #include <cmath>
+#include <regex>
 
 #include <gtest/gtest.h>
 
@@ -92,6 +93,67 @@ TEST(Explain, TriangleByThePlaneMethod) {
     Explanation parallel = explain(s, Ray{{0, 0, 0}, {1, 0, 0}}).value();
     EXPECT_FALSE(parallel.objects[0].hit);
     EXPECT_FALSE(parallel.objects[0].triangle->t);
+}
+
+/// Whether a step writes a number as "inf" or "nan" (as words: "discriminant" is fine).
+bool has_inf_or_nan(const std::vector<std::string>& steps) {
+    const std::regex inf_or_nan(R"(\b(inf|nan)\b)");
+    for (const std::string& step : steps) {
+        if (std::regex_search(step, inf_or_nan))
+            return true;
+    }
+    return false;
+}
+
+// Coordinates whose products leave double's range: the quadratic's A, B, C (past ~1e154) and
+// the plane's ⟨n,a⟩ (past ~1e102) had been written out as "inf" and "nan" (2e200t + nan = 0).
+// They are not written; the roots and the hit are the engine's rescaled kernels', right.
+TEST(Explain, ProductsBeyondDoublesRangeAreNotWrittenOut) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::sphere("far", {0, 0, 0}, 1e199, 0));
+    s.objects.push_back(testing::mesh_object(
+        "huge", {{-1e120, -1e120, 3e200}, {4e120, -1e120, 3e200}, {-1e120, 4e120, 3e200}},
+        {{0, 1, 2}}));
+    const Explanation ex = explain(s, Ray{{0, 0, -1e200}, {0, 0, 1}}).value();
+    const ObjectWork& sphere = ex.objects[0];
+    ASSERT_TRUE(sphere.sphere);
+    EXPECT_FALSE(sphere.sphere->representable);
+    EXPECT_FALSE(has_inf_or_nan(sphere.steps));
+    ASSERT_EQ(sphere.sphere->roots.size(), 2u);
+    EXPECT_EQ(sphere.sphere->roots[0], 9e199);
+    EXPECT_EQ(sphere.sphere->roots[1], 1.1e200);
+    EXPECT_TRUE(sphere.hit);
+
+    const ObjectWork& tri = ex.objects[1];
+    ASSERT_TRUE(tri.triangle);
+    EXPECT_FALSE(tri.triangle->representable);
+    EXPECT_FALSE(has_inf_or_nan(tri.steps));
+    ASSERT_TRUE(tri.hit);
+    EXPECT_EQ(*tri.t, 4e200);
+    EXPECT_EQ(*tri.triangle->point, (Vec3d{0, 0, 3e200}));
+    ASSERT_TRUE(ex.first_hit);
+    EXPECT_EQ(ex.first_hit->object, 0u);
+
+    // A miss at that scale is the watertight test's too.
+    const Explanation miss = explain(s, Ray{{1e121, 0, -1e200}, {0, 0, 1}}).value();
+    EXPECT_FALSE(miss.objects[1].hit);
+    EXPECT_EQ(miss.objects[1].reason, "the watertight test: the ray misses");
+
+    // Edges below ~1e-150 underflow n = ac × ab to zero, which read as a degenerate triangle.
+    Scene tiny;
+    tiny.materials.push_back(Material{});
+    tiny.objects.push_back(
+        testing::mesh_object("tiny", {{0, 0, 1}, {2e-160, 0, 1}, {0, 2e-160, 1}}, {{0, 1, 2}}));
+    const Explanation small = explain(tiny, Ray{{5e-161, 5e-161, 0}, {0, 0, 1}}).value();
+    EXPECT_FALSE(small.objects[0].triangle->representable);
+    EXPECT_TRUE(small.objects[0].hit);
+    EXPECT_EQ(*small.objects[0].t, 1.0);
+
+    // Ordinary coordinates keep the tutorial's algebra.
+    const Explanation near =
+        explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}}).value();
+    EXPECT_TRUE(near.objects[0].sphere->representable);
 }
 
 TEST(Explain, StopsWhenItsTokenHasFired) {

@@ -42,8 +42,12 @@ void write_object(JsonWriter& w, const engine::ObjectWork& o) {
     w.ch(']');
     if (o.sphere) {
         const auto& s = *o.sphere;
-        w.raw(",\"coefficients\":{\"a\":").number(s.a).raw(",\"b\":").number(s.b);
-        w.raw(",\"c\":").number(s.c).raw("},\"discriminant\":").number(s.discriminant);
+        if (s.representable) {
+            w.raw(",\"coefficients\":{\"a\":").number(s.a).raw(",\"b\":").number(s.b);
+            w.raw(",\"c\":").number(s.c).raw("},\"discriminant\":").number(s.discriminant);
+        } else {
+            w.raw(",\"coefficients\":null,\"discriminant\":null,\"out_of_range\":true");
+        }
         w.raw(",\"roots\":[");
         for (std::size_t i = 0; i < s.roots.size(); ++i) {
             if (i)
@@ -54,8 +58,13 @@ void write_object(JsonWriter& w, const engine::ObjectWork& o) {
     }
     if (o.triangle) {
         const auto& t = *o.triangle;
-        w.raw(",\"normal\":").vec(t.normal);
-        w.raw(",\"plane\":{\"n\":").vec(t.normal).raw(",\"n_dot_a\":").number(t.plane_d).ch('}');
+        if (t.representable) {
+            w.raw(",\"normal\":").vec(t.normal);
+            w.raw(",\"plane\":{\"n\":").vec(t.normal).raw(",\"n_dot_a\":").number(t.plane_d);
+            w.ch('}');
+        } else {
+            w.raw(",\"normal\":null,\"plane\":null,\"out_of_range\":true");
+        }
         // t of the plane crossing, whether or not d is inside abc (null when parallel).
         w.raw(",\"t\":");
         if (t.t) {
@@ -65,7 +74,7 @@ void write_object(JsonWriter& w, const engine::ObjectWork& o) {
         }
         if (t.point)
             w.raw(",\"point\":").vec(*t.point);
-        if (t.t) {
+        if (t.t && t.representable) {
             w.raw(",\"cross_products\":[").vec(t.cross[0]).ch(',').vec(t.cross[1]).ch(',');
             w.vec(t.cross[2]).ch(']');
             w.raw(",\"same_direction\":").boolean(t.same_direction);
@@ -356,6 +365,12 @@ std::string tex_quadratic(double a, double b, double c) {
     return s + " = 0";
 }
 
+/// Written in place of the algebra whose numbers leave double's range (engine/explain).
+constexpr const char* kOutOfRangeMd =
+    "At this scale the products of the coordinates leave double precision's range (about "
+    "$10^{-308}$ to $1.8 \\cdot 10^{308}$), so the algebra is not written out: the engine's "
+    "kernels rescale the coordinates by a power of two first.";
+
 void write_sphere(std::string& md, const engine::ObjectWork& o,
                   std::vector<std::optional<std::string>>& exact_first) {
     const auto& s = *o.sphere;
@@ -371,6 +386,18 @@ void write_sphere(std::string& md, const engine::ObjectWork& o,
         md += "The sphere's equation is\n\n$$" + equations[0] + "$$\n\n";
     if (equations.size() > 1)
         md += "Substituting $l(t)$ gives\n\n$$" + equations[1] + "$$\n\n";
+    if (!s.representable) {
+        md += std::string(kOutOfRangeMd);
+        if (s.roots.empty()) {
+            md += " They find no real root.\n\n";
+        } else {
+            md += s.roots.size() == 1
+                      ? " They find one root (tangent), $t = " + tex_num(s.roots[0]) + "$.\n\n"
+                      : " They find $t = " + tex_num(s.roots[0]) +
+                            "$ or $t = " + tex_num(s.roots[1]) + "$.\n\n";
+        }
+        return;
+    }
     md += "which is the quadratic $" + tex_quadratic(s.a, s.b, s.c) +
           "$ with $A = " + tex_num(s.a) + "$, $B = " + tex_num(s.b) + "$, $C = " + tex_num(s.c) +
           "$. ";
@@ -401,6 +428,12 @@ void write_sphere(std::string& md, const engine::ObjectWork& o,
 void write_triangle(std::string& md, const engine::ObjectWork& o, const engine::Ray& ray,
                     std::vector<std::optional<std::string>>& exact_first) {
     const auto& t = *o.triangle;
+    if (!t.representable) {
+        md += std::string(kOutOfRangeMd) + " The watertight ray/triangle test " +
+              (t.t ? "finds a hit at $t = " + tex_num(*t.t) + "$" : std::string("finds no hit")) +
+              ".\n\n";
+        return;
+    }
     md += "The normal is $n = ac \\times ab = " + tex_row(t.normal) +
           "$ and the plane of the triangle is $\\langle n, x\\rangle = \\langle n, a\\rangle = " +
           tex_num(t.plane_d) + "$.\n\n";

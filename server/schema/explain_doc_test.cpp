@@ -1,6 +1,7 @@
 #include "server/schema/explain_doc.h"
 
 #include <cctype>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -110,6 +111,33 @@ TEST(ExplainMarkdown, TriangleUsesTimesAndAngleBrackets) {
     EXPECT_TRUE(contains(parallel, "Since $\\langle n, v\\rangle = 0$, the ray is parallel"))
         << parallel;
     EXPECT_EQ(words_in_math(parallel), (std::vector<std::string>{})) << parallel;
+}
+
+// Coordinates whose products leave double's range: JSON gives no coefficients or plane (null,
+// with out_of_range) rather than inf and nan, and Markdown says why in place of the algebra.
+TEST(ExplainDocument, ProductsBeyondDoublesRangeAreNotWrittenOut) {
+    engine::Scene s;
+    s.materials.push_back(engine::Material{});
+    s.objects.push_back(engine::testing::sphere("far", {0, 0, 0}, 1e199, 0));
+    s.objects.push_back(engine::testing::mesh_object(
+        "huge", {{-1e120, -1e120, 3e200}, {4e120, -1e120, 3e200}, {-1e120, 4e120, 3e200}},
+        {{0, 1, 2}}));
+    const engine::Ray ray{{0, 0, -1e200}, {0, 0, 1}};
+    const engine::Explanation ex = engine::explain(s, ray).value();
+    const std::string json = write_explain_json(ex, ray);
+    const std::regex inf_or_nan(R"(\b(inf|nan)\b)");
+    EXPECT_FALSE(std::regex_search(json, inf_or_nan)) << json;
+    EXPECT_TRUE(contains(json, R"("coefficients":null,"discriminant":null,"out_of_range":true)"))
+        << json;
+    EXPECT_TRUE(contains(json, R"("normal":null,"plane":null,"out_of_range":true,"t":4e+200)"))
+        << json;
+    EXPECT_FALSE(contains(json, "cross_products")) << json;
+    const std::string md = write_explain_markdown(ex, ray);
+    EXPECT_EQ(words_in_math(md), (std::vector<std::string>{})) << md;
+    EXPECT_FALSE(std::regex_search(md, inf_or_nan)) << md;
+    EXPECT_TRUE(contains(md, "leave double precision's range")) << md;
+    EXPECT_TRUE(contains(md, "They find $t = 9 \\times 10^{199}$")) << md;
+    EXPECT_TRUE(contains(md, "finds a hit at $t = 4 \\times 10^{200}$")) << md;
 }
 
 // Inputs that are not simple decimals get no exact form; tiny numbers are written with
