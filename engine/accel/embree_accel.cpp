@@ -114,10 +114,40 @@ Hit kept_sphere_hit(const Object& o, const Ray& ray, const std::optional<Hit>& s
 }
 
 // ---------------------------------------------------------------------------------------------
-// exact (embree_accel.h). Where the exact BVH could not be built, or the float ray strays beyond
-// its boxes' padding, the linear scan answers: still exact.
+// exact (embree_accel.h). Where the exact BVH could not be built the linear scan answers: still
+// exact. A ray whose float ray strays beyond its boxes' padding (an origin ~1e16 scene sizes
+// away and beyond) is moved along its line to the scene first (move_near_scene, `may_move`)
+// and answered there; until 2026-12-05 the linear scan answered it, 1.6 ms a ray on a 69k
+// triangle mesh, so a body of such rays kept the server busy for minutes. Where the move is
+// not possible the scan still answers.
 
-std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal) {
+/// The hit of the moved ray `m` as the client's ray's: t mapped back, and t_err grown by what
+/// the move can shift the crossing. The moved line is the ray's translated by at most
+/// m.line_err (same direction), which moves a plane's crossing by |n·δ|/|n·d| ≤
+/// line_err/|n̂·d|: a grazing hit moves far along the ray (a variant that also moved rays from
+/// 2.7e8 scene sizes on had t 4 ulps beyond a t_err without it, the fuzzer found). On a sphere the
+/// chord's ends move by at most δ + √(2rδ + δ²) (the half-chord √(r² − ρ²) changes by at most
+/// √(|Δρ²|)), finite even for a tangent ray. Then the rounding of t_of.
+void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
+    const Object& o = a.scene->objects[h.object];
+    const double dlen = length(m.ray.direction);
+    const double delta = m.line_err;
+    double shift_bound;
+    if (o.kind == ObjectKind::sphere) {
+        const double r = o.sphere.radius;
+        shift_bound = (delta + std::sqrt(2.0 * r * delta + delta * delta)) / dlen;
+    } else {
+        const double nd =
+            std::abs(dot(triangle_normal(o.mesh->triangle(h.primitive)), m.ray.direction));
+        shift_bound = nd > 0.0 ? delta / nd : std::numeric_limits<double>::infinity();
+    }
+    h.t = m.t_of(h.t);
+    h.t_err = (h.t_err + shift_bound) * (1.0 + 4.0 * kDoubleUnitRoundoff) +
+              kDoubleUnitRoundoff * std::abs(h.t);
+}
+
+std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal,
+                                 bool may_move = true) {
     RayContext c(a);
     RTCScene s = a.exact_scene();
     if (!s)
@@ -126,6 +156,12 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
         return std::nullopt;
+    if (MovedRay m; unplaced(c) && may_move && move_near_scene(a, ray, m)) {
+        std::optional<Hit> h = exact_closest(a, m.ray, want_normal, /*may_move=*/false);
+        if (h)
+            moved_back(a, m, *h);
+        return h;
+    }
     if (!exact_ray_within_padding(a, c))
         return linear_closest(*a.scene, ray, want_normal);
     intersect1(s, c, f);  // the callback keeps the closest candidate in c.best
@@ -145,7 +181,7 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     return h;
 }
 
-bool exact_any(const Impl& a, const Ray& ray) {
+bool exact_any(const Impl& a, const Ray& ray, bool may_move = true) {
     RayContext c(a);
     RTCScene s = a.exact_scene();
     if (!s)
@@ -153,6 +189,8 @@ bool exact_any(const Impl& a, const Ray& ray) {
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
         return false;
+    if (MovedRay m; unplaced(c) && may_move && move_near_scene(a, ray, m))
+        return exact_any(a, m.ray, /*may_move=*/false);
     if (!exact_ray_within_padding(a, c))
         return linear_any(*a.scene, ray);
     return occluded1(s, c, f);
@@ -160,7 +198,8 @@ bool exact_any(const Impl& a, const Ray& ray) {
 
 /// Every hit decided in double (refined's `all` too: counting crossings must not leak through
 /// shared vertices, which Embree's float test occasionally does).
-void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>& out) {
+void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>& out,
+               bool may_move = true) {
     RayContext c(a);
     c.collect = &out;
     RTCScene s = a.exact_scene();
@@ -170,6 +209,13 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
         return;
+    if (MovedRay m; unplaced(c) && may_move && move_near_scene(a, ray, m)) {
+        const std::size_t first = out.size();
+        exact_all(a, m.ray, want_normal, out, /*may_move=*/false);
+        for (std::size_t i = first; i < out.size(); ++i)
+            moved_back(a, m, out[i]);
+        return;
+    }
     if (!exact_ray_within_padding(a, c))
         return linear_all(*a.scene, ray, want_normal, out);
     intersect1(s, c, f);  // every candidate goes to c.collect

@@ -85,6 +85,18 @@ bool triangles_only(const StressCase& c) {
     return true;
 }
 
+/// Whether Open3D can take the case's rays: it hands them to Embree as floats, and Debian's
+/// Embree (built with assertions) aborts the process on a ray with a coordinate past ~1.8e18
+/// (its ray-validity assertion), which the `far origins` suite has.
+bool within_embree_float_range(const StressCase& c) {
+    for (const auto& r : c.rays) {
+        if (raycastd::engine::max_abs(r.origin) > 1e18 ||
+            raycastd::engine::max_abs(r.direction) > 1e18)
+            return false;
+    }
+    return true;
+}
+
 /// Writes the files of one triangle case for the Open3D peer.
 void export_case(const StressCase& c, const std::filesystem::path& dir, const std::string& stem) {
     using namespace raycastd;
@@ -236,7 +248,7 @@ int main(int argc, char** argv) {
     first = true;
     int index = 0;
     for (const StressCase& c : cases) {
-        if (!triangles_only(c))
+        if (!triangles_only(c) || !within_embree_float_range(c))
             continue;
         const std::string stem = "case" + std::to_string(index++);
         export_case(c, out_dir / "open3d", stem);

@@ -92,6 +92,9 @@ TEST(Stress, NearTies) {
 TEST(Stress, FarMeshSpheres) {
     check(far_mesh_spheres(options()));
 }
+TEST(Stress, FarOrigins) {
+    check(far_origins(options()));
+}
 
 TEST(Stress, ClosedModels) {
     const auto cases = closed_models(options(), RAYCASTD_SHARED_DIR);

@@ -536,6 +536,37 @@ std::vector<StressCase> far_mesh_spheres(const GenOptions& g) {
     return out;
 }
 
+std::vector<StressCase> far_origins(const GenOptions& g) {
+    Rng rng(g.seed * 1000 + 13);
+    std::vector<StressCase> out;
+    for (double far : {1e18, 1e20, 1e22}) {
+        Scene s = empty_scene();
+        const Vec3d c{uniform(rng, -3, 3), uniform(rng, -3, 3), uniform(rng, -3, 3)};
+        s.objects.push_back(engine::testing::icosphere_object(3, c, 1.0));
+        std::vector<Ray> rays;
+        for (int i = 0; i < g.rays / 2; ++i) {
+            const std::size_t axis = static_cast<std::size_t>(i % 3);
+            const double sign = i % 2 ? 1.0 : -1.0;
+            if (i % 4 < 2) {
+                // Along an axis, within the sphere's outline: an exact line through it.
+                Vec3d o = c;
+                for (std::size_t j = 0; j < 3; ++j)
+                    o[j] = c[j] + uniform(rng, -1.1, 1.1);
+                o[axis] = c[axis] - sign * far;
+                Vec3d d{0, 0, 0};
+                d[axis] = sign * log_uniform(rng, 0.01, 100);
+                rays.push_back(Ray{o, d});
+            } else {
+                const Vec3d o = c + unit(rng) * far;
+                rays.push_back(ray_to(o, c + unit(rng) * uniform(rng, 0, 1.2)));
+            }
+        }
+        for (auto& cs : embree_only("far origins", std::move(s), std::move(rays), {true}))
+            out.push_back(std::move(cs));
+    }
+    return out;
+}
+
 std::vector<StressCase> all_suites(const GenOptions& g, const std::string& shared_dir) {
     std::vector<StressCase> out;
     auto add = [&](std::vector<StressCase> v) {
@@ -554,6 +585,7 @@ std::vector<StressCase> all_suites(const GenOptions& g, const std::string& share
     add(direction_lengths(g));
     add(near_ties(g));
     add(far_mesh_spheres(g));
+    add(far_origins(g));
     return out;
 }
 

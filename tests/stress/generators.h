@@ -49,6 +49,12 @@ std::vector<StressCase> near_ties(const GenOptions& g);
 /// Icospheres of radius 1 (level 3) at distances 1e3 … 1e9: the far-sphere case as triangles,
 /// which Open3D can take too.
 std::vector<StressCase> far_mesh_spheres(const GenOptions& g);
+/// Origins 1e17 … 1e25 scene sizes from an icosphere of radius 1 (level 3): beyond where the
+/// float ray could be placed from the ray itself, answered on the BVH by the ray moved along
+/// its line to the scene (embree/float_ray.h). Half the rays run along an axis (their line is
+/// exactly the one aimed at, through the sphere), half obliquely at it (their double origin
+/// and direction place the line anywhere within ~u·distance of the aim: hits and misses).
+std::vector<StressCase> far_origins(const GenOptions& g);
 
 /// Every suite above, in one list.
 std::vector<StressCase> all_suites(const GenOptions& g, const std::string& shared_dir);

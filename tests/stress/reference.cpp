@@ -21,11 +21,28 @@ using engine::Vec3d;
 
 namespace {
 
+/// Origins farther than this many primitive sizes are first moved along the ray's line to the
+/// primitive (near_line_shift): from ~2^56 the products of differences from the origin are no
+/// longer exact in quad, and the margins, relative to the origin's distance, put every decision
+/// inside the bands. The engine moves such rays too (from ~1e8 scene sizes,
+/// engine/accel/embree/float_ray.h) and is judged at the scale of the moved origin. Nearer
+/// origins are judged as before.
+constexpr double kFarOrigin = 0x1p50;
+
+/// The parameter s of the line's point nearest `p`, for an origin farther than kFarOrigin
+/// sizes from p; 0 otherwise. o + s·d is formed in quad: off the line by ~2^-113 of |o|.
+Quad near_line_shift(const QVec& o, const QVec& d, const QVec& p, double size) {
+    if (!(to_double(norm(p - o)) > kFarOrigin * size))
+        return 0;
+    return dot(p - o, d) / dot(d, d);
+}
+
 /// The sphere: Δ/4 = a·r² − |f × d|² (Lagrange's identity) with f = o − c exact in quad.
 void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& ray,
                       const Bands& bands, std::vector<RefCrossing>& out) {
-    const QVec f = q(ray.origin) - q(s.center);
     const QVec d = q(ray.direction);
+    const Quad shift = near_line_shift(q(ray.origin), d, q(s.center), s.radius);
+    const QVec f = q(ray.origin) + d * shift - q(s.center);
     const Quad r = s.radius;
     const Quad a = dot(d, d);
     const Quad beta = dot(f, d);
@@ -43,7 +60,7 @@ void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& 
         return;
     if (disc <= 0) {
         // Tangent, or a near miss within the band: the candidate point is the closest approach.
-        c.t = c.t_hi = -beta / a;
+        c.t = c.t_hi = shift - beta / a;
         c.front_face = true;
         out.push_back(c);
         return;
@@ -54,6 +71,8 @@ void sphere_crossings(const engine::Sphere& s, std::uint32_t object, const Ray& 
     Quad t0 = qq / a, t1 = gamma_c / qq;
     if (t0 > t1)
         std::swap(t0, t1);
+    t0 += shift;
+    t1 += shift;
     c.t = c.t_hi = t0;
     c.front_face = true;  // below the closest approach the ray moves towards the centre
     out.push_back(c);
@@ -89,16 +108,23 @@ S triangle_margin(const V& A, const V& B, const V& C, const V& d, S len_d, Norm&
 void triangle_crossings(const engine::Triangle& tri, std::uint32_t object, std::uint32_t prim,
                         const Ray& ray, const Bands& bands, std::vector<RefCrossing>& out) {
     // Double-precision filter: its margin is within a few u of the truth (see above), far
-    // inside the 1e-9 slack, so no candidate within the band is dropped.
-    {
+    // inside the 1e-9 slack, so no candidate within the band is dropped. Not for an origin
+    // more than 2^26 triangle sizes away: its differences A, B, C round by more than 2^-26 of
+    // an edge, and past ~2^53 the edges C − B formed from them vanish (a margin of −inf had
+    // dropped every crossing of rays from 1e17 away).
+    const double edge = std::max({engine::max_abs(tri.b - tri.a), engine::max_abs(tri.c - tri.a),
+                                  engine::max_abs(tri.c - tri.b)});
+    if (engine::max_abs(tri.a - ray.origin) <= 0x1p26 * edge) {
         const Vec3d A = tri.a - ray.origin, B = tri.b - ray.origin, C = tri.c - ray.origin;
         const double m = triangle_margin(A, B, C, ray.direction, engine::length(ray.direction),
                                          [](const Vec3d& v) { return engine::length(v); });
         if (!(m >= -bands.decision - 1e-9))
             return;
     }
-    const QVec o = q(ray.origin), d = q(ray.direction);
+    const QVec d = q(ray.direction);
     const QVec a = q(tri.a), b = q(tri.b), c = q(tri.c);
+    const Quad shift = near_line_shift(q(ray.origin), d, a, edge);
+    const QVec o = q(ray.origin) + d * shift;
     const QVec n = cross(b - a, c - a);
     if (n.x == 0 && n.y == 0 && n.z == 0)
         return;  // degenerate: never hit
@@ -116,14 +142,15 @@ void triangle_crossings(const engine::Triangle& tri, std::uint32_t object, std::
         // The line lies in (or parallel to) the plane: no crossing, but where it runs alongside
         // the triangle (the projections of the vertices on the line) matters to its neighbours.
         const Quad dd = dot(d, d);
-        const Quad ta = dot(A, d) / dd, tb = dot(B, d) / dd, tc = dot(C, d) / dd;
+        const Quad ta = shift + dot(A, d) / dd, tb = shift + dot(B, d) / dd,
+                   tc = shift + dot(C, d) / dd;
         x.parallel = true;
         x.t = std::min(ta, std::min(tb, tc));
         x.t_hi = std::max(ta, std::max(tb, tc));
         out.push_back(x);
         return;
     }
-    x.t = dot(n, A) / nd;
+    x.t = shift + dot(n, A) / nd;
     x.t_hi = x.t;
     x.front_face = nd < 0;
     out.push_back(x);

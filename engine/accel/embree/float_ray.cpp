@@ -106,4 +106,73 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     return true;
 }
 
+bool move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
+    const Vec3d& o = ray.origin;
+    const Vec3d& d = ray.direction;
+    const double d2 = dot(d, d);
+    const double radius = 0.5 * scaled_length(a.padded_bounds.diagonal());
+    if (!(d2 >= 0x1p-900 && d2 <= 0x1p900) || !(radius > 0.0) || !std::isfinite(radius))
+        return false;
+    const double dlen = std::sqrt(d2);
+    // The point of the line at parameter `shift`, relative to the centre, in double-double
+    // ((o − centre) + shift·d: TwoSum and TwoProduct are exact, the sums off by a few u² of the
+    // terms: Ogita, Rump & Oishi 2005), rounded to double.
+    const auto point = [&](const dd::DD& shift) {
+        Vec3d q;
+        for (std::size_t k = 0; k < 3; ++k) {
+            const dd::DD p =
+                dd::add(dd::add(dd::two_sum(o[k], -a.center[k]), dd::two_prod(d[k], shift.hi)),
+                        dd::two_prod(d[k], shift.lo));
+            q[k] = p.hi + p.lo;
+        }
+        return q;
+    };
+    // The parameter of the line's point nearest the centre, (centre − o)·d/|d|², is known to a
+    // few u of itself: from 1e16 scene sizes away that is thousands of scene sizes. So the point
+    // it gives is measured, and the step to the nearest point taken again from there, each step
+    // a few u of the last one's distance (three steps from 1e25 scene sizes), the shift summed
+    // in double-double. Beyond ~1e30 scene sizes double-double cannot hold the shift finely
+    // enough to come within the scene (nor the line's place within it): those rays keep the
+    // linear scan.
+    dd::DD shift{dot(a.center - o, d) / d2, 0.0};
+    Vec3d q = point(shift);
+    for (int step = 0; step < 4 && is_finite(q) && !(max_abs(q) <= radius); ++step) {
+        shift = dd::add(shift, dd::DD{-dot(q, d) / d2, 0.0});
+        q = point(shift);
+    }
+    // Back two radii, before the padded bounds (an origin inside them would miss what lies
+    // behind it only through tmin', which moves with it; starting outside keeps the float ray's
+    // set-up the ordinary one).
+    shift = dd::add(shift, dd::DD{-2.0 * radius / dlen, 0.0});
+    q = point(shift);
+    if (!std::isfinite(shift.hi) || !is_finite(q) || !(max_abs(q) <= 4.0 * radius))
+        return false;
+    m.shift = shift;
+    m.ray.origin = a.center + q;
+    m.ray.direction = d;
+    // The range moves with the origin (tmin − shift rounds once: a hit within an ulp of the
+    // client's far tmin or tmax, thousands of scene sizes at this distance, may go either way).
+    const auto moved = [&](double t) {
+        if (std::isinf(t))
+            return t;
+        const dd::DD r = dd::sub(dd::DD{t, 0.0}, shift);
+        return r.hi + r.lo;
+    };
+    m.ray.tmin = moved(ray.tmin);
+    m.ray.tmax = moved(ray.tmax);
+    // The moved origin's distance from the exact line: the double-double sums' few u² of the
+    // terms, the rounding of q and of centre + q (u each), per coordinate (√3 < 1.8 for the
+    // length).
+    const double terms =
+        max_abs(o) + max_abs(a.center) + max_abs(d) * (std::abs(shift.hi) + std::abs(shift.lo));
+    m.line_err = 1.8 * (8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * terms +
+                        2.0 * kDoubleUnitRoundoff * (max_abs(q) + max_abs(m.ray.origin)));
+    return std::isfinite(m.line_err) && !std::isnan(m.ray.tmin) && !std::isnan(m.ray.tmax);
+}
+
+double MovedRay::t_of(double t_moved) const {
+    const dd::DD t = dd::add(shift, dd::DD{t_moved, 0.0});
+    return t.hi + t.lo;
+}
+
 }  // namespace raycastd::engine::embree

@@ -21,6 +21,7 @@
 #include <embree3/rtcore.h>
 
 #include "engine/accel/embree/impl.h"
+#include "engine/math/double_double.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine::embree {
@@ -192,9 +193,30 @@ inline bool exact_ray_within_padding(const Impl& a, const RayContext& c) {
     return c.origin_err <= 0.25 * a.pad;
 }
 
+/// A ray moved along its own line to just before the scene (move_near_scene), and how to map
+/// its answers back.
+struct MovedRay {
+    Ray ray;          ///< the same line, origin at most ~2 scene sizes before the centre
+    dd::DD shift;     ///< t = shift + t', t' the moved ray's (double-double)
+    double line_err;  ///< bound on the distance between the moved origin and the ray's line
+    /// The client's t of the moved ray's t' (one rounding).
+    double t_of(double t_moved) const;
+};
+
+/// For a ray prepare_ray could not place (unplaced: an origin ~1e16 scene sizes away and
+/// beyond, where the slab test's rounding puts the start point outside the bounds): the same
+/// line with its origin moved along it to just before the scene's padded bounds, formed in
+/// double-double, so that the exact BVH and the double kernels (whose errors grow with the
+/// origin's distance: ~u·distance, a whole scene size from 1e16 on) see a near ray. False where
+/// the move is not possible (a direction whose |d|² leaves double's normal range, or an origin
+/// past ~1e30 scene sizes, where double-double cannot hold the shift finely enough): the linear
+/// scan answers then, as it answered every such ray until 2026-12-05.
+bool move_near_scene(const Impl& a, const Ray& ray, MovedRay& out);
+
 /// Whether prepare_ray could not place the float ray near the scene (an origin so far that the
 /// slab test's rounding puts the start point outside the bounds): its float segment is empty,
-/// and the exact answer comes from the linear scan (exact_ray_within_padding is false too).
+/// and the exact path answers it moved to the scene (move_near_scene), or where that is not
+/// possible by the linear scan (exact_ray_within_padding is false too).
 inline bool unplaced(const RayContext& c) {
     return c.origin_err == std::numeric_limits<double>::infinity();
 }
