@@ -59,6 +59,11 @@ constexpr const char* kOutOfRange =
     "1e-308 to 1.8e308), so they are not written out: the engine's kernels rescale the "
     "coordinates by a power of two first and decide";
 
+/// The reason given for a crossing whose t is past double's largest value.
+constexpr const char* kTBeyondRange =
+    "the ray crosses it at a t beyond double precision's range (about 1.8e308): not a hit that "
+    "can be reported";
+
 /// Below this a square (A = |v|²) has lost digits to the subnormal range.
 constexpr double kSmallestSquare = 0x1p-1000;
 
@@ -95,9 +100,18 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     }
 
     const SphereRoots r = sphere_roots(s, ray);
-    for (int i = 0; i < r.count; ++i)
+    bool finite_roots = true;
+    for (int i = 0; i < r.count; ++i) {
         sw.roots.push_back(r.t[i]);
-    if (r.count == 0) {
+        finite_roots = finite_roots && std::isfinite(r.t[i]);
+    }
+    if (!finite_roots) {
+        // A direction far shorter than the distances (1e-150 against 1e200): the roots
+        // overflow. No t to report, so no hit.
+        sw.roots.clear();
+        w.reason = kTBeyondRange;
+        w.steps.push_back(w.reason);
+    } else if (r.count == 0) {
         w.reason = "no real roots: the ray misses";
         w.steps.push_back(w.reason);
     } else {
@@ -131,21 +145,38 @@ ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
     w.steps.push_back("l(t) = " + vec(p) + " + t*" + vec(v));
     // n and ⟨n,a⟩ are products of two and three coordinates: past ~1e102 (or for edges below
     // ~1e-150) they overflow or underflow, and the plane method's numbers were inf, nan or a
-    // zero normal. The watertight test rescales and decides instead (intersect_triangle).
+    // zero normal; t overflows for a direction far shorter than the distances (1e-150 against
+    // 1e200), and the cross products for points past ~1e154. Every number is formed first, and
+    // where one is not finite the watertight test (which rescales) decides instead.
     const double magnitude = std::abs(tw.normal.x) + std::abs(tw.normal.y) + std::abs(tw.normal.z);
     tw.representable = std::isfinite(tw.plane_d) && std::isfinite(dot(tw.normal, p)) &&
                        std::isfinite(tw.n_dot_v) && std::isfinite(magnitude * max_abs(v)) &&
                        (magnitude >= kSmallestSquare || is_degenerate(tri));
+    if (tw.representable && magnitude > 0.0 && tw.n_dot_v != 0.0) {
+        const double t = (tw.plane_d - dot(tw.normal, p)) / tw.n_dot_v;
+        const Vec3d d = ray.at(t);
+        const Vec3d da = tri.a - d, db = tri.b - d, dc = tri.c - d;
+        tw.cross[0] = cross(da, db);
+        tw.cross[1] = cross(db, dc);
+        tw.cross[2] = cross(dc, da);
+        tw.representable = std::isfinite(t) && is_finite(d) && is_finite(tw.cross[0]) &&
+                           is_finite(tw.cross[1]) && is_finite(tw.cross[2]) &&
+                           std::isfinite(dot(tw.cross[0], tw.cross[1])) &&
+                           std::isfinite(dot(tw.cross[1], tw.cross[2])) &&
+                           std::isfinite(dot(tw.cross[2], tw.cross[0]));
+    }
     if (!tw.representable) {
+        tw.cross[0] = tw.cross[1] = tw.cross[2] = Vec3d{};
         w.steps.push_back(kOutOfRange);
-        if (const std::optional<Hit> h = intersect_triangle(tri, ray, false)) {
+        const std::optional<Hit> h = intersect_triangle(tri, ray, false);
+        if (h && std::isfinite(h->t)) {
             w.hit = true;
             w.t = h->t;
             tw.t = h->t;
             tw.point = ray.at(h->t);
             w.steps.push_back("the watertight test: hit at t = " + num(h->t));
         } else {
-            w.reason = "the watertight test: the ray misses";
+            w.reason = h ? kTBeyondRange : "the watertight test: the ray misses";
             w.steps.push_back(w.reason);
         }
         w.triangle = tw;
@@ -230,6 +261,8 @@ Result<Explanation> explain(const Scene& scene, const Ray& ray, const CancelToke
         ex.objects.push_back(std::move(w));
     }
     ex.first_hit = closest_by_brute_force(scene, ray, true, cancel);
+    if (ex.first_hit && !std::isfinite(ex.first_hit->t))
+        ex.first_hit.reset();  // past double's range (the objects' steps say so)
     if (cancel.fired())
         return cancel.status();
     if (ex.first_hit)

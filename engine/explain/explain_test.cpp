@@ -150,6 +150,32 @@ TEST(Explain, ProductsBeyondDoublesRangeAreNotWrittenOut) {
     EXPECT_TRUE(small.objects[0].hit);
     EXPECT_EQ(*small.objects[0].t, 1.0);
 
+    // t past double's range (a direction 1e-150 long from 1e200 away), and cross products that
+    // overflow at a point 1e160 out (a helper's review: "t = inf", "d = (-nan, ...)").
+    Scene unit;
+    unit.materials.push_back(Material{});
+    unit.objects.push_back(
+        testing::mesh_object("abc", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}));
+    unit.objects.push_back(testing::sphere("ball", {0, 0, -5}, 1.0, 0));
+    const Explanation beyond = explain(unit, Ray{{0.2, 0.2, 1e200}, {0, 0, -1e-150}}).value();
+    for (const ObjectWork& w : beyond.objects) {
+        EXPECT_FALSE(has_inf_or_nan(w.steps)) << w.name;
+        EXPECT_FALSE(w.hit) << w.name;
+    }
+    EXPECT_FALSE(beyond.first_hit);
+    Scene wide;
+    wide.materials.push_back(Material{});
+    wide.objects.push_back(
+        testing::mesh_object("wide", {{0, 0, 0}, {2e160, 0, 0}, {0, 2e160, 0}}, {{0, 1, 2}}));
+    const Explanation crossed = explain(wide, Ray{{1e160, 1e159, 1}, {0, 0, -1}}).value();
+    EXPECT_FALSE(has_inf_or_nan(crossed.objects[0].steps));
+    EXPECT_FALSE(crossed.objects[0].triangle->representable);
+    ASSERT_TRUE(crossed.objects[0].hit);
+    EXPECT_EQ(*crossed.objects[0].t, 1.0);
+    const Explanation aside = explain(unit, Ray{{1e160, 1e160, 1}, {0, 0, -1}}).value();
+    EXPECT_FALSE(has_inf_or_nan(aside.objects[0].steps));
+    EXPECT_FALSE(aside.objects[0].hit);
+
     // Ordinary coordinates keep the tutorial's algebra.
     const Explanation near =
         explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}}).value();
