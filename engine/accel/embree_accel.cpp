@@ -115,19 +115,21 @@ Hit kept_sphere_hit(const Object& o, const Ray& ray, const std::optional<Hit>& s
 
 // ---------------------------------------------------------------------------------------------
 // exact (embree_accel.h). Where the exact BVH could not be built the linear scan answers: still
-// exact. A ray whose float ray strays beyond its boxes' padding (an origin ~1e16 scene sizes
-// away and beyond) is moved along its line to the scene first (move_near_scene, `may_move`)
-// and answered there; until 2026-12-05 the linear scan answered it, 1.6 ms a ray on a 69k
-// triangle mesh, so a body of such rays kept the server busy for minutes. Where the move is
-// not possible the scan still answers.
+// exact. A ray whose origin is far from the scene (RayContext::far: ~1e8 scene sizes and
+// beyond) is moved along its line to the scene first (move_near_scene) and answered there, in
+// the centre's frame (RayFrame::centre); its answers are mapped back (moved_back). Until
+// 2026-12-05 the double kernels decided on the far ray itself, wrong by up to ~u·distance (a
+// line through a point a third of the way inside a triangle, from 1e18 away, missed it at
+// exact), and from ~1e16 on the linear scan answered (1.6 ms a ray on a 69k-triangle mesh: a
+// body of such rays kept the server busy for minutes). Where the move is not possible the ray
+// is answered as it is: the exact BVH, or the scan where the float ray cannot be placed.
 
 /// The hit of the moved ray `m` as the client's ray's: t mapped back, and t_err grown by what
 /// the move can shift the crossing. The moved line is the ray's translated by at most
 /// m.line_err (same direction), which moves a plane's crossing by |n·δ|/|n·d| ≤
-/// line_err/|n̂·d|: a grazing hit moves far along the ray (a variant that also moved rays from
-/// 2.7e8 scene sizes on had t 4 ulps beyond a t_err without it, the fuzzer found). On a sphere the
-/// chord's ends move by at most δ + √(2rδ + δ²) (the half-chord √(r² − ρ²) changes by at most
-/// √(|Δρ²|)), finite even for a tangent ray. Then the rounding of t_of.
+/// line_err/|n̂·d|: a grazing hit moves far along the ray. On a sphere the chord's ends move by
+/// at most δ + √(2rδ + δ²) (the half-chord √(r² − ρ²) changes by at most √(|Δρ²|)), finite even
+/// for a tangent ray. Then the rounding of t_of.
 void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
     const Object& o = a.scene->objects[h.object];
     const double dlen = length(m.ray.direction);
@@ -146,21 +148,38 @@ void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
               kDoubleUnitRoundoff * std::abs(h.t);
 }
 
+/// `o`'s sphere in the frame `c` decides in (RayContext::frame).
+Sphere sphere_in_frame(const Object& o, const RayContext& c) {
+    Sphere s = o.sphere;
+    if (c.frame)
+        s.center = s.center - *c.frame;
+    return s;
+}
+
 std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal,
-                                 bool may_move = true) {
+                                 RayFrame frame = RayFrame::world) {
     RayContext c(a);
     RTCScene s = a.exact_scene();
     if (!s)
         return linear_closest(*a.scene, ray, want_normal);
     c.exact = true;
     FloatRay f;
-    if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
+    if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
         return std::nullopt;
-    if (MovedRay m; unplaced(c) && may_move && move_near_scene(a, ray, m)) {
-        std::optional<Hit> h = exact_closest(a, m.ray, want_normal, /*may_move=*/false);
-        if (h)
-            moved_back(a, m, *h);
-        return h;
+    if (c.far && frame == RayFrame::world) {
+        MovedRay m;
+        switch (move_near_scene(a, ray, m)) {
+            case MoveResult::misses:
+                return std::nullopt;
+            case MoveResult::moved: {
+                std::optional<Hit> h = exact_closest(a, m.ray, want_normal, RayFrame::centre);
+                if (h)
+                    moved_back(a, m, *h);
+                return h;
+            }
+            case MoveResult::not_possible:
+                break;
+        }
     }
     if (!exact_ray_within_padding(a, c))
         return linear_closest(*a.scene, ray, want_normal);
@@ -171,7 +190,7 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     if (want_normal) {
         const Object& o = a.scene->objects[h.object];
         if (o.kind == ObjectKind::sphere) {
-            sphere_normal(o.sphere, ray, h.t, h);
+            sphere_normal(sphere_in_frame(o, c), ray, h.t, h);
         } else {
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
         }
@@ -181,16 +200,25 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     return h;
 }
 
-bool exact_any(const Impl& a, const Ray& ray, bool may_move = true) {
+bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world) {
     RayContext c(a);
     RTCScene s = a.exact_scene();
     if (!s)
         return linear_any(*a.scene, ray);
     FloatRay f;
-    if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
+    if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
         return false;
-    if (MovedRay m; unplaced(c) && may_move && move_near_scene(a, ray, m))
-        return exact_any(a, m.ray, /*may_move=*/false);
+    if (c.far && frame == RayFrame::world) {
+        MovedRay m;
+        switch (move_near_scene(a, ray, m)) {
+            case MoveResult::misses:
+                return false;
+            case MoveResult::moved:
+                return exact_any(a, m.ray, RayFrame::centre);
+            case MoveResult::not_possible:
+                break;
+        }
+    }
     if (!exact_ray_within_padding(a, c))
         return linear_any(*a.scene, ray);
     return occluded1(s, c, f);
@@ -199,7 +227,7 @@ bool exact_any(const Impl& a, const Ray& ray, bool may_move = true) {
 /// Every hit decided in double (refined's `all` too: counting crossings must not leak through
 /// shared vertices, which Embree's float test occasionally does).
 void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>& out,
-               bool may_move = true) {
+               RayFrame frame = RayFrame::world) {
     RayContext c(a);
     c.collect = &out;
     RTCScene s = a.exact_scene();
@@ -207,14 +235,23 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
         return linear_all(*a.scene, ray, want_normal, out);
     c.exact = true;
     FloatRay f;
-    if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
+    if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
         return;
-    if (MovedRay m; unplaced(c) && may_move && move_near_scene(a, ray, m)) {
-        const std::size_t first = out.size();
-        exact_all(a, m.ray, want_normal, out, /*may_move=*/false);
-        for (std::size_t i = first; i < out.size(); ++i)
-            moved_back(a, m, out[i]);
-        return;
+    if (c.far && frame == RayFrame::world) {
+        MovedRay m;
+        switch (move_near_scene(a, ray, m)) {
+            case MoveResult::misses:
+                return;
+            case MoveResult::moved: {
+                const std::size_t first = out.size();
+                exact_all(a, m.ray, want_normal, out, RayFrame::centre);
+                for (std::size_t i = first; i < out.size(); ++i)
+                    moved_back(a, m, out[i]);
+                return;
+            }
+            case MoveResult::not_possible:
+                break;
+        }
     }
     if (!exact_ray_within_padding(a, c))
         return linear_all(*a.scene, ray, want_normal, out);
@@ -407,6 +444,11 @@ std::optional<Hit> closest_triangle_scan(const Impl& a, const Ray& ray, bool wan
 /// its callbacks accepted); `escalated` is set when the exact path had to decide.
 std::optional<Hit> refined_answer(const Impl& a, const Ray& ray, const RayContext& c,
                                   bool want_normal, bool& escalated) {
+    if (c.far) {
+        // The filter decided on the far ray itself, within ~u·distance: exact moves it.
+        escalated = true;
+        return exact_closest(a, ray, want_normal);
+    }
     if (c.best) {
         const Object& o = a.scene->objects[c.best->object];
         if (o.kind == ObjectKind::sphere && !rejected_before_best(c))
@@ -444,6 +486,8 @@ std::optional<Hit> refined_closest(const Impl& a, const Ray& ray, bool want_norm
 
 /// refined's `any` after the native occlusion query found nothing.
 bool refined_confirm_no_hit(const Impl& a, const Ray& ray, const RayContext& c) {
+    if (c.far)
+        return exact_any(a, ray);  // moved to the scene (refined_answer)
     if (miss_is_certain(a, c))
         return false;
     if (can_confirm_by_scan(a, c))
@@ -456,6 +500,8 @@ bool refined_any(const Impl& a, const Ray& ray) {
     FloatRay f;
     if (!prepare_refined_ray(a, ray, c, f))
         return false;
+    if (c.far)
+        return exact_any(a, ray);  // a hit the filter decided on the far ray is not trusted
     if (occluded1(a.native.get(), c, f))
         return true;
     return refined_confirm_no_hit(a, ray, c);
@@ -513,12 +559,23 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
     }
 }
 
+/// Whether a ray of the group may have an origin prepare_ray marks far (maybe_far).
+bool group_maybe_far(const Impl& a, const Ray* rays, std::size_t m) {
+    for (std::size_t k = 0; k < m; ++k) {
+        if (maybe_far(a, rays[k]))
+            return true;
+    }
+    return false;
+}
+
 void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) {
     bool exact_first = false;
     for (std::size_t i = 0; i < n; i += kLanes) {
         const std::size_t m = std::min(kLanes, n - i);
         int escalations = 0;
-        if (exact_first || !packets_apply(a, m)) {
+        // A packet reports a lane's hit as the filter decided it; a far ray's (decided on the
+        // ray itself) is not refined's answer, so a group with one goes ray by ray.
+        if (exact_first || !packets_apply(a, m) || group_maybe_far(a, rays + i, m)) {
             for (std::size_t k = 0; k < m; ++k) {
                 const Ray& ray = rays[i + k];
                 const bool hit = exact_first ? exact_any(a, ray) : refined_any(a, ray);
@@ -573,6 +630,10 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
         impl->padded_bounds = b;
         impl->padded_bounds.lo -= Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
         impl->padded_bounds.hi += Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
+        for (std::size_t k = 0; k < 3; ++k) {
+            impl->padded_bounds_rel.lo[k] = next_down(impl->padded_bounds.lo[k] - impl->center[k]);
+            impl->padded_bounds_rel.hi[k] = next_up(impl->padded_bounds.hi[k] - impl->center[k]);
+        }
     }
 
     embree::take_error("");  // start clean on this thread

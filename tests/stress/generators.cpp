@@ -539,7 +539,7 @@ std::vector<StressCase> far_mesh_spheres(const GenOptions& g) {
 std::vector<StressCase> far_origins(const GenOptions& g) {
     Rng rng(g.seed * 1000 + 13);
     std::vector<StressCase> out;
-    for (double far : {1e18, 1e20, 1e22}) {
+    for (double far : {1e10, 1e13, 1e16, 1e18, 1e20, 1e22}) {
         Scene s = empty_scene();
         const Vec3d c{uniform(rng, -3, 3), uniform(rng, -3, 3), uniform(rng, -3, 3)};
         s.objects.push_back(engine::testing::icosphere_object(3, c, 1.0));

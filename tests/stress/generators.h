@@ -49,11 +49,12 @@ std::vector<StressCase> near_ties(const GenOptions& g);
 /// Icospheres of radius 1 (level 3) at distances 1e3 … 1e9: the far-sphere case as triangles,
 /// which Open3D can take too.
 std::vector<StressCase> far_mesh_spheres(const GenOptions& g);
-/// Origins 1e17 … 1e25 scene sizes from an icosphere of radius 1 (level 3): beyond where the
-/// float ray could be placed from the ray itself, answered on the BVH by the ray moved along
-/// its line to the scene (embree/float_ray.h). Half the rays run along an axis (their line is
-/// exactly the one aimed at, through the sphere), half obliquely at it (their double origin
-/// and direction place the line anywhere within ~u·distance of the aim: hits and misses).
+/// Origins 1e10 … 1e22 away from an icosphere of radius 1 (level 3), where the double
+/// kernels deciding on the far ray itself err by ~u·distance and from ~1e16 on the float ray
+/// cannot be placed: answered on the BVH by the ray moved along its line to the scene
+/// (embree/float_ray.h). Half the rays run along an axis (their line is exactly the one aimed
+/// at, through the sphere), half obliquely at it (their double origin and direction place the
+/// line anywhere within ~u·distance of the aim: hits and misses).
 std::vector<StressCase> far_origins(const GenOptions& g);
 
 /// Every suite above, in one list.

@@ -7,12 +7,16 @@
 namespace raycastd::engine::embree {
 
 bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1) {
+    return clip_to_bounds(a.padded_bounds, ray, t0, t1);
+}
+
+bool clip_to_bounds(const Bounds3& bounds, const Ray& ray, double& t0, double& t1) {
     // Slab test in double (Kay & Kajiya 1986) against the padded bounds.
     t0 = ray.tmin;
     t1 = ray.tmax;
     for (std::size_t k = 0; k < 3; ++k) {
         const double o = ray.origin[k], d = ray.direction[k];
-        const double lo = a.padded_bounds.lo[k], hi = a.padded_bounds.hi[k];
+        const double lo = bounds.lo[k], hi = bounds.hi[k];
         if (d == 0.0) {
             if (o < lo || o > hi)
                 return false;
@@ -38,6 +42,7 @@ namespace {
 /// an origin_err that unplaced() recognises, which sends it to the exact answer.
 void leave_unplaced(RayContext& c, FloatRay& f) {
     c.origin_err = std::numeric_limits<double>::infinity();
+    c.far = true;
     f = FloatRay{};
     f.dir_z = 1.0f;
     f.tfar = -1.0f;
@@ -45,11 +50,18 @@ void leave_unplaced(RayContext& c, FloatRay& f) {
 
 }  // namespace
 
-bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f) {
+bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f,
+                 RayFrame frame) {
+    // A ray relative to the centre is clipped against the bounds relative to it, and its
+    // origin is already what the float ray starts from.
+    const bool relative = frame == RayFrame::centre;
+    const Vec3d base = relative ? Vec3d{} : a.center;
     double t0, t1;
-    if (!clip_to_bounds(a, ray, t0, t1))
+    if (!clip_to_bounds(relative ? a.padded_bounds_rel : a.padded_bounds, ray, t0, t1))
         return false;
     c.ray = &ray;
+    c.frame = relative ? &a.center : nullptr;
+    c.far = false;
     double dlen = length(ray.direction);
     if (!(dlen > 0x1p-500 && dlen < 0x1p500))
         dlen = scaled_length(ray.direction);  // |d|² over- or underflowed (a direction 1e160 long)
@@ -63,20 +75,24 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     // BVH's box padding, and the start point is then formed in double-double instead (TwoSum
     // and TwoProduct are exact, their sum is off by a few u² of the terms: Ogita, Rump & Oishi
     // 2005), which keeps it within the padding out to ~1e15 scene sizes.
-    const double far = length(ray.origin - a.center) + std::abs(c.shift) * dlen;
+    const double far = length(ray.origin - base) + std::abs(c.shift) * dlen;
     Vec3d org;
     if (8.0 * kDoubleUnitRoundoff * far <= 0.25 * a.pad) {
-        org = (ray.origin - a.center) + ray.direction * c.shift;
+        org = (ray.origin - base) + ray.direction * c.shift;
         c.origin_err = 8.0 * kDoubleUnitRoundoff * far;
     } else {
         for (std::size_t k = 0; k < 3; ++k) {
-            const dd::DD p = dd::add(dd::two_sum(ray.origin[k], -a.center[k]),
+            const dd::DD p = dd::add(dd::two_sum(ray.origin[k], -base[k]),
                                      dd::two_prod(ray.direction[k], c.shift));
             org[k] = p.hi + p.lo;
         }
         // The double-double residual, then the rounding of the (near-scene) point to double.
         c.origin_err = 8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * far +
                        2.0 * kDoubleUnitRoundoff * length(org);
+        // Far, unless `far` only overflowed (coordinates past ~1e154 in a scene as large).
+        c.far = 8.0 * kDoubleUnitRoundoff *
+                    (scaled_length(ray.origin - base) + std::abs(c.shift) * dlen) >
+                0.25 * a.pad;
     }
     const Vec3d dir = ray.direction * (1.0 / dlen);  // rounded to float next: one more u
     if (!(max_abs(org) <= 4.0 * a.float_scale) || !is_finite(org) || !(c.len > 0.0) ||
@@ -106,13 +122,13 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     return true;
 }
 
-bool move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
+MoveResult move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
     const Vec3d& o = ray.origin;
     const Vec3d& d = ray.direction;
     const double d2 = dot(d, d);
     const double radius = 0.5 * scaled_length(a.padded_bounds.diagonal());
     if (!(d2 >= 0x1p-900 && d2 <= 0x1p900) || !(radius > 0.0) || !std::isfinite(radius))
-        return false;
+        return MoveResult::not_possible;
     const double dlen = std::sqrt(d2);
     // The point of the line at parameter `shift`, relative to the centre, in double-double
     // ((o − centre) + shift·d: TwoSum and TwoProduct are exact, the sums off by a few u² of the
@@ -130,25 +146,55 @@ bool move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
     // The parameter of the line's point nearest the centre, (centre − o)·d/|d|², is known to a
     // few u of itself: from 1e16 scene sizes away that is thousands of scene sizes. So the point
     // it gives is measured, and the step to the nearest point taken again from there, each step
-    // a few u of the last one's distance (three steps from 1e25 scene sizes), the shift summed
-    // in double-double. Beyond ~1e30 scene sizes double-double cannot hold the shift finely
-    // enough to come within the scene (nor the line's place within it): those rays keep the
-    // linear scan.
+    // a few u of the last one's distance, the shift summed in double-double. Beyond ~1e30 scene
+    // sizes double-double cannot hold the shift finely enough to come within the scene (nor the
+    // line's place within it): not possible, and the caller keeps the ray as it is.
     dd::DD shift{dot(a.center - o, d) / d2, 0.0};
     Vec3d q = point(shift);
-    for (int step = 0; step < 4 && is_finite(q) && !(max_abs(q) <= radius); ++step) {
-        shift = dd::add(shift, dd::DD{-dot(q, d) / d2, 0.0});
+    // Converged when the step is below 2⁻²⁰ of the distance to the centre, or below what the
+    // double-double point itself resolves (a few u² of |o| and |shift·d|).
+    const auto resolution = [&] {
+        return 16.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff *
+               (max_abs(o) + max_abs(a.center) + dlen * std::abs(shift.hi));
+    };
+    bool converged = false;
+    for (int step = 0; step < 6 && is_finite(q); ++step) {
+        const double ds = -dot(q, d) / d2;
+        if (std::abs(ds) * dlen <= 0x1p-20 * (scaled_length(q) + radius) + resolution()) {
+            converged = true;
+            break;
+        }
+        shift = dd::add(shift, dd::DD{ds, 0.0});
         q = point(shift);
     }
+    if (!converged || !std::isfinite(shift.hi))
+        return MoveResult::not_possible;
+    // The moved origin's distance from the exact line: the double-double sums' few u² of the
+    // terms and the rounding of q (u per coordinate; √3 < 1.8 for the length). In the centre's
+    // frame: placed in world coordinates it would round by u·|centre| more, which for a scene
+    // far from the world origin exceeds its own small triangles (a helper's probe: lines
+    // through a point 1e-6 inside a triangle at 2^33 missed it).
+    const double terms =
+        max_abs(o) + max_abs(a.center) + max_abs(d) * (std::abs(shift.hi) + std::abs(shift.lo));
+    const auto line_err = [&](const Vec3d& at) {
+        return 1.8 * (8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * terms +
+                      kDoubleUnitRoundoff * max_abs(at));
+    };
+    // q is now the line's point nearest the centre: if the line passes farther than the padded
+    // bounds' radius it meets nothing. The slab test, widened by γ₃ of a t of ~1e16 scene sizes,
+    // had let such lines through, and they were answered by the far kernels (wrongly: a line
+    // 22 units from a unit icosphere hit it) or the linear scan (a helper's review).
+    if (scaled_length(q) > radius * (1.0 + 0x1p-20) + line_err(q))
+        return MoveResult::misses;
     // Back two radii, before the padded bounds (an origin inside them would miss what lies
     // behind it only through tmin', which moves with it; starting outside keeps the float ray's
     // set-up the ordinary one).
     shift = dd::add(shift, dd::DD{-2.0 * radius / dlen, 0.0});
     q = point(shift);
-    if (!std::isfinite(shift.hi) || !is_finite(q) || !(max_abs(q) <= 4.0 * radius))
-        return false;
+    if (!is_finite(q) || !(max_abs(q) <= 4.0 * radius))
+        return MoveResult::not_possible;
     m.shift = shift;
-    m.ray.origin = a.center + q;
+    m.ray.origin = q;  // relative to the centre (RayFrame::centre)
     m.ray.direction = d;
     // The range moves with the origin (tmin − shift rounds once: a hit within an ulp of the
     // client's far tmin or tmax, thousands of scene sizes at this distance, may go either way).
@@ -160,14 +206,10 @@ bool move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
     };
     m.ray.tmin = moved(ray.tmin);
     m.ray.tmax = moved(ray.tmax);
-    // The moved origin's distance from the exact line: the double-double sums' few u² of the
-    // terms, the rounding of q and of centre + q (u each), per coordinate (√3 < 1.8 for the
-    // length).
-    const double terms =
-        max_abs(o) + max_abs(a.center) + max_abs(d) * (std::abs(shift.hi) + std::abs(shift.lo));
-    m.line_err = 1.8 * (8.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * terms +
-                        2.0 * kDoubleUnitRoundoff * (max_abs(q) + max_abs(m.ray.origin)));
-    return std::isfinite(m.line_err) && !std::isnan(m.ray.tmin) && !std::isnan(m.ray.tmax);
+    m.line_err = line_err(q);
+    if (!std::isfinite(m.line_err) || std::isnan(m.ray.tmin) || std::isnan(m.ray.tmax))
+        return MoveResult::not_possible;
+    return MoveResult::moved;
 }
 
 double MovedRay::t_of(double t_moved) const {

@@ -77,6 +77,8 @@ inline NativeHit native_hit(const EmbreeRayHit& rh, std::size_t k) {
 /// The part [t0, t1] of the ray's segment [tmin, tmax] inside the padded scene bounds; false
 /// when there is none (nothing can be hit).
 bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1);
+/// The same against `bounds`.
+bool clip_to_bounds(const Bounds3& bounds, const Ray& ray, double& t0, double& t1);
 
 /// Whether the ray's segment meets the padded scene bounds.
 inline bool enters_bounds(const Impl& a, const Ray& ray) {
@@ -125,10 +127,17 @@ enum class RayStart {
                  ///< the float segment (the exact BVH; its double test still enforces tmin)
 };
 
+/// What a ray's coordinates are relative to.
+enum class RayFrame {
+    world,   ///< the client's coordinates
+    centre,  ///< relative to the scene centre (Impl::center): a far ray moved to the scene
+};
+
 /// Sets up the clipped float ray for `ray` in `f` and its mapping back to the double ray in `c`
-/// (shift, len, margin, origin_err); false, with `f` untouched, when the ray's segment misses
-/// the padded bounds altogether.
-bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f);
+/// (shift, len, margin, origin_err, far, frame); false, with `f` untouched, when the ray's
+/// segment misses the padded bounds altogether.
+bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f,
+                 RayFrame frame = RayFrame::world);
 
 /// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org:
 /// tmin ≥ 0, an origin within 4 scene sizes of the centre on every axis (at most 8 in Embree's
@@ -196,22 +205,39 @@ inline bool exact_ray_within_padding(const Impl& a, const RayContext& c) {
 /// A ray moved along its own line to just before the scene (move_near_scene), and how to map
 /// its answers back.
 struct MovedRay {
-    Ray ray;          ///< the same line, origin at most ~2 scene sizes before the centre
+    /// The same line relative to the scene centre (RayFrame::centre), its origin two padded
+    /// radii before the point nearest the centre.
+    Ray ray;
     dd::DD shift;     ///< t = shift + t', t' the moved ray's (double-double)
     double line_err;  ///< bound on the distance between the moved origin and the ray's line
     /// The client's t of the moved ray's t' (one rounding).
     double t_of(double t_moved) const;
 };
 
-/// For a ray prepare_ray could not place (unplaced: an origin ~1e16 scene sizes away and
-/// beyond, where the slab test's rounding puts the start point outside the bounds): the same
-/// line with its origin moved along it to just before the scene's padded bounds, formed in
-/// double-double, so that the exact BVH and the double kernels (whose errors grow with the
-/// origin's distance: ~u·distance, a whole scene size from 1e16 on) see a near ray. False where
-/// the move is not possible (a direction whose |d|² leaves double's normal range, or an origin
-/// past ~1e30 scene sizes, where double-double cannot hold the shift finely enough): the linear
-/// scan answers then, as it answered every such ray until 2026-12-05.
-bool move_near_scene(const Impl& a, const Ray& ray, MovedRay& out);
+/// What move_near_scene made of a ray.
+enum class MoveResult {
+    moved,         ///< `out` holds the moved ray
+    misses,        ///< the line passes outside the padded bounds: no hit
+    not_possible,  ///< keep the ray as it is
+};
+
+/// For a ray prepare_ray marked far (RayContext::far: an origin ~1e8 scene sizes away and
+/// beyond, where the double kernels deciding on the ray itself err by ~u·distance, and from
+/// ~1e16 on the float ray cannot even be placed): the same line, relative to the scene centre,
+/// with its origin moved along it to just before the padded bounds, formed in double-double.
+/// `misses` where the line passes outside the bounds; `not_possible` for a direction whose |d|²
+/// leaves double's normal range, or an origin past ~1e30 scene sizes, where double-double
+/// cannot hold the shift finely enough.
+MoveResult move_near_scene(const Impl& a, const Ray& ray, MovedRay& out);
+
+/// Whether prepare_ray may mark `ray` far: false guarantees it will not (an origin within 2^24
+/// float scales of the centre on every axis; the double-double start point needs ~2^25). The
+/// packets of refined's `any` send a group with a far ray through the single-ray path.
+inline bool maybe_far(const Impl& a, const Ray& ray) {
+    const Vec3d o = ray.origin - a.center;
+    const double reach = 0x1p24 * a.float_scale;
+    return !(std::abs(o.x) <= reach && std::abs(o.y) <= reach && std::abs(o.z) <= reach);
+}
 
 /// Whether prepare_ray could not place the float ray near the scene (an origin so far that the
 /// slab test's rounding puts the start point outside the bounds): its float segment is empty,

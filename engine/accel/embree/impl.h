@@ -38,6 +38,9 @@ struct Impl {
     mutable Status exact_status;
     std::vector<GeomData> geoms;  ///< one per object, stable addresses (reserved up front)
     Bounds3 padded_bounds;
+    /// padded_bounds relative to `center`, rounded outward: the bounds a ray given relative to
+    /// the centre (a far ray moved to the scene: move_near_scene) is clipped against.
+    Bounds3 padded_bounds_rel;
     /// Embree sees every coordinate relative to this point (the centre of the scene bounds):
     /// float precision then follows the scene's size, not its distance from the origin.
     Vec3d center;
@@ -85,6 +88,16 @@ struct RayContext {
     double len = 1;     ///< |direction|·Impl::unit: float t' (frame units) ↔ t = shift + t'/len
     double margin = 0;  ///< slack added to tfar, in frame units (Impl::unit)
     double origin_err = 0;  ///< bound on the double rounding of the float ray's start point
+    /// The origin is so far from the scene (~1e8 scene sizes and beyond) that prepare_ray formed
+    /// the start point in double-double, or could not place it: the double kernels, deciding on
+    /// the ray itself, err there by ~u·distance (a whole scene size from 1e16 on). refined and
+    /// exact answer such a ray moved along its line to the scene (move_near_scene).
+    bool far = false;
+    /// When set, `ray` is given relative to this point (the scene centre), and the callbacks
+    /// translate each primitive by it before the double tests (a moved far ray: its origin
+    /// relative to the centre is accurate to a few u² of the distance, where in world
+    /// coordinates it would round by u·|centre|).
+    const Vec3d* frame = nullptr;
     /// Closest so far: the exact path's, or on `native` the first by `closer` of the double
     /// hits Embree offered within its float tfar (a sphere's, or a fat triangle's from the hit
     /// filter; keep_if_closer in float_ray.h).

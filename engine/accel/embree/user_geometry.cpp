@@ -11,14 +11,19 @@ namespace {
 
 /// Candidates of one primitive decided in double: the sphere roots in range, or the triangle
 /// hit of the watertight test. `emit` returns false to stop.
+/// In a context with a frame (a far ray moved to the scene, given relative to the centre) each
+/// primitive is translated by it first: the same difference the kernels form, a − o, up to the
+/// rounding of a − centre (exact where they lie within a factor of two, Sterbenz).
 template <class F>
 void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t prim, F&& emit) {
     const Object& o = c.accel->scene->objects[object];
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
+        Sphere s = o.sphere;
+        if (c.frame)
+            s.center = s.center - *c.frame;
         Hit hits[2];
-        const int n =
-            c.fast ? sphere_hits_fast(o.sphere, ray, hits) : sphere_hits(o.sphere, ray, hits);
+        const int n = c.fast ? sphere_hits_fast(s, ray, hits) : sphere_hits(s, ray, hits);
         for (int k = 0; k < n; ++k) {
             hits[k].object = object;
             if (!emit(hits[k]))
@@ -26,7 +31,10 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
         }
         return;
     }
-    if (auto h = intersect_triangle(o.mesh->triangle(prim), ray, false)) {
+    Triangle tri = o.mesh->triangle(prim);
+    if (c.frame)
+        tri = Triangle{tri.a - *c.frame, tri.b - *c.frame, tri.c - *c.frame};
+    if (auto h = intersect_triangle(tri, ray, false)) {
         h->object = object;
         h->primitive = prim;
         emit(*h);
