@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/math/float_bounds.h"
 #include "engine/shade/optics.h"
 
 namespace raycastd::engine {
@@ -47,6 +48,21 @@ TEST(Phong, AmbientIsKaTimesIaPerChannel) {
     // the ambient intensity, channel by channel.
     EXPECT_EQ(phong_ambient({0.1, 0.5, 1.0}, {0.5, 0.25, 2.0}), Vec3d(0.05, 0.125, 2.0));
     EXPECT_EQ(phong_ambient({0.3, 0.3, 0.3}, {}), Vec3d{});
+}
+
+// Whole exponents up to 1024 by repeated squaring, within 2n·u of std::pow over the cosines a
+// highlight takes; others are std::pow's own.
+TEST(Phong, PowerOfAWholeShininessIsPowsWithinRounding) {
+    for (double n : {0.0, 1.0, 2.0, 3.0, 30.0, 200.0, 300.0, 1000.0, 1024.0}) {
+        for (double x : {1.0, 0.999999, 0.99, 0.9, 0.7, 0.5, 0.25, 1e-3}) {
+            const double want = std::pow(x, n);
+            EXPECT_NEAR(phong_power(x, n), want, (2.0 * n + 2.0) * kDoubleUnitRoundoff * want)
+                << x << "^" << n;
+        }
+    }
+    EXPECT_EQ(phong_power(0.5, 6.33), std::pow(0.5, 6.33));
+    EXPECT_EQ(phong_power(0.9, 1025.0), std::pow(0.9, 1025.0));
+    EXPECT_EQ(phong_power(0.0, 0.0), 1.0);
 }
 
 TEST(Optics, ReflectionMirrorsAboutTheNormal) {
