@@ -129,7 +129,8 @@ Hit kept_sphere_hit(const Object& o, const Ray& ray, const std::optional<Hit>& s
 /// m.line_err (same direction), which moves a plane's crossing by |n·δ|/|n·d| ≤
 /// line_err/|n̂·d|: a grazing hit moves far along the ray. On a sphere the chord's ends move by
 /// at most δ + √(2rδ + δ²) (the half-chord √(r² − ρ²) changes by at most √(|Δρ²|)), finite even
-/// for a tangent ray. Then the rounding of t_of.
+/// for a tangent ray. Then the rounding of tau_of, all in the moved ray's units (τ), scaled
+/// back to t's by 2^-exp, exactly.
 void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
     const Object& o = a.scene->objects[h.object];
     const double dlen = length(m.ray.direction);
@@ -143,9 +144,11 @@ void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
             std::abs(dot(triangle_normal(o.mesh->triangle(h.primitive)), m.ray.direction));
         shift_bound = nd > 0.0 ? delta / nd : std::numeric_limits<double>::infinity();
     }
-    h.t = m.t_of(h.t);
-    h.t_err = (h.t_err + shift_bound) * (1.0 + 4.0 * kDoubleUnitRoundoff) +
-              kDoubleUnitRoundoff * std::abs(h.t);
+    const double tau = m.tau_of(h.t);
+    const double tau_err = (h.t_err + shift_bound) * (1.0 + 4.0 * kDoubleUnitRoundoff) +
+                           kDoubleUnitRoundoff * std::abs(tau);
+    h.t = std::ldexp(tau, -m.exp);
+    h.t_err = std::ldexp(tau_err, -m.exp);
 }
 
 /// `o`'s sphere in the frame `c` decides in (RayContext::frame).
@@ -313,8 +316,10 @@ void fast_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>&
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f))
         return;
-    if (unplaced(c))
-        return exact_all(a, ray, want_normal, out);  // not traced in float (prepare_ray)
+    // Not traced in float (unplaced), or far: the filter would decide on the far ray itself,
+    // within ~u·distance (a helper's probe: a crossing dropped from 1e15 away); exact moves it.
+    if (c.far)
+        return exact_all(a, ray, want_normal, out);
     c.fast = true;
     intersect1(a.native.get(), c, f);  // every double hit goes to c.collect
     for (Hit& h : out) {

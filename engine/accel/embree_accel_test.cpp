@@ -276,6 +276,35 @@ TEST(EmbreeAccel, FarLinesThatWereAnsweredWrongly) {
             }
         }
     }
+    // 4. (A second review.) A line through a unit icosphere's centre from 2^60 away along the
+    // diagonal, with a direction 2^-460 or 2^460 per axis: |d|² out of double's normal range,
+    // the move gave up and every precision missed. Now the direction is scaled first.
+    {
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects.push_back(testing::icosphere_object(2, {0, 0, 0}, 1.0));
+        Built b = build(std::move(s));
+        ASSERT_TRUE(b.accel);
+        for (int e : {-460, 0, 460}) {
+            const double k = std::ldexp(1.0, e);
+            const Ray ray{{-0x1p60, -0x1p60, -0x1p60}, {k, k, k}};
+            const double t_centre = 0x1p60 / k;  // the line reaches the centre there
+            for (Precision p : all_precisions) {
+                SCOPED_TRACE(::testing::Message() << "2^" << e << " " << to_string(p));
+                const auto h = b.accel->closest(ray, p, true);
+                ASSERT_TRUE(h.has_value());
+                EXPECT_TRUE(h->front_face);
+                EXPECT_TRUE(std::isfinite(h->t_err));
+                // The entry lies within the radius before the centre: |d|·(t_centre − t) ≤ 1.
+                EXPECT_LE(t_centre - h->t, 1.0 / (std::sqrt(3.0) * k) + h->t_err);
+                EXPECT_GE(t_centre - h->t, -h->t_err);
+                EXPECT_TRUE(b.accel->any(ray, p));
+                std::vector<Hit> hits;
+                b.accel->all(ray, p, false, hits);
+                EXPECT_EQ(hits.size(), 2u);
+            }
+        }
+    }
 }
 
 TEST(EmbreeAccel, AllAndCountAgreeWithLinearScan) {

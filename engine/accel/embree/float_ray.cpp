@@ -124,7 +124,16 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
 
 MoveResult move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
     const Vec3d& o = ray.origin;
-    const Vec3d& d = ray.direction;
+    // The direction scaled by a power of two to unit size, exactly: the line is the same and
+    // its parameter τ = t·2^e (MovedRay::exp). A direction whose |d|² left double's normal range
+    // (shorter than ~1e-135 or longer than ~1e135, which the API accepts) had not been moved, and
+    // its far rays kept the far kernels' answers (a line through a sphere's centre from 2^60
+    // away, direction 2^-460 per axis, missed: a helper's review).
+    const double dmax = max_abs(ray.direction);
+    if (!(dmax > 0.0) || !std::isfinite(dmax))
+        return MoveResult::not_possible;
+    m.exp = std::ilogb(dmax);
+    const Vec3d d = ray.direction * std::ldexp(1.0, -m.exp);
     const double d2 = dot(d, d);
     const double radius = 0.5 * scaled_length(a.padded_bounds.diagonal());
     if (!(d2 >= 0x1p-900 && d2 <= 0x1p900) || !(radius > 0.0) || !std::isfinite(radius))
@@ -198,21 +207,26 @@ MoveResult move_near_scene(const Impl& a, const Ray& ray, MovedRay& m) {
     m.ray.direction = d;
     // The range moves with the origin (tmin − shift rounds once: a hit within an ulp of the
     // client's far tmin or tmax, thousands of scene sizes at this distance, may go either way).
+    bool range_ok = true;
     const auto moved = [&](double t) {
         if (std::isinf(t))
             return t;
-        const dd::DD r = dd::sub(dd::DD{t, 0.0}, shift);
+        const double tau = std::ldexp(t, m.exp);  // exact unless it leaves double's range
+        range_ok = range_ok && std::isfinite(tau) && (tau != 0.0 || t == 0.0);
+        const dd::DD r = dd::sub(dd::DD{tau, 0.0}, shift);
         return r.hi + r.lo;
     };
     m.ray.tmin = moved(ray.tmin);
     m.ray.tmax = moved(ray.tmax);
+    if (!range_ok)
+        return MoveResult::not_possible;
     m.line_err = line_err(q);
     if (!std::isfinite(m.line_err) || std::isnan(m.ray.tmin) || std::isnan(m.ray.tmax))
         return MoveResult::not_possible;
     return MoveResult::moved;
 }
 
-double MovedRay::t_of(double t_moved) const {
+double MovedRay::tau_of(double t_moved) const {
     const dd::DD t = dd::add(shift, dd::DD{t_moved, 0.0});
     return t.hi + t.lo;
 }

@@ -206,12 +206,14 @@ inline bool exact_ray_within_padding(const Impl& a, const RayContext& c) {
 /// its answers back.
 struct MovedRay {
     /// The same line relative to the scene centre (RayFrame::centre), its origin two padded
-    /// radii before the point nearest the centre.
+    /// radii before the point nearest the centre, its direction the client's times 2^-exp
+    /// (unit-sized): its parameter t' is τ − shift, τ = t·2^exp.
     Ray ray;
-    dd::DD shift;     ///< t = shift + t', t' the moved ray's (double-double)
+    int exp = 0;
+    dd::DD shift;     ///< τ = shift + t' (double-double)
     double line_err;  ///< bound on the distance between the moved origin and the ray's line
-    /// The client's t of the moved ray's t' (one rounding).
-    double t_of(double t_moved) const;
+    /// τ of the moved ray's t' (one rounding); the client's t is τ·2^-exp.
+    double tau_of(double t_moved) const;
 };
 
 /// What move_near_scene made of a ray.
