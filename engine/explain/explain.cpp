@@ -152,20 +152,28 @@ ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
     tw.representable = std::isfinite(tw.plane_d) && std::isfinite(dot(tw.normal, p)) &&
                        std::isfinite(tw.n_dot_v) && std::isfinite(magnitude * max_abs(v)) &&
                        (magnitude >= kSmallestSquare || is_degenerate(tri));
+    // Step 2, substituting l(t): ⟨n,p⟩ + t·⟨n,v⟩ = ⟨n,a⟩, gives t and d = l(t). Step 3: d is
+    // inside iff da×db, db×dc, dc×da point the same way (pairwise dot ≥ 0; a zero vector, d on
+    // an edge line, agrees with any direction). Worked here, written out below.
+    double dots[3] = {0.0, 0.0, 0.0};
     if (tw.representable && magnitude > 0.0 && tw.n_dot_v != 0.0) {
-        const double t = (tw.plane_d - dot(tw.normal, p)) / tw.n_dot_v;
-        const Vec3d d = ray.at(t);
+        tw.t = (tw.plane_d - dot(tw.normal, p)) / tw.n_dot_v;
+        tw.point = ray.at(*tw.t);
+        const Vec3d& d = *tw.point;
         const Vec3d da = tri.a - d, db = tri.b - d, dc = tri.c - d;
         tw.cross[0] = cross(da, db);
         tw.cross[1] = cross(db, dc);
         tw.cross[2] = cross(dc, da);
-        tw.representable = std::isfinite(t) && is_finite(d) && is_finite(tw.cross[0]) &&
+        for (int k = 0; k < 3; ++k)
+            dots[k] = dot(tw.cross[k], tw.cross[(k + 1) % 3]);
+        tw.representable = std::isfinite(*tw.t) && is_finite(d) && is_finite(tw.cross[0]) &&
                            is_finite(tw.cross[1]) && is_finite(tw.cross[2]) &&
-                           std::isfinite(dot(tw.cross[0], tw.cross[1])) &&
-                           std::isfinite(dot(tw.cross[1], tw.cross[2])) &&
-                           std::isfinite(dot(tw.cross[2], tw.cross[0]));
+                           std::isfinite(dots[0]) && std::isfinite(dots[1]) &&
+                           std::isfinite(dots[2]);
     }
     if (!tw.representable) {
+        tw.t.reset();
+        tw.point.reset();
         tw.cross[0] = tw.cross[1] = tw.cross[2] = Vec3d{};
         w.steps.push_back(kOutOfRange);
         const std::optional<Hit> h = intersect_triangle(tri, ray, false);
@@ -190,28 +198,16 @@ ObjectWork work_triangle(const Triangle& tri, const Ray& ray) {
         w.triangle = tw;
         return w;
     }
-    // Step 2: substitute l(t): ⟨n,p⟩ + t·⟨n,v⟩ = ⟨n,a⟩.
     if (tw.n_dot_v == 0.0) {
         w.reason = "<n,v> = 0: the ray is parallel to the plane and misses";
         w.steps.push_back(w.reason);
         w.triangle = tw;
         return w;
     }
-    const double t = (tw.plane_d - dot(tw.normal, p)) / tw.n_dot_v;
-    tw.t = t;
-    const Vec3d d = ray.at(t);
-    tw.point = d;
+    const double t = *tw.t;
     w.steps.push_back("<n,p> + t<n,v> = <n,a>  =>  t = " + num(t));
-    w.steps.push_back("d = l(t) = " + vec(d));
-    // Step 3: d is inside iff da×db, db×dc, dc×da point the same way (pairwise dot ≥ 0; a zero
-    // vector, d on an edge line, agrees with any direction).
-    const Vec3d da = tri.a - d, db = tri.b - d, dc = tri.c - d;
-    tw.cross[0] = cross(da, db);
-    tw.cross[1] = cross(db, dc);
-    tw.cross[2] = cross(dc, da);
-    tw.same_direction = dot(tw.cross[0], tw.cross[1]) >= 0.0 &&
-                        dot(tw.cross[1], tw.cross[2]) >= 0.0 &&
-                        dot(tw.cross[2], tw.cross[0]) >= 0.0;
+    w.steps.push_back("d = l(t) = " + vec(*tw.point));
+    tw.same_direction = dots[0] >= 0.0 && dots[1] >= 0.0 && dots[2] >= 0.0;
     w.steps.push_back("da x db = " + vec(tw.cross[0]) + ", db x dc = " + vec(tw.cross[1]) +
                       ", dc x da = " + vec(tw.cross[2]));
     if (!tw.same_direction) {
