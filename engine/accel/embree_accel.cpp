@@ -151,14 +151,6 @@ void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
     h.t_err = std::ldexp(tau_err, -m.exp);
 }
 
-/// `o`'s sphere in the frame `c` decides in (RayContext::frame).
-Sphere sphere_in_frame(const Object& o, const RayContext& c) {
-    Sphere s = o.sphere;
-    if (c.frame)
-        s.center = s.center - *c.frame;
-    return s;
-}
-
 std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal,
                                  RayFrame frame = RayFrame::world) {
     RayContext c(a);
@@ -193,7 +185,7 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     if (want_normal) {
         const Object& o = a.scene->objects[h.object];
         if (o.kind == ObjectKind::sphere) {
-            sphere_normal(sphere_in_frame(o, c), ray, h.t, h);
+            sphere_normal(c.in_frame(o.sphere), ray, h.t, h);
         } else {
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
         }

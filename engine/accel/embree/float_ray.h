@@ -139,6 +139,12 @@ enum class RayFrame {
 bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f,
                  RayFrame frame = RayFrame::world);
 
+/// Whether every coordinate of v lies within ±reach; false for a NaN anywhere (a test of each
+/// coordinate: std::max, as in max_abs, can drop a NaN).
+inline bool within_reach(const Vec3d& v, double reach) {
+    return std::abs(v.x) <= reach && std::abs(v.y) <= reach && std::abs(v.z) <= reach;
+}
+
 /// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org:
 /// tmin ≥ 0, an origin within 4 scene sizes of the centre on every axis (at most 8 in Embree's
 /// frame), and |d|² in [1e-12, 1e12].
@@ -147,9 +153,7 @@ inline bool fast_ray_applies(const Impl& a, const Ray& ray, const Vec3d& org) {
     // Each coordinate, not |org|² against 16·scale²: that overflowed for scenes past ~1.7e153
     // across, and any origin passed (a helper's review). Not max_abs either: its std::max drops
     // a NaN in some positions, and such an origin would pass.
-    const double reach = 4.0 * a.float_scale;
-    return ray.tmin >= 0.0 && std::abs(org.x) <= reach && std::abs(org.y) <= reach &&
-           std::abs(org.z) <= reach && d2 >= 1e-12 && d2 <= 1e12;
+    return ray.tmin >= 0.0 && within_reach(org, 4.0 * a.float_scale) && d2 >= 1e-12 && d2 <= 1e12;
 }
 
 /// The unclipped float ray of `ray` (origin in Embree's frame, direction as given, range times
@@ -236,9 +240,7 @@ MoveResult move_near_scene(const Impl& a, const Ray& ray, MovedRay& out);
 /// float scales of the centre on every axis; the double-double start point needs ~2^25). The
 /// packets of refined's `any` send a group with a far ray through the single-ray path.
 inline bool maybe_far(const Impl& a, const Ray& ray) {
-    const Vec3d o = ray.origin - a.center;
-    const double reach = 0x1p24 * a.float_scale;
-    return !(std::abs(o.x) <= reach && std::abs(o.y) <= reach && std::abs(o.z) <= reach);
+    return !within_reach(ray.origin - a.center, 0x1p24 * a.float_scale);
 }
 
 /// Whether prepare_ray could not place the float ray near the scene (an origin so far that the

@@ -98,6 +98,15 @@ struct RayContext {
     /// relative to the centre is accurate to a few u² of the distance, where in world
     /// coordinates it would round by u·|centre|).
     const Vec3d* frame = nullptr;
+    /// A primitive in the frame the double tests decide in (translated by `frame` if set).
+    Sphere in_frame(Sphere s) const {
+        if (frame)
+            s.center = s.center - *frame;
+        return s;
+    }
+    Triangle in_frame(const Triangle& t) const {
+        return frame ? Triangle{t.a - *frame, t.b - *frame, t.c - *frame} : t;
+    }
     /// Closest so far: the exact path's, or on `native` the first by `closer` of the double
     /// hits Embree offered within its float tfar (a sphere's, or a fat triangle's from the hit
     /// filter; keep_if_closer in float_ray.h).

@@ -19,9 +19,7 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     const Object& o = c.accel->scene->objects[object];
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
-        Sphere s = o.sphere;
-        if (c.frame)
-            s.center = s.center - *c.frame;
+        const Sphere s = c.in_frame(o.sphere);
         Hit hits[2];
         const int n = c.fast ? sphere_hits_fast(s, ray, hits) : sphere_hits(s, ray, hits);
         for (int k = 0; k < n; ++k) {
@@ -31,10 +29,7 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
         }
         return;
     }
-    Triangle tri = o.mesh->triangle(prim);
-    if (c.frame)
-        tri = Triangle{tri.a - *c.frame, tri.b - *c.frame, tri.c - *c.frame};
-    if (auto h = intersect_triangle(tri, ray, false)) {
+    if (auto h = intersect_triangle(c.in_frame(o.mesh->triangle(prim)), ray, false)) {
         h->object = object;
         h->primitive = prim;
         emit(*h);
