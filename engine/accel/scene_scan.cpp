@@ -39,7 +39,17 @@ TrianglePlane TrianglePlane::of(const Triangle& tri) {
     return p;
 }
 
-bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
+namespace {
+
+/// TrianglePlane::left_behind's body, inlined into both scans: GCC had stopped inlining the
+/// member into SceneScan::closest, and the call then cost more than its n·d test for most rays
+/// (tutorial_like at fast, alternating pairs of bench_render: 4,905/4,877/4,888 →
+/// 4,833/4,818/4,996 ms of task-clock).
+[[gnu::always_inline]] inline bool left_behind(const TrianglePlane& plane, const Ray& ray,
+                                               const Vec3d& a) {
+    const Vec3d& n = plane.n;
+    const Vec3d& s_err = plane.s_err;
+    const Vec3d& sd_err = plane.sd_err;
     // s = n·(o − a) and n·d, each within its error bound of the exact triangle's: the rounded
     // normal's error times the other factor, and the rounding of o − a and of the dot products
     // (γ₅ of the magnitudes, with room for the bounds' own rounding). Beyond that, s must clear
@@ -58,7 +68,7 @@ bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
     // 1e108 had s = +inf for a true s of −1e308, and was skipped though hit, where the bound
     // summed per ray had overflowed with s and never skipped).
     constexpr double kMax = std::numeric_limits<double>::max();
-    if (!usable || !(ray.tmin >= 0.0))
+    if (!plane.usable || !(ray.tmin >= 0.0))
         return false;
     const Vec3d& d = ray.direction;
     const double sd = dot(n, d);
@@ -71,6 +81,12 @@ bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
         return false;
     const double s_bound = dot(s_err, abs(oa)) + 0x1p-1000;
     return sd > 0.0 ? s > s_bound : s < -s_bound;
+}
+
+}  // namespace
+
+bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
+    return engine::left_behind(*this, ray, a);
 }
 
 SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
@@ -259,6 +275,51 @@ std::optional<Hit> SceneScan::triangle(const Triangle& tri, const Ray& ray) cons
                  : intersect_triangle(tri, ray, /*want_normal=*/false);
 }
 
+namespace {
+
+/// A closest hit being looked for, kept in scalars: whole Hits copied from the kernels' answers
+/// had been read back 16 bytes at a time where the kernels wrote them 8 at a time, a
+/// store-forwarding stall at each new best (three of them were a sixth of SceneScan::closest's
+/// samples in the tutorial_like render, perf annotate with cycles:pp, 2026-12-05).
+struct Best {
+    double t, t_err = 0.0, u = 0.0, v = 0.0;
+    std::uint32_t object = kInvalidId, primitive = kInvalidId;
+    bool front_face = true, on_edge = false;
+
+    /// `closer(h, *this)` for a hit with h.t = t, of `object`, primitive `primitive`.
+    bool beaten_by(double ht, std::uint32_t hobject, std::uint32_t hprimitive) const {
+        if (ht != t)
+            return ht < t;
+        if (hobject != object)
+            return hobject < object;
+        return hprimitive < primitive;
+    }
+    /// Takes a triangle kernel's answer, field by field.
+    void take(const Hit& h, std::uint32_t hobject, std::uint32_t hprimitive) {
+        t = h.t;
+        t_err = h.t_err;
+        u = h.u;
+        v = h.v;
+        object = hobject;
+        primitive = hprimitive;
+        front_face = h.front_face;
+        on_edge = h.on_edge;
+    }
+    /// Writes the answer into `out`, field by field (its normal left as it is).
+    void put(Hit& out) const {
+        out.t = t;
+        out.t_err = t_err;
+        out.object = object;
+        out.primitive = primitive;
+        out.u = u;
+        out.v = v;
+        out.front_face = front_face;
+        out.on_edge = on_edge;
+    }
+};
+
+}  // namespace
+
 std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const {
     // linear_closest's loop, flattened: the scene-wide best so far bounds the spheres and each
     // mesh (tmax inclusive, so that an exact tie with a later object is still seen and `closer`
@@ -268,8 +329,7 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
     // time what had just been written 8 at a time, store-forwarding stalls that were a fifth of
     // this function's samples in the tutorial_like render (perf annotate).
     Ray r = ray_in;
-    double scene_tmax = ray_in.tmax, mesh_tmax = ray_in.tmax;
-    Hit best, mesh_best;
+    Best best{ray_in.tmax}, mesh_best{ray_in.tmax};
     const Primitive* winner = nullptr;
     const Primitive* mesh_winner = nullptr;
     bool new_object = true;
@@ -279,59 +339,66 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
             new_object = true;
             if (!may_hit(candidates, p.index))
                 continue;
-            // intersect_sphere without the normal (filled below for the winner).
-            r.tmax = scene_tmax;
-            if (auto h = first_hit_of_roots(p.sphere, r, roots(p.sphere, r), false)) {
-                h->object = p.object;
-                if (!winner || closer(*h, best)) {
-                    best = *h;
-                    winner = &p;
-                    scene_tmax = h->t;
-                }
+            // intersect_sphere without the normal (filled below for the winner): its first
+            // root in range, primitive 0.
+            r.tmax = best.t;
+            const SphereRoots roots_of = roots(p.sphere, r);
+            const int k = first_root_in_range(roots_of, r);
+            if (k >= 0 && (!winner || best.beaten_by(roots_of.t[k], p.object, 0))) {
+                best.t = roots_of.t[k];
+                best.t_err = roots_of.t_err;
+                best.u = best.v = 0.0;
+                best.object = p.object;
+                best.primitive = 0;
+                best.front_face = true;
+                best.on_edge = false;
+                winner = &p;
             }
             continue;
         }
         if (new_object) {
-            mesh_tmax = scene_tmax;
+            mesh_best.t = best.t;
             mesh_winner = nullptr;
         }
         // A plane left behind: a miss, without Woop's test.
-        r.tmax = mesh_tmax;
-        const std::optional<Hit> h =
-            p.plane.left_behind(r, p.tri.a) ? std::nullopt : triangle(p.tri, r);
-        if (h && (!mesh_winner || h->t < mesh_best.t)) {
-            mesh_best = *h;
-            mesh_best.object = p.object;
-            mesh_best.primitive = p.index;
-            mesh_winner = &p;
-            mesh_tmax = h->t;
+        r.tmax = mesh_best.t;
+        if (!left_behind(p.plane, r, p.tri.a)) {
+            const std::optional<Hit> h = triangle(p.tri, r);
+            if (h && (!mesh_winner || h->t < mesh_best.t)) {
+                mesh_best.take(*h, p.object, p.index);
+                mesh_winner = &p;
+            }
         }
         new_object = p.last_of_object;
-        if (p.last_of_object && mesh_winner && (!winner || closer(mesh_best, best))) {
+        if (p.last_of_object && mesh_winner &&
+            (!winner || best.beaten_by(mesh_best.t, mesh_best.object, mesh_best.primitive))) {
             best = mesh_best;
             winner = mesh_winner;
-            scene_tmax = best.t;
         }
     }
+    std::optional<Hit> result;
     if (!winner)
-        return std::nullopt;
+        return result;
+    // Made in place (the return value's own storage), for the stall that a Hit made on the
+    // stack and copied out had (Best's comment).
+    Hit& out = result.emplace();
+    best.put(out);
     if (want_normal) {
         if (winner->is_sphere)
-            sphere_normal(winner->sphere, ray_in, best.t, best);
+            sphere_normal(winner->sphere, ray_in, out.t, out);
         else
-            best.normal = winner->normal;
+            out.normal = winner->normal;
     }
-    return best;
+    return result;
 }
 
 bool SceneScan::any(const Ray& ray) const {
     const std::uint32_t candidates = sphere_candidates(ray);
     for (const Primitive& p : prims_) {
         if (p.is_sphere) {
-            if (may_hit(candidates, p.index) &&
-                first_hit_of_roots(p.sphere, ray, roots(p.sphere, ray), false))
+            if (may_hit(candidates, p.index) && first_root_in_range(roots(p.sphere, ray), ray) >= 0)
                 return true;
-        } else if (!p.plane.left_behind(ray, p.tri.a) && triangle(p.tri, ray)) {
+        } else if (!left_behind(p.plane, ray, p.tri.a) && triangle(p.tri, ray)) {
             return true;
         }
     }

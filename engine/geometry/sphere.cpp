@@ -255,19 +255,16 @@ std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_n
 
 std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const SphereRoots& r,
                                       bool want_normal) {
-    for (int i = 0; i < r.count; ++i) {
-        const double t = r.t[i];
-        if (t >= ray.tmin && t <= ray.tmax) {
-            Hit hit;
-            hit.t = t;
-            hit.t_err = r.t_err;
-            hit.primitive = 0;
-            if (want_normal)
-                sphere_normal(s, ray, t, hit);
-            return hit;
-        }
-    }
-    return std::nullopt;
+    const int i = first_root_in_range(r, ray);
+    if (i < 0)
+        return std::nullopt;
+    Hit hit;
+    hit.t = r.t[i];
+    hit.t_err = r.t_err;
+    hit.primitive = 0;
+    if (want_normal)
+        sphere_normal(s, ray, hit.t, hit);
+    return hit;
 }
 
 SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {

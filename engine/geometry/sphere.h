@@ -56,6 +56,15 @@ int sphere_hits_fast(const Sphere& s, const Ray& ray, Hit out[2]);
 /// root. `want_normal = false` skips the normal and front-face computation.
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal = true);
 
+/// The index of the first of `r`'s roots in [ray.tmin, ray.tmax], or −1.
+inline int first_root_in_range(const SphereRoots& r, const Ray& ray) {
+    for (int i = 0; i < r.count; ++i) {
+        if (r.t[i] >= ray.tmin && r.t[i] <= ray.tmax)
+            return i;
+    }
+    return -1;
+}
+
 /// intersect_sphere's answer from roots already found (sphere_roots or sphere_roots_fast):
 /// the first of them in [ray.tmin, ray.tmax] as a Hit.
 std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const SphereRoots& r,
