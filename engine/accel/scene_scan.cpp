@@ -330,7 +330,14 @@ struct Best {
 
 }  // namespace
 
-std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const {
+std::optional<Hit> SceneScan::closest(const Ray& ray, bool want_normal) const {
+    std::optional<Hit> result;
+    if (!closest(ray, want_normal, result.emplace()))
+        result.reset();
+    return result;
+}
+
+bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
     // linear_closest's loop, flattened: the scene-wide best so far bounds the spheres and each
     // mesh (tmax inclusive, so that an exact tie with a later object is still seen and `closer`
     // decides it); a mesh's own triangles narrow its bound further and keep the lower index on an
@@ -386,12 +393,10 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
             winner = mesh_winner;
         }
     }
-    std::optional<Hit> result;
     if (!winner)
-        return result;
-    // Made in place (the return value's own storage), for the stall that a Hit made on the
-    // stack and copied out had (Best's comment).
-    Hit& out = result.emplace();
+        return false;
+    // Written into the caller's Hit, for the stall that a Hit made here and copied out had
+    // (Best's comment).
     best.put(out);
     if (want_normal) {
         if (winner->is_sphere)
@@ -399,7 +404,7 @@ std::optional<Hit> SceneScan::closest(const Ray& ray_in, bool want_normal) const
         else
             out.normal = winner->normal;
     }
-    return result;
+    return true;
 }
 
 bool SceneScan::any(const Ray& ray) const {

@@ -60,6 +60,11 @@ class SceneScan {
 
     /// The closest hit in [tmin, tmax], or nullopt (linear_closest at exact).
     std::optional<Hit> closest(const Ray& ray, bool want_normal) const;
+    /// The same written into `out` (all of it but its normal where `want_normal` is false);
+    /// false, and `out` untouched, on a miss. A batch's own slot: a Hit returned and copied
+    /// in was read back in 16-byte pieces of what had been written in 4- and 8-byte ones, a
+    /// store-forwarding stall per camera ray (perf annotate of Tracer::closest_batch).
+    bool closest(const Ray& ray, bool want_normal, Hit& out) const;
     /// Whether anything is hit in [tmin, tmax] (linear_any at exact).
     bool any(const Ray& ray) const;
     /// Bit k set: the k-th sphere (in object order) may be hit; clear: the ray's line certainly

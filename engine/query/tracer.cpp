@@ -28,10 +28,8 @@ std::optional<Hit> Tracer::closest(const Ray& ray, bool want_normal) const {
 void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
     if (scan_) {
         out.assign(rays.size(), Hit{});
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            if (auto h = scan_->closest(rays[i], /*want_normal=*/true))
-                out[i] = *h;
-        }
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            scan_->closest(rays[i], /*want_normal=*/true, out[i]);
         return;
     }
     QueryOptions q;
