@@ -166,13 +166,14 @@ template <int W>
     const vd fx = ray.ox - x;
     const vd fy = ray.oy - y;
     const vd fz = ray.oz - z;
-    const vd c0 = fy * ray.dz - fz * ray.dy;
-    const vd c1 = fz * ray.dx - fx * ray.dz;
-    const vd c2 = fx * ray.dy - fy * ray.dx;
-    const vd cc = c0 * c0 + c1 * c1 + c2 * c2;
-    const vd ar2 = a * r2;
     const vd ff = fx * fx + fy * fy + fz * fz;
-    const vd bound = 128.0 * kDoubleUnitRoundoff * (ff * a + ar2) + 0x1p-900;
+    const vd beta = fx * ray.dx + fy * ray.dy + fz * ray.dz;
+    const vd fa = ff * a;
+    // |f × d|² by Lagrange's identity, |f|²|d|² − (f·d)², from the β and |f|²a that the
+    // behind test needs anyway (the cross product had cost 14 of the rule's ~40 operations).
+    const vd cc = fa - beta * beta;
+    const vd ar2 = a * r2;
+    const vd bound = 128.0 * kDoubleUnitRoundoff * (fa + ar2) + 0x1p-900;
     // Lanes are −1 where the line certainly misses (all terms finite, so the comparisons are
     // false on a NaN or an overflow), d·d permitting.
     miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax) & (ray.a_normal ? -1 : 0);
@@ -183,8 +184,6 @@ template <int W>
         // its rounding (|f|² and r² within γ₃ and u; β within (γ₃ + u)·|f||d| ≈ 4u·|f||d| of
         // the exact f·d, so β² > 64u²·|f|²a leaves room), and neither forms a root of another
         // sign from them.
-        const vd beta = fx * ray.dx + fy * ray.dy + fz * ray.dz;
-        const vd fa = ff * a;
         miss |= (ff - r2 > 8.0 * kDoubleUnitRoundoff * (ff + r2)) & (beta > 0.0) &
                 (beta * beta > 64.0 * kDoubleUnitRoundoff * kDoubleUnitRoundoff * fa + 0x1p-900) &
                 (fa <= kMax) & (ff <= kMax);
@@ -258,14 +257,20 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {
     // before any call: 89% of the sphere tests of the bench's tutorial_like render at exact
     // are lines that miss (counted 2026-12-04: 81 of 92 million), and those calls had been a
     // third of the render (perf). The discriminant a·r² − |f × d|² formed from the rounded
-    // f = o − c is within 48u·(|f|²a + a·r²) of the exact one (sphere_roots: Higham 2002,
-    // Lemma 3.1 on the cross product and the dot products), plus 2⁻⁹⁰⁰ for products that
-    // underflow. Beyond 128u of that the exact discriminant is below −80u·a·(|f|² + r²): the
-    // double-double discriminant of sphere_roots (a few u² of the same terms) is negative, and
-    // so is sphere_roots_fast's r² − |l|² (within ~22u·|f|² + 2u·r² + u·|disc| of Δ/(4a)),
-    // so both kernels find no root. A lane with an infinity or NaN anywhere is never ruled out.
-    // Four lanes (AVX) against two (SSE2): the tutorial_like render at fast spent 19% of its
-    // time here (perf, 2026-12-04), measured in docs/rendering.md.
+    // f = o − c is within 48u·(|f|²a + a·r²) of the exact one, plus 2⁻⁹⁰⁰ for products that
+    // underflow. With |f × d|² as |f|²a − β² (Lagrange's identity), β = f·d (Higham 2002,
+    // Lemma 3.1 and §3.1 on the dot products, for the rounded f): |f|² and a are within γ₃ of
+    // f·f and d·d, so |f|²a within ~7u of their product; β within γ₃·|f||d|, so β² within
+    // ~7u·|f|²|d|² of (f·d)²; the difference rounds by u of the larger term: ~16u·|f|²|d|² in
+    // all. The rounding of f itself (u per component) moves |f × d|² by ~2u·|f|²|d|² more, and
+    // a·r² rounds by ~2u of itself: within the 48u, although the identity cancels where the line
+    // passes near the centre (where nothing is ruled out anyway). Beyond 128u of that the exact
+    // discriminant is below −80u·a·(|f|² + r²): the double-double discriminant of sphere_roots (a
+    // few u² of the same terms) is negative, and so is sphere_roots_fast's r² − |l|² (within
+    // ~22u·|f|² + 2u·r² + u·|disc| of Δ/(4a)), so both kernels find no root. A lane with an
+    // infinity or NaN anywhere is never ruled out. Four lanes (AVX) against two (SSE2): the
+    // tutorial_like render at fast spent 19% of its time here (perf, 2026-12-04), measured in
+    // docs/rendering.md.
     if (spheres_.empty())
         return ~std::uint32_t{0};
     const SphereQuad* quads = spheres_.data();

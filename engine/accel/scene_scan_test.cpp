@@ -352,15 +352,14 @@ bool rule_rules_out(const Sphere& s, const Ray& r) {
     const double a = d.x * d.x + d.y * d.y + d.z * d.z;
     const double fx = r.origin.x - s.center.x, fy = r.origin.y - s.center.y,
                  fz = r.origin.z - s.center.z;
-    const double c0 = fy * d.z - fz * d.y, c1 = fz * d.x - fx * d.z, c2 = fx * d.y - fy * d.x;
-    const double cc = c0 * c0 + c1 * c1 + c2 * c2;
-    const double ar2 = a * r2;
     const double ff = fx * fx + fy * fy + fz * fz;
-    const double bound = 128.0 * u * (ff * a + ar2) + 0x1p-900;
+    const double beta = fx * d.x + fy * d.y + fz * d.z;
+    const double fa = ff * a;
+    const double cc = fa - beta * beta;  // |f × d|² by Lagrange's identity
+    const double ar2 = a * r2;
+    const double bound = 128.0 * u * (fa + ar2) + 0x1p-900;
     bool out = ar2 - cc < -bound && bound <= kMax && cc <= kMax && a >= 0x1p-1020;
     if (r.tmin >= 0.0) {
-        const double beta = fx * d.x + fy * d.y + fz * d.z;
-        const double fa = ff * a;
         out = out || (ff - r2 > 8.0 * u * (ff + r2) && beta > 0.0 &&
                       beta * beta > 64.0 * u * u * fa + 0x1p-900 && fa <= kMax && ff <= kMax);
     }
