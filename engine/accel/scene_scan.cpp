@@ -41,10 +41,10 @@ TrianglePlane TrianglePlane::of(const Triangle& tri) {
 
 namespace {
 
-/// TrianglePlane::left_behind's body, inlined into both scans: GCC had stopped inlining the
-/// member into SceneScan::closest, and the call then cost more than its n·d test for most rays
-/// (tutorial_like at fast, alternating pairs of bench_render: 4,905/4,877/4,888 →
-/// 4,833/4,818/4,996 ms of task-clock).
+/// TrianglePlane::left_behind's body, inlined into both scans as it was until GCC stopped
+/// inlining the member into SceneScan::closest when that grew (the out-of-line call showed as 7%
+/// of the render in perf; forced back in, three alternating pairs of bench_render's
+/// tutorial_like rows at fast were within the machine's noise: means 4,890 → 4,882 ms).
 [[gnu::always_inline]] inline bool left_behind(const TrianglePlane& plane, const Ray& ray,
                                                const Vec3d& a) {
     const Vec3d& n = plane.n;
@@ -170,7 +170,8 @@ template <int W>
     const vd beta = fx * ray.dx + fy * ray.dy + fz * ray.dz;
     const vd fa = ff * a;
     // |f × d|² by Lagrange's identity, |f|²|d|² − (f·d)², from the β and |f|²a that the
-    // behind test needs anyway (the cross product had cost 14 of the rule's ~40 operations).
+    // behind test needs anyway (the cross product had cost 13 of the rule's 39 packed
+    // multiplications, additions and subtractions, GCC 12 at -O3).
     const vd cc = fa - beta * beta;
     const vd ar2 = a * r2;
     const vd bound = 128.0 * kDoubleUnitRoundoff * (fa + ar2) + 0x1p-900;
@@ -263,12 +264,14 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {
     // f·f and d·d, so |f|²a within ~7u of their product; β within γ₃·|f||d|, so β² within
     // ~7u·|f|²|d|² of (f·d)²; the difference rounds by u of the larger term: ~16u·|f|²|d|² in
     // all. The rounding of f itself (u per component) moves |f × d|² by ~2u·|f|²|d|² more, and
-    // a·r² rounds by ~2u of itself: within the 48u, although the identity cancels where the line
-    // passes near the centre (where nothing is ruled out anyway). Beyond 128u of that the exact
-    // discriminant is below −80u·a·(|f|² + r²): the double-double discriminant of sphere_roots (a
-    // few u² of the same terms) is negative, and so is sphere_roots_fast's r² − |l|² (within
-    // ~22u·|f|² + 2u·r² + u·|disc| of Δ/(4a)), so both kernels find no root. A lane with an
-    // infinity or NaN anywhere is never ruled out. Four lanes (AVX) against two (SSE2): the
+    // a·r² is within ~5u of |d|²r² (a within γ₃ of d·d, then r² and the product rounded): within
+    // the 48u, although the identity cancels where the line passes near the centre (where
+    // nothing is ruled out anyway). A helper's probe measured the rule's discriminant against
+    // __float128 with the exact f over 40M rays: at most 8.7u of (|f|²a + a·r²). Beyond 128u of
+    // that the exact discriminant is below −80u·a·(|f|² + r²): the double-double discriminant of
+    // sphere_roots (a few u² of the same terms) is negative, and so is sphere_roots_fast's r² −
+    // |l|² (within ~22u·|f|² + 2u·r² + u·|disc| of Δ/(4a)), so both kernels find no root. A lane
+    // with an infinity or NaN anywhere is never ruled out. Four lanes (AVX) against two (SSE2): the
     // tutorial_like render at fast spent 19% of its time here (perf, 2026-12-04), measured in
     // docs/rendering.md.
     if (spheres_.empty())

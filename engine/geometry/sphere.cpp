@@ -86,12 +86,19 @@ bool tiny_radius(const Sphere& s) {
 /// four: a sphere 1e80 across hit by a ray whose direction is 1e80 long was taken for a miss,
 /// one 1e-80 across with a direction 1e-80 long got roots off by 1e-6), the direction is
 /// brought to [1, 2) by a power of two: the roots scale by the same power, exactly.
+/// The radius times the direction's length counts too, not only the largest length: with
+/// lengths scaled down from past 2⁵⁰⁰ (huge_lengths), a radius 2¹⁶⁰ times below the origin's
+/// distance and a direction 2⁻⁴⁰⁰ long gave a·r² = 2⁻¹⁴⁰⁰ and |f × d|² = 2⁻¹⁰⁸⁰, both 0 in
+/// double, and a false tangent root at t = 0 for a line passing 2¹⁶⁰ radii from the centre
+/// (a helper's review, 2026-12-05).
 /// A direction already in [1, 2) is not scaled again (lengths are at most 2⁵⁰⁰ by then, after
-/// huge_lengths): that would recurse for ever.
+/// huge_lengths, and a radius 2⁻⁴⁰⁰ or more, after tiny_radius): that would recurse for ever.
 bool extreme_products(const Sphere& s, const Ray& ray) {
     const double dm = max_abs(ray.direction);
     const double p = max_length(s, ray) * dm;
-    return (p > 0x1p500 || (p < 0x1p-500 && p > 0.0)) && !(dm >= 1.0 && dm < 2.0);
+    const double rd = s.radius * dm;
+    return (p > 0x1p500 || (p < 0x1p-500 && p > 0.0) || (rd < 0x1p-500 && rd > 0.0)) &&
+           !(dm >= 1.0 && dm < 2.0);
 }
 
 /// The ray with its direction brought to [1, 2) (extreme_products), and the power of two applied,
@@ -149,8 +156,10 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
         // One test for the ordinary case (a helper measured three separate ones at +20% of a
         // miss): lengths, radius, direction and their product in range.
         const double L = max_length(s, ray), D = max_abs(ray.direction), p = L * D;
+        const double rd = s.radius * D;
         const bool ordinary = D >= kTinyDirection && L <= kHugeLength && !tiny_radius(s) &&
-                              p <= 0x1p500 && (p >= 0x1p-500 || p == 0.0);
+                              p <= 0x1p500 && (p >= 0x1p-500 || p == 0.0) &&
+                              (rd >= 0x1p-500 || rd == 0.0);
         if (!ordinary) {
             if (const std::optional<SphereRoots> r = sphere_roots_rescaled(s, ray))
                 return *r;

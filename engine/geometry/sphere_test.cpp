@@ -175,6 +175,26 @@ TEST(Sphere, HugeSpheresAreHit) {
     EXPECT_NEAR(length(hit->normal), 1.0, 1e-15);
 }
 
+TEST(Sphere, ScaledLengthsAndAShortDirectionDoNotUnderflowToATangent) {
+    // A helper's reproducer (2026-12-05): lengths past 2⁵⁰⁰ are scaled by 2⁻⁶⁰⁰, and with a
+    // direction 2⁻⁴⁰⁰ long a·r² (2⁻¹⁴⁰⁰) and |f × d|² (2⁻¹⁰⁸⁰) both underflowed to 0: a tangent
+    // root at t = 0 for a line that passes 2¹⁶⁰ radii from the centre.
+    const Sphere s{{0x1p501, 0, 0}, 0x1p300};
+    const Ray beside{{0x1p501, 0x1p460, 0}, {0x1p-400, 0, 0}};
+    EXPECT_EQ(sphere_roots(s, beside).count, 0);
+    EXPECT_EQ(sphere_roots_fast(s, beside).count, 0);
+    EXPECT_FALSE(intersect_sphere(s, beside));
+    // The same scales on a line through the centre: both roots, within their bound of
+    // (2⁵⁰¹ ∓ 2³⁰⁰)·2⁴⁰⁰, which double rounds to 2⁹⁰¹ (2³⁰⁰ is below its ulp).
+    const Ray through{{0, 0, 0}, {0x1p-400, 0, 0}};
+    for (const bool fast : {false, true}) {
+        const SphereRoots r = fast ? sphere_roots_fast(s, through) : sphere_roots(s, through);
+        ASSERT_EQ(r.count, 2) << fast;
+        EXPECT_LE(std::abs(r.t[0] - 0x1p901), r.t_err + ulp(0x1p901)) << fast;
+        EXPECT_LE(std::abs(r.t[1] - 0x1p901), r.t_err + ulp(0x1p901)) << fast;
+    }
+}
+
 TEST(Sphere, BehindOriginMisses) {
     EXPECT_FALSE(intersect_sphere({{0, 0, -10}, 2}, ray_z()));
 }
