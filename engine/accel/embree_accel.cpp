@@ -124,31 +124,9 @@ Hit kept_sphere_hit(const Object& o, const Ray& ray, const std::optional<Hit>& s
 // body of such rays kept the server busy for minutes). Where the move is not possible the ray
 // is answered as it is: the exact BVH, or the scan where the float ray cannot be placed.
 
-/// The hit of the moved ray `m` as the client's ray's: t mapped back, and t_err grown by what
-/// the move can shift the crossing. The moved line is the ray's translated by at most
-/// m.line_err (same direction), which moves a plane's crossing by |n·δ|/|n·d| ≤
-/// line_err/|n̂·d|: a grazing hit moves far along the ray. On a sphere the chord's ends move by
-/// at most δ + √(2rδ + δ²) (the half-chord √(r² − ρ²) changes by at most √(|Δρ²|)), finite even
-/// for a tangent ray. Then the rounding of tau_of, all in the moved ray's units (τ), scaled
-/// back to t's by 2^-exp, exactly.
+/// The hit of the moved ray `m` as the client's ray's (far_ray.h's moved_back).
 void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
-    const Object& o = a.scene->objects[h.object];
-    const double dlen = length(m.ray.direction);
-    const double delta = m.line_err;
-    double shift_bound;
-    if (o.kind == ObjectKind::sphere) {
-        const double r = o.sphere.radius;
-        shift_bound = (delta + std::sqrt(2.0 * r * delta + delta * delta)) / dlen;
-    } else {
-        const double nd =
-            std::abs(dot(triangle_normal(o.mesh->triangle(h.primitive)), m.ray.direction));
-        shift_bound = nd > 0.0 ? delta / nd : std::numeric_limits<double>::infinity();
-    }
-    const double tau = m.tau_of(h.t);
-    const double tau_err = (h.t_err + shift_bound) * (1.0 + 4.0 * kDoubleUnitRoundoff) +
-                           kDoubleUnitRoundoff * std::abs(tau);
-    h.t = std::ldexp(tau, -m.exp);
-    h.t_err = std::ldexp(tau_err, -m.exp);
+    engine::moved_back(*a.scene, m, h);
 }
 
 std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal,

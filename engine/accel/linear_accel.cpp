@@ -115,4 +115,62 @@ void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vecto
     sort_and_merge_edge_duplicates(out);
 }
 
+std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall& ball,
+                                            const Ray& ray, bool want_normal,
+                                            const CancelToken* cancel) {
+    MovedRay m;
+    if (ball.far(ray)) {
+        switch (move_near_ball_world(ball.centre, ball.radius, ray, m)) {
+            case MoveResult::misses:
+                return std::nullopt;
+            case MoveResult::moved: {
+                std::optional<Hit> h = linear_closest(scene, m.ray, want_normal, cancel);
+                if (h)
+                    moved_back(scene, m, *h);
+                return h;
+            }
+            case MoveResult::not_possible:
+                break;
+        }
+    }
+    return linear_closest(scene, ray, want_normal, cancel);
+}
+
+bool linear_any_from_afar(const Scene& scene, const SceneBall& ball, const Ray& ray) {
+    MovedRay m;
+    if (ball.far(ray)) {
+        switch (move_near_ball_world(ball.centre, ball.radius, ray, m)) {
+            case MoveResult::misses:
+                return false;
+            case MoveResult::moved:
+                return linear_any(scene, m.ray);
+            case MoveResult::not_possible:
+                break;
+        }
+    }
+    return linear_any(scene, ray);
+}
+
+void linear_all_from_afar(const Scene& scene, const SceneBall& ball, const Ray& ray,
+                          bool want_normal, std::vector<Hit>& out) {
+    MovedRay m;
+    if (ball.far(ray)) {
+        switch (move_near_ball_world(ball.centre, ball.radius, ray, m)) {
+            case MoveResult::misses:
+                out.clear();
+                return;
+            case MoveResult::moved:
+                // The map back is monotonic in t (one rounding of shift + t'), so the order of
+                // linear_all's hits stands.
+                linear_all(scene, m.ray, want_normal, out);
+                for (Hit& h : out)
+                    moved_back(scene, m, h);
+                return;
+            case MoveResult::not_possible:
+                break;
+        }
+    }
+    linear_all(scene, ray, want_normal, out);
+}
+
 }  // namespace raycastd::engine

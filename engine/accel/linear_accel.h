@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/accel/far_ray.h"
 #include "engine/cancel.h"
 #include "engine/scene/scene.h"
 
@@ -32,6 +33,20 @@ bool linear_any(const Scene& scene, const Ray& ray);
 /// Every hit along the ray, sorted by `closer`; a crossing of an edge or vertex shared by
 /// triangles of one mesh is listed once (the lower-numbered triangle), a tangent sphere once.
 void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vector<Hit>& out);
+
+/// linear_closest, linear_any and linear_all for rays from anywhere: a ray whose origin is
+/// `ball.far` from the scene (~1e8 scene sizes and beyond, where the kernels deciding on the
+/// far ray itself err by ~u·distance and miss triangles the line crosses) is moved along its
+/// line to just before the scene (far_ray.h, in world coordinates), answered there, and its
+/// hits mapped back (t, and t_err grown by what the move may shift a crossing). Where the move
+/// is not possible (an origin past ~1e30 scene sizes, an extreme direction length) the ray is
+/// answered as it is. QueryEngine answers its brute-force scenes through these.
+std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall& ball,
+                                            const Ray& ray, bool want_normal,
+                                            const CancelToken* cancel = nullptr);
+bool linear_any_from_afar(const Scene& scene, const SceneBall& ball, const Ray& ray);
+void linear_all_from_afar(const Scene& scene, const SceneBall& ball, const Ray& ray,
+                          bool want_normal, std::vector<Hit>& out);
 
 /// Sorts hits by `closer` and drops the duplicates a shared edge or vertex produces: hits of the
 /// same object, both on an edge, facing the same way (both entering or both leaving), whose t

@@ -175,6 +175,8 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
         if (!accel.ok())
             return accel.status();
         engine->accel_ = std::move(*accel);
+    } else {
+        engine->ball_ = std::make_unique<const SceneBall>(scene_ball(*engine->scene_));
     }
     return std::shared_ptr<const QueryEngine>(std::move(engine));
 }
@@ -186,13 +188,13 @@ Precision QueryEngine::effective_precision(Precision asked) const {
 std::optional<Hit> QueryEngine::closest(const Ray& ray, Precision precision,
                                         bool want_normal) const {
     if (!accel_)
-        return linear_closest(*scene_, ray, want_normal);
+        return linear_closest_from_afar(*scene_, *ball_, ray, want_normal);
     return accel_->closest(ray, precision, want_normal);
 }
 
 bool QueryEngine::occluded(const Ray& ray, Precision precision) const {
     if (!accel_)
-        return linear_any(*scene_, ray);
+        return linear_any_from_afar(*scene_, *ball_, ray);
     return accel_->any(ray, precision);
 }
 
@@ -251,7 +253,7 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
             return;
         }
         for_each_ray(n, opt.cancel, [&](std::size_t i) {
-            auto h = linear_closest(*scene_, rays[i], opt.want_normal);
+            auto h = linear_closest_from_afar(*scene_, *ball_, rays[i], opt.want_normal);
             hits[i] = h ? *h : Hit{};
         });
         return;
@@ -265,7 +267,7 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
     for_each_ray(n, opt.cancel, [&](std::size_t i) {
         // `any` never looks for the closest: it stops at the first hit found.
         hits[i] = Hit{};
-        if (linear_any(*scene_, rays[i]))
+        if (linear_any_from_afar(*scene_, *ball_, rays[i]))
             hits[i].object = 0;
     });
 }
@@ -329,7 +331,7 @@ Status QueryEngine::intersect(const std::vector<Ray>& rays, const QueryOptions& 
                     if (accel) {
                         accel->all(rays[i], p, normals, one);
                     } else {
-                        linear_all(s, rays[i], normals, one);
+                        linear_all_from_afar(s, *ball_, rays[i], normals, one);
                     }
                     out.counts[i] = static_cast<std::uint32_t>(one.size());
                     if (mine)

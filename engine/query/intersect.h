@@ -22,6 +22,7 @@ namespace raycastd::engine {
 
 class EmbreeAccel;
 class SceneScan;
+struct SceneBall;
 struct WindingTrees;     // query/point_entry.cpp
 struct PointTree;        // query/point_entry.cpp
 struct ParityPieces;     // query/parity_pieces.h
@@ -151,6 +152,8 @@ class QueryEngine {
     std::shared_ptr<const Scene> scene_;
     std::size_t scene_bytes_ = 0;  ///< scene_memory_bytes(), once
     std::unique_ptr<EmbreeAccel> accel_;
+    /// Around a brute-force scene (no accel_): its far rays are moved to it (accel/far_ray.h).
+    std::unique_ptr<const SceneBall> ball_;
     std::vector<MeshTopology> topology_;  ///< per object (point_entry.cpp)
     /// Built per object on first use; shared_ptr, whose deleter is made where the type is complete.
     std::shared_ptr<WindingTrees> winding_;

@@ -564,6 +564,27 @@ std::vector<StressCase> far_origins(const GenOptions& g) {
         for (auto& cs : embree_only("far origins", std::move(s), std::move(rays), {true}))
             out.push_back(std::move(cs));
     }
+    // A scene of four primitives, answered by brute force (linear_accel.h: moved to the scene
+    // too since 2026-12-05; before, a lone triangle missed lines crossing it from 1e18 away).
+    for (double far : {1e10, 1e14, 1e18, 1e22}) {
+        Scene s = empty_scene();
+        const Vec3d c{uniform(rng, -3, 3), uniform(rng, -3, 3), uniform(rng, -3, 3)};
+        s.objects.push_back(sphere(c + Vec3d{0, 0, 1}, 0.75));
+        s.objects.push_back(
+            triangle(c + Vec3d{-1, -1, 0}, c + Vec3d{1, -1, 0}, c + Vec3d{-1, 1, 0}));
+        s.objects.push_back(triangle(c + Vec3d{1, -1, 0}, c + Vec3d{1, 1, 0}, c + Vec3d{-1, 1, 0}));
+        s.objects.push_back(sphere(c + Vec3d{1.5, 1.5, -0.5}, 0.25));
+        std::vector<Ray> rays;
+        for (int i = 0; i < g.rays / 4; ++i) {
+            const Vec3d o = c + unit(rng) * far;
+            // Aimed at points of the square and the spheres and a little beyond them.
+            const Vec3d target = c + Vec3d{uniform(rng, -1.3, 1.3), uniform(rng, -1.3, 1.3),
+                                           uniform(rng, -0.6, 1.8)};
+            rays.push_back(ray_to(o, target));
+        }
+        out.push_back({"far origins (small)", std::make_shared<Scene>(std::move(s)),
+                       std::move(rays), std::vector<bool>(4, false)});
+    }
     return out;
 }
 

@@ -21,6 +21,7 @@
 #include <embree3/rtcore.h>
 
 #include "engine/accel/embree/impl.h"
+#include "engine/accel/far_ray.h"
 #include "engine/math/double_double.h"
 #include "engine/math/float_bounds.h"
 
@@ -205,27 +206,6 @@ inline bool prepare_fast_native_ray(const Impl& a, const Ray& ray, RayContext& c
 inline bool exact_ray_within_padding(const Impl& a, const RayContext& c) {
     return c.origin_err <= 0.25 * a.pad;
 }
-
-/// A ray moved along its own line to just before the scene (move_near_scene), and how to map
-/// its answers back.
-struct MovedRay {
-    /// The same line relative to the scene centre (RayFrame::centre), its origin two padded
-    /// radii before the point nearest the centre, its direction the client's times 2^-exp
-    /// (unit-sized): its parameter t' is τ − shift, τ = t·2^exp.
-    Ray ray;
-    int exp = 0;
-    dd::DD shift;     ///< τ = shift + t' (double-double)
-    double line_err;  ///< bound on the distance between the moved origin and the ray's line
-    /// τ of the moved ray's t' (one rounding); the client's t is τ·2^-exp.
-    double tau_of(double t_moved) const;
-};
-
-/// What move_near_scene made of a ray.
-enum class MoveResult {
-    moved,         ///< `out` holds the moved ray
-    misses,        ///< the line passes outside the padded bounds: no hit
-    not_possible,  ///< keep the ray as it is
-};
 
 /// For a ray prepare_ray marked far (RayContext::far: an origin ~1e8 scene sizes away and
 /// beyond, where the double kernels deciding on the ray itself err by ~u·distance, and from

@@ -1,0 +1,84 @@
+#pragma once
+// A ray whose origin is far from a scene, moved along its own line to just before the scene and
+// answered there, its answers then mapped back to the client's ray. From ~1e8 scene sizes away
+// the double kernels, deciding on the far ray itself, err by ~u·distance (a − o rounds by
+// u·|o|): a line through a point a third of the way inside a triangle, from 1e18 away, missed
+// it. The move is formed in double-double, so that the moved ray lies within a few u of the
+// scene's size of the client's line (MovedRay::line_err).
+//
+// EmbreeAccel moves its far rays relative to the scene centre (move_near_scene, float_ray.h);
+// the brute-force paths (linear_accel.h) move them in world coordinates (move_near_ball_world),
+// where the moved origin then rounds like an origin placed near the scene by the client.
+
+#include <cstdint>
+
+#include "engine/math/double_double.h"
+#include "engine/math/ray.h"
+#include "engine/scene/scene.h"
+
+namespace raycastd::engine {
+
+/// A ray moved along its own line to just before a scene (move_near_ball), and how to map its
+/// answers back.
+struct MovedRay {
+    /// The same line, its origin two radii before the point nearest the centre (relative to
+    /// the centre, or in world coordinates for move_near_ball_world), its direction the
+    /// client's times 2^-exp (unit-sized): its parameter t' is τ − shift, τ = t·2^exp.
+    Ray ray;
+    int exp = 0;
+    dd::DD shift;     ///< τ = shift + t' (double-double)
+    double line_err;  ///< bound on the distance between the moved origin and the ray's line
+    /// τ of the moved ray's t' (one rounding); the client's t is τ·2^-exp.
+    double tau_of(double t_moved) const;
+};
+
+/// What move_near_ball made of a ray.
+enum class MoveResult {
+    moved,         ///< `out` holds the moved ray
+    misses,        ///< the line passes outside the ball: no hit
+    not_possible,  ///< keep the ray as it is
+};
+
+/// The same line as `ray`, relative to `centre`, with its origin moved along it to two radii
+/// before the point nearest the centre, formed in double-double. `misses` where the line passes
+/// outside the ball (centre, radius); `not_possible` for a direction whose |d|² leaves double's
+/// normal range, a radius that is not positive and finite, or an origin past ~1e30 radii, where
+/// double-double cannot hold the shift finely enough.
+MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, MovedRay& out);
+
+/// move_near_ball with the moved origin in world coordinates: centre + the relative origin,
+/// rounded once per coordinate (u·|origin| more in line_err, √3 < 1.8 for the length).
+MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& ray,
+                                MovedRay& out);
+
+/// A ball around a scene, for the brute-force paths' far rays.
+struct SceneBall {
+    Vec3d centre;
+    double radius = 0.0;
+    bool usable = false;  ///< a scene with finite, non-empty bounds
+    /// Whether `ray`'s origin lies farther than kFarRadii times the larger of the radius and
+    /// the centre's largest coordinate from the centre on some axis (or is not a number there):
+    /// the brute-force paths move such a ray.
+    bool far(const Ray& ray) const;
+};
+/// 2^27 (~1.3e8): from there on the double kernels' u·distance is a few 1e-9 of the scene and
+/// grows with the distance. EmbreeAccel marks far at about the same distance in scene sizes
+/// (float_ray.h). Measured also against the centre's own coordinates: moved in world
+/// coordinates, the origin rounds by u·|centre|, which for a scene far from the world origin
+/// exceeds what the exact kernels (double-double differences for spheres) had lost on the far
+/// ray itself (the differential fuzz: a scene 1e-4 across at 1.3e7, with spheres 1e-8 across,
+/// decided wrongly when moved from 1e11 radii away). Such a scene's far rays are moved only
+/// from 2^27 times its distance from the world origin on: a frame of the scene's own, as
+/// EmbreeAccel has, would move them sooner (not done).
+inline constexpr double kFarRadii = 0x1p27;
+
+/// The ball around the scene's bounds: their centre, and half their diagonal padded by 2⁻²⁰ of
+/// itself and by u of the centre's coordinates for the rounding of both (so that every
+/// primitive lies inside).
+SceneBall scene_ball(const Scene& scene);
+
+/// A hit of the moved ray `m` as the client's ray's: t mapped back, and t_err grown by what the
+/// move can shift the crossing (the hit's object in `scene`).
+void moved_back(const Scene& scene, const MovedRay& m, Hit& h);
+
+}  // namespace raycastd::engine
