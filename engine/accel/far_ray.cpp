@@ -112,14 +112,12 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
     return MoveResult::moved;
 }
 
-
 double MovedRay::tau_of(double t_moved) const {
     const dd::DD t = dd::add(shift, dd::DD{t_moved, 0.0});
     return t.hi + t.lo;
 }
 
-MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& ray,
-                                MovedRay& out) {
+MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& ray, MovedRay& out) {
     const MoveResult r = move_near_ball(centre, radius, ray, out);
     if (r != MoveResult::moved)
         return r;

@@ -48,8 +48,7 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
 
 /// move_near_ball with the moved origin in world coordinates: centre + the relative origin,
 /// rounded once per coordinate (u·|origin| more in line_err, √3 < 1.8 for the length).
-MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& ray,
-                                MovedRay& out);
+MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& ray, MovedRay& out);
 
 /// A ball around a scene, for the brute-force paths' far rays.
 struct SceneBall {
