@@ -161,7 +161,9 @@ void moved_back(const Scene& scene, const MovedRay& m, Hit& h) {
     double shift_bound;
     if (o.kind == ObjectKind::sphere) {
         const double r = o.sphere.radius;
-        shift_bound = (delta + std::sqrt(2.0 * r * delta + delta * delta)) / dlen;
+        // √δ·√(2r + δ) rather than √(2rδ + δ²), whose δ² overflowed from ~1e185 away (t_err
+        // inf for a unit sphere seen from 1e190: a helper's review).
+        shift_bound = (delta + std::sqrt(delta) * std::sqrt(2.0 * r + delta)) / dlen;
     } else {
         const double nd =
             std::abs(dot(triangle_normal(o.mesh->triangle(h.primitive)), m.ray.direction));

@@ -40,10 +40,14 @@ enum class MoveResult {
 };
 
 /// The same line as `ray`, relative to `centre`, with its origin moved along it to two radii
-/// before the point nearest the centre, formed in double-double. `misses` where the line passes
-/// outside the ball (centre, radius); `not_possible` for a direction whose |d|² leaves double's
-/// normal range, a radius that is not positive and finite, or an origin past ~1e30 radii, where
-/// double-double cannot hold the shift finely enough.
+/// before the point nearest the centre, formed in double-double (the direction scaled to unit
+/// size by a power of two first). `misses` where the line passes outside the ball (centre,
+/// radius); `not_possible` for a zero or non-finite direction, a radius that is not positive
+/// and finite, or where the nearest point does not converge or lands beyond 4 radii. There is
+/// no limit on the distance itself: past ~1e30 radii double-double no longer holds the shift
+/// to a radius, and a ray that is moved all the same carries a line_err of that size into
+/// its t_err (honest, and useless: 3.6e119 for a ball of radius 1.7 seen from 1e150, a
+/// helper's probe).
 MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, MovedRay& out);
 
 /// move_near_ball with the moved origin in world coordinates: centre + the relative origin,
@@ -62,13 +66,13 @@ struct SceneBall {
 };
 /// 2^27 (~1.3e8): from there on the double kernels' u·distance is a few 1e-9 of the scene and
 /// grows with the distance. EmbreeAccel marks far at about the same distance in scene sizes
-/// (float_ray.h). Measured also against the centre's own coordinates: moved in world
+/// (float_ray.h). Measured also against the centre's largest coordinate: moved in world
 /// coordinates, the origin rounds by u·|centre|, which for a scene far from the world origin
-/// exceeds what the exact kernels (double-double differences for spheres) had lost on the far
-/// ray itself (the differential fuzz: a scene 1e-4 across at 1.3e7, with spheres 1e-8 across,
-/// decided wrongly when moved from 1e11 radii away). Such a scene's far rays are moved only
-/// from 2^27 times its distance from the world origin on: a frame of the scene's own, as
-/// EmbreeAccel has, would move them sooner (not done).
+/// can exceed what the triangle kernels lose on the far ray itself (the differential fuzz: a
+/// scene 1e-4 across at 1.3e7 had t 4.28 ulps from the reference when moved from 1e11 radii
+/// away). Such a scene's far rays are moved only from 2^27 times its distance from the world
+/// origin on: a frame of the scene's own, as EmbreeAccel has, would move them sooner (not
+/// done). Spheres are never answered on the moved ray (linear_accel.cpp says why).
 inline constexpr double kFarRadii = 0x1p27;
 
 /// The ball around the scene's bounds: their centre, and half their diagonal padded by 2⁻²⁰ of

@@ -34,12 +34,13 @@ bool linear_any(const Scene& scene, const Ray& ray);
 /// triangles of one mesh is listed once (the lower-numbered triangle), a tangent sphere once.
 void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vector<Hit>& out);
 
-/// linear_closest, linear_any and linear_all for rays from anywhere: a ray whose origin is
-/// `ball.far` from the scene (~1e8 scene sizes and beyond, where the kernels deciding on the
-/// far ray itself err by ~u·distance and miss triangles the line crosses) is moved along its
-/// line to just before the scene (far_ray.h, in world coordinates), answered there, and its
-/// hits mapped back (t, and t_err grown by what the move may shift a crossing). Where the move
-/// is not possible (an origin past ~1e30 scene sizes, an extreme direction length) the ray is
+/// linear_closest, linear_any and linear_all for rays from anywhere: where a ray's origin is
+/// `ball.far` from the scene (~1e8 scene sizes and beyond, where the triangle kernel deciding
+/// on the far ray itself errs by ~u·distance and misses triangles the line crosses), its
+/// meshes are answered on the ray moved along its line to just before the scene (far_ray.h, in
+/// world coordinates) and their hits mapped back (t, and t_err grown by what the move may shift
+/// a crossing); its spheres on the ray as it is (their kernel loses nothing to the distance).
+/// A line that passes outside the ball hits nothing; where the move is not possible the ray is
 /// answered as it is. QueryEngine answers its brute-force scenes through these.
 std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall& ball,
                                             const Ray& ray, bool want_normal,

@@ -34,8 +34,9 @@ TEST(Linear, FarOriginsAreMovedToTheSceneAlongTheirLine) {
     EXPECT_LE(std::abs(h->t - 0x1p60), h->t_err + 256.0);  // t's ulp at 2^60 is 256
     EXPECT_TRUE(std::isfinite(h->t_err));
     EXPECT_TRUE(linear_any_from_afar(s, ball, through));
-    // Every crossing, mapped back: the triangle at 2^60, the sphere at 2^60 + 100 ∓ 10/√3 (all
-    // three round to 2^60 in double; `closer` then orders them by object).
+    // Every crossing: the triangle's mapped back from the moved ray, at 2^60; the sphere's on
+    // the ray as given, at 2^60 + 100 ∓ 10/√3. All three round to 2^60 in double, and `closer`
+    // orders them by object.
     std::vector<Hit> all;
     linear_all_from_afar(s, ball, through, false, all);
     ASSERT_EQ(all.size(), 3u);
@@ -51,6 +52,21 @@ TEST(Linear, FarOriginsAreMovedToTheSceneAlongTheirLine) {
     EXPECT_FALSE(linear_closest_from_afar(s, ball, beside, true));
     EXPECT_FALSE(linear_any_from_afar(s, ball, beside));
     linear_all_from_afar(s, ball, beside, false, all);
+    EXPECT_TRUE(all.empty());
+    // A sphere is decided on the ray as given, not the moved one (a helper's reproducer: this
+    // line passes 1e-11 outside a sphere at (1e6, 2e6, 3e6), and moved, its origin rounded by
+    // u·3e6, it hit).
+    Scene lone;
+    lone.materials.push_back(Material{});
+    lone.objects.push_back(testing::sphere("s", {1e6, 2e6, 3e6}, 0x1.9d5ea936814edp-4, 0));
+    const Ray grazing{{-0x1.09da9a4f96456p+49, -0x1.acadc4615a6efp+49, 0x1.e6137553a5d48p+49},
+                      {0x1.8f1990f321c69p-3, 0x1.41c429ebad4dfp-2, -0x1.6cd93f3c68594p-2}};
+    const SceneBall lone_ball = scene_ball(lone);
+    ASSERT_TRUE(lone_ball.far(grazing));
+    EXPECT_FALSE(linear_closest(lone, grazing, false));
+    EXPECT_FALSE(linear_closest_from_afar(lone, lone_ball, grazing, false));
+    EXPECT_FALSE(linear_any_from_afar(lone, lone_ball, grazing));
+    linear_all_from_afar(lone, lone_ball, grazing, false, all);
     EXPECT_TRUE(all.empty());
     // A near ray is answered as it is.
     const Ray near{{256, 256, 10}, {0, 0, -1}};

@@ -137,7 +137,10 @@ Status validate_ray(const Ray& ray, std::size_t index) {
 
 std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal,
                                           const CancelToken& cancel) {
-    return linear_closest(scene, ray, want_normal, cancel.can_fire() ? &cancel : nullptr);
+    // As QueryEngine answers a brute-force scene (far rays moved for its meshes), so that
+    // explain's first hit is intersect's (a helper's review: 1,113 of 2,000 far rays differed).
+    return linear_closest_from_afar(scene, scene_ball(scene), ray, want_normal,
+                                    cancel.can_fire() ? &cancel : nullptr);
 }
 
 std::optional<Hit> closest_in_object_by_brute_force(const Scene& scene, std::uint32_t object,

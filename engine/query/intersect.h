@@ -183,8 +183,10 @@ inline bool is_valid_ray(const Ray& ray) {
 Status validate_ray(const Ray& ray, std::size_t index);
 
 /// The closest hit over `scene` as it is, without a QueryEngine: every primitive tested in
-/// double (the exact path, by brute force), or nullopt. For work on a scene that is not
-/// prepared for queries (the tutorial's worked solution, engine/explain). `cancel` is asked once
+/// double (the exact path, by brute force), or nullopt; a far ray's meshes answered on the ray
+/// moved to the scene, as QueryEngine's brute-force path does (linear_closest_from_afar). For
+/// work on a scene that is not prepared for queries (the tutorial's worked solution,
+/// engine/explain). `cancel` is asked once
 /// per 65,536 triangles; once it has fired the answer is nullopt (the caller asks fired()).
 std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal,
                                           const CancelToken& cancel = {});
