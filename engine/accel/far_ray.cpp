@@ -132,9 +132,7 @@ MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& r
 bool SceneBall::far(const Ray& ray) const {
     if (!usable)
         return false;
-    const Vec3d f = ray.origin - centre;
-    const double reach = kFarRadii * std::max(radius, max_abs(centre));
-    return !(std::abs(f.x) <= reach && std::abs(f.y) <= reach && std::abs(f.z) <= reach);
+    return !within_reach(ray.origin - centre, kFarRadii * std::max(radius, max_abs(centre)));
 }
 
 SceneBall scene_ball(const Scene& scene) {

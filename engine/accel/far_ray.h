@@ -10,6 +10,7 @@
 // the brute-force paths (linear_accel.h) move them in world coordinates (move_near_ball_world),
 // where the moved origin then rounds like an origin placed near the scene by the client.
 
+#include <cmath>
 #include <cstdint>
 
 #include "engine/math/double_double.h"
@@ -53,6 +54,13 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
 /// move_near_ball with the moved origin in world coordinates: centre + the relative origin,
 /// rounded once per coordinate (u·|origin| more in line_err, √3 < 1.8 for the length).
 MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& ray, MovedRay& out);
+
+/// Whether every coordinate of v lies within ±reach; false for a NaN anywhere (a test of each
+/// coordinate: std::max, as in max_abs, can drop a NaN). The far tests here and in
+/// embree/float_ray.h.
+inline bool within_reach(const Vec3d& v, double reach) {
+    return std::abs(v.x) <= reach && std::abs(v.y) <= reach && std::abs(v.z) <= reach;
+}
 
 /// A ball around a scene, for the brute-force paths' far rays.
 struct SceneBall {

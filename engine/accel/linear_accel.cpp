@@ -111,24 +111,40 @@ bool hits_object(const Object& o, const Ray& ray) {
     return false;
 }
 
-}  // namespace
+// A far ray's meshes are answered on the ray moved to the scene (the *_from_afar functions).
+// A sphere is decided on the client's ray: its kernel forms o − c in double-double and loses
+// nothing to the distance, while the moved origin rounds by u·|origin| (a helper's review of
+// the first version, which moved spheres too: near-tangent lines 1e-10 of a radius outside a
+// sphere at (1e6, 2e6, 3e6) were hit, and 55–67 of 400 near-tangent lines at a sphere 1e-6
+// across were decided wrongly, where the unmoved kernel had been right). Answers of both kinds
+// are compared by `closer` once mapped back, so an exact tie in the client's t goes to the
+// lower object, as everywhere.
 
-bool linear_any(const Scene& scene, const Ray& ray) {
+/// linear_any's loop, each mesh tested on `mesh_ray` (the ray itself, or it moved).
+bool any_hit(const Scene& scene, const Ray& ray, const Ray& mesh_ray) {
     for (const Object& o : scene.objects) {
-        if (hits_object(o, ray))
+        if (hits_object(o, o.kind == ObjectKind::sphere ? ray : mesh_ray))
             return true;
     }
     return false;
 }
 
-void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vector<Hit>& out) {
+/// linear_all's loop, each mesh's crossings taken on m->ray and mapped back where `m` is given.
+void all_hits(const Scene& scene, const Ray& ray, const MovedRay* m, bool want_normal,
+              std::vector<Hit>& out) {
     out.clear();
-    for (std::uint32_t i = 0; i < scene.objects.size(); ++i)
-        append_hits(scene, i, ray, want_normal, out);
-    sort_and_merge_edge_duplicates(out);
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        if (!m || scene.objects[i].kind == ObjectKind::sphere) {
+            append_hits(scene, i, ray, want_normal, out);
+            continue;
+        }
+        const std::size_t first = out.size();
+        append_hits(scene, i, m->ray, want_normal, out);
+        for (std::size_t k = first; k < out.size(); ++k)
+            moved_back(scene, *m, out[k]);
+    }
+    sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
 }
-
-namespace {
 
 /// A far ray moved to the scene for its meshes (far_ray.h, world coordinates).
 struct FarMove {
@@ -154,15 +170,15 @@ FarMove far_move(const SceneBall& ball, const Ray& ray) {
     return f;
 }
 
-// Only meshes are answered on the moved ray. A sphere is decided on the client's ray: its
-// kernel forms o − c in double-double and loses nothing to the distance, while the moved
-// origin rounds by u·|origin| (a helper's review of the first version, which moved spheres too:
-// near-tangent lines 1e-10 of a radius outside a sphere at (1e6, 2e6, 3e6) were hit, and 55–67
-// of 400 near-tangent lines at a sphere 1e-6 across were decided wrongly, where the unmoved
-// kernel had been right). Answers of both kinds are compared by `closer` once mapped back, so
-// an exact tie in the client's t goes to the lower object, as everywhere.
-
 }  // namespace
+
+bool linear_any(const Scene& scene, const Ray& ray) {
+    return any_hit(scene, ray, ray);
+}
+
+void linear_all(const Scene& scene, const Ray& ray, bool want_normal, std::vector<Hit>& out) {
+    all_hits(scene, ray, nullptr, want_normal, out);
+}
 
 std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall& ball,
                                             const Ray& ray, bool want_normal,
@@ -191,36 +207,17 @@ std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall&
 
 bool linear_any_from_afar(const Scene& scene, const SceneBall& ball, const Ray& ray) {
     const FarMove f = far_move(ball, ray);
-    if (f.misses)
-        return false;
-    if (!f.moved)
-        return linear_any(scene, ray);
-    for (const Object& o : scene.objects) {
-        if (hits_object(o, o.kind == ObjectKind::sphere ? ray : f.m.ray))
-            return true;
-    }
-    return false;
+    return !f.misses && any_hit(scene, ray, f.moved ? f.m.ray : ray);
 }
 
 void linear_all_from_afar(const Scene& scene, const SceneBall& ball, const Ray& ray,
                           bool want_normal, std::vector<Hit>& out) {
     const FarMove f = far_move(ball, ray);
-    out.clear();
-    if (f.misses)
+    if (f.misses) {
+        out.clear();
         return;
-    if (!f.moved)
-        return linear_all(scene, ray, want_normal, out);
-    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
-        if (scene.objects[i].kind == ObjectKind::sphere) {
-            append_hits(scene, i, ray, want_normal, out);
-            continue;
-        }
-        const std::size_t first = out.size();
-        append_hits(scene, i, f.m.ray, want_normal, out);
-        for (std::size_t k = first; k < out.size(); ++k)
-            moved_back(scene, f.m, out[k]);
     }
-    sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
+    all_hits(scene, ray, f.moved ? &f.m : nullptr, want_normal, out);
 }
 
 }  // namespace raycastd::engine

@@ -140,12 +140,6 @@ enum class RayFrame {
 bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, FloatRay& f,
                  RayFrame frame = RayFrame::world);
 
-/// Whether every coordinate of v lies within ±reach; false for a NaN anywhere (a test of each
-/// coordinate: std::max, as in max_abs, can drop a NaN).
-inline bool within_reach(const Vec3d& v, double reach) {
-    return std::abs(v.x) <= reach && std::abs(v.y) <= reach && std::abs(v.z) <= reach;
-}
-
 /// Whether prepare_ray_fast applies to `ray`, whose origin relative to the scene centre is org:
 /// tmin ≥ 0, an origin within 4 scene sizes of the centre on every axis (at most 8 in Embree's
 /// frame), and |d|² in [1e-12, 1e12].
