@@ -129,8 +129,10 @@ void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
     engine::moved_back(*a.scene, m, h);
 }
 
+/// `far`, with RayFrame::centre: `ray` is the far ray far->client moved to the scene
+/// (far->moved), and the answer is mapped back to the client's ray (spheres decided on it).
 std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal,
-                                 RayFrame frame = RayFrame::world) {
+                                 RayFrame frame = RayFrame::world, FarSpheres* far = nullptr) {
     RayContext c(a);
     RTCScene s = a.exact_scene();
     if (!s)
@@ -145,10 +147,10 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
             case MoveResult::misses:
                 return std::nullopt;
             case MoveResult::moved: {
-                std::optional<Hit> h = exact_closest(a, m.ray, want_normal, RayFrame::centre);
-                if (h)
-                    moved_back(a, m, *h);
-                return h;
+                FarSpheres spheres;
+                spheres.client = &ray;
+                spheres.moved = &m;
+                return exact_closest(a, m.ray, want_normal, RayFrame::centre, &spheres);
             }
             case MoveResult::not_possible:
                 break;
@@ -156,9 +158,16 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     }
     if (!exact_ray_within_padding(a, c))
         return linear_closest(*a.scene, ray, want_normal);
+    c.far_spheres = far;
     intersect1(s, c, f);  // the callback keeps the closest candidate in c.best
     if (!c.best)
         return std::nullopt;
+    if (far && far->best) {  // a sphere's, decided on the client's ray, with its normal
+        Hit h = *far->best;
+        if (!want_normal)
+            h.normal = Vec3d{};
+        return h;
+    }
     Hit h = *c.best;
     if (want_normal) {
         const Object& o = a.scene->objects[h.object];
@@ -170,10 +179,13 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     } else {
         h.normal = Vec3d{};  // a sphere's candidate came with one (sphere_hits)
     }
+    if (far)
+        moved_back(a, *far->moved, h);
     return h;
 }
 
-bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world) {
+bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world,
+               FarSpheres* far = nullptr) {
     RayContext c(a);
     RTCScene s = a.exact_scene();
     if (!s)
@@ -186,21 +198,26 @@ bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world) 
         switch (move_near_scene(a, ray, m)) {
             case MoveResult::misses:
                 return false;
-            case MoveResult::moved:
-                return exact_any(a, m.ray, RayFrame::centre);
+            case MoveResult::moved: {
+                FarSpheres spheres;
+                spheres.client = &ray;
+                spheres.moved = &m;
+                return exact_any(a, m.ray, RayFrame::centre, &spheres);
+            }
             case MoveResult::not_possible:
                 break;
         }
     }
     if (!exact_ray_within_padding(a, c))
         return linear_any(*a.scene, ray);
+    c.far_spheres = far;
     return occluded1(s, c, f);
 }
 
 /// Every hit decided in double (refined's `all` too: counting crossings must not leak through
 /// shared vertices, which Embree's float test occasionally does).
 void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>& out,
-               RayFrame frame = RayFrame::world) {
+               RayFrame frame = RayFrame::world, FarSpheres* far = nullptr) {
     RayContext c(a);
     c.collect = &out;
     RTCScene s = a.exact_scene();
@@ -216,10 +233,10 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
             case MoveResult::misses:
                 return;
             case MoveResult::moved: {
-                const std::size_t first = out.size();
-                exact_all(a, m.ray, want_normal, out, RayFrame::centre);
-                for (std::size_t i = first; i < out.size(); ++i)
-                    moved_back(a, m, out[i]);
+                FarSpheres spheres;
+                spheres.client = &ray;
+                spheres.moved = &m;
+                exact_all(a, m.ray, want_normal, out, RayFrame::centre, &spheres);
                 return;
             }
             case MoveResult::not_possible:
@@ -228,7 +245,13 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
     }
     if (!exact_ray_within_padding(a, c))
         return linear_all(*a.scene, ray, want_normal, out);
-    intersect1(s, c, f);  // every candidate goes to c.collect
+    c.far_spheres = far;
+    intersect1(s, c, f);  // every candidate goes to c.collect (a far ray's spheres' to far->hits)
+    if (far) {
+        for (Hit& h : out)
+            moved_back(a, *far->moved, h);
+        out.insert(out.end(), far->hits.begin(), far->hits.end());
+    }
     for (Hit& h : out) {
         const Object& o = a.scene->objects[h.object];
         if (want_normal && o.kind != ObjectKind::sphere) {
@@ -237,7 +260,7 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
             h.normal = Vec3d{};  // a sphere's hits came with one (sphere_hits)
         }
     }
-    sort_and_merge_edge_duplicates(out);
+    sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
 }
 
 // ---------------------------------------------------------------------------------------------

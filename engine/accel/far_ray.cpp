@@ -95,12 +95,9 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
     // client's far tmin or tmax, thousands of scene sizes at this distance, may go either way).
     bool range_ok = true;
     const auto moved = [&](double t) {
-        if (std::isinf(t))
-            return t;
         const double tau = std::ldexp(t, m.exp);  // exact unless it leaves double's range
-        range_ok = range_ok && std::isfinite(tau) && (tau != 0.0 || t == 0.0);
-        const dd::DD r = dd::sub(dd::DD{tau, 0.0}, shift);
-        return r.hi + r.lo;
+        range_ok = range_ok && (std::isinf(t) || (std::isfinite(tau) && (tau != 0.0 || t == 0.0)));
+        return m.moved_t(t);
     };
     m.ray.tmin = moved(ray.tmin);
     m.ray.tmax = moved(ray.tmax);
@@ -110,6 +107,13 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
     if (!std::isfinite(m.line_err) || std::isnan(m.ray.tmin) || std::isnan(m.ray.tmax))
         return MoveResult::not_possible;
     return MoveResult::moved;
+}
+
+double MovedRay::moved_t(double t) const {
+    if (std::isinf(t))
+        return t;
+    const dd::DD r = dd::sub(dd::DD{std::ldexp(t, exp), 0.0}, shift);
+    return r.hi + r.lo;
 }
 
 double MovedRay::tau_of(double t_moved) const {

@@ -31,6 +31,9 @@ struct MovedRay {
     double line_err;  ///< bound on the distance between the moved origin and the ray's line
     /// τ of the moved ray's t' (one rounding); the client's t is τ·2^-exp.
     double tau_of(double t_moved) const;
+    /// The moved ray's t' of the client's t: τ − shift, rounded once (±inf stay; a τ that
+    /// leaves double's range is ±inf or 0).
+    double moved_t(double t) const;
 };
 
 /// What move_near_ball made of a ray.

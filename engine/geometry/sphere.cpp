@@ -149,6 +149,51 @@ std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray
     return std::nullopt;
 }
 
+/// Past 2²⁶ radii from the centre the components of f × d are formed by cross_far. Below, the
+/// double-double products' error, a few u² of |f|·|d|, is at most 2⁻⁷⁹ of r·|d|, the size of
+/// f × d near tangency: far below any decision it takes.
+constexpr double kFarRadii = 0x1p26;
+
+/// f₁·d₂ − f₂·d₁ for f₁, f₂ in double-double (the exact f = o − c), to a few u² of the result
+/// however far the origin. Formed by mul(), the product's low part rounds by u·|f.lo·d| ≈
+/// u²·|f|·|d|, which from ~1e20 radii away is a visible part of f × d near tangency, where it
+/// is ~r·|d|: a line passing 1.2e-7 of a radius outside a sphere 2e-6 across, from ~1e21 away,
+/// hit it. Here the eight parts of the two products (each exact by TwoProduct) are summed
+/// by SumK with K = 3 (Ogita, Rump & Oishi 2005, Algorithm 4.8: two passes of the error-free
+/// VecSum, then the sum of the rest), whose error is within γ³₁₄ of the parts' magnitudes
+/// (~2¹³·u³·|f|·|d|) plus a rounding of the result (kept here as double-double).
+DD cross_far(const DD& f1, double d2, const DD& f2, double d1) {
+    const DD a = two_prod(f1.hi, d2), b = two_prod(f1.lo, d2);
+    const DD c = two_prod(f2.hi, -d1), e = two_prod(f2.lo, -d1);
+    double p[8] = {a.hi, c.hi, a.lo, c.lo, b.hi, e.hi, b.lo, e.lo};
+    for (int pass = 0; pass < 2; ++pass) {
+        for (int i = 1; i < 8; ++i) {
+            const DD t = two_sum(p[i], p[i - 1]);
+            p[i] = t.hi;
+            p[i - 1] = t.lo;
+        }
+    }
+    double rest = 0.0;
+    for (int i = 0; i < 7; ++i)
+        rest += p[i];
+    return two_sum(p[7], rest);
+}
+
+/// f × d in double-double for f = o − c given exactly: by mul() near the sphere, by cross_far
+/// from kFarRadii on.
+void cross_dd(const DD& fx, const DD& fy, const DD& fz, const Vec3d& d, double radius, DD& cx,
+              DD& cy, DD& cz) {
+    if (std::max({std::abs(fx.hi), std::abs(fy.hi), std::abs(fz.hi)}) > kFarRadii * radius) {
+        cx = cross_far(fy, d.z, fz, d.y);
+        cy = cross_far(fz, d.x, fx, d.z);
+        cz = cross_far(fx, d.y, fy, d.x);
+        return;
+    }
+    cx = add(mul(fy, d.z), neg(mul(fz, d.y)));
+    cy = add(mul(fz, d.x), neg(mul(fx, d.z)));
+    cz = add(mul(fx, d.y), neg(mul(fy, d.x)));
+}
+
 }  // namespace
 
 RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
@@ -193,9 +238,8 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
     // Δ/4 = β² − a·γ = a·r² − |f × d|² (Lagrange's identity; the RTG 2019 form a·(r² − |l|²)
     // with |l| = |f × d|/√a): no difference of two huge squares, and in double-double the
     // cancellation near tangency costs nothing visible.
-    const DD cx = add(mul(fy, d.z), neg(mul(fz, d.y)));
-    const DD cy = add(mul(fz, d.x), neg(mul(fx, d.z)));
-    const DD cz = add(mul(fx, d.y), neg(mul(fy, d.x)));
+    DD cx, cy, cz;
+    cross_dd(fx, fy, fz, d, s.radius, cx, cy, cz);
     const DD fxd2 = add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz));
     const DD r2 = two_prod(s.radius, s.radius);
     const DD disc = add(mul(a, r2), neg(fxd2));
@@ -245,17 +289,73 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
     return with_roots(out, t0, t1);
 }
 
-void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
+namespace {
+
+/// p − c at the root t of a ray from more than kNormalFarRadii away: the closest approach
+/// l = (d × (f × d))/a plus or minus the half-chord h·d (h = √(a·r² − |f × d|²)/a; RTG 2019
+/// eq. 7.5's terms), in double-double with f × d by cross_dd, rather than f + t·d: t is rounded
+/// by u·|f|/|d|, which moves the point along the ray by u·|f|, and from ~1e16 radii away that
+/// is the whole sphere (the normal of a line hitting a sphere 2e-6 across from 2^60 away came
+/// out (0, 0, 0), and front_face false). Which sign: t before the closest approach −β/a is the near
+/// root, unless `side` says which (−1 near, +1 far): from that far both roots of a near-tangent
+/// line round to one t. Its error is a few u of r, plus cross_far's. nullopt where that form's
+/// products leave double's range (then the plain form).
+std::optional<Vec3d> point_from_closest_approach(const Sphere& s, const Ray& ray, double t,
+                                                 int side) {
+    const Vec3d& d = ray.direction;
+    const DD fx = two_sum(ray.origin.x, -s.center.x);
+    const DD fy = two_sum(ray.origin.y, -s.center.y);
+    const DD fz = two_sum(ray.origin.z, -s.center.z);
+    DD cx, cy, cz;
+    cross_dd(fx, fy, fz, d, s.radius, cx, cy, cz);
+    const DD a = add(add(two_prod(d.x, d.x), two_prod(d.y, d.y)), two_prod(d.z, d.z));
+    const DD beta = add(add(mul(fx, d.x), mul(fy, d.y)), mul(fz, d.z));
+    // d × (f × d) = a·f − β·d = a·l.
+    const Vec3d l{div(add(mul(cz, d.y), neg(mul(cy, d.z))), a),
+                  div(add(mul(cx, d.z), neg(mul(cz, d.x))), a),
+                  div(add(mul(cy, d.x), neg(mul(cx, d.y))), a)};
+    const DD disc = add(mul(a, two_prod(s.radius, s.radius)),
+                        neg(add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz))));
+    const double h = disc.hi > 0.0 ? div(sqrt_dd(disc), a) : 0.0;
+    const double tc = div(neg(beta), a);
+    const bool near = side != 0 ? side < 0 : t <= tc;
+    const Vec3d pc = near ? l - d * h : l + d * h;
+    if (!is_finite(pc) || !(std::abs(length(pc) - s.radius) <= 0x1p-10 * s.radius))
+        return std::nullopt;
+    return pc;
+}
+
+/// From 2²⁰ radii away the plain form's rounding, u·|f| ≈ 2⁻³³ of the radius, would start to
+/// show in the normal's digits.
+constexpr double kNormalFarRadii = 0x1p20;
+
+/// sphere_normal at the root on `side` (−1 the near one, +1 the far one, 0 unknown: told by t).
+void sphere_normal_at(const Sphere& s, const Ray& ray, double t, int side, Hit& hit) {
     // (p − c)/r is exact for the points a reader checks by hand (the tutorial's (0, −1, −√3)/2
     // gives −0.5, not −0.5000000000000001); when rounding in p leaves it visibly off unit
     // length (far from the origin), normalise instead.
-    const Vec3d pc = ray.origin - s.center + ray.direction * t;
+    Vec3d pc = ray.origin - s.center + ray.direction * t;
+    if (!(max_abs(ray.origin - s.center) <= kNormalFarRadii * s.radius)) {
+        if (const std::optional<Vec3d> p = point_from_closest_approach(s, ray, t, side))
+            pc = *p;
+    }
     Vec3d n = pc / s.radius;
     const double len2 = dot(n, n);
     if (std::abs(len2 - 1.0) > 8.0 * kDoubleUnitRoundoff)
         n = normalize(pc);
     hit.normal = n;
     hit.front_face = dot(ray.direction, hit.normal) < 0.0;
+}
+
+/// The side of root i of `r` for sphere_normal_at.
+int root_side(const SphereRoots& r, int i) {
+    return r.count < 2 ? 0 : (i == 0 ? -1 : 1);
+}
+
+}  // namespace
+
+void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
+    sphere_normal_at(s, ray, t, 0, hit);
 }
 
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal) {
@@ -272,7 +372,7 @@ std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const Sph
     hit.t_err = r.t_err;
     hit.primitive = 0;
     if (want_normal)
-        sphere_normal(s, ray, hit.t, hit);
+        sphere_normal_at(s, ray, hit.t, root_side(r, i), hit);
     return hit;
 }
 
@@ -337,7 +437,7 @@ int hits_in_range(const Sphere& s, const Ray& ray, const SphereRoots& r, Hit out
         h.t = r.t[k];
         h.t_err = r.t_err;
         h.primitive = 0;
-        sphere_normal(s, ray, h.t, h);
+        sphere_normal_at(s, ray, h.t, root_side(r, k), h);
     }
     return n;
 }

@@ -4,7 +4,9 @@
 // Solves |o + t·d − c|² = r², i.e. a·t² + 2β·t + γ = 0 with f = o − c, a = d·d, β = f·d and
 // γ = f·f − r², following Haines, Günther & Akenine-Möller, "Precision Improvements for
 // Ray/Sphere Intersection" (Ray Tracing Gems, ch. 7, 2019), evaluated in double-double:
-//   * f = o − c is formed exactly (Knuth's TwoSum), so a far origin costs nothing;
+//   * f = o − c is formed exactly (Knuth's TwoSum), and from 2²⁶ radii away f × d from the
+//     exact parts of its products (SumK, Ogita, Rump & Oishi 2005), so a far origin costs
+//     nothing;
 //   * the discriminant is a·r² − |f × d|² (= β² − a·γ by Lagrange's identity; RTG eq. 7.5
 //     writes it a·(r² − |l|²) with l the closest approach), so no difference of two huge
 //     squares is formed, and in double-double (TwoProduct with std::fma; Dekker 1971, Ogita,

@@ -264,6 +264,44 @@ TEST(Sphere, NearTangentRootsToAnUlp) {
     EXPECT_NEAR(r.t[1], static_cast<double>(tc + h), 2 * ulp(10.0));
 }
 
+// Lines from 2^40 to 2^73 away, passing 10^-9 to 10^-12 of a radius inside or outside a sphere
+// 2e-6 across. Each passes exactly through the world origin (o = −2^K·d: a power of two times
+// d), so its distance from the centre is |c × d|/|d|, which long double gives to ~1e-18 of the
+// radius. Until cross_far the double-double cross product rounded by u²·|f|·|d|, and from
+// ~2^63 away most of these were decided wrongly (a probe: 808 of 2,000 at 1e-9 of tangency
+// from 2^63, 982 from 2^68); the normal, formed from the rounded t, was (0, 0, 0) from ~2^52 on.
+TEST(Sphere, FarNearTangentLinesAreDecidedExactly) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1), exponent(9, 12), distance(40, 73);
+    const double r = 1e-6;
+    for (int j = 0; j < 400; ++j) {
+        Vec3d c;
+        do {
+            c = Vec3d{u(rng), u(rng), u(rng)} * 4e-5;
+        } while (length(c) < 8e-6);
+        // The line through the origin and c + ρ0·e (e ⟂ c) passes at r·(1 ± 10^-x) from c.
+        const Vec3d e = normalize(cross(c, Vec3d{u(rng), u(rng), u(rng)}));
+        const double want = r * (1.0 + (j % 2 ? 1.0 : -1.0) * std::pow(10.0, -exponent(rng)));
+        const Vec3d d = normalize(c + e * (want * length(c) / std::sqrt(dot(c, c) - want * want)));
+        const Ray ray{-d * std::ldexp(1.0, static_cast<int>(distance(rng))), d};
+        const long double cx = c.x, cy = c.y, cz = c.z, dx = d.x, dy = d.y, dz = d.z;
+        const long double x = cy * dz - cz * dy, y = cz * dx - cx * dz, z = cx * dy - cy * dx;
+        const long double dist = std::sqrt((x * x + y * y + z * z) / (dx * dx + dy * dy + dz * dz));
+        SCOPED_TRACE(::testing::Message() << "line " << j << " at 2^" << std::ilogb(ray.origin.x)
+                                          << ": distance/r − 1 = " << double(dist / r - 1));
+        Hit hits[2];
+        const int n = sphere_hits(Sphere{c, r}, ray, hits);
+        ASSERT_EQ(n > 0, dist < r);
+        const double nd =
+            std::sqrt(std::max(0.0, 1.0 - static_cast<double>(dist * dist / (r * r))));
+        for (int k = 0; k < n; ++k) {
+            EXPECT_EQ(hits[k].front_face, k == 0);
+            EXPECT_NEAR(length(hits[k].normal), 1.0, 1e-15);
+            EXPECT_NEAR(dot(hits[k].normal, d), k == 0 ? -nd : nd, 1e-9);
+        }
+    }
+}
+
 TEST(Sphere, ErrorBoundCoversFarSphere) {
     SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
     EXPECT_GT(r.t_err, 0.0);

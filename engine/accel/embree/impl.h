@@ -15,6 +15,7 @@
 
 #include "engine/accel/embree/device.h"
 #include "engine/accel/embree/user_geometry.h"
+#include "engine/accel/far_ray.h"
 #include "engine/scene/scene.h"
 
 namespace raycastd::engine::embree {
@@ -78,6 +79,23 @@ struct Impl {
     }
 };
 
+/// A far ray moved to the scene (RayContext::frame), whose spheres the exact BVH's callbacks
+/// decide on the client's ray instead, as the brute-force paths do (linear_accel.cpp): the
+/// sphere kernel forms o − c in double-double and loses nothing to the distance, while the
+/// moved origin, rounded, lies up to MovedRay::line_err off the line, which decided near-tangent
+/// lines wrongly (a helper's probe: 63–73 of 400 lines at a sphere 1e-6 across, from 1e10 to
+/// 1e22 away, where the unmoved kernel is right). The traversal still culls by the moved ray
+/// (it lies within line_err, far below the boxes' padding, of the client's line), and a
+/// sphere's hit competes there at its t on the moved ray (user_geometry.cpp).
+struct FarSpheres {
+    const Ray* client = nullptr;
+    const MovedRay* moved = nullptr;
+    /// closest: RayContext::best as decided on `client`, when it is a sphere's.
+    std::optional<Hit> best;
+    /// all: every sphere hit, decided on `client`.
+    std::vector<Hit> hits;
+};
+
 /// The context handed through Embree to our callbacks (Embree's documented way to pass per-ray
 /// data: a struct that starts with RTCIntersectContext).
 struct RayContext {
@@ -107,6 +125,8 @@ struct RayContext {
     Triangle in_frame(const Triangle& t) const {
         return frame ? Triangle{t.a - *frame, t.b - *frame, t.c - *frame} : t;
     }
+    /// Set with `frame` on the exact BVH: the spheres are decided on the client's ray.
+    FarSpheres* far_spheres = nullptr;
     /// Closest so far: the exact path's, or on `native` the first by `closer` of the double
     /// hits Embree offered within its float tfar (a sphere's, or a fat triangle's from the hit
     /// filter; keep_if_closer in float_ray.h).

@@ -10,7 +10,9 @@ namespace raycastd::engine::embree {
 namespace {
 
 /// Candidates of one primitive decided in double: the sphere roots in range, or the triangle
-/// hit of the watertight test. `emit` returns false to stop.
+/// hit of the watertight test. `emit(h, client)` returns false to stop; `client` is null, or for
+/// a sphere of a far ray's FarSpheres the hit on the client's ray, `h` then being it at its t on
+/// the moved ray.
 /// In a context with a frame (a far ray moved to the scene, given relative to the centre) each
 /// primitive is translated by it first: the same difference the kernels form, a − o, up to the
 /// rounding of a − centre (exact where they lie within a factor of two, Sterbenz).
@@ -19,12 +21,33 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     const Object& o = c.accel->scene->objects[object];
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
-        const Sphere s = c.in_frame(o.sphere);
         Hit hits[2];
+        if (const FarSpheres* far = c.far_spheres) {
+            // Decided on the client's ray; ordered among the other candidates by the roots on
+            // the moved ray, whose t' keep the sphere's place along the line to a few u of the
+            // scene (the client's t, rounded at ~u·distance, would not: a sphere in front of a
+            // mesh, both 1e18 away, came after it). Where the two kernels disagree on the count
+            // (a line within the move's error of tangency, or of a range's end), the client's
+            // roots are carried over to the moved ray (MovedRay::moved_t).
+            const int n = sphere_hits(o.sphere, *far->client, hits);
+            if (n == 0)
+                return;
+            Hit on_moved[2];
+            const bool same = sphere_hits(c.in_frame(o.sphere), ray, on_moved) == n;
+            for (int k = 0; k < n; ++k) {
+                hits[k].object = object;
+                Hit moved = hits[k];
+                moved.t = same ? on_moved[k].t : far->moved->moved_t(hits[k].t);
+                if (!emit(moved, &hits[k]))
+                    return;
+            }
+            return;
+        }
+        const Sphere s = c.in_frame(o.sphere);
         const int n = c.fast ? sphere_hits_fast(s, ray, hits) : sphere_hits(s, ray, hits);
         for (int k = 0; k < n; ++k) {
             hits[k].object = object;
-            if (!emit(hits[k]))
+            if (!emit(hits[k], nullptr))
                 return;
         }
         return;
@@ -32,7 +55,7 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     if (auto h = intersect_triangle(c.in_frame(o.mesh->triangle(prim)), ray, false)) {
         h->object = object;
         h->primitive = prim;
-        emit(*h);
+        emit(*h, nullptr);
     }
 }
 
@@ -69,14 +92,19 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     RayContext& c = ctx_of(args->context);
     auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
-    double_candidates(c, g->object, args->primID, [&](const Hit& h) {
+    double_candidates(c, g->object, args->primID, [&](const Hit& h, const Hit* client) {
         if (c.collect) {
-            c.collect->push_back(h);
+            if (client)
+                c.far_spheres->hits.push_back(*client);
+            else
+                c.collect->push_back(h);
             return true;
         }
         if (c.exact) {
             if (!c.best || closer(h, *c.best)) {
                 c.best = h;
+                if (c.far_spheres)
+                    c.far_spheres->best = client ? std::optional<Hit>(*client) : std::nullopt;
                 rh->ray.tfar = std::min(rh->ray.tfar, tfar_for(c, h.t));
                 rh->hit.geomID = h.object;
                 rh->hit.primID = h.primitive;
@@ -105,7 +133,7 @@ void user_occluded(const RTCOccludedFunctionNArguments* args) {
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     RayContext& c = ctx_of(args->context);
     auto* ray = reinterpret_cast<RTCRay*>(args->ray);
-    double_candidates(c, g->object, args->primID, [&](const Hit&) {
+    double_candidates(c, g->object, args->primID, [&](const Hit&, const Hit*) {
         ray->tfar = -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
         return false;
     });
