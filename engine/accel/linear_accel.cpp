@@ -116,9 +116,9 @@ bool hits_object(const Object& o, const Ray& ray) {
 // nothing to the distance, while the moved origin rounds by u·|origin| (a helper's review of
 // the first version, which moved spheres too: near-tangent lines 1e-10 of a radius outside a
 // sphere at (1e6, 2e6, 3e6) were hit, and 55–67 of 400 near-tangent lines at a sphere 1e-6
-// across were decided wrongly, where the unmoved kernel had been right). Answers of both kinds
-// are compared by `closer` once mapped back, so an exact tie in the client's t goes to the
-// lower object, as everywhere.
+// across were decided wrongly, where the unmoved kernel had been right). `all` compares the
+// crossings of both kinds by `closer` once mapped back, so an exact tie in the client's t goes
+// to the lower object, as everywhere; `closest` by their places on the moved ray (below).
 
 /// linear_any's loop, each mesh tested on `mesh_ray` (the ray itself, or it moved).
 bool any_hit(const Scene& scene, const Ray& ray, const Ray& mesh_ray) {
@@ -188,7 +188,13 @@ std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall&
         return std::nullopt;
     if (!f.moved)
         return linear_closest(scene, ray, want_normal, cancel);
+    // Objects are ordered by their first crossing's t on the moved ray, not by the client's t:
+    // from far enough every crossing's t rounds to one double (its ulp is 128 from 1e18 away),
+    // and `closer` then gave the hit to the lowest object, in front or not. A sphere, decided on
+    // the client's ray, is placed by its root on the moved ray (or, where that kernel misses a
+    // line within the move's error of tangency, by the client's root carried over).
     std::optional<Hit> best;
+    double best_key = 0.0;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const bool sphere = scene.objects[i].kind == ObjectKind::sphere;
         std::optional<Hit> h =
@@ -197,10 +203,18 @@ std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall&
             return std::nullopt;
         if (!h)
             continue;
-        if (!sphere)
+        double key = h->t;
+        if (sphere) {
+            const std::optional<Hit> on_moved =
+                intersect_sphere(scene.objects[i].sphere, f.m.ray, false);
+            key = on_moved ? on_moved->t : f.m.moved_t(h->t);
+        } else {
             moved_back(scene, f.m, *h);
-        if (!best || closer(*h, *best))
+        }
+        if (!best || key < best_key) {  // objects come in order: a tie keeps the lower one
             best = h;
+            best_key = key;
+        }
     }
     return best;
 }

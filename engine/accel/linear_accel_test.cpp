@@ -68,6 +68,19 @@ TEST(Linear, FarOriginsAreMovedToTheSceneAlongTheirLine) {
     EXPECT_FALSE(linear_any_from_afar(lone, lone_ball, grazing));
     linear_all_from_afar(lone, lone_ball, grazing, false, all);
     EXPECT_TRUE(all.empty());
+    // A sphere 36 units in front of the triangle along the same line: from 2^60 away both t
+    // round to 2^60, and ordered by the client's t the tie went to the lower object, the
+    // triangle behind it. Ordered by their places on the moved ray, the sphere comes first, as
+    // for a near ray on the same line.
+    Scene front = s;
+    front.objects[1] = testing::sphere("ball", {286, 286, 30}, 10, 0);
+    const auto first = linear_closest_from_afar(front, scene_ball(front), through, true);
+    ASSERT_TRUE(first);
+    EXPECT_EQ(first->object, 1u);
+    EXPECT_TRUE(first->front_face);
+    EXPECT_LE(std::abs(first->t - (0x1p60 - 30 - 10 / std::sqrt(3.0))), first->t_err + 256.0);
+    const Ray on_the_line{{1256, 1256, 1000}, {-1, -1, -1}};
+    EXPECT_EQ(linear_closest(front, on_the_line, false)->object, 1u);
     // A near ray is answered as it is.
     const Ray near{{256, 256, 10}, {0, 0, -1}};
     EXPECT_FALSE(ball.far(near));
