@@ -103,12 +103,11 @@ void Impl::build_fast() const {
 namespace {
 
 /// The sphere hit the native traversal's callback decided in double and kept, with its normal.
-Hit kept_sphere_hit(const Object& o, const Ray& ray, const std::optional<Hit>& sphere_hit,
-                    bool want_normal) {
+/// (sphere_hits' normal, which knows which root it is: recomputed from t alone, a root just
+/// past tmin whose neighbour rounds next to it could take the other side: a helper's review.)
+Hit kept_sphere_hit(const std::optional<Hit>& sphere_hit, bool want_normal) {
     Hit h = *sphere_hit;
-    if (want_normal)
-        sphere_normal(o.sphere, ray, h.t, h);
-    else
+    if (!want_normal)
         h.normal = Vec3d{};  // sphere_hits fills it for front_face: not asked, not answered
     return h;
 }
@@ -156,8 +155,10 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
                 break;
         }
     }
+    // (A moved ray starts two scene radii away: always within the padding. Should it not be, the
+    // scan answers the client's ray, not the moved one, which is relative to the centre.)
     if (!exact_ray_within_padding(a, c))
-        return linear_closest(*a.scene, ray, want_normal);
+        return linear_closest(*a.scene, far ? *far->client : ray, want_normal);
     c.far_spheres = far;
     intersect1(s, c, f);  // the callback keeps the closest candidate in c.best
     if (!c.best)
@@ -171,11 +172,8 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     Hit h = *c.best;
     if (want_normal) {
         const Object& o = a.scene->objects[h.object];
-        if (o.kind == ObjectKind::sphere) {
-            sphere_normal(c.in_frame(o.sphere), ray, h.t, h);
-        } else {
+        if (o.kind != ObjectKind::sphere)  // a sphere's came with the candidate (sphere_hits)
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
-        }
     } else {
         h.normal = Vec3d{};  // a sphere's candidate came with one (sphere_hits)
     }
@@ -209,7 +207,7 @@ bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world,
         }
     }
     if (!exact_ray_within_padding(a, c))
-        return linear_any(*a.scene, ray);
+        return linear_any(*a.scene, far ? *far->client : ray);
     c.far_spheres = far;
     return occluded1(s, c, f);
 }
@@ -244,7 +242,7 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
         }
     }
     if (!exact_ray_within_padding(a, c))
-        return linear_all(*a.scene, ray, want_normal, out);
+        return linear_all(*a.scene, far ? *far->client : ray, want_normal, out);
     c.far_spheres = far;
     intersect1(s, c, f);  // every candidate goes to c.collect (a far ray's spheres' to far->hits)
     if (far) {
@@ -275,7 +273,7 @@ std::optional<Hit> fast_answer(const Impl& a, const Ray& ray, const RayContext& 
         return std::nullopt;
     const Object& o = a.scene->objects[nh.geom];
     if (o.kind == ObjectKind::sphere)
-        return kept_sphere_hit(o, ray, c.best, want_normal);
+        return kept_sphere_hit(c.best, want_normal);
     Hit h;
     fast_hit(a, ray, c.shift, c.len, nh, want_normal, h);
     return h;
@@ -450,7 +448,7 @@ std::optional<Hit> refined_answer(const Impl& a, const Ray& ray, const RayContex
     if (c.best) {
         const Object& o = a.scene->objects[c.best->object];
         if (o.kind == ObjectKind::sphere && !rejected_before_best(c))
-            return kept_sphere_hit(o, ray, c.best, want_normal);
+            return kept_sphere_hit(c.best, want_normal);
         if (o.kind != ObjectKind::sphere && hit_is_certain(a, c)) {
             Hit h = *c.best;
             if (want_normal)

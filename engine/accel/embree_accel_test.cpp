@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/accel/far_ray.h"
 #include "engine/accel/linear_accel.h"
+#include "engine/accel/scene_scan.h"
 #include "engine/geometry/triangle.h"
 #include "engine/testing/scenes.h"
 
@@ -405,6 +407,91 @@ TEST(EmbreeAccel, FarRaysDecideSpheresOnTheClientsRay) {
         }
     }
     EXPECT_EQ(inside, 200);  // half the lines pass inside, as constructed
+}
+
+// A far ray's sphere keeps its place before a mesh just behind it where the moved ray's kernel
+// and the client's disagree on the crossing (a line within the move's error of tangency): it
+// had been placed at the client's root carried over to the moved ray, rounded by ~u·distance,
+// and came after a cube 3e-3 beyond it (a helper's review: 64 of 1,000 lines from 2^50–2^56
+// away at exact and refined, 81 of 1,000 in the brute-force scan's own far path). Each line
+// passes exactly through the world origin, near-tangent to the sphere (10^-9 to 10^-12 of its
+// radius); the near ray on the same line starts 16 units away and decides as the far one must.
+TEST(EmbreeAccel, FarSpheresKeepTheirPlaceBeforeAMesh) {
+    std::mt19937_64 rng(91);
+    std::uniform_real_distribution<double> u(-1, 1), exponent(9, 12), distance(50, 57);
+    constexpr double r = 1e-6;
+    int sphere_first = 0;
+    for (int j = 0; j < 200; ++j) {
+        // A few units from the origin, where c − centre rounds in the moved ray's frame.
+        Vec3d c;
+        do {
+            c = Vec3d{u(rng), u(rng), u(rng)} * 4.0;
+        } while (length(c) < 1.0);
+        const Vec3d e = normalize(cross(c, Vec3d{u(rng), u(rng), u(rng)}));
+        const double want = r * (1.0 + (j % 2 ? 1.0 : -1.0) * std::pow(10.0, -exponent(rng)));
+        const Vec3d d = normalize(c + e * (want * length(c) / std::sqrt(dot(c, c) - want * want)));
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects.push_back(testing::sphere("small", c, r, 0));
+        Object cube = testing::cube_object(-1e-3, 1e-3);
+        auto mesh = std::make_shared<TriangleMesh>(*cube.mesh);
+        for (Vec3d& p : mesh->positions)
+            p = p + c + d * 3e-3;
+        cube.mesh = mesh;
+        s.objects.push_back(cube);
+        s.objects.push_back(testing::sphere("big", {5, -3, 2}, 1.0, 0));
+        for (int i = 0; i < 4; ++i)
+            s.objects.push_back(testing::sphere("filler", {-4.0 + i, 4, -4}, 0.01, 0));
+        Built b = build(s);
+        ASSERT_TRUE(b.accel);
+        const Ray near{-d * 16.0, d};
+        const Ray far{-d * std::ldexp(1.0, static_cast<int>(distance(rng))), d};
+        SCOPED_TRACE(::testing::Message()
+                     << "line " << j << " from 2^" << std::ilogb(length(far.origin)));
+        const auto reference = b.accel->closest(near, Precision::exact, false);
+        ASSERT_TRUE(reference);  // the cube, at least
+        sphere_first += reference->object == 0;
+        for (Precision p : {Precision::refined, Precision::exact}) {
+            const auto h = b.accel->closest(far, p, false);
+            ASSERT_TRUE(h) << to_string(p);
+            EXPECT_EQ(h->object, reference->object) << to_string(p);
+        }
+        const auto scanned = linear_closest_from_afar(*b.scene, scene_ball(*b.scene), far, false);
+        ASSERT_TRUE(scanned);
+        EXPECT_EQ(scanned->object, linear_closest(*b.scene, near, false)->object);
+    }
+    EXPECT_GT(sphere_first, 80);  // half the lines cross the sphere
+}
+
+// Which root a sphere's normal belongs to, through every path that answers it (the kernels'
+// hits, EmbreeAccel at refined and exact, the renderer's scan): with tmin between two roots that
+// round to neighbouring doubles 2^40 away, the exit's normal and front_face, not the entry's.
+TEST(EmbreeAccel, SphereNormalsKnowWhichRootTheyAreAt) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::sphere("unit", {0, 0, 0}, 1.0, 0));
+    for (int i = 0; i < 16; ++i)
+        s.objects.push_back(testing::sphere("filler", {-8.0 + i, 20, 0}, 0.1, 0));
+    Built b = build(s);
+    ASSERT_TRUE(b.accel);
+    Ray ray{{-0x1p40, std::sqrt(1 - 1e-8), 0}, {1, 0, 0}};
+    ray.tmin = 0x1p40;  // the second root
+    const auto ref = linear_closest(*b.scene, ray, true);
+    ASSERT_TRUE(ref);
+    EXPECT_FALSE(ref->front_face);
+    EXPECT_GT(ref->normal.x, 0.0);
+    // (fast's plain-double roots may put both in range: a decision within its float bands.)
+    for (Precision p : {Precision::refined, Precision::exact}) {
+        const auto h = b.accel->closest(ray, p, true);
+        ASSERT_TRUE(h) << to_string(p);
+        EXPECT_EQ(h->front_face, ref->front_face) << to_string(p);
+        EXPECT_EQ(h->normal, ref->normal) << to_string(p);
+    }
+    const SceneScan scan(*b.scene, /*fast=*/false);
+    Hit scanned;
+    ASSERT_TRUE(scan.closest(ray, true, scanned));
+    EXPECT_EQ(scanned.front_face, ref->front_face);
+    EXPECT_EQ(scanned.normal, ref->normal);
 }
 
 TEST(EmbreeAccel, AllAndCountAgreeWithLinearScan) {

@@ -303,6 +303,8 @@ struct Best {
     double t, t_err = 0.0, u = 0.0, v = 0.0;
     std::uint32_t object = kInvalidId, primitive = kInvalidId;
     bool front_face = true, on_edge = false;
+    /// A sphere's root: root_side (its normal is formed for the winner only, after the scan).
+    int side = 0;
 
     /// `closer(h, *this)` for a hit with h.t = t, of `object`, primitive `primitive`.
     bool beaten_by(double ht, std::uint32_t hobject, std::uint32_t hprimitive) const {
@@ -377,6 +379,7 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
                 best.primitive = 0;
                 best.front_face = true;
                 best.on_edge = false;
+                best.side = root_side(roots_of, k);
                 winner = &p;
             }
             continue;
@@ -408,7 +411,7 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
     best.put(out);
     if (want_normal) {
         if (winner->is_sphere)
-            sphere_normal(winner->sphere, ray_in, out.t, out);
+            sphere_normal(winner->sphere, ray_in, out.t, best.side, out);
         else
             out.normal = winner->normal;
     }

@@ -137,6 +137,10 @@ std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray
         double k = power_to_unit(s.radius);
         if (!(L * k <= 0x1p500))
             k = std::ldexp(1.0, 499 - std::ilogb(L));
+        // At most 2¹⁰⁰⁰: for a radius below 2⁻¹⁰²³ the power above is 2¹⁰²⁴ or more, which is
+        // inf, and the scaled call recursed until the stack ran out (r = 2⁻¹⁰⁷⁴ with an origin
+        // as small: a helper's review). From 2¹⁰⁰⁰ the radius is 2⁻⁷⁴ or more: not tiny.
+        k = std::min(k, 0x1p1000);
         if (!(s.radius * k >= 0x1p-400))
             return SphereRoots{};
         return times(sphere_roots(sphere_times(s, k), origin_times(ray, k)), 1.0 / k);
@@ -156,13 +160,16 @@ constexpr double kFarRadii = 0x1p26;
 
 /// f₁·d₂ − f₂·d₁ for f₁, f₂ in double-double (the exact f = o − c), to a few u² of the result
 /// however far the origin. Formed by mul(), the product's low part rounds by u·|f.lo·d| ≈
-/// u²·|f|·|d|, which from ~1e20 radii away is a visible part of f × d near tangency, where it
-/// is ~r·|d|: a line passing 1.2e-7 of a radius outside a sphere 2e-6 across, from ~1e21 away,
-/// hit it. Here the eight parts of the two products (each exact by TwoProduct) are summed
-/// by SumK with K = 3 (Ogita, Rump & Oishi 2005, Algorithm 4.8: two passes of the error-free
-/// VecSum, then the sum of the rest), whose error is within γ³₁₄ of the parts' magnitudes
+/// u²·|f|·|d|, which relative to f × d near tangency, ~r·|d|, is u²·|f|/r: a line passing
+/// 1.2e-7 of a radius outside a sphere 2e-6 across, from ~1e21 away (~1e27 radii), hit it. Here the
+/// eight parts of the two products (each exact by TwoProduct) are summed by SumK with K = 3 (Ogita,
+/// Rump & Oishi 2005, Algorithm 4.8: two passes of the error-free VecSum, then the sum of the
+/// rest), whose error is within γ³₁₄ of the parts' magnitudes
 /// (~2¹³·u³·|f|·|d|) plus a rounding of the result (kept here as double-double).
-DD cross_far(const DD& f1, double d2, const DD& f2, double d1) {
+// Out of line (its callers' FMA clones then call libm's fma from it: only far rays come here),
+// where cross_dd is always inlined: a cross_dd out of line made 12 calls to libm's fma from
+// sphere_roots' FMA clone for every near ray (a helper measured +16% a hit).
+[[gnu::noinline]] DD cross_far(const DD& f1, double d2, const DD& f2, double d1) {
     const DD a = two_prod(f1.hi, d2), b = two_prod(f1.lo, d2);
     const DD c = two_prod(f2.hi, -d1), e = two_prod(f2.lo, -d1);
     double p[8] = {a.hi, c.hi, a.lo, c.lo, b.hi, e.hi, b.lo, e.lo};
@@ -181,8 +188,8 @@ DD cross_far(const DD& f1, double d2, const DD& f2, double d1) {
 
 /// f × d in double-double for f = o − c given exactly: by mul() near the sphere, by cross_far
 /// from kFarRadii on.
-void cross_dd(const DD& fx, const DD& fy, const DD& fz, const Vec3d& d, double radius, DD& cx,
-              DD& cy, DD& cz) {
+[[gnu::always_inline]] inline void cross_dd(const DD& fx, const DD& fy, const DD& fz,
+                                            const Vec3d& d, double radius, DD& cx, DD& cy, DD& cz) {
     if (std::max({std::abs(fx.hi), std::abs(fy.hi), std::abs(fz.hi)}) > kFarRadii * radius) {
         cx = cross_far(fy, d.z, fz, d.y);
         cy = cross_far(fz, d.x, fx, d.z);
@@ -291,38 +298,55 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
 
 namespace {
 
-/// p − c at the root t of a ray from more than kNormalFarRadii away: the closest approach
-/// l = (d × (f × d))/a plus or minus the half-chord h·d (h = √(a·r² − |f × d|²)/a; RTG 2019
-/// eq. 7.5's terms), in double-double with f × d by cross_dd, rather than f + t·d: t is rounded
-/// by u·|f|/|d|, which moves the point along the ray by u·|f|, and from ~1e16 radii away that
-/// is the whole sphere (the normal of a line hitting a sphere 2e-6 across from 2^60 away came
-/// out (0, 0, 0), and front_face false). Which sign: t before the closest approach −β/a is the near
-/// root, unless `side` says which (−1 near, +1 far): from that far both roots of a near-tangent
-/// line round to one t. Its error is a few u of r, plus cross_far's. nullopt where that form's
-/// products leave double's range (then the plain form).
-std::optional<Vec3d> point_from_closest_approach(const Sphere& s, const Ray& ray, double t,
-                                                 int side) {
-    const Vec3d& d = ray.direction;
-    const DD fx = two_sum(ray.origin.x, -s.center.x);
-    const DD fy = two_sum(ray.origin.y, -s.center.y);
-    const DD fz = two_sum(ray.origin.z, -s.center.z);
+/// The unit normal (p − c)/r at the root t of a ray from more than kNormalFarRadii away: p − c
+/// is the closest approach l = (d × (f × d))/a plus or minus the half-chord h·d (h = √(a·r² −
+/// |f × d|²)/a; RTG 2019 eq. 7.5's terms), in double-double with f × d by cross_dd, rather than
+/// f + t·d: t is rounded by u·|f|/|d|, which moves the point along the ray by u·|f|, and from
+/// ~1e16 radii away that is the whole sphere (the normal of a line hitting a sphere 2e-6 across
+/// from 2^60 away came out (0, 0, 0), and front_face false). Which sign: t before the closest
+/// approach −β/a is the near root, unless `side` says which (−1 near, +1 far): from that far
+/// both roots of a near-tangent line round to one t. The direction is first brought to [1, 2)
+/// and f and r to the radius' scale, by powers of two (exact; the normal does not change), as
+/// sphere_roots_rescaled does for the roots: unscaled, the products left double's range for
+/// lengths past ~2^550 or below ~2^-520 or directions ~2^±600, and the plain form answered
+/// (a helper's review). Its error is a few u, plus cross_far's. nullopt where the scaled f is
+/// still beyond 2^500 radii, or on degenerate input (then the plain form).
+std::optional<Vec3d> normal_from_closest_approach(const Sphere& s, const Ray& ray, double t,
+                                                  int side) {
+    if (!(s.radius > 0.0) || !std::isfinite(s.radius))
+        return std::nullopt;
+    const double kd = power_to_unit(max_abs(ray.direction));
+    const double kr = power_to_unit(s.radius);
+    if (!std::isfinite(kd) || !std::isfinite(kr) || kd == 0.0 || kr == 0.0)
+        return std::nullopt;
+    const Vec3d d = ray.direction * kd;
+    const double r = s.radius * kr;
+    const auto scaled = [&](double o, double c) {
+        const DD f = two_sum(o, -c);
+        return DD{f.hi * kr, f.lo * kr};
+    };
+    const DD fx = scaled(ray.origin.x, s.center.x);
+    const DD fy = scaled(ray.origin.y, s.center.y);
+    const DD fz = scaled(ray.origin.z, s.center.z);
+    if (!(std::max({std::abs(fx.hi), std::abs(fy.hi), std::abs(fz.hi)}) <= 0x1p500))
+        return std::nullopt;
     DD cx, cy, cz;
-    cross_dd(fx, fy, fz, d, s.radius, cx, cy, cz);
+    cross_dd(fx, fy, fz, d, r, cx, cy, cz);
     const DD a = add(add(two_prod(d.x, d.x), two_prod(d.y, d.y)), two_prod(d.z, d.z));
     const DD beta = add(add(mul(fx, d.x), mul(fy, d.y)), mul(fz, d.z));
     // d × (f × d) = a·f − β·d = a·l.
     const Vec3d l{div(add(mul(cz, d.y), neg(mul(cy, d.z))), a),
                   div(add(mul(cx, d.z), neg(mul(cz, d.x))), a),
                   div(add(mul(cy, d.x), neg(mul(cx, d.y))), a)};
-    const DD disc = add(mul(a, two_prod(s.radius, s.radius)),
-                        neg(add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz))));
+    const DD disc =
+        add(mul(a, two_prod(r, r)), neg(add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz))));
     const double h = disc.hi > 0.0 ? div(sqrt_dd(disc), a) : 0.0;
-    const double tc = div(neg(beta), a);
-    const bool near = side != 0 ? side < 0 : t <= tc;
+    // t on the scaled ray: k_r·(f + t·d) = f′ + (t·k_r/k_d)·d′.
+    const bool near = side != 0 ? side < 0 : t * (kr / kd) <= div(neg(beta), a);
     const Vec3d pc = near ? l - d * h : l + d * h;
-    if (!is_finite(pc) || !(std::abs(length(pc) - s.radius) <= 0x1p-10 * s.radius))
+    if (!is_finite(pc) || !(std::abs(length(pc) - r) <= 0x1p-10 * r))
         return std::nullopt;
-    return pc;
+    return pc / r;
 }
 
 /// From 2²⁰ radii away the plain form's rounding, u·|f| ≈ 2⁻³³ of the radius, would start to
@@ -334,12 +358,12 @@ void sphere_normal_at(const Sphere& s, const Ray& ray, double t, int side, Hit& 
     // (p − c)/r is exact for the points a reader checks by hand (the tutorial's (0, −1, −√3)/2
     // gives −0.5, not −0.5000000000000001); when rounding in p leaves it visibly off unit
     // length (far from the origin), normalise instead.
-    Vec3d pc = ray.origin - s.center + ray.direction * t;
-    if (!(max_abs(ray.origin - s.center) <= kNormalFarRadii * s.radius)) {
-        if (const std::optional<Vec3d> p = point_from_closest_approach(s, ray, t, side))
-            pc = *p;
-    }
+    const Vec3d pc = ray.origin - s.center + ray.direction * t;
     Vec3d n = pc / s.radius;
+    if (!(max_abs(ray.origin - s.center) <= kNormalFarRadii * s.radius)) {
+        if (const std::optional<Vec3d> far = normal_from_closest_approach(s, ray, t, side))
+            n = *far;
+    }
     const double len2 = dot(n, n);
     if (std::abs(len2 - 1.0) > 8.0 * kDoubleUnitRoundoff)
         n = normalize(pc);
@@ -347,15 +371,23 @@ void sphere_normal_at(const Sphere& s, const Ray& ray, double t, int side, Hit& 
     hit.front_face = dot(ray.direction, hit.normal) < 0.0;
 }
 
-/// The side of root i of `r` for sphere_normal_at.
+}  // namespace
+
 int root_side(const SphereRoots& r, int i) {
     return r.count < 2 ? 0 : (i == 0 ? -1 : 1);
 }
 
-}  // namespace
-
 void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit) {
     sphere_normal_at(s, ray, t, 0, hit);
+}
+
+void sphere_normal(const Sphere& s, const Ray& ray, double t, int side, Hit& hit) {
+    sphere_normal_at(s, ray, t, side, hit);
+}
+
+double sphere_closest_approach(const Sphere& s, const Ray& ray) {
+    const Vec3d f = ray.origin - s.center;
+    return -dot(f, ray.direction) / dot(ray.direction, ray.direction);
 }
 
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal) {

@@ -77,7 +77,16 @@ std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const Sph
 int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]);
 
 /// The outward unit normal at the point of the ray at parameter t, and whether the ray arrives
-/// against it.
+/// against it. Which root t is, where that matters, is told by t itself: see the overload.
 void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit);
+/// Which of `r`'s roots root i is: −1 the near one, +1 the far one, 0 a single (tangent) root.
+int root_side(const SphereRoots& r, int i);
+/// sphere_normal at a root whose side (root_side) is known: from far away (2²⁰ radii on) the
+/// normal is formed from the closest approach and the half-chord, and both roots of a
+/// near-tangent line may round to one t (sphere_hits and first_hit_of_roots pass it).
+void sphere_normal(const Sphere& s, const Ray& ray, double t, int side, Hit& hit);
+/// The parameter of the ray's point nearest the centre, −(f·d)/(d·d) in double: where a far
+/// ray's moved copy lies within its error of tangency, a sphere's place along it.
+double sphere_closest_approach(const Sphere& s, const Ray& ray);
 
 }  // namespace raycastd::engine

@@ -302,6 +302,76 @@ TEST(Sphere, FarNearTangentLinesAreDecidedExactly) {
     }
 }
 
+// The far normal (closest approach and half-chord) at extreme scales: lengths near 2^±900 and
+// directions 2^±900 or 2^-600 long, where its products had left double's range and the plain
+// form, o + t·d − c from the rounded t, answered (0, 1, 0) or (0, 0, 0) (a helper's review).
+// Each line crosses the sphere at 60° from its axis, or through its centre.
+TEST(Sphere, FarNormalsAtExtremeScales) {
+    struct Case {
+        Sphere s;
+        Ray ray;
+        Vec3d near;  // the outward normal at the entry; the exit's mirrors its x (or x and y)
+        bool through_centre;
+    };
+    const double h = std::sqrt(3.0) / 2;
+    const Case cases[] = {
+        {{{0, 0, 0}, 0x1p900}, {{-0x1p980, 0x1p899, 0}, {1, 0, 0}}, {-h, 0.5, 0}, false},
+        {{{0, 0, 0}, 0x1p-900}, {{-0x1p-840, 0x1p-901, 0}, {1, 0, 0}}, {-h, 0.5, 0}, false},
+        {{{0, 0, 0}, 1}, {{-0x1p60, 0.5, 0}, {0x1p-900, 0, 0}}, {-h, 0.5, 0}, false},
+        {{{0, 0, 0}, 1}, {{-0x1p60, 0.5, 0}, {0x1p900, 0, 0}}, {-h, 0.5, 0}, false},
+        {{{0, 0, 0}, 1},
+         {{-0x1p60, -0x1p60, 0}, {0x1p-600, 0x1p-600, 0}},
+         {-std::sqrt(0.5), -std::sqrt(0.5), 0},
+         true},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(::testing::Message()
+                     << "radius " << c.s.radius << ", origin x " << c.ray.origin.x
+                     << ", direction x " << c.ray.direction.x);
+        Hit hits[2];
+        ASSERT_EQ(sphere_hits(c.s, c.ray, hits), 2);
+        const Vec3d far_side = c.through_centre ? -c.near : Vec3d{-c.near.x, c.near.y, 0};
+        for (int k = 0; k < 2; ++k) {
+            const Vec3d want = k == 0 ? c.near : far_side;
+            EXPECT_EQ(hits[k].front_face, k == 0);
+            EXPECT_NEAR(hits[k].normal.x, want.x, 1e-15) << k;
+            EXPECT_NEAR(hits[k].normal.y, want.y, 1e-15) << k;
+            EXPECT_NEAR(hits[k].normal.z, want.z, 1e-15) << k;
+        }
+    }
+}
+
+// Which root a normal belongs to is passed on where it is known: from 2^40 away the two roots
+// of a line 1e-8 of a radius inside a unit sphere round to neighbouring doubles, and with tmin
+// at the second one, the normal recomputed from t alone took the near side, front_face true
+// (a helper's review; EmbreeAccel's answers had recomputed it so).
+TEST(Sphere, NormalsKnowWhichRootTheyAreAt) {
+    const Sphere s{{0, 0, 0}, 1};
+    Ray ray{{-0x1p40, std::sqrt(1 - 1e-8), 0}, {1, 0, 0}};
+    const SphereRoots r = sphere_roots(s, ray);
+    ASSERT_EQ(r.count, 2);
+    ASSERT_EQ(r.t[1], 0x1p40);
+    ray.tmin = r.t[1];
+    const auto h = intersect_sphere(s, ray, true);
+    ASSERT_TRUE(h);
+    EXPECT_FALSE(h->front_face);
+    EXPECT_GT(h->normal.x, 0.0);
+    Hit by_side;
+    sphere_normal(s, ray, h->t, root_side(r, 1), by_side);
+    EXPECT_EQ(by_side.normal, h->normal);
+    EXPECT_FALSE(by_side.front_face);
+}
+
+// A radius of 2^-1074 with an origin as small: the tiny-radius scaling's power of two was inf,
+// and the call recursed until the stack ran out (a helper's review).
+TEST(Sphere, SmallestRadiusIsAnsweredWithoutRecursingForEver) {
+    const Sphere s{{0, 0, 0}, 0x1p-1074};
+    const SphereRoots r = sphere_roots(s, Ray{{-0x1p-1074, 0, 0}, {1, 0, 0}});
+    ASSERT_EQ(r.count, 2);
+    EXPECT_EQ(r.t[0], 0.0);
+    EXPECT_EQ(r.t[1], 0x1p-1073);
+}
+
 TEST(Sphere, ErrorBoundCoversFarSphere) {
     SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
     EXPECT_GT(r.t_err, 0.0);
