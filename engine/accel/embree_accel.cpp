@@ -245,7 +245,11 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
         return linear_all(*a.scene, far ? *far->client : ray, want_normal, out);
     c.far_spheres = far;
     intersect1(s, c, f);  // every candidate goes to c.collect (a far ray's spheres' to far->hits)
+    // Triangles' moved crossings, and then spheres', in the moved ray's frame, for the order.
+    std::vector<Hit> moved;
     if (far) {
+        moved = out;
+        moved.insert(moved.end(), far->hits_moved.begin(), far->hits_moved.end());
         for (Hit& h : out)
             moved_back(a, *far->moved, h);
         out.insert(out.end(), far->hits.begin(), far->hits.end());
@@ -258,7 +262,10 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
             h.normal = Vec3d{};  // a sphere's hits came with one (sphere_hits)
         }
     }
-    sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
+    if (far)
+        sort_and_merge_on_moved(moved, out);  // along the moved ray (far_ray.h)
+    else
+        sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -415,7 +415,8 @@ TEST(EmbreeAccel, FarRaysDecideSpheresOnTheClientsRay) {
 // and came after a cube 3e-3 beyond it (a helper's review: 64 of 1,000 lines from 2^50–2^56
 // away at exact and refined, 81 of 1,000 in the brute-force scan's own far path). Each line
 // passes exactly through the world origin, near-tangent to the sphere (10^-9 to 10^-12 of its
-// radius); the near ray on the same line starts 16 units away and decides as the far one must.
+// radius); the near ray on the same line starts 16 units away and decides as the far one must,
+// for `closest` and for the order of `all`.
 TEST(EmbreeAccel, FarSpheresKeepTheirPlaceBeforeAMesh) {
     std::mt19937_64 rng(91);
     std::uniform_real_distribution<double> u(-1, 1), exponent(9, 12), distance(50, 57);
@@ -432,13 +433,14 @@ TEST(EmbreeAccel, FarSpheresKeepTheirPlaceBeforeAMesh) {
         const Vec3d d = normalize(c + e * (want * length(c) / std::sqrt(dot(c, c) - want * want)));
         Scene s;
         s.materials.push_back(Material{});
-        s.objects.push_back(testing::sphere("small", c, r, 0));
+        // The cube first: in object order it would come before the sphere.
         Object cube = testing::cube_object(-1e-3, 1e-3);
         auto mesh = std::make_shared<TriangleMesh>(*cube.mesh);
         for (Vec3d& p : mesh->positions)
             p = p + c + d * 3e-3;
         cube.mesh = mesh;
         s.objects.push_back(cube);
+        s.objects.push_back(testing::sphere("small", c, r, 0));
         s.objects.push_back(testing::sphere("big", {5, -3, 2}, 1.0, 0));
         for (int i = 0; i < 4; ++i)
             s.objects.push_back(testing::sphere("filler", {-4.0 + i, 4, -4}, 0.01, 0));
@@ -450,7 +452,7 @@ TEST(EmbreeAccel, FarSpheresKeepTheirPlaceBeforeAMesh) {
                      << "line " << j << " from 2^" << std::ilogb(length(far.origin)));
         const auto reference = b.accel->closest(near, Precision::exact, false);
         ASSERT_TRUE(reference);  // the cube, at least
-        sphere_first += reference->object == 0;
+        sphere_first += reference->object == 1;
         for (Precision p : {Precision::refined, Precision::exact}) {
             const auto h = b.accel->closest(far, p, false);
             ASSERT_TRUE(h) << to_string(p);
@@ -459,6 +461,23 @@ TEST(EmbreeAccel, FarSpheresKeepTheirPlaceBeforeAMesh) {
         const auto scanned = linear_closest_from_afar(*b.scene, scene_ball(*b.scene), far, false);
         ASSERT_TRUE(scanned);
         EXPECT_EQ(scanned->object, linear_closest(*b.scene, near, false)->object);
+        // `all` lists the crossings in the near ray's order too (it had listed them by object:
+        // every far t rounds to one double).
+        const auto objects = [](const std::vector<Hit>& list) {
+            std::vector<std::uint32_t> out;
+            for (const Hit& h : list)
+                out.push_back(h.object);
+            return out;
+        };
+        std::vector<Hit> near_all, far_all;
+        b.accel->all(near, Precision::exact, false, near_all);
+        for (Precision p : {Precision::refined, Precision::exact}) {
+            b.accel->all(far, p, false, far_all);
+            EXPECT_EQ(objects(far_all), objects(near_all)) << to_string(p);
+        }
+        linear_all(*b.scene, near, false, near_all);
+        linear_all_from_afar(*b.scene, scene_ball(*b.scene), far, false, far_all);
+        EXPECT_EQ(objects(far_all), objects(near_all));
     }
     EXPECT_GT(sphere_first, 80);  // half the lines cross the sphere
 }

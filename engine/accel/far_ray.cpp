@@ -178,4 +178,49 @@ void moved_back(const Scene& scene, const MovedRay& m, Hit& h) {
     h.t_err = std::ldexp(tau_err, -m.exp);
 }
 
+Hit sphere_on_moved(const Sphere& s, const MovedRay& m, const Ray& moved_ray, const Hit& client,
+                    int i, int n, const Hit* on_moved, int n_moved) {
+    Hit h = client;
+    if (n_moved == n) {
+        h.t = on_moved[i].t;
+        h.t_err = on_moved[i].t_err;
+    } else {
+        h.t = sphere_closest_approach(s, moved_ray);
+        h.t_err = std::ldexp(client.t_err, m.exp) + kDoubleUnitRoundoff * std::abs(h.t);
+    }
+    return h;
+}
+
+void sort_and_merge_on_moved(const std::vector<Hit>& moved, std::vector<Hit>& out) {
+    std::vector<std::size_t> order(moved.size());
+    for (std::size_t k = 0; k < order.size(); ++k)
+        order[k] = k;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return closer(moved[a], moved[b]); });
+    std::vector<std::size_t> kept;
+    kept.reserve(order.size());
+    for (const std::size_t k : order) {
+        const Hit& h = moved[k];
+        bool duplicate = false;
+        if (h.on_edge) {
+            for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+                const Hit& o = moved[*it];
+                if (h.t - o.t > h.t_err + o.t_err)
+                    break;
+                if (o.object == h.object && o.on_edge && o.front_face == h.front_face) {
+                    duplicate = true;
+                    break;
+                }
+            }
+        }
+        if (!duplicate)
+            kept.push_back(k);
+    }
+    std::vector<Hit> sorted;
+    sorted.reserve(kept.size());
+    for (const std::size_t k : kept)
+        sorted.push_back(out[k]);
+    out.swap(sorted);
+}
+
 }  // namespace raycastd::engine

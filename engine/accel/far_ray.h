@@ -12,7 +12,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
+#include "engine/geometry/sphere.h"
 #include "engine/math/double_double.h"
 #include "engine/math/ray.h"
 #include "engine/scene/scene.h"
@@ -94,5 +96,21 @@ SceneBall scene_ball(const Scene& scene);
 /// A hit of the moved ray `m` as the client's ray's: t mapped back, and t_err grown by what the
 /// move can shift the crossing (the hit's object in `scene`).
 void moved_back(const Scene& scene, const MovedRay& m, Hit& h);
+
+/// The place along the moved ray `m` of a sphere's root that was decided on the client's ray
+/// (`client`, root i of the client's roots in range), for ordering it among the moved ray's
+/// other crossings: the moved ray's own root where its kernel finds as many (`on_moved`, `n`
+/// of them), else its closest approach to the centre (a line within the move's error of
+/// tangency: within the half-chord there, ~√(2r·line_err), of either root). t and t_err in the
+/// moved ray's units; the rest is `client`'s.
+Hit sphere_on_moved(const Sphere& s, const MovedRay& m, const Ray& moved_ray, const Hit& client,
+                    int i, int n, const Hit* on_moved, int n_moved);
+
+/// `all` for a far ray answered on its moved copy: `moved[k]` is crossing k in the moved ray's
+/// frame (t, t_err), `out[k]` the same crossing as the client's ray's. Sorts `out` by `closer`
+/// on the moved crossings, and drops edge duplicates there, as sort_and_merge_edge_duplicates
+/// does on the client's t: from far enough every client t rounds to one double, and the list
+/// had come in object order (its first entry not `closest`'s answer: a helper's review).
+void sort_and_merge_on_moved(const std::vector<Hit>& moved, std::vector<Hit>& out);
 
 }  // namespace raycastd::engine

@@ -116,9 +116,9 @@ bool hits_object(const Object& o, const Ray& ray) {
 // nothing to the distance, while the moved origin rounds by u·|origin| (a helper's review of
 // the first version, which moved spheres too: near-tangent lines 1e-10 of a radius outside a
 // sphere at (1e6, 2e6, 3e6) were hit, and 55–67 of 400 near-tangent lines at a sphere 1e-6
-// across were decided wrongly, where the unmoved kernel had been right). `all` compares the
-// crossings of both kinds by `closer` once mapped back, so an exact tie in the client's t goes
-// to the lower object, as everywhere; `closest` by their places on the moved ray (below).
+// across were decided wrongly, where the unmoved kernel had been right). Crossings of both kinds
+// are ordered by their places on the moved ray (`closest` below, `all` by
+// sort_and_merge_on_moved): from far enough every client t rounds to one double.
 
 /// linear_any's loop, each mesh tested on `mesh_ray` (the ray itself, or it moved).
 bool any_hit(const Scene& scene, const Ray& ray, const Ray& mesh_ray) {
@@ -129,21 +129,39 @@ bool any_hit(const Scene& scene, const Ray& ray, const Ray& mesh_ray) {
     return false;
 }
 
-/// linear_all's loop, each mesh's crossings taken on m->ray and mapped back where `m` is given.
+/// linear_all's loop, each mesh's crossings taken on m->ray and mapped back where `m` is given,
+/// and then listed in their order along the moved ray (sort_and_merge_on_moved), each sphere's
+/// at its place there (sphere_on_moved).
 void all_hits(const Scene& scene, const Ray& ray, const MovedRay* m, bool want_normal,
               std::vector<Hit>& out) {
     out.clear();
-    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
-        if (!m || scene.objects[i].kind == ObjectKind::sphere) {
+    if (!m) {
+        for (std::uint32_t i = 0; i < scene.objects.size(); ++i)
             append_hits(scene, i, ray, want_normal, out);
+        sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
+        return;
+    }
+    std::vector<Hit> moved;
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        const std::size_t first = out.size();
+        if (o.kind == ObjectKind::sphere) {
+            append_hits(scene, i, ray, want_normal, out);
+            Hit on_moved[2];
+            const int n_moved = sphere_hits(o.sphere, m->ray, on_moved);
+            const int n = static_cast<int>(out.size() - first);
+            for (int k = 0; k < n; ++k)
+                moved.push_back(
+                    sphere_on_moved(o.sphere, *m, m->ray, out[first + k], k, n, on_moved, n_moved));
             continue;
         }
-        const std::size_t first = out.size();
         append_hits(scene, i, m->ray, want_normal, out);
-        for (std::size_t k = first; k < out.size(); ++k)
+        for (std::size_t k = first; k < out.size(); ++k) {
+            moved.push_back(out[k]);
             moved_back(scene, *m, out[k]);
+        }
     }
-    sort_and_merge_edge_duplicates(out);  // by `closer` on the client's t
+    sort_and_merge_on_moved(moved, out);
 }
 
 /// A far ray moved to the scene for its meshes (far_ray.h, world coordinates).

@@ -92,8 +92,9 @@ struct FarSpheres {
     const MovedRay* moved = nullptr;
     /// closest: RayContext::best as decided on `client`, when it is a sphere's.
     std::optional<Hit> best;
-    /// all: every sphere hit, decided on `client`.
-    std::vector<Hit> hits;
+    /// all: every sphere hit, decided on `client`, and the same at its place on the moved ray
+    /// (sphere_on_moved), for the order of the list.
+    std::vector<Hit> hits, hits_moved;
 };
 
 /// The context handed through Embree to our callbacks (Embree's documented way to pass per-ray

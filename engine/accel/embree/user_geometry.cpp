@@ -28,20 +28,19 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
             // scene (the client's t, rounded at ~u·distance, would not: a sphere in front of a
             // mesh, both 1e18 away, came after it). Where the two kernels disagree on the count
             // (a line within the move's error of tangency, or of a range's end) the sphere is
-            // placed at the moved ray's closest approach to its centre, within the half-chord
-            // there, ~√(2r·line_err), of either root. (The client's root carried over, rounded by
-            // ~u·distance, had put a sphere behind a cube 3e-3 beyond it in 64 of 1,000 such
-            // lines from 2^50–2^56 away: a helper's review.)
+            // placed at the moved ray's closest approach to its centre (sphere_on_moved). (The
+            // client's root carried over, rounded by ~u·distance, had put a sphere behind a cube
+            // 3e-3 beyond it in 64 of 1,000 such lines from 2^50–2^56 away: a helper's review.)
             const int n = sphere_hits(o.sphere, *far->client, hits);
             if (n == 0)
                 return;
             Hit on_moved[2];
             const Sphere in_frame = c.in_frame(o.sphere);
-            const bool same = sphere_hits(in_frame, ray, on_moved) == n;
+            const int n_moved = sphere_hits(in_frame, ray, on_moved);
             for (int k = 0; k < n; ++k) {
                 hits[k].object = object;
-                Hit moved = hits[k];
-                moved.t = same ? on_moved[k].t : sphere_closest_approach(in_frame, ray);
+                const Hit moved =
+                    sphere_on_moved(in_frame, *far->moved, ray, hits[k], k, n, on_moved, n_moved);
                 if (!emit(moved, &hits[k]))
                     return;
             }
@@ -98,10 +97,12 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
     auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
     double_candidates(c, g->object, args->primID, [&](const Hit& h, const Hit* client) {
         if (c.collect) {
-            if (client)
+            if (client) {
                 c.far_spheres->hits.push_back(*client);
-            else
+                c.far_spheres->hits_moved.push_back(h);
+            } else {
                 c.collect->push_back(h);
+            }
             return true;
         }
         if (c.exact) {
