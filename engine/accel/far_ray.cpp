@@ -185,8 +185,13 @@ Hit sphere_on_moved(const Sphere& s, const MovedRay& m, const Ray& moved_ray, co
         h.t = on_moved[i].t;
         h.t_err = on_moved[i].t_err;
     } else {
+        // Within the half-chord at the closest approach of either root: the move's bound for a
+        // sphere (moved_back), in the moved ray's units.
         h.t = sphere_closest_approach(s, moved_ray);
-        h.t_err = std::ldexp(client.t_err, m.exp) + kDoubleUnitRoundoff * std::abs(h.t);
+        const double delta = m.line_err;
+        h.t_err = (delta + std::sqrt(delta) * std::sqrt(2.0 * s.radius + delta)) /
+                      length(moved_ray.direction) +
+                  kDoubleUnitRoundoff * std::abs(h.t);
     }
     return h;
 }
@@ -195,8 +200,10 @@ void sort_and_merge_on_moved(const std::vector<Hit>& moved, std::vector<Hit>& ou
     std::vector<std::size_t> order(moved.size());
     for (std::size_t k = 0; k < order.size(); ++k)
         order[k] = k;
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return closer(moved[a], moved[b]); });
+    // Stable: a sphere's two roots placed at one t (sphere_on_moved) tie by `closer`, and come
+    // in the order they were appended, entry first (std::sort had swapped them: a review).
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return closer(moved[a], moved[b]); });
     std::vector<std::size_t> kept;
     kept.reserve(order.size());
     for (const std::size_t k : order) {

@@ -93,11 +93,17 @@ bool tiny_radius(const Sphere& s) {
 /// (a helper's review, 2026-12-05).
 /// A direction already in [1, 2) is not scaled again (lengths are at most 2⁵⁰⁰ by then, after
 /// huge_lengths, and a radius 2⁻⁴⁰⁰ or more, after tiny_radius): that would recurse for ever.
+/// A direction longer than 2²⁵⁰ is brought to [1, 2) too, whatever the lengths: its a = d·d
+/// overflows past 2⁵¹², and with small enough lengths the products stayed under 2⁵⁰⁰: a ray
+/// 2⁵²⁰ long, 2⁻⁹⁸ from a sphere of radius 2⁻¹⁰⁰, missed it (a second review).
+constexpr double kLongDirection = 0x1p250;
+
 bool extreme_products(const Sphere& s, const Ray& ray) {
     const double dm = max_abs(ray.direction);
     const double p = max_length(s, ray) * dm;
     const double rd = s.radius * dm;
-    return (p > 0x1p500 || (p < 0x1p-500 && p > 0.0) || (rd < 0x1p-500 && rd > 0.0)) &&
+    return (p > 0x1p500 || (p < 0x1p-500 && p > 0.0) || (rd < 0x1p-500 && rd > 0.0) ||
+            dm > kLongDirection) &&
            !(dm >= 1.0 && dm < 2.0);
 }
 
@@ -209,8 +215,8 @@ RAYCASTD_FMA_CLONES SphereRoots sphere_roots(const Sphere& s, const Ray& ray) {
         // miss): lengths, radius, direction and their product in range.
         const double L = max_length(s, ray), D = max_abs(ray.direction), p = L * D;
         const double rd = s.radius * D;
-        const bool ordinary = D >= kTinyDirection && L <= kHugeLength && !tiny_radius(s) &&
-                              p <= 0x1p500 && (p >= 0x1p-500 || p == 0.0) &&
+        const bool ordinary = D >= kTinyDirection && D <= kLongDirection && L <= kHugeLength &&
+                              !tiny_radius(s) && p <= 0x1p500 && (p >= 0x1p-500 || p == 0.0) &&
                               (rd >= 0x1p-500 || rd == 0.0);
         if (!ordinary) {
             if (const std::optional<SphereRoots> r = sphere_roots_rescaled(s, ray))
@@ -309,27 +315,33 @@ namespace {
 /// and f and r to the radius' scale, by powers of two (exact; the normal does not change), as
 /// sphere_roots_rescaled does for the roots: unscaled, the products left double's range for
 /// lengths past ~2^550 or below ~2^-520 or directions ~2^±600, and the plain form answered
-/// (a helper's review). Its error is a few u, plus cross_far's. nullopt where the scaled f is
-/// still beyond 2^500 radii, or on degenerate input (then the plain form).
+/// (a helper's review). The lengths' power is the radius' own, at most 2¹⁰⁰⁰ (a subnormal
+/// radius' is inf) and at most what keeps f within 2⁵⁰⁰ (beyond 2⁵⁰⁰ radii the radius then
+/// shrinks instead, to 2⁻⁴⁰⁰ or more wherever the roots find a hit), as sphere_roots_rescaled
+/// chooses it for a tiny radius (a second review found zero normals for a radius below 2⁻¹⁰²³
+/// and (0, 1, 0) from 2⁵⁰¹ radii on). Its error is a few u, plus cross_far's. nullopt on
+/// degenerate input (then the plain form).
 std::optional<Vec3d> normal_from_closest_approach(const Sphere& s, const Ray& ray, double t,
                                                   int side) {
-    if (!(s.radius > 0.0) || !std::isfinite(s.radius))
+    const double dmax = max_abs(ray.direction);
+    if (!(s.radius > 0.0) || !std::isfinite(s.radius) || !(dmax > 0.0) || !std::isfinite(dmax))
         return std::nullopt;
-    const double kd = power_to_unit(max_abs(ray.direction));
-    const double kr = power_to_unit(s.radius);
-    if (!std::isfinite(kd) || !std::isfinite(kr) || kd == 0.0 || kr == 0.0)
+    const DD f[3] = {two_sum(ray.origin.x, -s.center.x), two_sum(ray.origin.y, -s.center.y),
+                     two_sum(ray.origin.z, -s.center.z)};
+    const double fmax = std::max({std::abs(f[0].hi), std::abs(f[1].hi), std::abs(f[2].hi)});
+    if (!std::isfinite(fmax))
         return std::nullopt;
-    const Vec3d d = ray.direction * kd;
-    const double r = s.radius * kr;
-    const auto scaled = [&](double o, double c) {
-        const DD f = two_sum(o, -c);
-        return DD{f.hi * kr, f.lo * kr};
-    };
-    const DD fx = scaled(ray.origin.x, s.center.x);
-    const DD fy = scaled(ray.origin.y, s.center.y);
-    const DD fz = scaled(ray.origin.z, s.center.z);
-    if (!(std::max({std::abs(fx.hi), std::abs(fy.hi), std::abs(fz.hi)}) <= 0x1p500))
+    // Exponents, not powers: kr/kd could overflow where the true scaled t cannot.
+    const int ed = -std::ilogb(dmax);
+    int er = std::min(-std::ilogb(s.radius), 1000);
+    if (fmax > 0.0)
+        er = std::min(er, 499 - std::ilogb(fmax));
+    const Vec3d d = ray.direction * std::ldexp(1.0, ed);
+    const double r = std::ldexp(s.radius, er);
+    if (!(r > 0.0))
         return std::nullopt;
+    const auto scaled = [&](const DD& x) { return DD{std::ldexp(x.hi, er), std::ldexp(x.lo, er)}; };
+    const DD fx = scaled(f[0]), fy = scaled(f[1]), fz = scaled(f[2]);
     DD cx, cy, cz;
     cross_dd(fx, fy, fz, d, r, cx, cy, cz);
     const DD a = add(add(two_prod(d.x, d.x), two_prod(d.y, d.y)), two_prod(d.z, d.z));
@@ -342,7 +354,7 @@ std::optional<Vec3d> normal_from_closest_approach(const Sphere& s, const Ray& ra
         add(mul(a, two_prod(r, r)), neg(add(add(mul(cx, cx), mul(cy, cy)), mul(cz, cz))));
     const double h = disc.hi > 0.0 ? div(sqrt_dd(disc), a) : 0.0;
     // t on the scaled ray: k_r·(f + t·d) = f′ + (t·k_r/k_d)·d′.
-    const bool near = side != 0 ? side < 0 : t * (kr / kd) <= div(neg(beta), a);
+    const bool near = side != 0 ? side < 0 : std::ldexp(t, er - ed) <= div(neg(beta), a);
     const Vec3d pc = near ? l - d * h : l + d * h;
     if (!is_finite(pc) || !(std::abs(length(pc) - r) <= 0x1p-10 * r))
         return std::nullopt;

@@ -323,6 +323,12 @@ TEST(Sphere, FarNormalsAtExtremeScales) {
          {{-0x1p60, -0x1p60, 0}, {0x1p-600, 0x1p-600, 0}},
          {-std::sqrt(0.5), -std::sqrt(0.5), 0},
          true},
+        // (A second review.) A subnormal radius, whose power of two to 1 is inf; a line 2^501
+        // radii away, beyond what the lengths' scaling had allowed; a direction 2^520 long,
+        // whose d·d overflows (the roots themselves had been missed).
+        {{{0, 0, 0}, 0x1p-1074}, {{-1e-300, 0, 0}, {1, 0, 0}}, {-1, 0, 0}, true},
+        {{{0, 0, 0}, 1}, {{-0x1p501, 0.6, 0}, {1, 0, 0}}, {-0.8, 0.6, 0}, false},
+        {{{0, 0, 0}, 0x1p-100}, {{-0x1p-98, 0x1p-101, 0}, {0x1p520, 0, 0}}, {-h, 0.5, 0}, false},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(::testing::Message()
@@ -360,6 +366,16 @@ TEST(Sphere, NormalsKnowWhichRootTheyAreAt) {
     sphere_normal(s, ray, h->t, root_side(r, 1), by_side);
     EXPECT_EQ(by_side.normal, h->normal);
     EXPECT_FALSE(by_side.front_face);
+    // Told by t alone, where the scales' ratio 2^600/2^-430 overflows but the scaled t does not
+    // (a second review: the far root's normal came back for the entry).
+    const Sphere tiny{{0, 0, 0}, 0x1p-600};
+    const Ray long_ray{{-0x1p-560, 0.6 * 0x1p-600, 0}, {0x1p430, 0, 0}};
+    Hit hits[2];
+    ASSERT_EQ(sphere_hits(tiny, long_ray, hits), 2);
+    Hit by_t;
+    sphere_normal(tiny, long_ray, hits[0].t, by_t);
+    EXPECT_TRUE(by_t.front_face);
+    EXPECT_NEAR(by_t.normal.x, -0.8, 1e-15);
 }
 
 // A radius of 2^-1074 with an origin as small: the tiny-radius scaling's power of two was inf,

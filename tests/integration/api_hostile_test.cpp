@@ -56,6 +56,23 @@ TEST(Hostile, DeeplyNestedJsonIsRefusedAndTheServerLives) {
               200);
 }
 
+// A sphere of the smallest radius double has (2^-1074) and a ray from as close: the sphere
+// kernel's scaling for tiny radii was inf there, and it recursed until the stack ran out, a
+// SIGSEGV of the whole server (found by a helper's review of the kernel, 2026-12-05).
+TEST(Hostile, ASphereOfTheSmallestRadiusIsAnsweredAndTheServerLives) {
+    testing::ServerProcess server;
+    const std::string body =
+        R"({"scene":{"objects":[{"type":"sphere","center":[0,0,0],"radius":4.9406564584124654e-324}]},)"
+        R"("rays":[{"origin":[-4.9406564584124654e-324,0,0],"direction":[1,0,0]}],)"
+        R"("precision":"exact"})";
+    const std::string a = exchange(server.port(), post("/v1/intersect", body));
+    ASSERT_EQ(status_of(a), 200) << a.substr(0, 300);
+    const json hit = json::parse(body_of(a)).at("hits").at(0);
+    EXPECT_TRUE(hit.at("hit").get<bool>());
+    EXPECT_EQ(hit.at("t").get<double>(), 0.0);
+    ASSERT_TRUE(server.alive());
+}
+
 TEST(Hostile, IdleSocketsDoNotStarveHealth) {
     // ServerProcess serves at most 4 connections at once: 64 silent half-heads are 16 times that.
     testing::ServerProcess server;
