@@ -423,6 +423,11 @@ std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const Sph
 SphereRoots sphere_roots_fast(const Sphere& s, const Ray& ray) {
     if (tiny_direction(ray.direction))
         return scaled_back(sphere_roots_fast(s, with_scaled_direction(ray)));
+    if (max_abs(ray.direction) > kLongDirection) {  // d·d would overflow past 2⁵¹²
+        double k;
+        const Ray r = with_unit_direction(ray, k);
+        return times(sphere_roots_fast(s, r), k);
+    }
     SphereRoots out;
     const Vec3d& d = ray.direction;
     const Vec3d f = ray.origin - s.center;
