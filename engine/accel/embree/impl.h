@@ -81,12 +81,13 @@ struct Impl {
 
 /// A far ray moved to the scene (RayContext::frame), whose spheres the exact BVH's callbacks
 /// decide on the client's ray instead, as the brute-force paths do (linear_accel.cpp): the
-/// sphere kernel forms o − c in double-double and loses nothing to the distance, while the
-/// moved origin, rounded, lies up to MovedRay::line_err off the line, which decided near-tangent
-/// lines wrongly (a helper's probe: 63–73 of 400 lines at a sphere 1e-6 across, from 1e10 to
-/// 1e22 away, where the unmoved kernel is right). The traversal still culls by the moved ray
-/// (it lies within line_err, far below the boxes' padding, of the client's line), and a
-/// sphere's hit competes there at its t on the moved ray (user_geometry.cpp).
+/// sphere kernel forms o − c exactly and f × d to a few u² of itself (cross_far, sphere.cpp)
+/// and loses nothing to the distance, while the moved origin, rounded by u of its distance from
+/// the centre, lies up to MovedRay::line_err off the line, which decided near-tangent lines
+/// wrongly (a probe: 42–67 of 2,000 lines 1e-9 of a radius from a sphere 2e-6 across, in a
+/// scene 10 across, from 2^43 to 2^73 away; 0 on the client's ray). The traversal still culls by
+/// the moved ray (it lies within line_err, far below the boxes' padding, of the client's line), and
+/// a sphere's hit competes there at its t on the moved ray (user_geometry.cpp).
 struct FarSpheres {
     const Ray* client = nullptr;
     const MovedRay* moved = nullptr;
