@@ -204,25 +204,8 @@ void sort_and_merge_on_moved(const std::vector<Hit>& moved, std::vector<Hit>& ou
     // in the order they were appended, entry first (std::sort had swapped them: a review).
     std::stable_sort(order.begin(), order.end(),
                      [&](std::size_t a, std::size_t b) { return closer(moved[a], moved[b]); });
-    std::vector<std::size_t> kept;
-    kept.reserve(order.size());
-    for (const std::size_t k : order) {
-        const Hit& h = moved[k];
-        bool duplicate = false;
-        if (h.on_edge) {
-            for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
-                const Hit& o = moved[*it];
-                if (h.t - o.t > h.t_err + o.t_err)
-                    break;
-                if (o.object == h.object && o.on_edge && o.front_face == h.front_face) {
-                    duplicate = true;
-                    break;
-                }
-            }
-        }
-        if (!duplicate)
-            kept.push_back(k);
-    }
+    const std::vector<std::size_t> kept =
+        kept_after_edge_merge(order, [&](std::size_t k) -> const Hit& { return moved[k]; });
     std::vector<Hit> sorted;
     sorted.reserve(kept.size());
     for (const std::size_t k : kept)

@@ -106,6 +106,36 @@ void moved_back(const Scene& scene, const MovedRay& m, Hit& h);
 Hit sphere_on_moved(const Sphere& s, const MovedRay& m, const Ray& moved_ray, const Hit& client,
                     int i, int n, const Hit* on_moved, int n_moved);
 
+/// Of crossings sorted by `closer` (crossing `order[j]` is j-th, `hit(k)` is crossing k), those
+/// an edge-duplicate merge keeps, in order: an on-edge crossing of an object, on one side,
+/// within both t_errs of one kept before it is the same crossing found by the neighbouring
+/// triangle at a shared edge or vertex. The merge of sort_and_merge_edge_duplicates (on the
+/// client's t) and of sort_and_merge_on_moved (on the moved ray's).
+template <class HitAt>
+std::vector<std::size_t> kept_after_edge_merge(const std::vector<std::size_t>& order, HitAt hit) {
+    std::vector<std::size_t> kept;
+    kept.reserve(order.size());
+    for (const std::size_t k : order) {
+        const Hit& h = hit(k);
+        bool duplicate = false;
+        if (h.on_edge) {
+            // Sorted by t: only the tail of `kept` can be within the error band.
+            for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+                const Hit& o = hit(*it);
+                if (h.t - o.t > h.t_err + o.t_err)
+                    break;
+                if (o.object == h.object && o.on_edge && o.front_face == h.front_face) {
+                    duplicate = true;
+                    break;
+                }
+            }
+        }
+        if (!duplicate)
+            kept.push_back(k);
+    }
+    return kept;
+}
+
 /// `all` for a far ray answered on its moved copy: `moved[k]` is crossing k in the moved ray's
 /// frame (t, t_err), `out[k]` the same crossing as the client's ray's. Sorts `out` by `closer`
 /// on the moved crossings, and drops edge duplicates there, as sort_and_merge_edge_duplicates

@@ -56,25 +56,16 @@ void sort_and_merge_edge_duplicates(std::vector<Hit>& hits) {
     // they were appended, entry first (std::sort put the exit first in 25 of 72 such lines from
     // 2^30 away: a review).
     std::stable_sort(hits.begin(), hits.end(), closer);
-    std::vector<Hit> kept;
-    kept.reserve(hits.size());
-    for (const Hit& h : hits) {
-        bool duplicate = false;
-        if (h.on_edge) {
-            // Hits sorted by t: only the tail of `kept` can be within the error band.
-            for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
-                if (h.t - it->t > h.t_err + it->t_err)
-                    break;
-                if (it->object == h.object && it->on_edge && it->front_face == h.front_face) {
-                    duplicate = true;
-                    break;
-                }
-            }
-        }
-        if (!duplicate)
-            kept.push_back(h);
-    }
-    hits.swap(kept);
+    std::vector<std::size_t> order(hits.size());
+    for (std::size_t k = 0; k < order.size(); ++k)
+        order[k] = k;
+    const std::vector<std::size_t> kept =
+        kept_after_edge_merge(order, [&](std::size_t k) -> const Hit& { return hits[k]; });
+    std::vector<Hit> merged;
+    merged.reserve(kept.size());
+    for (const std::size_t k : kept)
+        merged.push_back(hits[k]);
+    hits.swap(merged);
 }
 
 namespace {
