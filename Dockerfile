@@ -14,7 +14,7 @@ FROM debian:12 AS build
 # this layer apart from the sources.
 RUN apt-get update -q \
     && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
-        build-essential cmake pkg-config git curl ca-certificates \
+        build-essential cmake ninja-build pkg-config git curl ca-certificates \
         libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev \
         nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev \
     && rm -rf /var/lib/apt/lists/*

@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
-cmake --preset release >/dev/null
+scripts/configure.sh release
 cmake --build --preset release -j"$(nproc)" --target raycastd
 scene_root=../shared/data/models
 [[ -d "$scene_root" ]] || scene_root=clients/examples

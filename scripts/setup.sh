@@ -13,7 +13,7 @@ set -euo pipefail
 # What building raycastd needs: the Dockerfile's build stage installs exactly this list
 # (tests/deploy/test_dockerfile.py compares the two).
 build_packages=(
-    build-essential cmake pkg-config git curl ca-certificates
+    build-essential cmake ninja-build pkg-config git curl ca-certificates
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
     nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
 )

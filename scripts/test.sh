@@ -9,7 +9,8 @@
 #   tsan      the server's concurrency tests (connections, registry, caches, jobs) under
 #             ThreadSanitizer (tests/tsan/suppressions.txt: the uninstrumented TBB and Embree)
 # Sanitizer builds use clang at -O1 with line tables only: they compile in about half the time
-# of gcc's -O2 -g, and CI has two cores.
+# of gcc's -O2 -g, and CI has two cores. The tests' own code is built lighter still
+# (cmake/test_code.cmake; docs/testing.md has where the minutes go).
 # Flags: --release-only (the first stage alone), --long (the long load and fault run, and
 # fuzzing for 10 minutes a target).
 set -euo pipefail
@@ -38,7 +39,7 @@ stage_start=$SECONDS
 lap() { echo "$1 $((SECONDS - stage_start)) s" >>"$summary.times"; stage_start=$SECONDS; }
 for preset in "${presets[@]}"; do
     echo "=== ${preset}: configure and build" >&2
-    cmake --preset "$preset" >/dev/null
+    scripts/configure.sh "$preset"
     cmake --build --preset "$preset" -j"$jobs"
     lap "${preset}: build"
     echo "=== ${preset}: test" >&2
@@ -50,7 +51,7 @@ for preset in "${presets[@]}"; do
     if [[ "$preset" == asan ]] && ((fuzz)); then
         # The asan build (clang, fuzzer-no-link) holds the libFuzzer targets too; its ctest has
         # replayed the committed crashers (fuzz_regressions). Each target then runs for
-        # FUZZ_SECONDS (20 s: ~140 s for the six, seeding included).
+        # FUZZ_SECONDS (20 s), one target a core at a time (tests/fuzz/run.sh --jobs).
         echo "=== fuzz: run" >&2
         seconds="${FUZZ_SECONDS:-20}"
         ((long)) && seconds=600
