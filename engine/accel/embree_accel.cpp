@@ -177,8 +177,13 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     } else {
         h.normal = Vec3d{};  // a sphere's candidate came with one (sphere_hits)
     }
-    if (far)
+    if (far) {
         moved_back(a, *far->moved, h);
+        // Its t overflowed double on the way back, and every other candidate lies beyond it: no
+        // hit (sphere.h, first_root_in_range).
+        if (!std::isfinite(h.t))
+            return std::nullopt;
+    }
     return h;
 }
 
@@ -283,6 +288,10 @@ std::optional<Hit> fast_answer(const Impl& a, const Ray& ray, const RayContext& 
         return kept_sphere_hit(c.best, want_normal);
     Hit h;
     fast_hit(a, ray, c.shift, c.len, nh, want_normal, h);
+    // A far ray's shift (its distance over its direction's length) can overflow double where its
+    // float crossing is fine: no hit, as in the kernels (sphere.h, first_root_in_range).
+    if (!std::isfinite(h.t))
+        return std::nullopt;
     return h;
 }
 

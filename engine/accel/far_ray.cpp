@@ -208,8 +208,12 @@ void sort_and_merge_on_moved(const std::vector<Hit>& moved, std::vector<Hit>& ou
         kept_after_edge_merge(order, [&](std::size_t k) -> const Hit& { return moved[k]; });
     std::vector<Hit> sorted;
     sorted.reserve(kept.size());
-    for (const std::size_t k : kept)
-        sorted.push_back(out[k]);
+    for (const std::size_t k : kept) {
+        // A crossing whose t overflowed double on the way back (moved_back: 1e300 away along a
+        // direction 1e-10 long) is no hit, as in the kernels (sphere.h, first_root_in_range).
+        if (std::isfinite(out[k].t))
+            sorted.push_back(out[k]);
+    }
     out.swap(sorted);
 }
 

@@ -234,6 +234,10 @@ std::optional<Hit> linear_closest_from_afar(const Scene& scene, const SceneBall&
             best_key = key;
         }
     }
+    // Its t overflowed double on the way back (moved_back), and every other crossing lies
+    // beyond it: no hit (sphere.h, first_root_in_range).
+    if (best && !std::isfinite(best->t))
+        return std::nullopt;
     return best;
 }
 

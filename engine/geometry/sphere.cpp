@@ -479,8 +479,8 @@ namespace {
 int hits_in_range(const Sphere& s, const Ray& ray, const SphereRoots& r, Hit out[2]) {
     int n = 0;
     for (int k = 0; k < r.count; ++k) {
-        if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax))
-            continue;
+        if (!(r.t[k] >= ray.tmin && r.t[k] <= ray.tmax && std::isfinite(r.t[k])))
+            continue;  // an overflowed root is no hit (first_root_in_range)
         Hit& h = out[n++];
         h = Hit{};
         h.t = r.t[k];

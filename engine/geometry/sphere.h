@@ -20,6 +20,7 @@
 // Each root is rounded from double-double at most three times: within 2 ulps of the exact
 // root (measured against a quad-precision reference in tests/stress; docs/accuracy.md).
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 
@@ -58,10 +59,13 @@ int sphere_hits_fast(const Sphere& s, const Ray& ray, Hit out[2]);
 /// root. `want_normal = false` skips the normal and front-face computation.
 std::optional<Hit> intersect_sphere(const Sphere& s, const Ray& ray, bool want_normal = true);
 
-/// The index of the first of `r`'s roots in [ray.tmin, ray.tmax], or −1.
+/// The index of the first of `r`'s roots in [ray.tmin, ray.tmax], or −1. A root that overflowed
+/// double (a direction 1e-10 long towards a sphere 1e300 away: t ≈ 1e310) is no hit, even with
+/// the default tmax = +inf: its t cannot be answered (JSON has no inf, and the binary answer's
+/// t = +inf means a miss).
 inline int first_root_in_range(const SphereRoots& r, const Ray& ray) {
     for (int i = 0; i < r.count; ++i) {
-        if (r.t[i] >= ray.tmin && r.t[i] <= ray.tmax)
+        if (r.t[i] >= ray.tmin && r.t[i] <= ray.tmax && std::isfinite(r.t[i]))
             return i;
     }
     return -1;

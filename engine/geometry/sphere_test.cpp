@@ -449,5 +449,21 @@ TEST(Sphere, FastRootsWithinTheirBound) {
     EXPECT_FALSE(std::isnan(c.t_err));
 }
 
+// A root that overflows double (9e299 along a direction 1e-10 long) is no hit, with the default
+// tmax = +inf: it had been answered at t = inf with a NaN normal. 1,000 times longer, it fits.
+TEST(Sphere, RootsPastTheLargestDoubleAreNoHits) {
+    const Sphere s{{0, 0, 1e300}, 1e299};
+    const Ray overflows{{0, 0, 0}, {0, 0, 1e-10}}, fits{{0, 0, 0}, {0, 0, 1e-7}};
+    Hit out[2];
+    EXPECT_FALSE(intersect_sphere(s, overflows).has_value());
+    EXPECT_EQ(sphere_hits(s, overflows, out), 0);
+    EXPECT_EQ(sphere_hits_fast(s, overflows, out), 0);
+    const std::optional<Hit> h = intersect_sphere(s, fits);
+    ASSERT_TRUE(h.has_value());
+    EXPECT_NEAR(h->t, 9e306, h->t_err);
+    EXPECT_EQ(sphere_hits(s, fits, out), 2);
+    EXPECT_TRUE(std::isfinite(out[1].t));
+}
+
 }  // namespace
 }  // namespace raycastd::engine

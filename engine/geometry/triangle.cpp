@@ -203,6 +203,8 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
         // result fits (a helper's review).
         h->t = std::ldexp(h->t, -e);
         h->t_err = std::ldexp(h->t_err, -e);
+        if (require_inside && !std::isfinite(h->t))
+            return std::nullopt;  // t overflowed on the way back: no hit (woop's last check)
         // The triangle's own normal, not the scaled copy's: normalising a cross product past
         // 2⁵⁰⁰ divides by its largest component first, and the scaled copy's came out an ulp
         // away, so a triangle's normal had depended on the ray (SceneScan, which keeps each
@@ -316,6 +318,12 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
     }
 
+    // A t that overflowed double is no hit, even with the default tmax = +inf: it cannot be
+    // answered (JSON has no inf; the binary answer's t = +inf means a miss). Checked here, after
+    // the rescaled retry above, which finds the t of a triangle whose sheared coordinates alone
+    // overflowed.
+    if (require_inside && !std::isfinite(t))
+        return std::nullopt;
     Hit hit;
     hit.t = t;
     hit.u = v * inv_det;

@@ -319,5 +319,20 @@ TEST(Triangle, FastKernelReportsNothingItCannotPlaceAfterTmin) {
     EXPECT_NEAR(fast->t, 1.0, fast->t_err);
 }
 
+// A crossing that overflows double (1e300 along a direction 1e-10 long) is no hit, with the
+// default tmax = +inf, at both kernels: it had been answered at t = inf. 1,000 times longer, it
+// fits.
+TEST(Triangle, CrossingsPastTheLargestDoubleAreNoHits) {
+    const Triangle tri{{-1e300, -1e300, 1e300}, {1e300, -1e300, 1e300}, {0, 1e300, 1e300}};
+    const Ray overflows{{0, 0, 0}, {0, 0, 1e-10}}, fits{{0, 0, 0}, {0, 0, 1e-7}};
+    EXPECT_FALSE(intersect_triangle(tri, overflows).has_value());
+    EXPECT_FALSE(intersect_triangle_fast(tri, overflows).has_value());
+    for (const std::optional<Hit>& h :
+         {intersect_triangle(tri, fits), intersect_triangle_fast(tri, fits)}) {
+        ASSERT_TRUE(h.has_value());
+        EXPECT_NEAR(h->t, 1e307, h->t_err);
+    }
+}
+
 }  // namespace
 }  // namespace raycastd::engine

@@ -24,7 +24,7 @@ while (($#)); do
         --jobs) jobs="$2"; shift 2 ;;
         --build-dir) build="$2"; shift 2 ;;
         --models) models="$2"; shift 2 ;;
-        -h|--help) sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,/^[^#]/{/^#/s/^# \{0,1\}//p}' "$0"; exit 0 ;;
         *) echo "run.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
     esac
 done
@@ -39,6 +39,7 @@ targets=(
     "ray_scanner 4096 -dict=$repo/tests/fuzz/json.dict"
     "http_routes 16384 -dict=$repo/tests/fuzz/json.dict"
 )
+[[ "$jobs" =~ ^[1-9][0-9]*$ ]] || { echo "run.sh: --jobs needs a positive integer, not '$jobs'" >&2; exit 2; }
 bin_dir="$build/tests/fuzz"
 regressions="$repo/tests/fuzz/regressions"
 mkdir -p "$build/corpus" "$build/summary" "$build/logs" "$build/artifacts"
