@@ -100,7 +100,13 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
         return m.moved_t(t);
     };
     m.ray.tmin = moved(ray.tmin);
-    m.ray.tmax = moved(ray.tmax);
+    // An unbounded ray ends at the largest double: a crossing past it overflows the client's t
+    // and is no hit (sphere.h, first_root_in_range), but on the moved ray its t is finite, and
+    // `any` had answered true where `closest` found nothing (a helper's review). Where that end
+    // is out of the moved ray's range, no client t can overflow, and +inf stays.
+    const bool unbounded_end = std::isinf(ray.tmax) && ray.tmax > 0.0 &&
+                               std::isfinite(std::ldexp(std::numeric_limits<double>::max(), m.exp));
+    m.ray.tmax = moved(unbounded_end ? std::numeric_limits<double>::max() : ray.tmax);
     if (!range_ok)
         return MoveResult::not_possible;
     m.line_err = line_err(q);

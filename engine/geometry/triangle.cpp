@@ -299,11 +299,21 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         t = plane_t(tri, ray);
         if (std::isnan(t))
             return std::nullopt;  // in the plane to double-double precision
+    } else {
+        t = (u * az + v * bz + w * cz) * inv_det;
+    }
+    // An inf t here (or NaN from inf − inf in the sheared sum) can be an intermediate's overflow
+    // alone: u·az passes 1.8e308 for a triangle 1e80 across seen 1e160 away along a unit
+    // direction, whose t is 1e160. The rescaled retry finds that t; one that truly overflows
+    // comes back inf from it and is no hit (below). Before the range test, which an inf t fails
+    // whenever tmax is finite (a helper's review).
+    if (!rescaled && !std::isfinite(t))
+        return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
+    if (t_from == TFrom::plane) {
         if (require_inside && !(t >= ray.tmin && t <= ray.tmax))
             return std::nullopt;
         t_err = t_error();
     } else {
-        t = (u * az + v * bz + w * cz) * inv_det;
         t_err = t_error();
         // Only a hit certainly at or after tmin (pbrt-v4's t > δt): a ray spawned just off
         // this very triangle (shade/spawn.h) crosses its plane a hair behind its origin, which
@@ -319,9 +329,8 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     }
 
     // A t that overflowed double is no hit, even with the default tmax = +inf: it cannot be
-    // answered (JSON has no inf; the binary answer's t = +inf means a miss). Checked here, after
-    // the rescaled retry above, which finds the t of a triangle whose sheared coordinates alone
-    // overflowed.
+    // answered (JSON has no inf; the binary answer's t = +inf means a miss). Only the rescaled
+    // pass gets here with one (the first hands it to the retry above).
     if (require_inside && !std::isfinite(t))
         return std::nullopt;
     Hit hit;

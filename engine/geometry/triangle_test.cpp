@@ -334,5 +334,26 @@ TEST(Triangle, CrossingsPastTheLargestDoubleAreNoHits) {
     }
 }
 
+// An intermediate that overflows where t does not: u·az passes 1.8e308 for a triangle 1e80
+// across seen 1e160 away along a unit direction, whose t is 1e160. The fast kernel's sheared t
+// came out inf, and was answered so; since the overflow check such a t goes to the rescaled
+// retry (a helper's review) and is found there or not at all: the fast kernel's bound, here 1e65
+// times t, does not place it after tmin, and it stays silent. The exact kernel finds it, with a
+// finite tmax too.
+TEST(Triangle, AnIntermediateOverflowIsNotAnswered) {
+    const Triangle tri{{-1e80, -1e80, 1e160}, {1e80, -1e80, 1e160}, {0, 1e80, 1e160}};
+    for (const double tmax : {kInfinity, 1e200}) {
+        Ray ray{{0, 0, 0}, {0, 0, 1}};
+        ray.tmax = tmax;
+        const std::optional<Hit> exact = intersect_triangle(tri, ray);
+        ASSERT_TRUE(exact.has_value()) << tmax;
+        EXPECT_NEAR(exact->t, 1e160, exact->t_err) << tmax;
+        if (const std::optional<Hit> fast = intersect_triangle_fast(tri, ray)) {
+            EXPECT_TRUE(std::isfinite(fast->t)) << tmax;
+            EXPECT_NEAR(fast->t, 1e160, fast->t_err) << tmax;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace raycastd::engine

@@ -384,40 +384,62 @@ TEST(EmbreeAccel, ExtremeDirectionsAreAnsweredWithoutAborting) {
 // across a scene is still brute force, at every precision.
 // A crossing whose t overflows double (a direction 1e-10 long towards a sphere 1e300 away:
 // t ≈ 9e309) is no hit, in every mode and at every precision, on the brute-force scan and on
-// Embree's BVHs, for near rays and for far ones moved to the scene. It had been answered as a
-// hit at t = inf (JSON's null, the binary form's miss) whose point and normal were NaN, since
-// the default tmax = +inf admitted it. Each overflowing ray has a twin 1,000 times longer whose
-// t fits, and hits.
+// Embree's BVHs, for near rays, far rays moved to the scene and rays too far to be moved. It had
+// been answered as a hit at t = inf (JSON's null, the binary form's miss) whose point and normal
+// were NaN, since the default tmax = +inf admitted it; then, a helper's review found, `any` still
+// said true on a far ray's moved one. Each overflowing ray has a twin 1,000 times
+// longer whose t fits, and hits.
 TEST(EmbreeAccel, CrossingsPastTheLargestDoubleAreNoHits) {
     struct Case {
-        const char* what;
+        std::string what;
         Scene scene;
         Ray overflows, fits;
+        std::uint32_t crossings;  // of `fits`
+        bool brute_force;
     };
-    // A sphere at z = 0 and an icosphere at z = 3 (320 triangles: Embree's BVHs; 20: brute
-    // force), both of radius 1, times `size`, shifted along z by `at`.
+    // A sphere at z = at and, 3 sizes beyond, an icosphere of 320 triangles (with the sphere,
+    // over QueryEngine's 16 primitives: Embree's BVHs) or a single triangle (brute force), all
+    // of radius `size`.
     const auto scene = [](bool big, double size, double at) {
         Scene s;
         s.materials.push_back(Material{});
         s.objects.push_back(testing::sphere("ball", {0, 0, at}, size, 0));
-        s.objects.push_back(testing::icosphere_object(big ? 2 : 0, {0, 0, at + 3 * size}, size));
+        const double z = at + 3 * size;
+        if (big) {
+            s.objects.push_back(testing::icosphere_object(2, {0, 0, z}, size));
+        } else {
+            s.objects.push_back(testing::mesh_object(
+                "triangle", {{-size, -size, z}, {size, -size, z}, {0, size, z}}, {{0, 1, 2}}));
+        }
         return s;
     };
     std::vector<Case> cases;
     for (int big = 0; big < 2; ++big) {
-        // Near rays: the scene 1e300 away from the origin, the rays from the origin.
-        cases.push_back({big ? "near, BVH" : "near, brute force", scene(big, 1e299, 1e300),
-                         Ray{{0, 0, 0}, {0, 0, 1e-10}}, Ray{{0, 0, 0}, {0, 0, 1e-7}}});
-        // Far rays: a unit scene at the origin, the rays from 1e200 away (from 1e300, 2⁹⁰⁰ radii,
-        // a sphere is below the kernel's resolution and missed, docs/numerics.md).
-        cases.push_back({big ? "far, BVH" : "far, brute force", scene(big, 1.0, 0.0),
-                         Ray{{0, 0, -1e200}, {0, 0, 1e-110}}, Ray{{0, 0, -1e200}, {0, 0, 1e-105}}});
+        const std::string how = big ? ", BVH" : ", brute force";
+        const std::uint32_t n = big ? 4 : 3;
+        // Near rays: a scene 1e300 away from the origin (wider than Embree's float frame takes:
+        // the scan, big or not), and one 1e200 across from 2e200 (Embree's BVHs when big).
+        cases.push_back({"near, 1e300 away" + how, scene(big, 1e299, 1e300),
+                         Ray{{0, 0, 0}, {0, 0, 1e-10}}, Ray{{0, 0, 0}, {0, 0, 1e-7}}, n, true});
+        cases.push_back({"near, 1e200 across" + how, scene(big, 1e199, 0.0),
+                         Ray{{0, 0, -2e200}, {0, 0, 1e-110}}, Ray{{0, 0, -2e200}, {0, 0, 1e-107}},
+                         n, !big});
+        // Far rays moved to the scene (1e20 scene sizes away), and too far to be moved (1e200
+        // away: the kernels on the client's ray; from 2⁹⁰⁰ radii a sphere is below the
+        // kernel's resolution and missed, docs/numerics.md).
+        cases.push_back({"far, moved" + how, scene(big, 1e150, 0.0),
+                         Ray{{0, 0, -1e170}, {0, 0, 1e-140}}, Ray{{0, 0, -1e170}, {0, 0, 1e-137}},
+                         n, !big});
+        cases.push_back({"far, not moved" + how, scene(big, 1.0, 0.0),
+                         Ray{{0, 0, -1e200}, {0, 0, 1e-110}}, Ray{{0, 0, -1e200}, {0, 0, 1e-105}},
+                         n, !big});
     }
     for (Case& c : cases) {
         auto engine = build(std::move(c.scene));
+        EXPECT_EQ(engine->brute_force(), c.brute_force) << c.what;
         const std::vector<Ray> rays = {c.overflows, c.fits};
         for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
-            const std::string at = std::string(c.what) + ", " + to_string(p);
+            const std::string at = c.what + ", " + to_string(p);
             QueryResult r = engine->intersect(rays, QueryOptions{Mode::closest, p, true});
             EXPECT_FALSE(r.hits[0].valid()) << at << ": t " << r.hits[0].t;
             ASSERT_TRUE(r.hits[1].valid()) << at;
@@ -425,14 +447,15 @@ TEST(EmbreeAccel, CrossingsPastTheLargestDoubleAreNoHits) {
             EXPECT_GT(r.hits[1].t, 1e304) << at;
             EXPECT_FALSE(engine->closest(c.overflows, p, true).has_value()) << at;
             r = engine->intersect(rays, QueryOptions{Mode::all, p, true});
-            EXPECT_EQ(r.offsets, (std::vector<std::uint32_t>{0, 0, 4})) << at;
+            EXPECT_EQ(r.offsets, (std::vector<std::uint32_t>{0, 0, c.crossings})) << at;
             for (const Hit& h : r.hits)
                 EXPECT_TRUE(std::isfinite(h.t)) << at;
             r = engine->intersect(rays, QueryOptions{Mode::count, p, true});
-            EXPECT_EQ(r.counts, (std::vector<std::uint32_t>{0, 4})) << at;
+            EXPECT_EQ(r.counts, (std::vector<std::uint32_t>{0, c.crossings})) << at;
             r = engine->intersect(rays, QueryOptions{Mode::any, p, true});
             EXPECT_FALSE(r.hits[0].valid()) << at;
             EXPECT_TRUE(r.hits[1].valid()) << at;
+            EXPECT_FALSE(engine->occluded(c.overflows, p)) << at;
         }
     }
 }
