@@ -77,25 +77,24 @@ TEST(Hostile, ASphereOfTheSmallestRadiusIsAnsweredAndTheServerLives) {
 // every mode: it had come back as {"hit": true, "t": null, "point": [null, ...]}.
 TEST(Hostile, ACrossingPastTheLargestDoubleIsAMiss) {
     testing::ServerProcess server;
-    for (const char* mode : {"closest", "all", "count", "any"}) {
+    for (const std::string mode : {"closest", "all", "count", "any"}) {
         const std::string body =
-            std::string(
-                R"({"scene":{"objects":[{"type":"sphere","center":[0,0,1e300],"radius":1e299},)"
-                R"({"type":"triangle","vertices":[[-1e300,-1e300,1.5e300],[1e300,-1e300,1.5e300],[0,1e300,1.5e300]]}]},)"
-                R"("rays":[{"origin":[0,0,0],"direction":[0,0,1e-10]},{"origin":[0,0,0],"direction":[0,0,1e-7]}],)"
-                R"("mode":")") +
+            R"({"scene":{"objects":[{"type":"sphere","center":[0,0,1e300],"radius":1e299},)"
+            R"({"type":"triangle","vertices":[[-1e300,-1e300,1.5e300],[1e300,-1e300,1.5e300],[0,1e300,1.5e300]]}]},)"
+            R"("rays":[{"origin":[0,0,0],"direction":[0,0,1e-10]},{"origin":[0,0,0],"direction":[0,0,1e-7]}],)"
+            R"("mode":")" +
             mode + R"("})";
         const std::string a = exchange(server.port(), post("/v1/intersect", body));
         ASSERT_EQ(status_of(a), 200) << mode << ": " << a.substr(0, 300);
         const json hits = json::parse(body_of(a)).at("hits");
-        if (std::string(mode) == "all" || std::string(mode) == "count") {
+        if (mode == "all" || mode == "count") {
             EXPECT_EQ(hits.at(0).at("count"), 0) << mode << ": " << hits.dump().substr(0, 300);
             EXPECT_EQ(hits.at(1).at("count"), 3) << mode << ": " << hits.dump().substr(0, 300);
         } else {
             EXPECT_FALSE(hits.at(0).at("hit").get<bool>()) << mode << ": " << hits.dump();
             EXPECT_TRUE(hits.at(1).at("hit").get<bool>()) << mode;
         }
-        if (std::string(mode) == "closest") {
+        if (mode == "closest") {
             EXPECT_NEAR(hits.at(1).at("t").get<double>(), 9e306, 1e294);
         }
     }
