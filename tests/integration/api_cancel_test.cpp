@@ -294,12 +294,16 @@ TEST(Cancel, ClientGoneAfterTheTracingFreesTheAnswer) {
     // The same batch, but the client goes only once the tracing is over and the server waits,
     // idle, for it to read a 128 MB answer it never reads: the buffers are freed, not pooled
     // (the CI run of 2026-12-01 kept 245 MB after such a client had gone).
+    // Where freed memory is not handed back (ASan) only the holding is checked, on a quarter of
+    // the batch: 4M exact rays took 18.5 s of the asan stage's serial tail.
+    const std::size_t rays = kAllocatorHandsMemoryBack ? 4u << 20 : 1u << 20;
+    const std::size_t answer_bytes = rays * 32;  // 32 bytes a float32 closest answer
     ServerProcess server;
     const std::string id = register_scene(server, uv_sphere_obj(200, 200), "model/obj");
     const std::size_t rss_before = sample(server.pid()).rss_bytes;
     const int s = connect_loopback(server.port());
     send_all(s, post("/v1/scenes/" + id + "/intersect?mode=closest&precision=exact&dtype=float32",
-                     "application/octet-stream", random_ray_records(4u << 20)));
+                     "application/octet-stream", random_ray_records(rays)));
     ASSERT_TRUE(seconds_until_idle(server.pid(), Clock::now(), 20s)) << "the tracing never ended";
     const std::size_t rss_waiting = sample(server.pid()).rss_bytes;
     ::close(s);
@@ -308,7 +312,7 @@ TEST(Cancel, ClientGoneAfterTheTracingFreesTheAnswer) {
     std::printf(
         "[ measured ] answer never read: RSS %.0f MB before, %.0f MB waiting, %.0f MB after\n",
         mb(rss_before), mb(rss_waiting), mb(rss_after));
-    EXPECT_GT(rss_waiting, rss_before + (128u << 20)) << "the answer should have been held";
+    EXPECT_GT(rss_waiting, rss_before + answer_bytes) << "the answer should have been held";
     if (kAllocatorHandsMemoryBack) {
         EXPECT_LT(rss_after, rss_before + (64u << 20));
     }
