@@ -32,8 +32,11 @@ else()
 endif()
 # RAYCASTD_SANITIZED (0 or 1): a few brute-force references visit a quarter of their points
 # under the sanitizers, where they cost ~11x release's time (engine/accel/point_bvh_test.cpp).
-target_compile_definitions(raycastd_test_code INTERFACE
-    RAYCASTD_SANITIZED=$<BOOL:${RAYCASTD_SANITIZE}>)
+if(RAYCASTD_SANITIZE)
+    target_compile_definitions(raycastd_test_code INTERFACE RAYCASTD_SANITIZED=1)
+else()
+    target_compile_definitions(raycastd_test_code INTERFACE RAYCASTD_SANITIZED=0)
+endif()
 
 # Precompiled headers: GoogleTest, nlohmann/json, cpp-httplib and the common standard headers
 # took 2-5 s to parse in each of the ~80 test files that include them (one empty file including
