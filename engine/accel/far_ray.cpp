@@ -93,22 +93,19 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
     m.ray.direction = d;
     // The range moves with the origin (tmin − shift rounds once: a hit within an ulp of the
     // client's far tmin or tmax, thousands of scene sizes at this distance, may go either way).
-    bool range_ok = true;
-    const auto moved = [&](double t) {
-        const double tau = std::ldexp(t, m.exp);  // exact unless it leaves double's range
-        range_ok = range_ok && (std::isinf(t) || (std::isfinite(tau) && (tau != 0.0 || t == 0.0)));
-        return m.moved_t(t);
-    };
-    m.ray.tmin = moved(ray.tmin);
+    // An end whose τ leaves double's range goes to ±inf or rounds towards 0 (MovedRay::moved_t),
+    // which changes no answer: every crossing near the scene has a τ of shift plus a few radii,
+    // finite and far from 0. Such ends had made the ray not movable: a tmax of 1e308 (clients
+    // send it for "unbounded", JSON having no infinity) on a direction longer than 2 lost every
+    // hit of a far ray, in every mode and precision (a helper's review).
+    m.ray.tmin = m.moved_t(ray.tmin);
     // An unbounded ray ends at the largest double: a crossing past it overflows the client's t
     // and is no hit (sphere.h, first_root_in_range), but on the moved ray its t is finite, and
     // `any` had answered true where `closest` found nothing (a helper's review). Where that end
     // is out of the moved ray's range, no client t can overflow, and +inf stays.
     const bool unbounded_end = std::isinf(ray.tmax) && ray.tmax > 0.0 &&
                                std::isfinite(std::ldexp(std::numeric_limits<double>::max(), m.exp));
-    m.ray.tmax = moved(unbounded_end ? std::numeric_limits<double>::max() : ray.tmax);
-    if (!range_ok)
-        return MoveResult::not_possible;
+    m.ray.tmax = m.moved_t(unbounded_end ? std::numeric_limits<double>::max() : ray.tmax);
     m.line_err = line_err(q);
     if (!std::isfinite(m.line_err) || std::isnan(m.ray.tmin) || std::isnan(m.ray.tmax))
         return MoveResult::not_possible;
@@ -116,9 +113,12 @@ MoveResult move_near_ball(const Vec3d& centre, double radius, const Ray& ray, Mo
 }
 
 double MovedRay::moved_t(double t) const {
-    if (std::isinf(t))
-        return t;
-    const dd::DD r = dd::sub(dd::DD{std::ldexp(t, exp), 0.0}, shift);
+    // τ = t·2^exp is exact unless it leaves double's range: then it is ±inf (beyond every
+    // crossing near the scene, whose τ is finite) or rounds towards 0 (far before them).
+    const double tau = std::ldexp(t, exp);
+    if (std::isinf(tau))
+        return tau;
+    const dd::DD r = dd::sub(dd::DD{tau, 0.0}, shift);
     return r.hi + r.lo;
 }
 

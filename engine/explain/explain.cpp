@@ -100,32 +100,43 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     }
 
     const SphereRoots r = sphere_roots(s, ray);
-    bool finite_roots = true;
+    // A direction far shorter than the distances (1e-150 against 1e200) makes a root overflow.
+    // Only the finite ones can be reported: a ray from inside a sphere 1e300 across, 4e-9 long,
+    // has its root behind at -inf and the one ahead at 1.25e308, which is the intersectors' hit
+    // (their kernels skip a root past the largest double, not the other one).
+    int overflowed = 0;
     for (int i = 0; i < r.count; ++i) {
-        sw.roots.push_back(r.t[i]);
-        finite_roots = finite_roots && std::isfinite(r.t[i]);
+        if (std::isfinite(r.t[i]))
+            sw.roots.push_back(r.t[i]);
+        else
+            ++overflowed;
     }
-    if (!finite_roots) {
-        // A direction far shorter than the distances (1e-150 against 1e200): the roots
-        // overflow. No t to report, so no hit.
-        sw.roots.clear();
-        w.reason = kTBeyondRange;
-        w.steps.push_back(w.reason);
-    } else if (r.count == 0) {
+    if (r.count == 0) {
         w.reason = "no real roots: the ray misses";
         w.steps.push_back(w.reason);
+    } else if (sw.roots.empty()) {
+        w.reason = kTBeyondRange;
+        w.steps.push_back(w.reason);
     } else {
-        w.steps.push_back(r.count == 1 ? "t = " + num(r.t[0]) + " (tangent)"
-                                       : "t = " + num(r.t[0]) + " or t = " + num(r.t[1]));
-        for (int i = 0; i < r.count; ++i) {
-            if (r.t[i] >= ray.tmin && r.t[i] <= ray.tmax) {
+        if (r.count == 1)
+            w.steps.push_back("t = " + num(sw.roots[0]) + " (tangent)");
+        else if (overflowed == 0)
+            w.steps.push_back("t = " + num(sw.roots[0]) + " or t = " + num(sw.roots[1]));
+        else
+            w.steps.push_back("t = " + num(sw.roots[0]) +
+                              " (the other root lies beyond double precision's range, about "
+                              "1.8e308)");
+        for (double t : sw.roots) {
+            if (t >= ray.tmin && t <= ray.tmax) {
                 w.hit = true;
-                w.t = r.t[i];
+                w.t = t;
                 break;
             }
         }
         if (!w.hit) {
-            w.reason = "both roots lie outside [tmin, tmax]: the ray misses";
+            w.reason = sw.roots.size() == 2 ? "both roots lie outside [tmin, tmax]: the ray misses"
+                       : r.count == 1       ? "the root lies outside [tmin, tmax]: the ray misses"
+                                      : "the finite root lies outside [tmin, tmax]: the ray misses";
             w.steps.push_back(w.reason);
         }
     }

@@ -182,6 +182,35 @@ TEST(Explain, ProductsBeyondDoublesRangeAreNotWrittenOut) {
     EXPECT_TRUE(near.objects[0].sphere->representable);
 }
 
+TEST(Explain, ARootPastTheLargestDoubleLeavesTheOther) {
+    // From inside a sphere 2e300 across, halfway up, with a direction 4e-9 long: the root behind
+    // is -1.5e300 / 4e-9, past the largest double, and the one ahead 1.25e308, which is what the
+    // intersectors answer. The overflowing root had taken the finite one with it ("no hit").
+    Scene scene;
+    scene.materials.push_back(Material{});
+    scene.material_names.push_back("default");
+    scene.objects.push_back(testing::sphere("huge", {0, 0, 0}, 1e300, 0));
+    const Ray ray{{0, 0, 0.5e300}, {0, 0, 4e-9}};
+    const Explanation ex = explain(scene, ray).value();
+    const ObjectWork& w = ex.objects[0];
+    ASSERT_TRUE(w.sphere);
+    ASSERT_EQ(w.sphere->roots.size(), 1u);
+    EXPECT_NEAR(w.sphere->roots[0], 1.25e308, 1e293);
+    EXPECT_FALSE(has_inf_or_nan(w.steps));
+    ASSERT_TRUE(w.hit);
+    EXPECT_EQ(*w.t, w.sphere->roots[0]);
+    ASSERT_TRUE(ex.first_hit);
+    EXPECT_EQ(ex.first_hit->t, *w.t);
+
+    Ray short_ray = ray;
+    short_ray.tmax = 1e308;
+    const Explanation before = explain(scene, short_ray).value();
+    EXPECT_FALSE(before.objects[0].hit);
+    EXPECT_EQ(before.objects[0].reason,
+              "the finite root lies outside [tmin, tmax]: the ray misses");
+    EXPECT_FALSE(before.first_hit);
+}
+
 TEST(Explain, StopsWhenItsTokenHasFired) {
     const CancelToken stopped = CancelToken::make();
     stopped.cancel();

@@ -326,8 +326,15 @@ std::optional<Vec3d> normal_from_closest_approach(const Sphere& s, const Ray& ra
     const double dmax = max_abs(ray.direction);
     if (!(s.radius > 0.0) || !std::isfinite(s.radius) || !(dmax > 0.0) || !std::isfinite(dmax))
         return std::nullopt;
-    const DD f[3] = {two_sum(ray.origin.x, -s.center.x), two_sum(ray.origin.y, -s.center.y),
-                     two_sum(ray.origin.z, -s.center.z)};
+    // f = o − c, exactly, at 2^ef: halved where o − c could overflow (an origin at -1e308 and a
+    // centre at 1e308 gave a NaN normal, written as null, and front_face false: a helper's
+    // review). Halving coordinates above 2^1000 loses no digit that matters at that scale.
+    const int ef = std::max(max_abs(ray.origin), max_abs(s.center)) > 0x1p1000 ? -1 : 0;
+    const auto diff = [ef](double o, double c) {
+        return two_sum(std::ldexp(o, ef), -std::ldexp(c, ef));
+    };
+    const DD f[3] = {diff(ray.origin.x, s.center.x), diff(ray.origin.y, s.center.y),
+                     diff(ray.origin.z, s.center.z)};
     const double fmax = std::max({std::abs(f[0].hi), std::abs(f[1].hi), std::abs(f[2].hi)});
     if (!std::isfinite(fmax))
         return std::nullopt;
@@ -335,12 +342,15 @@ std::optional<Vec3d> normal_from_closest_approach(const Sphere& s, const Ray& ra
     const int ed = -std::ilogb(dmax);
     int er = std::min(-std::ilogb(s.radius), 1000);
     if (fmax > 0.0)
-        er = std::min(er, 499 - std::ilogb(fmax));
+        er = std::min(er, 499 - (std::ilogb(fmax) - ef));
     const Vec3d d = ray.direction * std::ldexp(1.0, ed);
     const double r = std::ldexp(s.radius, er);
     if (!(r > 0.0))
         return std::nullopt;
-    const auto scaled = [&](const DD& x) { return DD{std::ldexp(x.hi, er), std::ldexp(x.lo, er)}; };
+    // f held at 2^ef, brought to 2^er.
+    const auto scaled = [&](const DD& x) {
+        return DD{std::ldexp(x.hi, er - ef), std::ldexp(x.lo, er - ef)};
+    };
     const DD fx = scaled(f[0]), fy = scaled(f[1]), fz = scaled(f[2]);
     DD cx, cy, cz;
     cross_dd(fx, fy, fz, d, r, cx, cy, cz);
@@ -372,7 +382,9 @@ void sphere_normal_at(const Sphere& s, const Ray& ray, double t, int side, Hit& 
     // length (far from the origin), normalise instead.
     const Vec3d pc = ray.origin - s.center + ray.direction * t;
     Vec3d n = pc / s.radius;
-    if (!(max_abs(ray.origin - s.center) <= kNormalFarRadii * s.radius)) {
+    // The distance scaled down, not the radius up: 2²⁰·r overflows for a radius past 1.7e302,
+    // and an o − c that overflowed then compared inf <= inf and took the plain form's NaN.
+    if (!(max_abs(ray.origin - s.center) / kNormalFarRadii <= s.radius)) {
         if (const std::optional<Vec3d> far = normal_from_closest_approach(s, ray, t, side))
             n = *far;
     }

@@ -348,6 +348,32 @@ TEST(Sphere, FarNormalsAtExtremeScales) {
     }
 }
 
+// o − c past the largest double (an origin at -1e308, a centre at 1e308) while both roots fit:
+// the normal had come out NaN (JSON's null) with front_face false (a helper's review).
+TEST(Sphere, NormalsWhereOriginMinusCentreOverflows) {
+    const double h = std::sqrt(3.0) / 2;
+    const Sphere s{{1e308, 0, 0}, 5e307};
+    for (const Ray& ray :
+         {Ray{{-1e308, 2.5e307, 0}, {2, 0, 0}}, Ray{{-1e308, 2.5e307, 0}, {1, 0, 0}}}) {
+        SCOPED_TRACE(ray.direction.x);
+        Hit hits[2];
+        const int n = sphere_hits(s, ray, hits);
+        ASSERT_EQ(n, ray.direction.x == 2 ? 2 : 1);  // the far root overflows at direction 1
+        for (int k = 0; k < n; ++k) {
+            const Vec3d want = k == 0 ? Vec3d{-h, 0.5, 0} : Vec3d{h, 0.5, 0};
+            EXPECT_EQ(hits[k].front_face, k == 0) << k;
+            EXPECT_NEAR(hits[k].normal.x, want.x, 1e-15) << k;
+            EXPECT_NEAR(hits[k].normal.y, want.y, 1e-15) << k;
+            EXPECT_EQ(hits[k].normal.z, 0.0) << k;
+        }
+        const std::optional<Hit> first = intersect_sphere(s, ray);
+        ASSERT_TRUE(first);
+        EXPECT_EQ(first->t, hits[0].t);
+        EXPECT_EQ(first->normal, hits[0].normal);
+        EXPECT_TRUE(first->front_face);
+    }
+}
+
 // Which root a normal belongs to is passed on where it is known: from 2^40 away the two roots
 // of a line 1e-8 of a radius inside a unit sphere round to neighbouring doubles, and with tmin
 // at the second one, the normal recomputed from t alone took the near side, front_face true

@@ -1,6 +1,7 @@
 #include "engine/query/intersect.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -122,6 +123,38 @@ TEST(Query, BuildRejectsInvalidScene) {
     ASSERT_FALSE(e.ok());
     EXPECT_EQ(e.status().code, Code::invalid_scene);
     EXPECT_EQ(e.status().path, "/objects/1/radius");
+}
+
+// A scene whose extent passes the largest double is refused: a sphere reaching past it, a
+// triangle whose edges overflow, and two objects each within range whose distance is not (a
+// helper's review: every point query of the first answered "on the surface", the second was
+// never hit). Up to ±8e307 on each axis a scene is taken.
+TEST(Query, BuildRejectsASceneWiderThanDouble) {
+    const auto refused = [](Scene s) {
+        auto e = QueryEngine::build(std::make_shared<Scene>(std::move(s)));
+        return e.ok() ? std::string("built") : e.status().path;
+    };
+    const auto scene_of = [](std::vector<Object> objects) {
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects = std::move(objects);
+        return s;
+    };
+    const Object tiny = testing::sphere("tiny", {0, 0, 0}, 1.0, 0);
+    EXPECT_EQ(refused(scene_of({tiny, testing::sphere("past", {1e308, 0, 0}, 1e308, 0)})),
+              "/objects/1");
+    EXPECT_EQ(refused(scene_of({testing::mesh_object(
+                  "wide", {{-1e308, -1e308, 5}, {1e308, -1e308, 5}, {0, 1e308, 5}}, {{0, 1, 2}})})),
+              "/objects/0");
+    EXPECT_EQ(refused(scene_of({testing::sphere("left", {-1e308, 0, 0}, 1.0, 0), tiny,
+                                testing::sphere("right", {1e308, 0, 0}, 1.0, 0)})),
+              "/objects/2");
+    EXPECT_EQ(refused(scene_of({testing::sphere("left", {-8e307, 0, 0}, 1e306, 0),
+                                testing::sphere("right", {8e307, 0, 0}, 1e306, 0)})),
+              "built");
+    Status st = validate(scene_of({tiny, testing::sphere("past", {1e308, 0, 0}, 1e308, 0)}));
+    EXPECT_EQ(st.code, Code::invalid_scene);
+    EXPECT_NE(st.message.find("object 1's extent"), std::string::npos) << st.message;
 }
 
 // A batch whose token has fired answers Code::cancelled in every mode, on a BVH and by brute
@@ -456,6 +489,73 @@ TEST(EmbreeAccel, CrossingsPastTheLargestDoubleAreNoHits) {
             EXPECT_FALSE(r.hits[0].valid()) << at;
             EXPECT_TRUE(r.hits[1].valid()) << at;
             EXPECT_FALSE(engine->occluded(c.overflows, p)) << at;
+        }
+    }
+}
+
+// A far ray whose range ends near double's limits, as clients send them for "unbounded" (JSON
+// has no infinity): tmax 1e308 or the largest double, tmin -1e308, on a direction 4 long per axis,
+// whose τ = t·2^exp of those ends overflows on the way to the scene; and ends of 5e-324 on a
+// direction 2^-10 long, whose τ underflows. Such rays were not moved to the scene, and the far
+// kernels, whose shear of an oblique ray from 2^66 away mixes in rounding far larger than the
+// scene, lost its mesh's hits in every mode and at every precision (a helper's review: a
+// triangle seen along (1, 1, 1) from -2^66·(1, 1, 1) with tmax 1e308). Each is answered as the
+// same ray with the default range, on the brute-force scan and on Embree's BVHs.
+TEST(EmbreeAccel, FarRaysWithRangeEndsNearDoublesLimitsHit) {
+    constexpr double kMax = std::numeric_limits<double>::max();
+    constexpr double kTiny = std::numeric_limits<double>::denorm_min();
+    for (int big = 0; big < 2; ++big) {
+        // Along the line x = y = z: a unit sphere at the origin, then a triangle crossed at
+        // (0.1, 0.1, 0.1) or an icosphere of 320 triangles centred at (3, 3, 3).
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects.push_back(testing::sphere("ball", {0, 0, 0}, 1.0, 0));
+        if (big) {
+            s.objects.push_back(testing::icosphere_object(2, {3, 3, 3}, 1.0));
+        } else {
+            s.objects.push_back(testing::mesh_object(
+                "triangle", {{-1, -1, 0.1}, {1, -1, 0.1}, {0, 1, 0.1}}, {{0, 1, 2}}));
+        }
+        const std::uint32_t crossings = big ? 4 : 3;
+        auto engine = build(std::move(s));
+        EXPECT_EQ(engine->brute_force(), !big);
+        struct Case {
+            double length, tmin, tmax;
+            bool hits;
+        };
+        for (const Case& c :
+             {Case{4, 0, 1e308, true}, Case{4, 0, kMax, true}, Case{4, -1e308, kInfinity, true},
+              Case{4, -kMax, kMax, true}, Case{0x1p-10, kTiny, kInfinity, true},
+              Case{0x1p-10, -1e308, 1e308, true}, Case{0x1p-10, 0, kTiny, false}}) {
+            const Ray plain{{-0x1p66, -0x1p66, -0x1p66}, {c.length, c.length, c.length}};
+            const Ray ray{plain.origin, plain.direction, c.tmin, c.tmax};
+            for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+                const std::string at = std::string(big ? "BVH" : "brute force") + ", length " +
+                                       std::to_string(c.length) + ", [" + std::to_string(c.tmin) +
+                                       ", " + std::to_string(c.tmax) + "], " + to_string(p);
+                const std::vector<Ray> rays = {plain, ray};
+                QueryResult r = engine->intersect(rays, QueryOptions{Mode::all, p, true});
+                ASSERT_EQ(r.offsets.size(), 3u) << at;
+                EXPECT_EQ(r.offsets[1], crossings) << at;
+                EXPECT_EQ(r.offsets[2] - r.offsets[1], c.hits ? crossings : 0u) << at;
+                for (std::uint32_t k = 0; c.hits && k < crossings && r.offsets[2] == 2 * crossings;
+                     ++k) {
+                    EXPECT_EQ(r.hits[crossings + k].t, r.hits[k].t) << at << " hit " << k;
+                    EXPECT_EQ(r.hits[crossings + k].object, r.hits[k].object) << at;
+                }
+                r = engine->intersect(rays, QueryOptions{Mode::closest, p, true});
+                ASSERT_TRUE(r.hits[0].valid()) << at;
+                EXPECT_EQ(r.hits[1].valid(), c.hits) << at;
+                if (c.hits && r.hits[1].valid()) {
+                    EXPECT_EQ(r.hits[1].t, r.hits[0].t) << at;
+                }
+                r = engine->intersect(rays, QueryOptions{Mode::count, p, true});
+                EXPECT_EQ(r.counts, (std::vector<std::uint32_t>{crossings, c.hits ? crossings : 0}))
+                    << at;
+                r = engine->intersect(rays, QueryOptions{Mode::any, p, true});
+                EXPECT_EQ(r.hits[1].valid(), c.hits) << at;
+                EXPECT_EQ(engine->occluded(ray, p), c.hits) << at;
+            }
         }
     }
 }

@@ -21,17 +21,24 @@ std::size_t Scene::sphere_count() const {
                       [](const Object& o) { return o.kind == ObjectKind::sphere; }));
 }
 
+namespace {
+
+Bounds3 object_bounds(const Object& o) {
+    if (o.kind != ObjectKind::sphere)
+        return o.mesh->bounds();
+    Bounds3 b;
+    const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
+    b.extend(o.sphere.center - r);
+    b.extend(o.sphere.center + r);
+    return b;
+}
+
+}  // namespace
+
 Bounds3 Scene::bounds() const {
     Bounds3 b;
-    for (const auto& o : objects) {
-        if (o.kind == ObjectKind::sphere) {
-            const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
-            b.extend(o.sphere.center - r);
-            b.extend(o.sphere.center + r);
-        } else {
-            b.extend(o.mesh->bounds());
-        }
-    }
+    for (const auto& o : objects)
+        b.extend(object_bounds(o));
     return b;
 }
 
@@ -123,6 +130,28 @@ Status validate(const Scene& scene) {
         if (!o.mesh->corner_uvs.empty() && o.mesh->corner_uvs.size() != o.mesh->size()) {
             return Status::error(Code::internal, "texture coordinates for some triangles only",
                                  object_path(i));
+        }
+    }
+    // The scene's extent must be finite too: its bounds, and their size along each axis. A
+    // sphere of radius 1e308 centred at 1e308 (its bounds' +x is inf) had every point query
+    // answered "on the surface", since their error bound grows with the bounds; a triangle
+    // from -1e308 to 1e308, whose edges overflow, was never hit (a helper's review). Such a
+    // scene has surface points, or distances across it, that double cannot hold.
+    Bounds3 all;
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const Bounds3 b = object_bounds(scene.objects[i]);
+        if (b.empty())
+            continue;
+        const bool own = is_finite(b.lo) && is_finite(b.hi) && is_finite(b.diagonal());
+        all.extend(b);
+        if (!own || !is_finite(all.diagonal())) {
+            return Status::error(
+                Code::invalid_scene,
+                std::string(own ? "with object " + std::to_string(i) + " the scene's"
+                                : "object " + std::to_string(i) + "'s") +
+                    " extent along x, y or z passes the largest double (about 1.8e308): "
+                    "coordinates and the distances between them must stay within it",
+                object_path(i));
         }
     }
     return {};

@@ -147,7 +147,7 @@ Dtype parse_dtype(const std::string& s) {
     if (s == "float64")
         return Dtype::float64;
     throw ApiError(ErrorCode::invalid_request,
-                   "dtype must be float32 or float64, got \"" + s + "\"");
+                   "dtype must be float32 or float64, got \"" + s + "\"", "dtype");
 }
 
 std::size_t ray_count(std::size_t bytes, Dtype dtype, std::size_t max_rays) {

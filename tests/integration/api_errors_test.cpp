@@ -80,6 +80,11 @@ TEST_F(ApiErrors, InvalidScene) {
                            R"([{"origin":[0,0,0],"direction":[0,0,1]}])"),
                  400, "invalid_scene", "/scene/objects/0/type");
     expect_error("/v1/intersect", R"({"rays":[]})", 400, "invalid_request", "/scene");
+    // A scene reaching past the largest double (docs/api.md).
+    expect_error("/v1/intersect",
+                 intersect(R"({"objects":[{"type":"sphere","center":[1e308,0,0],"radius":1e308}]})",
+                           R"([{"origin":[0,0,0],"direction":[0,0,1]}])"),
+                 400, "invalid_scene", "/scene/objects/0");
 }
 
 TEST_F(ApiErrors, InvalidRequest) {

@@ -174,7 +174,7 @@ TEST_F(Intersect, BinaryFieldsAreTheJsonNames) {
         EXPECT_NEAR(b[3] * b[3] + b[4] * b[4] + b[5] * b[5], 1.0f, 1e-5f) << i;
     }
     EXPECT_GT(hits, 50);
-    for (const char* bad : {"fields=normals", "fields=t,,object", "fields=t%2Cbogus"}) {
+    for (const char* bad : {"fields=normals", "fields=t,,object", "fields=t%2Cbogus", "fields="}) {
         auto r = post_binary(std::string("precision=exact&") + bad, body);
         ASSERT_TRUE(r);
         EXPECT_EQ(r->status, 400) << bad;
@@ -265,6 +265,7 @@ TEST_F(Intersect, BadBinaryBodiesAreInvalidRay) {
     expect_invalid(inf, "ray 0");
     auto bad_dtype = post_binary("dtype=float16", good);
     EXPECT_EQ(Json::parse(bad_dtype->body).at("error").at("code"), "invalid_request");
+    EXPECT_EQ(Json::parse(bad_dtype->body).at("error").at("path"), "dtype");
     // The server is still there, and so is the scene.
     EXPECT_EQ(post_binary("dtype=float32", good)->status, 200);
 }
