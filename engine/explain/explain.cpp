@@ -273,7 +273,7 @@ Result<Explanation> explain(const Scene& scene, const Ray& ray, const CancelToke
     if (cancel.fired())
         return cancel.status();
     if (ex.first_hit)
-        ex.first_point = ray.at(ex.first_hit->t);
+        ex.first_point = hit_point(scene, ray, *ex.first_hit);  // l(t), or on the surface from afar
     return ex;
 }
 

@@ -58,7 +58,7 @@ struct ObjectWork {
 struct Explanation {
     std::vector<ObjectWork> objects;
     std::optional<Hit> first_hit;  ///< the engine's closest hit (exact path), if any
-    Vec3d first_point;             ///< l(first_hit.t)
+    Vec3d first_point;             ///< l(first_hit.t): hit_point (engine/query/intersect.h)
 };
 
 /// Works the solution for every object of the scene. The ray must be valid. Code::cancelled

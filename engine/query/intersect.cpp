@@ -135,6 +135,33 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
+Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit) {
+    // 2²⁰ object sizes: where sphere_normal starts taking the closest approach (kNormalFarRadii).
+    constexpr double kFarSizes = 0x1p20;
+    const Vec3d on_ray = ray.at(hit.t);
+    if (hit.object >= scene.objects.size())
+        return on_ray;
+    const Object& o = scene.objects[hit.object];
+    Vec3d p = on_ray;
+    if (o.kind == ObjectKind::sphere) {
+        const Sphere& s = o.sphere;
+        if (max_abs(ray.origin - s.center) / kFarSizes <= s.radius)
+            return on_ray;
+        Hit at;  // the hit's own normal is zero when the request did not ask for it
+        sphere_normal(s, ray, hit.t, at);
+        p = s.center + at.normal * s.radius;
+    } else {
+        if (!o.mesh || hit.primitive >= o.mesh->size())
+            return on_ray;
+        const Triangle t = o.mesh->triangle(hit.primitive);
+        const Vec3d ab = t.b - t.a, ac = t.c - t.a;
+        if (max_abs(ray.origin - t.a) / kFarSizes <= std::max(max_abs(ab), max_abs(ac)))
+            return on_ray;
+        p = t.a + ab * hit.u + ac * hit.v;
+    }
+    return is_finite(p) ? p : on_ray;
+}
+
 std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal,
                                           const CancelToken& cancel) {
     // As QueryEngine answers a brute-force scene (far rays moved for its meshes), so that

@@ -182,6 +182,16 @@ inline bool is_valid_ray(const Ray& ray) {
 /// Checks one ray against the API's rules; the message names the ray index.
 Status validate_ray(const Ray& ray, std::size_t index);
 
+/// The point of a hit, for answers: origin + t·direction, as API.md defines it, unless the ray
+/// comes from more than 2²⁰ of the object's sizes away (from its sphere's centre, or its
+/// triangle's first corner). That sum rounds by u·|origin|: from -2⁶⁶·(1, 1, 1) a triangle's hit
+/// at (0.1, 0.1, 0.1) came out as (0, 0, 0) (a helper's review). There the point is taken on the
+/// surface instead, to the object's own precision: (1−u−v)·a + u·b + v·c with the hit's
+/// barycentrics (a far ray's come from the ray moved to the scene, docs/numerics.md), or c + r·n
+/// with the normal from the closest approach (geometry/sphere.h). Both agree with
+/// origin + t·direction within t's own error; nearer rays keep that sum, bit for bit.
+Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit);
+
 /// The closest hit over `scene` as it is, without a QueryEngine: every primitive tested in
 /// double (the exact path, by brute force), or nullopt; a far ray's meshes answered on the ray
 /// moved to the scene, as QueryEngine's brute-force path does (linear_closest_from_afar). For

@@ -560,6 +560,45 @@ TEST(EmbreeAccel, FarRaysWithRangeEndsNearDoublesLimitsHit) {
     }
 }
 
+// hit_point: origin + t·direction for near rays, bit for bit; on the surface for rays from far
+// away, where that sum rounds by u·|origin| (2^66·u = 8,192 below: a triangle's hit at
+// (0.1, 0.1, 0.1) came out as (0, 0, 0), a sphere's at z = -0.8 as z = 0).
+TEST(Query, HitPointsOfFarRaysAreOnTheSurface) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(
+        testing::mesh_object("triangle", {{-1, -1, 0.1}, {1, -1, 0.1}, {0, 1, 0.1}}, {{0, 1, 2}}));
+    s.objects.push_back(testing::sphere("ball", {5, 0, 0}, 1.0, 0));
+    const auto scene = std::make_shared<Scene>(std::move(s));
+    auto engine = QueryEngine::build(scene);
+    ASSERT_TRUE(engine.ok());
+    struct Case {
+        Ray ray;
+        Vec3d want;
+    };
+    const Case cases[] = {
+        {Ray{{-0x1p66, -0x1p66, -0x1p66}, {2, 2, 2}}, {0.1, 0.1, 0.1}},
+        {Ray{{5.6, 0, -0x1p66}, {0, 0, 1}}, {5.6, 0, -0.8}},
+    };
+    for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
+        const double tol = p == Precision::fast ? 1e-6 : 4e-15;
+        for (const Case& c : cases) {
+            const std::optional<Hit> h = (*engine)->closest(c.ray, p, false);
+            ASSERT_TRUE(h) << to_string(p);
+            const Vec3d got = hit_point(*scene, c.ray, *h);
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(got[k], c.want[k], tol) << to_string(p) << " " << k;
+            EXPECT_GT(length(c.ray.at(h->t) - c.want), 0.05) << "the sum itself is accurate?";
+        }
+        // Near rays: the sum, bit for bit.
+        for (const Ray& near : {Ray{{0.1, 0.1, -3}, {0, 0, 1}}, Ray{{5.6, 0, -3}, {0, 0, 1}}}) {
+            const std::optional<Hit> h = (*engine)->closest(near, p, false);
+            ASSERT_TRUE(h);
+            EXPECT_EQ(hit_point(*scene, near, *h), near.at(h->t));
+        }
+    }
+}
+
 TEST(EmbreeAccel, SceneWiderThanFloatIsAnswered) {
     for (double scale : {1.0, 1e260}) {
         Scene s;

@@ -112,7 +112,7 @@ void write_hit(JsonWriter& w, const engine::Scene& scene, const engine::Ray& ray
     if (f.t_err)
         w.raw(",\"t_err\":").number(h.t_err);
     if (f.point)
-        w.raw(",\"point\":").vec(ray.at(h.t));
+        w.raw(",\"point\":").vec(engine::hit_point(scene, ray, h));
     if (f.normal)
         w.raw(",\"normal\":").vec(h.normal);
     if (f.front_face)

@@ -101,6 +101,31 @@ TEST(Hostile, ACrossingPastTheLargestDoubleIsAMiss) {
     ASSERT_TRUE(server.alive());
 }
 
+// A far ray with the "unbounded" tmax a JSON client sends (1e308) keeps its hit, and its point
+// is on the triangle: from -2^66·(1, 1, 1) along (2, 2, 2) the triangle at z = 0.1 is crossed at
+// (0.1, 0.1, 0.1). The ray had been left unmoved and missed in every mode (tmax's scaled value
+// overflowed), and origin + t·direction, which rounds by 2^66·u, put the point at (0, 0, 0).
+TEST(Hostile, AFarRayWithTmax1e308HitsWhereTheTriangleIs) {
+    testing::ServerProcess server;
+    const std::string ray =
+        R"({"origin":[-73786976294838206464,-73786976294838206464,-73786976294838206464],)"
+        R"("direction":[2,2,2],"tmax":1e308})";
+    for (const std::string precision : {"fast", "refined", "exact"}) {
+        const std::string body =
+            R"({"scene":{"objects":[{"type":"triangle","vertices":[[-1,-1,0.1],[1,-1,0.1],[0,1,0.1]]}]},)"
+            R"("rays":[)" +
+            ray + R"(],"precision":")" + precision + R"("})";
+        const std::string a = exchange(server.port(), post("/v1/intersect", body));
+        ASSERT_EQ(status_of(a), 200) << precision << ": " << a.substr(0, 300);
+        const json hit = json::parse(body_of(a)).at("hits").at(0);
+        ASSERT_TRUE(hit.at("hit").get<bool>()) << precision << ": " << hit.dump();
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(hit.at("point").at(k).get<double>(), 0.1, 1e-6) << precision << " " << k;
+        }
+    }
+    ASSERT_TRUE(server.alive());
+}
+
 TEST(Hostile, IdleSocketsDoNotStarveHealth) {
     // ServerProcess serves at most 4 connections at once: 64 silent half-heads are 16 times that.
     testing::ServerProcess server;
