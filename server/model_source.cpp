@@ -331,8 +331,13 @@ engine::Scene scene_from_model(std::string_view bytes, engine::ModelFormat forma
     }
     adopt_model_extras(model, "", scene);
     engine::Status st = engine::validate(scene);
-    if (!st.ok())
+    if (!st.ok()) {
+        // A raw model body has no document to point into, and a file that parsed but cannot
+        // be answered is API.md's 422 (e.g. vertices at ±1e308: an extent past double's).
+        if (st.code == engine::Code::invalid_scene)
+            throw ApiError(ErrorCode::model_load_failed, "the model: " + st.message);
         throw load_error(st, st.path);
+    }
     aim_model_camera(scene);
     return scene;
 }

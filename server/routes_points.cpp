@@ -42,7 +42,7 @@ BinaryPointsQuery parse_binary_points_query(const httplib::Request& req) {
     BinaryPointsQuery q;
     if (req.has_param("query"))
         q.options.query = parse_point_query(req.get_param_value("query"), "query");
-    q.dtype = parse_dtype(req.has_param("dtype") ? req.get_param_value("dtype") : "");
+    q.dtype = req.has_param("dtype") ? parse_dtype(req.get_param_value("dtype")) : Dtype::float32;
     if (req.has_param("max_distance")) {
         const std::string v = req.get_param_value("max_distance");
         std::size_t used = 0;

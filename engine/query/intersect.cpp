@@ -147,9 +147,18 @@ Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit) {
         const Sphere& s = o.sphere;
         if (max_abs(ray.origin - s.center) / kFarSizes <= s.radius)
             return on_ray;
-        Hit at;  // the hit's own normal is zero when the request did not ask for it
-        sphere_normal(s, ray, hit.t, at);
-        p = s.center + at.normal * s.radius;
+        // The hit's own normal knows which root it is at; from afar both roots can round to one
+        // t, and a normal recomputed from t alone then puts an exit on the entry side (a
+        // helper's review: (0, 0.5, -0.866) for both hits of a unit sphere from 2^60 away).
+        // Callers that want points ask for normals (server/schema/query_doc.cpp); without one,
+        // the side is told by t.
+        Vec3d n = hit.normal;
+        if (n == Vec3d{0.0, 0.0, 0.0}) {
+            Hit at;
+            sphere_normal(s, ray, hit.t, at);
+            n = at.normal;
+        }
+        p = s.center + n * s.radius;
     } else {
         if (!o.mesh || hit.primitive >= o.mesh->size())
             return on_ray;

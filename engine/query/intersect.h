@@ -188,8 +188,10 @@ Status validate_ray(const Ray& ray, std::size_t index);
 /// at (0.1, 0.1, 0.1) came out as (0, 0, 0) (a helper's review). There the point is taken on the
 /// surface instead, to the object's own precision: (1−u−v)·a + u·b + v·c with the hit's
 /// barycentrics (a far ray's come from the ray moved to the scene, docs/numerics.md), or c + r·n
-/// with the normal from the closest approach (geometry/sphere.h). Both agree with
-/// origin + t·direction within t's own error; nearer rays keep that sum, bit for bit.
+/// with the hit's normal (from the closest approach, geometry/sphere.h; a hit without one gets
+/// the normal at t, whose side is ambiguous where both roots round to one t: ask for normals).
+/// Both agree with origin + t·direction within t's own error; nearer rays keep that sum, bit for
+/// bit.
 Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit);
 
 /// The closest hit over `scene` as it is, without a QueryEngine: every primitive tested in

@@ -590,6 +590,18 @@ TEST(Query, HitPointsOfFarRaysAreOnTheSurface) {
                 EXPECT_NEAR(got[k], c.want[k], tol) << to_string(p) << " " << k;
             EXPECT_GT(length(c.ray.at(h->t) - c.want), 0.05) << "the sum itself is accurate?";
         }
+        // Both crossings of a unit sphere from 2^60 away round to one t (2^60): the exit's point
+        // is on the far side, from the hit's own normal (a helper's review: both had been put
+        // at (0, 0.5, -0.866)).
+        const Ray through{{5, 0.5, -0x1p60}, {0, 0, 1}};
+        const QueryResult all = (*engine)->intersect({through}, QueryOptions{Mode::all, p, true});
+        ASSERT_EQ(all.offsets.back(), 2u) << to_string(p);
+        EXPECT_EQ(all.hits[0].t, all.hits[1].t) << to_string(p);
+        for (int k = 0; k < 2; ++k) {
+            const Vec3d got = hit_point(*scene, through, all.hits[k]);
+            const Vec3d want{5, 0.5, (k == 0 ? -1 : 1) * std::sqrt(0.75)};
+            EXPECT_LT(length(got - want), tol) << to_string(p) << " crossing " << k;
+        }
         // Near rays: the sum, bit for bit.
         for (const Ray& near : {Ray{{0.1, 0.1, -3}, {0, 0, 1}}, Ray{{5.6, 0, -3}, {0, 0, 1}}}) {
             const std::optional<Hit> h = (*engine)->closest(near, p, false);

@@ -137,9 +137,20 @@ Status validate(const Scene& scene) {
     // answered "on the surface", since their error bound grows with the bounds; a triangle
     // from -1e308 to 1e308, whose edges overflow, was never hit (a helper's review). Such a
     // scene has surface points, or distances across it, that double cannot hold.
+    // A mesh counts the vertices its triangles use: a file's unused vertices are no surface.
+    const auto surface_bounds = [](const Object& o) {
+        if (o.kind == ObjectKind::sphere)
+            return object_bounds(o);
+        Bounds3 b;
+        for (const auto& t : o.mesh->triangles) {
+            for (std::uint32_t k : t)
+                b.extend(o.mesh->positions[k]);
+        }
+        return b;
+    };
     Bounds3 all;
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-        const Bounds3 b = object_bounds(scene.objects[i]);
+        const Bounds3 b = surface_bounds(scene.objects[i]);
         if (b.empty())
             continue;
         const bool own = is_finite(b.lo) && is_finite(b.hi) && is_finite(b.diagonal());

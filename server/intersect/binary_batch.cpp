@@ -23,7 +23,8 @@ BinaryQuery parse_binary_query(const httplib::Request& req) {
         opt.mode = parse_mode(param("mode"), "mode");
     if (req.has_param("precision"))
         opt.precision = parse_precision(param("precision"), "precision");
-    q.dtype = parse_dtype(param("dtype"));
+    // Absent means float32; present, even empty (`?dtype=`), it must name one.
+    q.dtype = req.has_param("dtype") ? parse_dtype(param("dtype")) : Dtype::float32;
     opt.want_normal = true;
     if (req.has_param("fields")) {
         // ?fields=t,object: normals are left out (zeros) unless asked for. The names are the

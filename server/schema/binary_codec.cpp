@@ -142,7 +142,7 @@ void encode_as(const engine::QueryResult& r, engine::Mode mode, std::size_t n, s
 }  // namespace
 
 Dtype parse_dtype(const std::string& s) {
-    if (s.empty() || s == "float32")
+    if (s == "float32")
         return Dtype::float32;
     if (s == "float64")
         return Dtype::float64;

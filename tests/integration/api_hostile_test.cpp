@@ -2,6 +2,7 @@
 // server, held a connection, or got the wrong answer (issue 13), and each is answered now.
 
 #include <chrono>
+#include <cmath>
 #include <string>
 #include <thread>
 #include <vector>
@@ -123,6 +124,17 @@ TEST(Hostile, AFarRayWithTmax1e308HitsWhereTheTriangleIs) {
             EXPECT_NEAR(hit.at("point").at(k).get<double>(), 0.1, 1e-6) << precision << " " << k;
         }
     }
+    // Asked for points alone, both crossings of a unit sphere from 2^60 away (one t in double)
+    // are where they are: z = -0.866 and +0.866.
+    const std::string body =
+        R"({"scene":{"objects":[{"type":"sphere","center":[0,0,0],"radius":1}]},"mode":"all",)"
+        R"("fields":["t","point"],"rays":[{"origin":[0,0.5,-1152921504606846976],"direction":[0,0,1]}]})";
+    const std::string a = exchange(server.port(), post("/v1/intersect", body));
+    ASSERT_EQ(status_of(a), 200) << a.substr(0, 300);
+    const json hits = json::parse(body_of(a)).at("hits").at(0).at("hits");
+    ASSERT_EQ(hits.size(), 2u) << hits.dump();
+    EXPECT_NEAR(hits.at(0).at("point").at(2).get<double>(), -std::sqrt(0.75), 1e-12);
+    EXPECT_NEAR(hits.at(1).at("point").at(2).get<double>(), std::sqrt(0.75), 1e-12);
     ASSERT_TRUE(server.alive());
 }
 

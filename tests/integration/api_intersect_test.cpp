@@ -266,6 +266,9 @@ TEST_F(Intersect, BadBinaryBodiesAreInvalidRay) {
     auto bad_dtype = post_binary("dtype=float16", good);
     EXPECT_EQ(Json::parse(bad_dtype->body).at("error").at("code"), "invalid_request");
     EXPECT_EQ(Json::parse(bad_dtype->body).at("error").at("path"), "dtype");
+    auto empty_dtype = post_binary("dtype=", good);
+    EXPECT_EQ(empty_dtype->status, 400) << empty_dtype->body;
+    EXPECT_EQ(Json::parse(empty_dtype->body).at("error").at("path"), "dtype");
     // The server is still there, and so is the scene.
     EXPECT_EQ(post_binary("dtype=float32", good)->status, 200);
 }
