@@ -168,8 +168,7 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
     }
     if (const Json* f = member(body, "fields"))
         req.fields = parse_fields(*f, prefix + "/fields");
-    // A far sphere hit's point is c + r·n with the hit's own normal (engine::hit_point).
-    req.options.want_normal = req.fields.normal || req.fields.front_face || req.fields.point;
+    req.options.want_normal = req.fields.needs_normals();
 
     const Json* rays = member(body, "rays");
     const std::string rpath = prefix + "/rays";

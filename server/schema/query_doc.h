@@ -15,6 +15,10 @@ namespace raycastd::server {
 struct FieldMask {
     bool t = true, t_err = true, point = true, normal = true, front_face = true, object = true,
          name = true, primitive = true, barycentric = true;
+
+    /// Whether the engine must compute normals: for themselves, for front_face, and for point,
+    /// since a far sphere hit's point is c + r·n with the hit's own normal (engine::hit_point).
+    bool needs_normals() const { return normal || front_face || point; }
 };
 
 struct IntersectRequest {

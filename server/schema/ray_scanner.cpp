@@ -268,8 +268,7 @@ bool scan_intersect_request(std::string_view body, std::size_t max_rays, Interse
             f.push_back(std::move(name));
         out.fields = parse_fields(f, "/fields");
     }
-    // A far sphere hit's point is c + r·n with the hit's own normal (engine::hit_point).
-    out.options.want_normal = out.fields.normal || out.fields.front_face || out.fields.point;
+    out.options.want_normal = out.fields.needs_normals();
     for (std::size_t i = 0; i < out.rays.size(); ++i) {
         engine::Status st = engine::validate_ray(out.rays[i], i);
         if (!st.ok())
