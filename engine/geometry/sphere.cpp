@@ -371,10 +371,6 @@ std::optional<Vec3d> normal_from_closest_approach(const Sphere& s, const Ray& ra
     return pc / r;
 }
 
-/// From 2²⁰ radii away the plain form's rounding, u·|f| ≈ 2⁻³³ of the radius, would start to
-/// show in the normal's digits.
-constexpr double kNormalFarRadii = 0x1p20;
-
 /// sphere_normal at the root on `side` (−1 the near one, +1 the far one, 0 unknown: told by t).
 void sphere_normal_at(const Sphere& s, const Ray& ray, double t, int side, Hit& hit) {
     // (p − c)/r is exact for the points a reader checks by hand (the tutorial's (0, −1, −√3)/2

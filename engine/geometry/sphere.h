@@ -80,6 +80,10 @@ std::optional<Hit> first_hit_of_roots(const Sphere& s, const Ray& ray, const Sph
 /// front_face; object left for the caller), ascending; returns how many (0, 1 or 2).
 int sphere_hits(const Sphere& s, const Ray& ray, Hit out[2]);
 
+/// From 2²⁰ radii away sphere_normal forms the normal from the closest approach: there the plain
+/// form's rounding, u·|o − c| ≈ 2⁻³³ of the radius, would start to show in the normal's digits.
+inline constexpr double kNormalFarRadii = 0x1p20;
+
 /// The outward unit normal at the point of the ray at parameter t, and whether the ray arrives
 /// against it. Which root t is, where that matters, is told by t itself: see the overload.
 void sphere_normal(const Sphere& s, const Ray& ray, double t, Hit& hit);

@@ -136,8 +136,8 @@ Status validate_ray(const Ray& ray, std::size_t index) {
 }
 
 Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit) {
-    // 2²⁰ object sizes: where sphere_normal starts taking the closest approach (kNormalFarRadii).
-    constexpr double kFarSizes = 0x1p20;
+    // Far: from the distance at which sphere_normal takes the closest approach, in object sizes.
+    constexpr double kFarSizes = kNormalFarRadii;
     const Vec3d on_ray = ray.at(hit.t);
     if (hit.object >= scene.objects.size())
         return on_ray;
