@@ -139,12 +139,6 @@ MoveResult move_near_ball_world(const Vec3d& centre, double radius, const Ray& r
     return MoveResult::moved;
 }
 
-bool SceneBall::far(const Ray& ray) const {
-    if (!usable)
-        return false;
-    return !within_reach(ray.origin - centre, kFarRadii * std::max(radius, max_abs(centre)));
-}
-
 SceneBall scene_ball(const Scene& scene) {
     SceneBall b;
     const Bounds3 bounds = scene.bounds();
@@ -154,6 +148,8 @@ SceneBall scene_ball(const Scene& scene) {
     const double half = 0.5 * scaled_length(bounds.hi - bounds.lo);
     b.radius = half * (1.0 + 0x1p-20) + 2.0 * kDoubleUnitRoundoff * max_abs(b.centre) + 0x1p-1000;
     b.usable = is_finite(b.centre) && std::isfinite(b.radius) && b.radius > 0.0;
+    if (b.usable)
+        b.far_reach = kFarRadii * std::max(b.radius, max_abs(b.centre));
     return b;
 }
 

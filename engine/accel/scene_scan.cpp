@@ -89,7 +89,7 @@ bool TrianglePlane::left_behind(const Ray& ray, const Vec3d& a) const {
     return engine::left_behind(*this, ray, a);
 }
 
-SceneScan::SceneScan(const Scene& scene, bool fast) : fast_(fast) {
+SceneScan::SceneScan(const Scene& scene, bool fast) : ball_(scene_ball(scene)), fast_(fast) {
     std::uint32_t spheres = 0;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];

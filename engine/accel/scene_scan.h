@@ -17,6 +17,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/accel/far_ray.h"
 #include "engine/geometry/sphere.h"
 #include "engine/geometry/triangle.h"
 #include "engine/scene/scene.h"
@@ -67,6 +68,12 @@ class SceneScan {
     bool closest(const Ray& ray, bool want_normal, Hit& out) const;
     /// Whether anything is hit in [tmin, tmax] (linear_any at exact).
     bool any(const Ray& ray) const;
+    /// Whether `ray` comes from so far away (SceneBall::far) that the brute-force paths move it
+    /// to the scene (linear_closest_from_afar and the others, far_ray.h), which the scan does
+    /// not: its caller answers such a ray there. Decided on the far ray itself the kernels err
+    /// by ~u·distance: from 1e20 a camera's ray at `fast` hit a sphere behind the triangle it
+    /// crosses (a helper's review).
+    bool far(const Ray& ray) const { return ball_.far(ray); }
     /// Bit k set: the k-th sphere (in object order) may be hit; clear: the ray's line certainly
     /// misses it, or it lies behind the origin and tmin ≥ 0, so that neither sphere_roots nor
     /// sphere_roots_fast finds a root in range. Public for tests.
@@ -100,6 +107,7 @@ class SceneScan {
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
 
+    SceneBall ball_;  ///< for far()
     std::vector<Primitive> prims_;
     std::vector<SphereQuad> spheres_;
     /// Bit k set: sphere k may be ruled out by sphere_candidates (its r² lies in

@@ -135,18 +135,16 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
-Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit) {
+bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p, Vec3d& err) {
     // Far: from the distance at which sphere_normal takes the closest approach, in object sizes.
     constexpr double kFarSizes = kNormalFarRadii;
-    const Vec3d on_ray = ray.at(hit.t);
     if (hit.object >= scene.objects.size())
-        return on_ray;
+        return false;
     const Object& o = scene.objects[hit.object];
-    Vec3d p = on_ray;
     if (o.kind == ObjectKind::sphere) {
         const Sphere& s = o.sphere;
         if (max_abs(ray.origin - s.center) / kFarSizes <= s.radius)
-            return on_ray;
+            return false;
         // The hit's own normal knows which root it is at; from afar both roots can round to one
         // t, and a normal recomputed from t alone then puts an exit on the entry side (a
         // helper's review: (0, 0.5, -0.866) for both hits of a unit sphere from 2^60 away).
@@ -158,17 +156,37 @@ Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit) {
             sphere_normal(s, ray, hit.t, at);
             n = at.normal;
         }
-        p = s.center + n * s.radius;
-    } else {
-        if (!o.mesh || hit.primitive >= o.mesh->size())
-            return on_ray;
-        const Triangle t = o.mesh->triangle(hit.primitive);
-        const Vec3d ab = t.b - t.a, ac = t.c - t.a;
-        if (max_abs(ray.origin - t.a) / kFarSizes <= std::max(max_abs(ab), max_abs(ac)))
-            return on_ray;
-        p = t.a + ab * hit.u + ac * hit.v;
+        const Vec3d q = s.center + n * s.radius;
+        if (!is_finite(q))
+            return false;
+        p = q;
+        // c + r·n rounds twice per component (γ₂ of |c| + r·|n|, Higham 2002 Lemma 3.1); the
+        // normal is a unit vector within a few u (geometry/sphere.cpp), which puts the point
+        // off the sphere by a few u of r: γ₈·r holds both with a margin.
+        const double off = gamma(8) * s.radius;
+        err = (abs(s.center) + abs(n) * s.radius) * gamma(2) + Vec3d{off, off, off};
+        return true;
     }
-    return is_finite(p) ? p : on_ray;
+    if (!o.mesh || hit.primitive >= o.mesh->size())
+        return false;
+    const Triangle t = o.mesh->triangle(hit.primitive);
+    const Vec3d ab = t.b - t.a, ac = t.c - t.a;
+    if (max_abs(ray.origin - t.a) / kFarSizes <= std::max(max_abs(ab), max_abs(ac)))
+        return false;
+    const Vec3d q = t.a + ab * hit.u + ac * hit.v;
+    if (!is_finite(q))
+        return false;
+    p = q;
+    // a + u·ab + v·ac is a point of the triangle's plane but for its roundings: ab and ac
+    // (u of each, times |u| and |v|) and the two products and two sums (γ₄ with them; Higham
+    // 2002 Lemma 3.1).
+    err = (abs(t.a) + abs(ab) * std::abs(hit.u) + abs(ac) * std::abs(hit.v)) * gamma(4);
+    return true;
+}
+
+Vec3d hit_point(const Scene& scene, const Ray& ray, const Hit& hit) {
+    Vec3d p, err;
+    return surface_point(scene, ray, hit, p, err) ? p : ray.at(hit.t);
 }
 
 std::optional<Hit> closest_by_brute_force(const Scene& scene, const Ray& ray, bool want_normal,
@@ -217,7 +235,36 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     } else {
         engine->ball_ = std::make_unique<const SceneBall>(scene_ball(*engine->scene_));
     }
+    engine->find_near_reach();
     return std::shared_ptr<const QueryEngine>(std::move(engine));
+}
+
+void QueryEngine::find_near_reach() {
+    // The sizes surface_point() compares with: a sphere's radius, a triangle's largest edge
+    // coordinate from its first corner.
+    const Scene& s = *scene_;
+    double smallest = kInfinity;
+    for (const Object& o : s.objects) {
+        if (o.kind == ObjectKind::sphere) {
+            smallest = std::min(smallest, o.sphere.radius);
+            continue;
+        }
+        for (std::size_t p = 0; p < o.mesh->size(); ++p) {
+            const Triangle t = o.mesh->triangle(p);
+            smallest = std::min(smallest, std::max(max_abs(t.b - t.a), max_abs(t.c - t.a)));
+        }
+    }
+    const Bounds3 b = s.bounds();
+    if (b.empty() || !std::isfinite(smallest))
+        return;
+    // Every object point a lies within `half` of the centre on each axis, so an origin within
+    // 2²⁰·smallest − half of it lies within 2²⁰·smallest of a; both sides rounded towards that
+    // (2⁻²⁰ of each is far more than their roundings).
+    near_centre_ = 0.5 * (b.lo + b.hi);
+    const double half = max_abs(b.hi - b.lo) * 0.5;
+    near_reach_ = kNormalFarRadii * smallest * (1.0 - 0x1p-20) - half * (1.0 + 0x1p-20);
+    if (!std::isfinite(near_reach_))
+        near_reach_ = -1.0;
 }
 
 Precision QueryEngine::effective_precision(Precision asked) const {

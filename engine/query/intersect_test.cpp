@@ -611,6 +611,59 @@ TEST(Query, HitPointsOfFarRaysAreOnTheSurface) {
     }
 }
 
+// surface_point's bound holds the point's distance from the surface (what a spawned origin must
+// clear, shade/spawn.h), and near_every_object() is a safe shortcut: where it says near, every
+// hit's point is the sum, and surface_point() is false. A scene with an object of size 0 is
+// never near.
+TEST(Query, NearEveryObjectAndSurfacePointErrors) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(
+        testing::mesh_object("triangle", {{-1, -1, 0.1}, {1, -1, 0.1}, {0, 1, 0.1}}, {{0, 1, 2}}));
+    s.objects.push_back(testing::sphere("ball", {5, 0, 0}, 1.0, 0));
+    const auto scene = std::make_shared<Scene>(s);
+    auto built = QueryEngine::build(scene);
+    ASSERT_TRUE(built.ok());
+    const QueryEngine& engine = **built;
+    // The smallest object is the ball (radius 1); the bounds reach 3.5 from their centre.
+    EXPECT_TRUE(engine.near_every_object(Ray{{2, 0, -1e5}, {0, 0, 1}}));
+    EXPECT_FALSE(engine.near_every_object(Ray{{2, 0, -0x1p20}, {0, 0, 1}}));
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> unit(-1, 1), exponent(8, 30);
+    int near = 0, far = 0;
+    for (int i = 0; i < 4000; ++i) {
+        const Vec3d aim{i % 2 ? 5 + 0.9 * unit(rng) : 0.5 * unit(rng), 0.5 * unit(rng), 0.0};
+        const Vec3d d = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
+        const Ray ray{aim - d * std::exp2(exponent(rng)), d};
+        const std::optional<Hit> h = engine.closest(ray, Precision::exact, true);
+        if (!h)
+            continue;
+        Vec3d p, err;
+        const bool on_surface = surface_point(*scene, ray, *h, p, err);
+        if (engine.near_every_object(ray)) {
+            ++near;
+            EXPECT_FALSE(on_surface) << i;
+            continue;
+        }
+        if (!on_surface)
+            continue;
+        ++far;
+        const Vec3d n = h->object == 0 ? Vec3d{0, 0, 1} : normalize(p - Vec3d{5, 0, 0});
+        const double off =
+            h->object == 0 ? std::abs(p.z - 0.1) : std::abs(length(p - Vec3d{5, 0, 0}) - 1);
+        EXPECT_LE(off, dot(abs(n), err)) << i;
+        EXPECT_GT(dot(abs(n), err), 0.0);
+    }
+    EXPECT_GT(near, 500);
+    EXPECT_GT(far, 500);
+    // A degenerate triangle (size 0) makes every origin possibly far.
+    s.objects.push_back(
+        testing::mesh_object("point", {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {{0, 1, 2}}));
+    auto degenerate = QueryEngine::build(std::make_shared<Scene>(s));
+    ASSERT_TRUE(degenerate.ok());
+    EXPECT_FALSE((*degenerate)->near_every_object(Ray{{2, 0, -3}, {0, 0, 1}}));
+}
+
 TEST(EmbreeAccel, SceneWiderThanFloatIsAnswered) {
     for (double scale : {1.0, 1e260}) {
         Scene s;

@@ -20,7 +20,8 @@ Precision Tracer::precision() const {
 }
 
 std::optional<Hit> Tracer::closest(const Ray& ray, bool want_normal) const {
-    if (scan_)
+    // A far ray goes to QueryEngine's brute force, which moves it to the scene (scene_scan.h).
+    if (scan_ && !scan_->far(ray))
         return scan_->closest(ray, want_normal);
     return engine_.closest(ray, precision_, want_normal);
 }
@@ -28,8 +29,13 @@ std::optional<Hit> Tracer::closest(const Ray& ray, bool want_normal) const {
 void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
     if (scan_) {
         out.assign(rays.size(), Hit{});
-        for (std::size_t i = 0; i < rays.size(); ++i)
-            scan_->closest(rays[i], /*want_normal=*/true, out[i]);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            if (!scan_->far(rays[i])) {
+                scan_->closest(rays[i], /*want_normal=*/true, out[i]);
+            } else if (const auto h = engine_.closest(rays[i], precision_, true)) {
+                out[i] = *h;
+            }
+        }
         return;
     }
     QueryOptions q;
@@ -44,7 +50,7 @@ void Tracer::occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out)
         out.resize(rays.size());
         for (std::size_t i = 0; i < rays.size(); ++i) {
             out[i] = Hit{};
-            if (scan_->any(rays[i]))
+            if (scan_->far(rays[i]) ? engine_.occluded(rays[i], precision_) : scan_->any(rays[i]))
                 out[i].object = 0;  // an `any` answer: valid() says blocked (query_result.h)
         }
         return;
@@ -58,7 +64,7 @@ void Tracer::occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out)
 }
 
 bool Tracer::occluded(const Ray& ray) const {
-    if (scan_)
+    if (scan_ && !scan_->far(ray))
         return scan_->any(ray);
     return engine_.occluded(ray, precision_);
 }

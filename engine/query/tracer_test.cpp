@@ -3,6 +3,7 @@
 
 #include "engine/query/tracer.h"
 
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -150,6 +151,49 @@ TEST(Tracer, ManyRaysScanATinySceneWiderThanFloat) {
         if (p != Precision::fast) {
             EXPECT_EQ(h->t, 10.0);
         }
+    }
+}
+
+// A far ray through a scanned scene is answered as QueryEngine's brute force answers it (moved
+// to the scene, accel/far_ray.h): the scan's own kernels, deciding on the far ray, err by
+// ~u·distance, and from 2^66 away a ray through a triangle at `fast` hit the sphere 5 units
+// behind it instead (a helper's review). Lines from 2^30 to 2^90 away, straight through the
+// triangle and then the sphere, or through the sphere alone.
+TEST(Tracer, ManyRaysAnswerFarRaysAsTheBruteForce) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(
+        testing::mesh_object("tri", {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}}, {{0, 1, 2}}));
+    s.objects.push_back(testing::sphere("ball", {5, 5, 5}, 1, 0));
+    auto engine = build(s);
+    ASSERT_TRUE(engine->brute_force());
+    std::vector<Ray> rays;
+    for (int e = 30; e <= 90; e += 12) {
+        const double far = std::ldexp(1.0, e);
+        rays.push_back(Ray{{-far, -far, -far}, {1, 1, 1}});  // triangle, then ball
+        rays.push_back(Ray{{5, 5, -far}, {0, 0, 3}});        // ball only
+    }
+    for (Precision p : {Precision::fast, Precision::refined}) {
+        const Tracer few(*engine, p, BuildHint::few_rays);
+        const Tracer many(*engine, p, BuildHint::many_rays);
+        ASSERT_TRUE(many.scans());
+        std::vector<Hit> batch, blocked;
+        many.closest_batch(rays, batch);
+        many.occluded_batch(rays, blocked);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            SCOPED_TRACE(std::string(to_string(p)) + ", ray " + std::to_string(i));
+            const std::optional<Hit> got = many.closest(rays[i], true);
+            ASSERT_TRUE(got);
+            EXPECT_EQ(got->object, i % 2 == 0 ? 0u : 1u);
+            expect_same(*got, *few.closest(rays[i], true));
+            expect_same(batch[i], *got);
+            EXPECT_TRUE(many.occluded(rays[i]));
+            EXPECT_TRUE(blocked[i].valid());
+        }
+        // A line beside both, from 2^66 away, misses.
+        const Ray beside{{-0x1p66, -0x1p66, -0x1p66}, {1, 1.0 + 0x1p-40, 1}};
+        EXPECT_FALSE(many.closest(beside, true));
+        EXPECT_FALSE(many.occluded(beside));
     }
 }
 

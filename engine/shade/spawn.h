@@ -24,6 +24,12 @@ namespace raycastd::engine {
 /// float tracer of `frame` (none when frame.scale is 0: a tracer that decides in double).
 Vec3d hit_point_error(const Ray& ray, const Hit& hit, const FloatFrame& frame);
 
+/// What a float tracer of `frame` adds to the error of a point p it spawns rays from (its
+/// rounding of the origin and of its own copy of the surface); zero when frame.scale is 0.
+/// hit_point_error includes it; a point taken on the surface (query/intersect.h,
+/// surface_point) adds it to its own bound.
+Vec3d float_tracer_error(const Vec3d& p, const FloatFrame& frame);
+
 namespace detail {
 
 /// p + offset rounded once more away from p, so that the addition cannot land back inside the

@@ -110,7 +110,7 @@ struct ShadowRayRecord {
 /// A surface point where intensity is computed (a node of the ray tree).
 struct TreeNode {
     Hit hit;       ///< as the query answered it (geometric normal as stored, front_face)
-    Vec3d point;   ///< ray.at(hit.t)
+    Vec3d point;   ///< hit_point (query/intersect.h): ray.at(hit.t), or on the surface from afar
     Vec3d normal;  ///< the shading normal, turned to face the incoming ray
     std::vector<ShadowRayRecord> shadow_rays;
     bool full_phong = false;  ///< some light contributes: ambient + diffuse + specular

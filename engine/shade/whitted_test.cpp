@@ -174,6 +174,43 @@ TEST(Whitted, LightBehindTheShadingNormalIsNotFacingAndTracesNoRay) {
     EXPECT_EQ(t.counts.shadow, 0u);
 }
 
+// A ray from far away is shaded at its point on the surface, not at o + t·d, which rounds by
+// u·|o|: from 2^66 away along (1, 1, 1) the hit on the plane x + 2y + 4z = 1 at (1/7, 1/7, 1/7)
+// came out as (0, 0, 0), 0.22 behind the plane, and a light 0.1 in front of it was judged to be
+// behind it (`facing` false: a helper's review). At 2^40 the sum is off by 3.5e-5. Both tracers
+// (a scan for many rays, QueryEngine's brute force for few), at fast and refined.
+TEST(Whitted, FarRaysAreShadedAtTheirPointOnTheSurface) {
+    Scene s;
+    s.materials = {Material{}};
+    s.objects.push_back(
+        testing::mesh_object("tilted", {{1, 0, 0}, {-3, 0, 1}, {1, 2, -1}}, {{0, 1, 2}}));
+    s.objects.push_back(sphere("behind", {5, 5, 5}, 1, 0));
+    const Vec3d n = Vec3d{1, 2, 4} / std::sqrt(21.0);
+    const Vec3d p{1.0 / 7, 1.0 / 7, 1.0 / 7};
+    s.lights = {ambient_light(0.2), point_light(p - n * 0.1)};
+    auto engine = prepare(std::move(s));
+    for (double far : {0x1p40, 0x1p66}) {
+        const Ray r{{-far, -far, -far}, {1, 1, 1}};
+        for (bool many : {false, true}) {
+            for (Precision precision : {Precision::fast, Precision::refined}) {
+                SCOPED_TRACE("from " + std::to_string(far) + (many ? ", scan, " : ", ") +
+                             to_string(precision));
+                WhittedOptions o;
+                o.many_rays = many;
+                o.precision = precision;
+                const RayTree t = Whitted(*engine, o).tree(r).value();
+                ASSERT_FALSE(t.nodes.empty());
+                EXPECT_EQ(t.nodes[0].hit.object, 0u);
+                EXPECT_LE(max_abs(t.nodes[0].point - p), 1e-15);
+                ASSERT_EQ(t.nodes[0].shadow_rays.size(), 1u);
+                EXPECT_TRUE(t.nodes[0].shadow_rays[0].facing);
+                EXPECT_EQ(t.nodes[0].shadow_rays[0].blocked_by, kInvalidId);
+                EXPECT_TRUE(t.nodes[0].full_phong);
+            }
+        }
+    }
+}
+
 TEST(Whitted, TotalInternalReflectionIsReportedAndTransmitsNothing) {
     // A ray leaving a glass cube past the critical angle.
     Scene s;
