@@ -239,6 +239,10 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     return std::shared_ptr<const QueryEngine>(std::move(engine));
 }
 
+Vec3d QueryEngine::point_of(const Ray& ray, const Hit& hit) const {
+    return near_every_object(ray) ? ray.at(hit.t) : hit_point(*scene_, ray, hit);
+}
+
 void QueryEngine::find_near_reach() {
     // The sizes surface_point() compares with: a sphere's radius, a triangle's largest edge
     // coordinate from its first corner.

@@ -34,7 +34,7 @@ void answer_json(App& app, const engine::QueryEngine& engine, const IntersectReq
     cancel.check(engine.intersect(req.rays, options, result));
     note_rays(ray_kind(options.mode), engine.effective_precision(options.precision),
               req.rays.size());
-    send_json(res, write_intersect_response(engine.scene(), req, result));
+    send_json(res, write_intersect_response(engine, req, result));
 }
 
 /// Reads `body` with the DOM reader and answers it over `engine` into `result`.

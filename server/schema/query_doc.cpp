@@ -104,7 +104,7 @@ FieldMask parse_field_list(const std::string& list, const std::string& path) {
 
 namespace {
 
-void write_hit(JsonWriter& w, const engine::Scene& scene, const engine::Ray& ray,
+void write_hit(JsonWriter& w, const engine::QueryEngine& engine, const engine::Ray& ray,
                const engine::Hit& h, const FieldMask& f) {
     w.raw("{\"hit\":true");
     if (f.t)
@@ -112,7 +112,7 @@ void write_hit(JsonWriter& w, const engine::Scene& scene, const engine::Ray& ray
     if (f.t_err)
         w.raw(",\"t_err\":").number(h.t_err);
     if (f.point)
-        w.raw(",\"point\":").vec(engine::hit_point(scene, ray, h));
+        w.raw(",\"point\":").vec(engine.point_of(ray, h));
     if (f.normal)
         w.raw(",\"normal\":").vec(h.normal);
     if (f.front_face)
@@ -120,7 +120,7 @@ void write_hit(JsonWriter& w, const engine::Scene& scene, const engine::Ray& ray
     if (f.object)
         w.raw(",\"object\":").integer(h.object);
     if (f.name)
-        w.raw(",\"name\":").string(scene.objects[h.object].name);
+        w.raw(",\"name\":").string(engine.scene().objects[h.object].name);
     if (f.primitive)
         w.raw(",\"primitive\":").integer(h.primitive);
     if (f.barycentric)
@@ -192,7 +192,7 @@ IntersectRequest parse_intersect_request(const Json& body, const std::string& pr
 namespace {
 
 /// Appends the result entries of rays [begin, end) to `out`.
-void write_entries(const engine::Scene& scene, const IntersectRequest& req,
+void write_entries(const engine::QueryEngine& engine, const IntersectRequest& req,
                    const engine::QueryResult& r, std::size_t begin, std::size_t end,
                    std::string& out) {
     JsonWriter w(out);
@@ -202,7 +202,7 @@ void write_entries(const engine::Scene& scene, const IntersectRequest& req,
         switch (req.options.mode) {
             case engine::Mode::closest:
                 if (r.hits[i].valid()) {
-                    write_hit(w, scene, req.rays[i], r.hits[i], req.fields);
+                    write_hit(w, engine, req.rays[i], r.hits[i], req.fields);
                 } else {
                     w.raw("{\"hit\":false}");
                 }
@@ -219,7 +219,7 @@ void write_entries(const engine::Scene& scene, const IntersectRequest& req,
                 for (std::uint32_t k = b; k < e; ++k) {
                     if (k != b)
                         w.ch(',');
-                    write_hit(w, scene, req.rays[i], r.hits[k], req.fields);
+                    write_hit(w, engine, req.rays[i], r.hits[k], req.fields);
                 }
                 w.raw("]}");
                 break;
@@ -233,7 +233,7 @@ constexpr std::size_t kWriteChunk = 8192;
 
 }  // namespace
 
-std::string write_intersect_response(const engine::Scene& scene, const IntersectRequest& req,
+std::string write_intersect_response(const engine::QueryEngine& engine, const IntersectRequest& req,
                                      const engine::QueryResult& r) {
     std::string out;
     const std::size_t n = req.rays.size();
@@ -242,7 +242,7 @@ std::string write_intersect_response(const engine::Scene& scene, const Intersect
     w.raw("{\"precision\":").string(engine::to_string(r.precision));
     w.raw(",\"mode\":").string(engine::to_string(req.options.mode)).raw(",\"hits\":[");
     if (n <= kWriteChunk) {
-        write_entries(scene, req, r, 0, n, out);
+        write_entries(engine, req, r, 0, n, out);
     } else {
         // Formatting numbers costs more than tracing the rays: big responses are written in
         // chunks on all cores, then joined.
@@ -251,7 +251,7 @@ std::string write_intersect_response(const engine::Scene& scene, const Intersect
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
             const std::size_t b = c * kWriteChunk, e = std::min(n, b + kWriteChunk);
             parts[c].reserve((e - b) * 220);
-            write_entries(scene, req, r, b, e, parts[c]);
+            write_entries(engine, req, r, b, e, parts[c]);
         });
         for (const auto& p : parts)
             out.append(p);

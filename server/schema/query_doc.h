@@ -41,8 +41,9 @@ FieldMask parse_fields(const Json& j, const std::string& path);
 FieldMask parse_field_list(const std::string& list, const std::string& path);
 engine::Precision parse_precision(const std::string& s, const std::string& path);
 
-/// {"precision": ..., "hits": [...]} with the record shape of the mode.
-std::string write_intersect_response(const engine::Scene& scene, const IntersectRequest& req,
+/// {"precision": ..., "hits": [...]} with the record shape of the mode, for `result` of
+/// `engine` (its scene's names, and its points: QueryEngine::point_of).
+std::string write_intersect_response(const engine::QueryEngine& engine, const IntersectRequest& req,
                                      const engine::QueryResult& result);
 
 }  // namespace raycastd::server

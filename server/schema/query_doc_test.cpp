@@ -69,12 +69,12 @@ TEST(QueryDoc, ResponseShapes) {
                         "fields":["t","object","name"]})"),
         "", 10);
     std::string out =
-        write_intersect_response(*scene, req, engine->intersect(req.rays, req.options));
+        write_intersect_response(*engine, req, engine->intersect(req.rays, req.options));
     EXPECT_EQ(
         out,
         R"({"precision":"exact","mode":"closest","hits":[{"hit":true,"t":7.267949192431123,"object":2,"name":"sphere 3"},{"hit":false}]})");
     Json full = Json::parse(write_intersect_response(
-        *scene,
+        *engine,
         parse_intersect_request(Json::parse(R"({"rays":[{"origin":[0,0,0],"direction":[0,0,1]}]})"),
                                 "", 10),
         engine->intersect(req.rays, req.options)));
