@@ -75,11 +75,12 @@ struct SceneBall {
     /// Whether `ray`'s origin lies farther than kFarRadii times the larger of the radius and
     /// the centre's largest coordinate from the centre on some axis (or is not a number there):
     /// the brute-force paths move such a ray.
-    bool far(const Ray& ray) const { return !within_reach(ray.origin - centre, far_reach); }
+    bool far(const Ray& ray) const {
+        return usable && !within_reach(ray.origin - centre, far_reach);
+    }
     /// far()'s reach: kFarRadii times the larger of the radius and the centre's largest
-    /// coordinate; ∞ (every finite origin near) where the ball is not usable. Made once by
-    /// scene_ball: a renderer's scan asks far() of every ray it traces.
-    double far_reach = kInfinity;
+    /// coordinate. Made once by scene_ball: a renderer's scan asks far() of every ray it traces.
+    double far_reach = 0.0;
 };
 /// 2^27 (~1.3e8): from there on the double kernels' u·distance is a few 1e-9 of the scene and
 /// grows with the distance. EmbreeAccel marks far at about the same distance in scene sizes

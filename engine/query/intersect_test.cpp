@@ -653,9 +653,47 @@ TEST(Query, NearEveryObjectAndSurfacePointErrors) {
             h->object == 0 ? std::abs(p.z - 0.1) : std::abs(length(p - Vec3d{5, 0, 0}) - 1);
         EXPECT_LE(off, dot(abs(n), err)) << i;
         EXPECT_GT(dot(abs(n), err), 0.0);
+        // And a bound of the objects' own precision (a few u of unit-sized objects within 6 of
+        // the origin), not one that holds by being large.
+        EXPECT_LT(dot(abs(n), err), 1e-14) << i;
     }
     EXPECT_GT(near, 500);
     EXPECT_GT(far, 500);
+    // A far sphere hit whose normal is not a unit vector keeps the sum: c + r·n would not be on
+    // the sphere (a zero normal from `fast` had put the point at the centre: a helper's review).
+    {
+        const Ray ray{{5, 0.5, -0x1p40}, {0, 0, 1}};
+        Hit h = *engine.closest(ray, Precision::exact, true);
+        ASSERT_EQ(h.object, 1u);
+        Vec3d p, err;
+        EXPECT_TRUE(surface_point(*scene, ray, h, p, err));
+        h.normal = {2, 0, 0};
+        EXPECT_FALSE(surface_point(*scene, ray, h, p, err));
+        EXPECT_EQ(hit_point(*scene, ray, h), ray.at(h.t));
+    }
+    // Two spheres of radius 1.01 at 2^66 and 2^66 + 2^14: their bounds' centre rounds onto the
+    // first (a helper's review), which near_every_object's reach must allow for.
+    {
+        Scene twin;
+        twin.materials.push_back(Material{});
+        twin.objects.push_back(testing::sphere("a", {0x1p66, 0, 0}, 1.01, 0));
+        twin.objects.push_back(testing::sphere("b", {0x1p66 + 0x1p14, 0, 0}, 1.01, 0));
+        auto e = QueryEngine::build(std::make_shared<Scene>(twin));
+        ASSERT_TRUE(e.ok());
+        for (double x = 0x1p66 - 0x1p21; x <= 0x1p66 + 0x1p21;
+             x += 0x1p14) {  // ulp 2^13, then 2^14
+            const Ray ray{{x, 0, 0}, {0, 1, 0}};
+            const bool is_near = (*e)->near_every_object(ray);
+            for (std::uint32_t k = 0; k < 2; ++k) {
+                Hit h;
+                h.object = k;
+                h.t = 1.0;
+                h.normal = {0, 1, 0};
+                Vec3d p, err;
+                EXPECT_FALSE(is_near && surface_point(twin, ray, h, p, err)) << x << " " << k;
+            }
+        }
+    }
     // A degenerate triangle (size 0) makes every origin possibly far.
     s.objects.push_back(
         testing::mesh_object("point", {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {{0, 1, 2}}));

@@ -156,7 +156,7 @@ TEST(Tracer, ManyRaysScanATinySceneWiderThanFloat) {
 
 // A far ray through a scanned scene is answered as QueryEngine's brute force answers it (moved
 // to the scene, accel/far_ray.h): the scan's own kernels, deciding on the far ray, err by
-// ~u·distance, and from 2^66 away a ray through a triangle at `fast` hit the sphere 5 units
+// ~u·distance, and from 2^66 away a ray through a triangle at `fast` hit the sphere 7.7 units
 // behind it instead (a helper's review). Lines from 2^30 to 2^90 away, straight through the
 // triangle and then the sphere, or through the sphere alone.
 TEST(Tracer, ManyRaysAnswerFarRaysAsTheBruteForce) {
