@@ -146,9 +146,7 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
             case MoveResult::misses:
                 return std::nullopt;
             case MoveResult::moved: {
-                FarSpheres spheres;
-                spheres.client = &ray;
-                spheres.moved = &m;
+                FarSpheres spheres(ray, m);
                 return exact_closest(a, m.ray, want_normal, RayFrame::centre, &spheres);
             }
             case MoveResult::not_possible:
@@ -202,9 +200,7 @@ bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world,
             case MoveResult::misses:
                 return false;
             case MoveResult::moved: {
-                FarSpheres spheres;
-                spheres.client = &ray;
-                spheres.moved = &m;
+                FarSpheres spheres(ray, m);
                 return exact_any(a, m.ray, RayFrame::centre, &spheres);
             }
             case MoveResult::not_possible:
@@ -236,9 +232,7 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
             case MoveResult::misses:
                 return;
             case MoveResult::moved: {
-                FarSpheres spheres;
-                spheres.client = &ray;
-                spheres.moved = &m;
+                FarSpheres spheres(ray, m);
                 exact_all(a, m.ray, want_normal, out, RayFrame::centre, &spheres);
                 return;
             }

@@ -89,8 +89,10 @@ struct Impl {
 /// the moved ray (it lies within line_err, far below the boxes' padding, of the client's line), and
 /// a sphere's hit competes there at its t on the moved ray (user_geometry.cpp).
 struct FarSpheres {
-    const Ray* client = nullptr;
-    const MovedRay* moved = nullptr;
+    FarSpheres(const Ray& client_ray, const MovedRay& moved_ray)
+        : client(&client_ray), moved(&moved_ray) {}
+    const Ray* client;
+    const MovedRay* moved;
     /// closest: RayContext::best as decided on `client`, when it is a sphere's.
     std::optional<Hit> best;
     /// all: every sphere hit, decided on `client`, and the same at its place on the moved ray
