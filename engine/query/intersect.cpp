@@ -2,6 +2,7 @@
 
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -185,8 +186,13 @@ bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p,
     p = q;
     // a + u·ab + v·ac is a point of the triangle's plane but for its roundings: ab and ac
     // (u of each, times |u| and |v|) and the two products and two sums (γ₄ with them; Higham
-    // 2002 Lemma 3.1).
-    err = (abs(t.a) + abs(ab) * std::abs(hit.u) + abs(ac) * std::abs(hit.v)) * gamma(4);
+    // 2002 Lemma 3.1). Across the plane of a triangle in z = 0 that is exactly 0, and an origin
+    // moved by 0 stays on the plane, where a shadow ray hits its own triangle at t = 0 (a far
+    // camera's render of such a triangle came out unlit): the bound is never below the least
+    // normal double, so that spawn.h's offset always moves the origin off.
+    constexpr double kHair = std::numeric_limits<double>::min();
+    err = (abs(t.a) + abs(ab) * std::abs(hit.u) + abs(ac) * std::abs(hit.v)) * gamma(4) +
+          Vec3d{kHair, kHair, kHair};
     return true;
 }
 

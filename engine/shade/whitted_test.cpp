@@ -174,11 +174,34 @@ TEST(Whitted, LightBehindTheShadingNormalIsNotFacingAndTracesNoRay) {
     EXPECT_EQ(t.counts.shadow, 0u);
 }
 
+/// The ray tree of `r` by both tracers (a scan for many rays, QueryEngine's brute force for few)
+/// at fast and refined: its first hit on object 0, at `want` within `tol` where given, and fully
+/// lit by the scene's one point light.
+void expect_lit_first_hit(const QueryEngine& engine, const Ray& r, const Vec3d* want, double tol) {
+    for (bool many : {false, true}) {
+        for (Precision precision : {Precision::fast, Precision::refined}) {
+            SCOPED_TRACE(std::string(many ? "scan, " : "") + to_string(precision));
+            WhittedOptions o;
+            o.many_rays = many;
+            o.precision = precision;
+            const RayTree t = Whitted(engine, o).tree(r).value();
+            ASSERT_FALSE(t.nodes.empty());
+            EXPECT_EQ(t.nodes[0].hit.object, 0u);
+            if (want) {
+                EXPECT_LE(max_abs(t.nodes[0].point - *want), tol);
+            }
+            ASSERT_EQ(t.nodes[0].shadow_rays.size(), 1u);
+            EXPECT_TRUE(t.nodes[0].shadow_rays[0].facing);
+            EXPECT_EQ(t.nodes[0].shadow_rays[0].blocked_by, kInvalidId);
+            EXPECT_TRUE(t.nodes[0].full_phong);
+        }
+    }
+}
+
 // A ray from far away is shaded at its point on the surface, not at o + t·d, which rounds by
 // u·|o|: from 2^66 away along (1, 1, 1) the hit on the plane x + 2y + 4z = 1 at (1/7, 1/7, 1/7)
 // came out as (0, 0, 0), 0.22 behind the plane, and a light 0.1 in front of it was judged to be
-// behind it (`facing` false: a helper's review). At 2^40 the sum is off by 3.5e-5. Both tracers
-// (a scan for many rays, QueryEngine's brute force for few), at fast and refined.
+// behind it (`facing` false: a helper's review). At 2^40 the sum is off by 3.5e-5.
 TEST(Whitted, FarRaysAreShadedAtTheirPointOnTheSurface) {
     Scene s;
     s.materials = {Material{}};
@@ -193,25 +216,28 @@ TEST(Whitted, FarRaysAreShadedAtTheirPointOnTheSurface) {
     // answer itself (SceneBall::far from ~2^29.8 for this scene); its point is then the scan's
     // barycentric one, off by ~u·distance/size of the triangle's size.
     for (double far : {0x1p26, 0x1p40, 0x1p66}) {
-        const double tol = far < 0x1p27 ? 1e-7 : 1e-15;
-        const Ray r{{-far, -far, -far}, {1, 1, 1}};
-        for (bool many : {false, true}) {
-            for (Precision precision : {Precision::fast, Precision::refined}) {
-                SCOPED_TRACE("from " + std::to_string(far) + (many ? ", scan, " : ", ") +
-                             to_string(precision));
-                WhittedOptions o;
-                o.many_rays = many;
-                o.precision = precision;
-                const RayTree t = Whitted(*engine, o).tree(r).value();
-                ASSERT_FALSE(t.nodes.empty());
-                EXPECT_EQ(t.nodes[0].hit.object, 0u);
-                EXPECT_LE(max_abs(t.nodes[0].point - p), tol);
-                ASSERT_EQ(t.nodes[0].shadow_rays.size(), 1u);
-                EXPECT_TRUE(t.nodes[0].shadow_rays[0].facing);
-                EXPECT_EQ(t.nodes[0].shadow_rays[0].blocked_by, kInvalidId);
-                EXPECT_TRUE(t.nodes[0].full_phong);
-            }
-        }
+        SCOPED_TRACE("from " + std::to_string(far));
+        expect_lit_first_hit(*engine, Ray{{-far, -far, -far}, {1, 1, 1}}, &p,
+                             far < 0x1p27 ? 1e-7 : 1e-15);
+    }
+}
+
+// The same for a triangle in the plane z = 0, whose point has no rounding across that plane:
+// spawned with an offset of 0, the shadow ray started on the triangle and was blocked by it at
+// t = 0, and a far camera's render showed the lit triangle black (seen in a render through the
+// server, 2026-12-06).
+TEST(Whitted, FarRaysOnAnAxisAlignedTriangleAreLit) {
+    Scene s;
+    s.materials = {Material{}};
+    s.objects.push_back(
+        testing::mesh_object("flat", {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}}, {{0, 1, 2}}));
+    s.objects.push_back(sphere("behind", {0, 0, 5}, 2, 0));
+    s.lights = {ambient_light(0.2), point_light({0, 2, -10})};
+    auto engine = prepare(std::move(s));
+    for (double far : {0x1p26, 0x1p66}) {
+        SCOPED_TRACE("from " + std::to_string(far));
+        // Through (0.0625, −0.125, 0) from 2^66 away.
+        expect_lit_first_hit(*engine, Ray{{0, 0, -far}, {0x1p-70, -0x1p-69, 1}}, nullptr, 0.0);
     }
 }
 
