@@ -167,10 +167,10 @@ bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p,
         if (!is_finite(q))
             return false;
         p = q;
-        // c + r·n rounds twice per component (γ₂ of |c| + r·|n|, Higham 2002 Lemma 3.1); the
-        // normal is a unit vector within a few u (geometry/sphere.cpp), which puts the point
-        // off the sphere by a few u of r: γ₈·r holds both with a margin.
-        const double off = gamma(8) * s.radius;
+        // c + r·n rounds twice per component (γ₂ of |c| + r·|n|, Higham 2002 Lemma 3.1); |n|
+        // within 8u of 1 (the test above) puts the point up to 8u·r off the sphere (its
+        // direction's error only moves it along the sphere): γ₁₂·r holds that with a margin.
+        const double off = gamma(12) * s.radius;
         err = (abs(s.center) + abs(n) * s.radius) * gamma(2) + Vec3d{off, off, off};
         return true;
     }
@@ -188,11 +188,15 @@ bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p,
     // (u of each, times |u| and |v|) and the two products and two sums (γ₄ with them; Higham
     // 2002 Lemma 3.1). Across the plane of a triangle in z = 0 that is exactly 0, and an origin
     // moved by 0 stays on the plane, where a shadow ray hits its own triangle at t = 0 (a far
-    // camera's render of such a triangle came out unlit): the bound is never below the least
-    // normal double, so that spawn.h's offset always moves the origin off.
-    constexpr double kHair = std::numeric_limits<double>::min();
+    // camera's render of such a triangle came out unlit). So the bound is never below u of the
+    // triangle's size: spawn.h's offset then always moves the origin off, by enough that the
+    // crossing's t, that distance over an unnormalised direction to a light, stays a normal
+    // number (the least normal double alone would underflow it to −0 for a light 1e16 away, and
+    // −0 ≥ tmin = 0: a review).
+    const double hair = std::max(std::numeric_limits<double>::min(),
+                                 kDoubleUnitRoundoff * std::max(max_abs(ab), max_abs(ac)));
     err = (abs(t.a) + abs(ab) * std::abs(hit.u) + abs(ac) * std::abs(hit.v)) * gamma(4) +
-          Vec3d{kHair, kHair, kHair};
+          Vec3d{hair, hair, hair};
     return true;
 }
 
@@ -267,7 +271,12 @@ void QueryEngine::find_near_reach() {
         }
         for (std::size_t p = 0; p < o.mesh->size(); ++p) {
             const Triangle t = o.mesh->triangle(p);
-            smallest = std::min(smallest, std::max(max_abs(t.b - t.a), max_abs(t.c - t.a)));
+            const double size = std::max(max_abs(t.b - t.a), max_abs(t.c - t.a));
+            // A triangle whose corners coincide is never hit, in double or in float (a
+            // review: one such triangle, common in real meshes, had turned the shortcut off
+            // for the whole scene).
+            if (size > 0.0)
+                smallest = std::min(smallest, size);
         }
     }
     const Bounds3 b = s.bounds();

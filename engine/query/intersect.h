@@ -99,11 +99,12 @@ class QueryEngine {
     /// than float can hold (answered in double at every precision).
     bool brute_force() const { return accel_ == nullptr; }
 
-    /// Whether `ray`'s origin lies within 2²⁰ object sizes of every object of the scene, so that
-    /// hit_point is origin + t·direction for any of its hits and surface_point() false: a test
-    /// against the scene's bounds and its smallest object (made once by build()), which lets a
-    /// renderer skip reading each hit's primitive (2–6% of a render, bench_render). False where
-    /// it cannot tell (an object of size 0).
+    /// True only if `ray`'s origin lies within 2²⁰ object sizes of every object of the scene, so
+    /// that hit_point is origin + t·direction for any of its hits and surface_point() false: a
+    /// sufficient test against the scene's bounds and its smallest object (made once by
+    /// build(); triangles whose corners coincide, never hit, do not count), which lets a
+    /// renderer or a JSON answer skip reading each hit's primitive. False for every ray where
+    /// 2²⁰ times the smallest object does not exceed the scene's half-extent.
     bool near_every_object(const Ray& ray) const {
         const Vec3d q = ray.origin - near_centre_;
         return std::abs(q.x) <= near_reach_ && std::abs(q.y) <= near_reach_ &&

@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "engine/accel/linear_accel.h"
+#include "engine/math/float_bounds.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -616,23 +617,36 @@ TEST(Query, HitPointsOfFarRaysAreOnTheSurface) {
 // hit's point is the sum, and surface_point() is false. A scene with an object of size 0 is
 // never near.
 TEST(Query, NearEveryObjectAndSurfacePointErrors) {
+    // A tilted triangle (the plane x + 2y + 4z = 1), a unit ball, and a triangle in z = 0, where
+    // a point's rounding across the plane is exactly 0 and only the bound's floor (u of the
+    // triangle's size) moves a spawned origin off it.
     Scene s;
     s.materials.push_back(Material{});
     s.objects.push_back(
-        testing::mesh_object("triangle", {{-1, -1, 0.1}, {1, -1, 0.1}, {0, 1, 0.1}}, {{0, 1, 2}}));
+        testing::mesh_object("tilted", {{1, 0, 0}, {-3, 0, 1}, {1, 2, -1}}, {{0, 1, 2}}));
     s.objects.push_back(testing::sphere("ball", {5, 0, 0}, 1.0, 0));
+    s.objects.push_back(
+        testing::mesh_object("flat", {{-1, -3, 0}, {1, -3, 0}, {0, -1, 0}}, {{0, 1, 2}}));
     const auto scene = std::make_shared<Scene>(s);
     auto built = QueryEngine::build(scene);
     ASSERT_TRUE(built.ok());
     const QueryEngine& engine = **built;
-    // The smallest object is the ball (radius 1); the bounds reach 3.5 from their centre.
+    // The smallest object is the ball (radius 1); the bounds reach 4.5 from their centre.
     EXPECT_TRUE(engine.near_every_object(Ray{{2, 0, -1e5}, {0, 0, 1}}));
     EXPECT_FALSE(engine.near_every_object(Ray{{2, 0, -0x1p20}, {0, 0, 1}}));
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> unit(-1, 1), exponent(8, 30);
-    int near = 0, far = 0;
-    for (int i = 0; i < 4000; ++i) {
-        const Vec3d aim{i % 2 ? 5 + 0.9 * unit(rng) : 0.5 * unit(rng), 0.5 * unit(rng), 0.0};
+    int near = 0, far = 0, flat = 0;
+    for (int i = 0; i < 6000; ++i) {
+        Vec3d aim;
+        if (i % 3 == 0) {
+            const double x = -0.5 + 0.4 * unit(rng), y = 0.6 + 0.3 * unit(rng);
+            aim = {x, y, (1 - x - 2 * y) / 4};
+        } else if (i % 3 == 1) {
+            aim = {5 + 0.9 * unit(rng), 0.5 * unit(rng), 0.0};
+        } else {
+            aim = {0.3 * unit(rng), -2.4 + 0.2 * unit(rng), 0.0};
+        }
         const Vec3d d = normalize(Vec3d{unit(rng), unit(rng), unit(rng)});
         const Ray ray{aim - d * std::exp2(exponent(rng)), d};
         const std::optional<Hit> h = engine.closest(ray, Precision::exact, true);
@@ -648,17 +662,32 @@ TEST(Query, NearEveryObjectAndSurfacePointErrors) {
         if (!on_surface)
             continue;
         ++far;
-        const Vec3d n = h->object == 0 ? Vec3d{0, 0, 1} : normalize(p - Vec3d{5, 0, 0});
-        const double off =
-            h->object == 0 ? std::abs(p.z - 0.1) : std::abs(length(p - Vec3d{5, 0, 0}) - 1);
-        EXPECT_LE(off, dot(abs(n), err)) << i;
-        EXPECT_GT(dot(abs(n), err), 0.0);
+        // The point's distance from its surface, in long double (the tilted plane's products
+        // by 2 and 4 are exact, its sums all but so).
+        using LD = long double;
+        Vec3d n;
+        LD off;
+        if (h->object == 0) {
+            n = Vec3d{1, 2, 4} / std::sqrt(21.0);
+            off = std::abs(LD(p.x) - 1 + 2 * LD(p.y) + 4 * LD(p.z)) / std::sqrt(LD(21));
+        } else if (h->object == 1) {
+            n = normalize(p - Vec3d{5, 0, 0});
+            const LD x = LD(p.x) - 5, y = p.y, z = p.z;
+            off = std::abs(std::sqrt(x * x + y * y + z * z) - 1);
+        } else {
+            ++flat;
+            n = {0, 0, 1};
+            off = std::abs(LD(p.z));
+            EXPECT_GE(err.z, 2 * kDoubleUnitRoundoff) << i;  // the floor: u of the size, 2
+        }
+        EXPECT_LE(off, LD(dot(abs(n), err))) << i;
         // And a bound of the objects' own precision (a few u of unit-sized objects within 6 of
         // the origin), not one that holds by being large.
         EXPECT_LT(dot(abs(n), err), 1e-14) << i;
     }
     EXPECT_GT(near, 500);
     EXPECT_GT(far, 500);
+    EXPECT_GT(flat, 100);
     // A far sphere hit whose normal is not a unit vector keeps the sum: c + r·n would not be on
     // the sphere (a zero normal from `fast` had put the point at the centre: a helper's review).
     {
@@ -694,12 +723,20 @@ TEST(Query, NearEveryObjectAndSurfacePointErrors) {
             }
         }
     }
-    // A degenerate triangle (size 0) makes every origin possibly far.
-    s.objects.push_back(
+    // A triangle whose corners coincide is never hit and does not count (one had turned the
+    // shortcut off for the whole scene: a review); a sliver 1e-9 across does, and 2^20 of it is
+    // less than the scene's extent, so no origin is near.
+    Scene with_point = s;
+    with_point.objects.push_back(
         testing::mesh_object("point", {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {{0, 1, 2}}));
-    auto degenerate = QueryEngine::build(std::make_shared<Scene>(s));
-    ASSERT_TRUE(degenerate.ok());
-    EXPECT_FALSE((*degenerate)->near_every_object(Ray{{2, 0, -3}, {0, 0, 1}}));
+    auto pointed = QueryEngine::build(std::make_shared<Scene>(with_point));
+    ASSERT_TRUE(pointed.ok());
+    EXPECT_TRUE((*pointed)->near_every_object(Ray{{2, 0, -3}, {0, 0, 1}}));
+    s.objects.push_back(testing::mesh_object(
+        "sliver", {{1, 1, 1}, {1 + 1e-9, 1, 1}, {1, 1 + 1e-9, 1}}, {{0, 1, 2}}));
+    auto tiny = QueryEngine::build(std::make_shared<Scene>(s));
+    ASSERT_TRUE(tiny.ok());
+    EXPECT_FALSE((*tiny)->near_every_object(Ray{{2, 0, -3}, {0, 0, 1}}));
 }
 
 TEST(EmbreeAccel, SceneWiderThanFloatIsAnswered) {

@@ -5,8 +5,11 @@
 // most 16 primitives by brute force in exact precision through linear_accel.h, the cheapest
 // for a few rays. A many-rays tracer scans such a scene through a flat copy of its own
 // (accel/scene_scan.h): at refined and exact the same exact answers bit for bit, at fast the
-// fast kernels. bench_render's tutorial_like (four spheres and a floor), spp 4: refined through
-// the Embree BVH this replaced 2,545-3,020 ms, scanned 1,423-1,798 ms; fast 1.2x faster.
+// fast kernels, except for a ray from so far away (SceneBall::far) that the brute force moves
+// it to the scene first, which the scan does not: such a ray gets the brute force's exact
+// answer at every precision. bench_render's tutorial_like (four spheres and a floor), spp 4:
+// refined through the Embree BVH this replaced 2,545-3,020 ms, scanned 1,423-1,798 ms; fast
+// 1.2x faster.
 
 #include <memory>
 #include <optional>
@@ -34,7 +37,8 @@ class Tracer {
     Tracer& operator=(const Tracer&) = delete;
 
     /// The path that answers (QueryEngine::effective_precision; a scan of the tracer's own
-    /// answers fast at fast and exact otherwise).
+    /// answers fast at fast, but for far rays, which are answered exactly, and exact
+    /// otherwise).
     Precision precision() const;
     /// The float frame of that path: what a spawned ray's origin error must add (shade/spawn.h);
     /// scale 0 where the answer is decided in double.

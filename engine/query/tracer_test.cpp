@@ -190,10 +190,13 @@ TEST(Tracer, ManyRaysAnswerFarRaysAsTheBruteForce) {
             EXPECT_TRUE(many.occluded(rays[i]));
             EXPECT_TRUE(blocked[i].valid());
         }
-        // A line beside both, from 2^66 away, misses.
-        const Ray beside{{-0x1p66, -0x1p66, -0x1p66}, {1, 1.0 + 0x1p-40, 1}};
-        EXPECT_FALSE(many.closest(beside, true));
-        EXPECT_FALSE(many.occluded(beside));
+        // A line from 2^50 away that passes 0.25 beside the triangle's edge (x = 0.5 at y = 0;
+        // the far kernels err by ~u·2^50 = 0.125 there) and then through the ball.
+        const Ray beside{{0.75 - 0x1p50, -0x1p50, -0x1p50}, {1, 1, 1}};
+        const std::optional<Hit> got = many.closest(beside, true);
+        ASSERT_TRUE(got);
+        EXPECT_EQ(got->object, 1u);
+        EXPECT_EQ(got->object, few.closest(beside, true)->object);
     }
 }
 

@@ -174,17 +174,27 @@ TEST(Whitted, LightBehindTheShadingNormalIsNotFacingAndTracesNoRay) {
     EXPECT_EQ(t.counts.shadow, 0u);
 }
 
-/// The ray tree of `r` by both tracers (a scan for many rays, QueryEngine's brute force for few)
-/// at fast and refined: its first hit on object 0, at `want` within `tol` where given, and fully
-/// lit by the scene's one point light.
+/// The ray tree of `r` by both tracers (for many rays, a scan of a small scene; QueryEngine's
+/// own path for few) at fast and refined: its first hit on object 0, at `want` within `tol`
+/// where given, and fully lit by the scene's one point light; and the same colour through a
+/// render's paths, radiance() (occluded shadow rays) and shade_hits() (their batches).
 void expect_lit_first_hit(const QueryEngine& engine, const Ray& r, const Vec3d* want, double tol) {
     for (bool many : {false, true}) {
         for (Precision precision : {Precision::fast, Precision::refined}) {
-            SCOPED_TRACE(std::string(many ? "scan, " : "") + to_string(precision));
+            SCOPED_TRACE(std::string(many ? "many rays, " : "") + to_string(precision));
             WhittedOptions o;
             o.many_rays = many;
             o.precision = precision;
-            const RayTree t = Whitted(engine, o).tree(r).value();
+            const Whitted w(engine, o);
+            const RayTree t = w.tree(r).value();
+            RayCounts counts;
+            EXPECT_LE(max_abs(w.radiance(r, counts) - t.color), 1e-9);
+            std::vector<Hit> hits;
+            std::vector<Vec3d> colors;
+            w.closest_batch({r}, hits);
+            w.shade_hits({r}, hits, colors, counts);
+            ASSERT_EQ(colors.size(), 1u);
+            EXPECT_LE(max_abs(colors[0] - t.color), 1e-9);
             ASSERT_FALSE(t.nodes.empty());
             EXPECT_EQ(t.nodes[0].hit.object, 0u);
             if (want) {
@@ -225,19 +235,31 @@ TEST(Whitted, FarRaysAreShadedAtTheirPointOnTheSurface) {
 // The same for a triangle in the plane z = 0, whose point has no rounding across that plane:
 // spawned with an offset of 0, the shadow ray started on the triangle and was blocked by it at
 // t = 0, and a far camera's render showed the lit triangle black (seen in a render through the
-// server, 2026-12-06).
+// server, 2026-12-06). A light 1e17 away along the normal tests the size of the bound's floor:
+// the least normal double alone gave a shadow ray's t = that offset over |direction| ≈ 1e17,
+// which underflowed to −0 and passed tmin = 0 (a review). With an icosphere far off the scene
+// has a BVH (Embree, whose float error the spawned origins add) instead of a scan.
 TEST(Whitted, FarRaysOnAnAxisAlignedTriangleAreLit) {
-    Scene s;
-    s.materials = {Material{}};
-    s.objects.push_back(
-        testing::mesh_object("flat", {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}}, {{0, 1, 2}}));
-    s.objects.push_back(sphere("behind", {0, 0, 5}, 2, 0));
-    s.lights = {ambient_light(0.2), point_light({0, 2, -10})};
-    auto engine = prepare(std::move(s));
-    for (double far : {0x1p26, 0x1p66}) {
-        SCOPED_TRACE("from " + std::to_string(far));
-        // Through (0.0625, −0.125, 0) from 2^66 away.
-        expect_lit_first_hit(*engine, Ray{{0, 0, -far}, {0x1p-70, -0x1p-69, 1}}, nullptr, 0.0);
+    for (bool bvh : {false, true}) {
+        for (const Vec3d& light : {Vec3d{0, 2, -10}, Vec3d{0, 2, -1e17}}) {
+            Scene s;
+            s.materials = {Material{}};
+            s.objects.push_back(
+                testing::mesh_object("flat", {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}}, {{0, 1, 2}}));
+            s.objects.push_back(sphere("behind", {0, 0, 5}, 2, 0));
+            if (bvh)
+                s.objects.push_back(testing::icosphere_object(1, {40, 40, 40}, 1.0));
+            s.lights = {ambient_light(0.2), point_light(light)};
+            auto engine = prepare(std::move(s));
+            ASSERT_EQ(engine->brute_force(), !bvh);
+            for (double far : {0x1p26, 0x1p66}) {
+                SCOPED_TRACE("from " + std::to_string(far) + (bvh ? ", BVH" : "") +
+                             ", light at z = " + std::to_string(light.z));
+                // Through (0.0625, −0.125, 0) from 2^66 away.
+                expect_lit_first_hit(*engine, Ray{{0, 0, -far}, {0x1p-70, -0x1p-69, 1}}, nullptr,
+                                     0.0);
+            }
+        }
     }
 }
 

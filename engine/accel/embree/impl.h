@@ -89,8 +89,11 @@ struct Impl {
 /// the moved ray (it lies within line_err, far below the boxes' padding, of the client's line), and
 /// a sphere's hit competes there at its t on the moved ray (user_geometry.cpp).
 struct FarSpheres {
+    /// Keeps pointers to both rays, which must outlive it (temporaries are refused).
     FarSpheres(const Ray& client_ray, const MovedRay& moved_ray)
         : client(&client_ray), moved(&moved_ray) {}
+    FarSpheres(Ray&&, const MovedRay&) = delete;
+    FarSpheres(const Ray&, MovedRay&&) = delete;
     const Ray* client;
     const MovedRay* moved;
     /// closest: RayContext::best as decided on `client`, when it is a sphere's.
