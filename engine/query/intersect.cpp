@@ -137,6 +137,17 @@ Status validate_ray(const Ray& ray, std::size_t index) {
     return {};
 }
 
+namespace {
+
+/// A triangle's size as surface_point's far test measures it, from its edges ab and ac: their
+/// largest coordinate. find_near_reach takes the scene's smallest by the same rule, which its
+/// shortcut relies on.
+double edge_size(const Vec3d& ab, const Vec3d& ac) {
+    return std::max(max_abs(ab), max_abs(ac));
+}
+
+}  // namespace
+
 bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p, Vec3d& err) {
     // Far: from the distance at which sphere_normal takes the closest approach, in object sizes.
     constexpr double kFarSizes = kNormalFarRadii;
@@ -178,7 +189,8 @@ bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p,
         return false;
     const Triangle t = o.mesh->triangle(hit.primitive);
     const Vec3d ab = t.b - t.a, ac = t.c - t.a;
-    if (max_abs(ray.origin - t.a) / kFarSizes <= std::max(max_abs(ab), max_abs(ac)))
+    const double size = edge_size(ab, ac);
+    if (max_abs(ray.origin - t.a) / kFarSizes <= size)
         return false;
     const Vec3d q = t.a + ab * hit.u + ac * hit.v;
     if (!is_finite(q))
@@ -193,8 +205,7 @@ bool surface_point(const Scene& scene, const Ray& ray, const Hit& hit, Vec3d& p,
     // crossing's t, that distance over an unnormalised direction to a light, stays a normal
     // number (the least normal double alone would underflow it to −0 for a light 1e16 away, and
     // −0 ≥ tmin = 0: a review).
-    const double hair = std::max(std::numeric_limits<double>::min(),
-                                 kDoubleUnitRoundoff * std::max(max_abs(ab), max_abs(ac)));
+    const double hair = std::max(std::numeric_limits<double>::min(), kDoubleUnitRoundoff * size);
     err = (abs(t.a) + abs(ab) * std::abs(hit.u) + abs(ac) * std::abs(hit.v)) * gamma(4) +
           Vec3d{hair, hair, hair};
     return true;
@@ -255,8 +266,13 @@ Result<std::shared_ptr<const QueryEngine>> QueryEngine::build(std::shared_ptr<co
     return std::shared_ptr<const QueryEngine>(std::move(engine));
 }
 
+bool QueryEngine::surface_point(const Ray& ray, const Hit& hit, Vec3d& p, Vec3d& err) const {
+    return !near_every_object(ray) && engine::surface_point(*scene_, ray, hit, p, err);
+}
+
 Vec3d QueryEngine::point_of(const Ray& ray, const Hit& hit) const {
-    return near_every_object(ray) ? ray.at(hit.t) : hit_point(*scene_, ray, hit);
+    Vec3d p, err;
+    return surface_point(ray, hit, p, err) ? p : ray.at(hit.t);
 }
 
 void QueryEngine::find_near_reach() {
@@ -271,7 +287,7 @@ void QueryEngine::find_near_reach() {
         }
         for (std::size_t p = 0; p < o.mesh->size(); ++p) {
             const Triangle t = o.mesh->triangle(p);
-            const double size = std::max(max_abs(t.b - t.a), max_abs(t.c - t.a));
+            const double size = edge_size(t.b - t.a, t.c - t.a);
             // A triangle whose corners coincide is never hit, in double or in float (a
             // review: one such triangle, common in real meshes, had turned the shortcut off
             // for the whole scene).

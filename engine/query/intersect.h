@@ -110,8 +110,10 @@ class QueryEngine {
         return std::abs(q.x) <= near_reach_ && std::abs(q.y) <= near_reach_ &&
                std::abs(q.z) <= near_reach_;
     }
-    /// hit_point over this engine's scene (below), without reading the hit's primitive where
-    /// near_every_object(ray) says the point is the sum.
+    /// surface_point over this engine's scene (below), without reading the hit's primitive where
+    /// near_every_object(ray) says the point is the sum (false then).
+    bool surface_point(const Ray& ray, const Hit& hit, Vec3d& p, Vec3d& err) const;
+    /// hit_point the same way: the surface point where there is one, else the sum.
     Vec3d point_of(const Ray& ray, const Hit& hit) const;
 
     // ---- Point queries: what engine/points builds closest points, distances and inside/outside

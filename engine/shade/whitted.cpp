@@ -202,7 +202,7 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
     // u·|o|, which put a camera ray's hit from 2⁶⁶ away 8,192 units off its triangle and judged
     // a light in front of it to be behind (a helper's review; query/intersect.h, hit_point).
     Vec3d p, p_err;
-    if (!engine_.near_every_object(ray) && surface_point(scene(), ray, hit, p, p_err)) {
+    if (engine_.surface_point(ray, hit, p, p_err)) {
         p_err += float_tracer_error(p, tracer_.float_frame());
     } else {
         p = ray.at(hit.t);
