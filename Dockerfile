@@ -16,7 +16,7 @@ RUN apt-get update -q \
     && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
         build-essential cmake ninja-build pkg-config git curl ca-certificates \
         libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev \
-        nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev \
+        nlohmann-json3-dev libstb-dev zlib1g-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev \
     && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY . .

@@ -6,6 +6,7 @@ find_package(OpenMesh REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(TBB REQUIRED)
 find_package(OpenSSL REQUIRED)  # SHA-256 for content-addressed scene ids
+find_package(ZLIB REQUIRED)     # deflate for the PNG writer (engine/render/png.h)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib)
 pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)

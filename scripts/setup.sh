@@ -15,7 +15,7 @@ set -euo pipefail
 build_packages=(
     build-essential cmake ninja-build pkg-config git curl ca-certificates
     libembree-dev libtinygltf-dev libopenmesh-dev libcpp-httplib-dev libssl-dev
-    nlohmann-json3-dev libstb-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
+    nlohmann-json3-dev libstb-dev zlib1g-dev libtbb-dev libgtest-dev libgmock-dev libbenchmark-dev
 )
 # What testing, formatting and fuzzing need besides.
 packages=(

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <cstring>
 
-#include <stb_image_write.h>
+#include "engine/render/png.h"
 
 namespace raycastd::engine {
 
@@ -13,14 +13,8 @@ namespace {
 
 std::vector<unsigned char> to_8bit(const Image& img, bool linear) {
     std::vector<unsigned char> out(img.rgb.size());
-    for (std::size_t i = 0; i < img.rgb.size(); ++i)
-        out[i] = encode_8bit(img.rgb[i], linear);
+    encode_8bit(img.rgb.data(), img.rgb.size(), linear, out.data());
     return out;
-}
-
-void append_png(void* context, void* data, int size) {
-    auto* out = static_cast<std::string*>(context);
-    out->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
 }
 
 template <class T>
@@ -131,7 +125,7 @@ const char* mime_type(ImageFormat format) {
     return "application/octet-stream";
 }
 
-unsigned char srgb_encode(float linear) {
+unsigned char srgb_encode_formula(float linear) {
     if (!(linear > 0.0f))
         return 0;  // also NaN
     if (linear >= 1.0f)
@@ -142,41 +136,104 @@ unsigned char srgb_encode(float linear) {
     return static_cast<unsigned char>(std::lround(s * 255.0f));
 }
 
-unsigned char encode_8bit(float value, bool linear) {
-    if (!linear)
-        return srgb_encode(value);
-    const float c = std::isfinite(value) ? std::clamp(value, 0.0f, 1.0f) : 0.0f;
-    return static_cast<unsigned char>(std::lround(c * 255.0f));
-}
-
 namespace {
 
-/// stb_image_write's defaults (deflate level 8, and each row tried with all five PNG filters to
-/// keep the smallest) made the encode a fifth of a 640×480 Duck preview's time. The Sub filter
-/// (PNG spec §9.2, type 1) on every row at level 5 encoded the same preview 1.6–2.0× faster for
-/// 4% more bytes (10 encodes of each setting on this 2-core machine, docs/rendering.md; every
-/// render reports its own encode time in X-Render-Breakdown).
-/// The two are process-wide variables of libstb, set once, before the first encode reads them.
-void set_png_encoder_options() {
-    static const bool once = [] {
-        stbi_write_png_compression_level = 5;
-        stbi_write_force_png_filter = 1;
-        return true;
-    }();
-    (void)once;
+/// srgb_encode_formula, tabulated. Every image is written through the curve, three powf calls a
+/// pixel: 46 ms of a 1024×768 preview's 92 ms PNG encode, and the same again in adaptive
+/// sampling's first pass, which compares the 8-bit values shown (render.cpp). The table splits
+/// [2^-13, 1) into buckets by a float's exponent and top 7 mantissa bits (its bits >> 16). The
+/// code rises across a bucket by at most the curve's slope times its width, 255 · 1.055/2.4 ·
+/// c^(1/2.4) · 2^-7 ≤ 0.88 (the linear segment: 12.92 · 255 · c · 2^-7 ≤ 0.08), so each bucket
+/// holds its first value's code and at most one step, at the first float whose code is higher.
+/// Below 2^-13 the code is 0 (12.92 · 255 · 2^-13 = 0.40 < 1/2).
+/// SrgbTable.MatchesTheFormulaOnEveryFloat compares the two on every float in [0, 1].
+class SrgbTable {
+  public:
+    SrgbTable() {
+        for (std::uint32_t i = 0; i < kBuckets; ++i) {
+            const std::uint32_t first = (kFirstBucket + i) << 16;
+            const std::uint32_t last = first | 0xffffu;
+            base_[i] = srgb_encode_formula(from_bits(first));
+            step_[i] = 2.0f;  // no step in this bucket: no value in [0, 1) reaches it
+            if (srgb_encode_formula(from_bits(last)) == base_[i])
+                continue;
+            // The first float in (first, last] whose code is above base_[i] (bisection).
+            std::uint32_t lo = first, hi = last;
+            while (hi - lo > 1) {
+                const std::uint32_t mid = lo + (hi - lo) / 2;
+                (srgb_encode_formula(from_bits(mid)) > base_[i] ? hi : lo) = mid;
+            }
+            step_[i] = from_bits(hi);
+        }
+    }
+    unsigned char operator()(float linear) const {
+        if (!(linear >= kFirst))
+            return 0;  // also NaN
+        if (linear >= 1.0f)
+            return 255;
+        std::uint32_t bits;
+        std::memcpy(&bits, &linear, sizeof bits);
+        const std::uint32_t i = (bits >> 16) - kFirstBucket;
+        return static_cast<unsigned char>(base_[i] + (linear >= step_[i] ? 1 : 0));
+    }
+
+  private:
+    static float from_bits(std::uint32_t bits) {
+        float f;
+        std::memcpy(&f, &bits, sizeof f);
+        return f;
+    }
+    static constexpr float kFirst = 0x1p-13f;
+    static constexpr std::uint32_t kFirstBucket = (127u - 13u) << 7;  // bits(2^-13) >> 16
+    static constexpr std::uint32_t kBuckets = 13u << 7;               // 2^-13 .. 1: 13 octaves
+    unsigned char base_[kBuckets];
+    float step_[kBuckets];
+};
+
+const SrgbTable& srgb_table() {
+    static const SrgbTable table;
+    return table;
 }
 
 }  // namespace
 
+unsigned char srgb_encode(float linear) {
+    return srgb_table()(linear);
+}
+
+namespace {
+
+/// Round-half-up of c · 255 for c in [0, 1], as std::lround gives it (non-negative), without a
+/// libm call: the float product is exact in double, and adding 1/2 to it there is exact too.
+unsigned char linear_8bit(float value) {
+    const float c = std::isfinite(value) ? std::clamp(value, 0.0f, 1.0f) : 0.0f;
+    return static_cast<unsigned char>(static_cast<double>(c * 255.0f) + 0.5);
+}
+
+}  // namespace
+
+unsigned char encode_8bit(float value, bool linear) {
+    return linear ? linear_8bit(value) : srgb_encode(value);
+}
+
+void encode_8bit(const float* values, std::size_t n, bool linear, unsigned char* out) {
+    if (linear) {
+        for (std::size_t i = 0; i < n; ++i)
+            out[i] = linear_8bit(values[i]);
+        return;
+    }
+    const SrgbTable& table = srgb_table();
+    for (std::size_t i = 0; i < n; ++i)
+        out[i] = table(values[i]);
+}
+
 std::string encode_image(const Image& img, ImageFormat format, bool linear_8bit) {
     switch (format) {
         case ImageFormat::png: {
-            set_png_encoder_options();
-            const std::vector<unsigned char> px = to_8bit(img, linear_8bit);
-            std::string out;
-            stbi_write_png_to_func(append_png, &out, img.width, img.height, 3, px.data(),
-                                   img.width * 3);
-            return out;
+            const std::size_t n = 3 * static_cast<std::size_t>(img.width);
+            return encode_png_rgb8(img.width, img.height, [&](int y, unsigned char* out) {
+                encode_8bit(&img.rgb[n * static_cast<std::size_t>(y)], n, linear_8bit, out);
+            });
         }
         case ImageFormat::ppm: {
             const std::vector<unsigned char> px = to_8bit(img, linear_8bit);

@@ -1,7 +1,7 @@
 #pragma once
 // Image: a linear RGB float image, and its encodings.
 //
-//   png  8-bit sRGB (IEC 61966-2-1 transfer curve) through libstb's stb_image_write
+//   png  8-bit sRGB (IEC 61966-2-1 transfer curve), written by png.h with zlib
 //   ppm  binary P6, 8-bit sRGB (Netpbm's PPM holds gamma-encoded samples)
 //   pfm  Portable Float Map, linear 32-bit floats, bottom row first (Netpbm/Debevec's PF)
 //   exr  OpenEXR 2.0 single-part scanline file, uncompressed, linear 32-bit float R, G, B
@@ -89,11 +89,17 @@ std::optional<ImageFormat> image_format_from_name(std::string_view name);
 /// The MIME type of an encoded image ("image/png", "image/x-portable-pixmap", ...).
 const char* mime_type(ImageFormat format);
 
-/// The sRGB encoding of a linear value in [0, 1] (clamped), as an 8-bit code.
+/// The sRGB encoding of a linear value in [0, 1] (clamped; NaN: 0), as an 8-bit code: the IEC
+/// 61966-2-1 curve, rounded to nearest.
 unsigned char srgb_encode(float linear);
+/// The same code computed by the curve's formula in float (srgb_encode reads it from a table built
+/// with this, and equals it on every float).
+unsigned char srgb_encode_formula(float linear);
 /// The 8-bit code a value is written as: sRGB-encoded, or with `linear` (the data modes) the
 /// value in [0, 1] (clamped; not finite: 0) times 255, rounded.
 unsigned char encode_8bit(float value, bool linear);
+/// encode_8bit of values[0, n) into out[0, n).
+void encode_8bit(const float* values, std::size_t n, bool linear, unsigned char* out);
 
 /// The image encoded in `format`. Never fails for a well-formed Image (width·height·3 floats).
 std::string encode_image(const Image& image, ImageFormat format, bool linear_8bit = false);

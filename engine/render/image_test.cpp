@@ -1,9 +1,17 @@
 #include "engine/render/image.h"
 
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <limits>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <stb_image.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace raycastd::engine {
 namespace {
@@ -26,6 +34,59 @@ TEST(Image, SrgbCurve) {
     EXPECT_EQ(srgb_encode(0.5f), 188);
     EXPECT_EQ(srgb_encode(0.2159f), 128);
     EXPECT_EQ(srgb_encode(0.001f), 3);  // the linear segment: 12.92 · 0.001 · 255
+}
+
+// srgb_encode reads a table built from the formula (image.cpp); it must give the formula's code
+// on every float. Below 2^-13 the table answers 0 without looking: the formula's product and
+// lround only rise with the value, so the largest float below 2^-13 giving 0 covers them all.
+TEST(Image, SrgbTableMatchesTheFormulaOnEveryFloat) {
+    auto from_bits = [](std::uint32_t b) {
+        float f;
+        std::memcpy(&f, &b, sizeof f);
+        return f;
+    };
+    const std::uint32_t first = (127u - 13u) << 23;  // 2^-13
+    const std::uint32_t one = 127u << 23;            // 1.0f
+    EXPECT_EQ(srgb_encode_formula(from_bits(first - 1)), 0);
+    std::atomic<std::uint64_t> wrong{0};
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(first, one + 1, 1u << 16),
+                      [&](const tbb::blocked_range<std::uint32_t>& r) {
+                          std::uint64_t n = 0;
+                          for (std::uint32_t b = r.begin(); b != r.end(); ++b) {
+                              const float v = from_bits(b);
+                              n += srgb_encode(v) != srgb_encode_formula(v);
+                          }
+                          wrong += n;
+                      });
+    EXPECT_EQ(wrong.load(), 0u);
+    for (const float v :
+         {0.0f, -0.0f, 1e-45f, 1e-38f, 0x1p-14f, -1.0f, 1.0f, 1.5f,
+          std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+          std::numeric_limits<float>::quiet_NaN()})
+        EXPECT_EQ(srgb_encode(v), srgb_encode_formula(v)) << v;
+}
+
+// The data modes' codes round c · 255 half up without libm: the same as std::lround at every
+// half-way point and the few floats either side of it, and the batch form as the single one.
+TEST(Image, LinearCodesRoundAsLround) {
+    std::vector<float> values;
+    for (int k = 0; k < 255; ++k) {
+        float v = (k + 0.5f) / 255.0f;
+        for (int i = 0; i < 4; ++i)
+            v = std::nextafter(v, 0.0f);
+        for (int i = 0; i < 9; ++i, v = std::nextafter(v, 1.0f))
+            values.push_back(v);
+    }
+    for (const float v : values)
+        ASSERT_EQ(encode_8bit(v, true), std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)) << v;
+    values.insert(values.end(), {-1.0f, 2.0f, std::numeric_limits<float>::quiet_NaN(),
+                                 std::numeric_limits<float>::infinity(), 0.0f, 1.0f});
+    for (const bool linear : {true, false}) {
+        std::vector<unsigned char> batch(values.size());
+        encode_8bit(values.data(), values.size(), linear, batch.data());
+        for (std::size_t i = 0; i < values.size(); ++i)
+            ASSERT_EQ(batch[i], encode_8bit(values[i], linear)) << values[i];
+    }
 }
 
 TEST(Image, PngRoundTripsThroughStb) {
