@@ -14,6 +14,7 @@
 #include "engine/accel/linear_accel.h"
 #include "engine/accel/scene_scan.h"
 #include "engine/geometry/triangle.h"
+#include "engine/math/float_bounds.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -957,6 +958,64 @@ TEST(EmbreeAccel, RangeIsInclusiveAndRespected) {
         ASSERT_TRUE(h);
         EXPECT_EQ(h->t, 6.0);
     }
+}
+
+// A sphere whose radius is below half an ulp of its centre's coordinates (1e-9 at 2^24, where
+// an ulp is 3.7e-9): its box, made from c ± r rounded to nearest, had been its centre alone,
+// and the BVH passed by every line through the sphere that missed that point by more than the
+// padding, at every precision (the differential fuzzer, seed 6218). Bounds now round outward.
+TEST(EmbreeAccel, SphereBelowAnUlpOfItsCentreIsInItsBox) {
+    const Vec3d c{0x1p24, -0x1p23, 0x1.4p24};
+    Scene s;
+    s.objects.push_back(testing::sphere("tiny", c, 1e-9, 0));
+    // Sixteen more around it, 1e-5 away, so that the engine builds a BVH.
+    for (int k = 0; k < 16; ++k) {
+        const double phi = 0.4 * k;
+        s.objects.push_back(testing::sphere("ring " + std::to_string(k),
+                                            c + Vec3d{std::cos(phi), std::sin(phi), 0.1} * 1e-5,
+                                            5e-9, 0));
+    }
+    const Bounds3 b = object_bounds(s.objects[0]);
+    for (std::size_t k = 0; k < 3; ++k) {
+        // c ± r, in long double (exact here): the nearest doubles outside, not c itself.
+        using LD = long double;
+        const LD lo = LD(c[k]) - LD(1e-9), hi = LD(c[k]) + LD(1e-9);
+        EXPECT_LE(LD(b.lo[k]), lo);
+        EXPECT_GT(LD(next_up(b.lo[k])), lo);
+        EXPECT_GE(LD(b.hi[k]), hi);
+        EXPECT_LT(LD(next_down(b.hi[k])), hi);
+    }
+    // A radius that c ± r holds exactly keeps its exact bounds.
+    const Bounds3 unit = object_bounds(testing::sphere("unit", {0, 0, 0}, 1.0, 0));
+    EXPECT_EQ(unit.lo, (Vec3d{-1, -1, -1}));
+    EXPECT_EQ(unit.hi, (Vec3d{1, 1, 1}));
+
+    Built built = build(s);
+    ASSERT_TRUE(built.accel);
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int checked = 0;
+    for (int i = 0; i < 200; ++i) {
+        // Lines from around the world origin passing the centre at up to 0.9 r: c − o is exact
+        // for an integer o, so the line from o along it meets c; the origin is then moved
+        // sideways by up to 0.9 r (an ulp near 1e3 is 1e-13), which moves the line as much.
+        const Vec3d o{std::round(u(rng) * 1e3), std::round(u(rng) * 1e3), std::round(u(rng) * 1e3)};
+        Vec3d side = cross(c - o, Vec3d{u(rng), u(rng), u(rng)});
+        side = side / length(side);
+        const Ray ray{o + side * (0.9e-9 * std::abs(u(rng))), c - o};
+        const auto ref = linear_closest(*built.scene, ray, false);
+        ASSERT_TRUE(ref.has_value());
+        ASSERT_EQ(ref->object, 0u);
+        for (const Precision p : {Precision::refined, Precision::exact}) {
+            const auto h = built.accel->closest(ray, p, false);
+            ASSERT_TRUE(h.has_value()) << "ray " << i << " at " << to_string(p);
+            EXPECT_EQ(h->object, 0u);
+            EXPECT_EQ(h->t, ref->t) << "ray " << i << " at " << to_string(p);
+            EXPECT_TRUE(built.accel->any(ray, p)) << "ray " << i << " at " << to_string(p);
+        }
+        ++checked;
+    }
+    EXPECT_EQ(checked, 200);
 }
 
 }  // namespace

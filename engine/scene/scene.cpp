@@ -4,6 +4,9 @@
 #include <cmath>
 #include <set>
 
+#include "engine/math/double_double.h"
+#include "engine/math/float_bounds.h"
+
 namespace raycastd::engine {
 
 std::size_t Scene::triangle_count() const {
@@ -23,17 +26,32 @@ std::size_t Scene::sphere_count() const {
 
 namespace {
 
-Bounds3 object_bounds(const Object& o) {
-    if (o.kind != ObjectKind::sphere)
-        return o.mesh->bounds();
-    Bounds3 b;
-    const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
-    b.extend(o.sphere.center - r);
-    b.extend(o.sphere.center + r);
-    return b;
+/// c − r rounded down and c + r rounded up (TwoSum's residual says which way c ± r rounded,
+/// Knuth; Ogita, Rump & Oishi 2005). Rounded to nearest, a radius below half an ulp of its
+/// centre's coordinates vanished: a sphere 1.6e-9 across centred at 2^24 had the box of its
+/// centre alone, and the exact BVH's traversal passed by rays through it (the differential
+/// fuzzer, seed 6218; tests/stress/regressions/exact-miss-sphere-below-an-ulp-of-its-centre.txt).
+double minus_down(double c, double r) {
+    const dd::DD s = dd::two_sum(c, -r);
+    return s.lo < 0.0 ? next_down(s.hi) : s.hi;
+}
+double plus_up(double c, double r) {
+    const dd::DD s = dd::two_sum(c, r);
+    return s.lo > 0.0 ? next_up(s.hi) : s.hi;
 }
 
 }  // namespace
+
+Bounds3 object_bounds(const Object& o) {
+    if (o.kind != ObjectKind::sphere)
+        return o.mesh->bounds();
+    const Vec3d& c = o.sphere.center;
+    const double r = o.sphere.radius;
+    Bounds3 b;
+    b.extend({minus_down(c.x, r), minus_down(c.y, r), minus_down(c.z, r)});
+    b.extend({plus_up(c.x, r), plus_up(c.y, r), plus_up(c.z, r)});
+    return b;
+}
 
 Bounds3 Scene::bounds() const {
     Bounds3 b;

@@ -74,6 +74,10 @@ struct Scene {
 /// indices in range, material indices valid); the path names the offending object.
 Status validate(const Scene& scene);
 
+/// An object's bounds: its mesh's, or a sphere's centre ± radius rounded outward, so that the
+/// box holds the whole sphere however small against its centre's coordinates.
+Bounds3 object_bounds(const Object& o);
+
 /// The default camera for an image of `aspect` = width / height: looks at the centre of the
 /// bounds from the side `view` names (+y up), from the distance at which their bounding sphere
 /// (centre, half the diagonal) just fills the narrower of the two fields of view

@@ -67,9 +67,7 @@ void user_bounds(const RTCBoundsFunctionArguments* args) {
     const Object& o = g->accel->scene->objects[g->object];
     Bounds3 b;
     if (o.kind == ObjectKind::sphere) {
-        const Vec3d r{o.sphere.radius, o.sphere.radius, o.sphere.radius};
-        b.extend(o.sphere.center - r);
-        b.extend(o.sphere.center + r);
+        b = object_bounds(o);  // rounded outward: a radius below an ulp of the centre counts
     } else {
         const Triangle t = o.mesh->triangle(args->primID);
         b.extend(t.a);
