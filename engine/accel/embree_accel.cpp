@@ -425,13 +425,46 @@ bool miss_is_certain(const Impl& a, const RayContext& c) {
 /// certified, or after a rejection, it is a front face (a back face first: the ray may have
 /// slipped in through an edge; found by the fuzzer on a ray grazing an icosahedron at 0.015°,
 /// tests/stress/regressions/triangle-t-259-ulps.txt).
+/// Whether the back face c.best is crossed far enough inside its triangle that a ray coming in
+/// from outside must have shown itself to the float traversal. Δ = 2 pads bounds how far the
+/// float line strays from the double one relative to the float triangles (fat_triangles.h), and
+/// w = 16Δ is the widening. A length s = 2Δ/sin β before the exit the line runs 2Δ below the
+/// face's plane; where the exit lies at least s + 2Δ from every edge, that point lies over the
+/// face at least 2Δ from its edges, so it is more than Δ inside the solid (unless the solid is
+/// thinner there than ~3Δ, 48·u_f of the scene, or a wedge sharper than a right angle), and so
+/// is the float line. A ray that came from outside then crossed into the float solid before,
+/// which the traversal reports as a candidate: a front face closer than the back one, or a
+/// rejection. sin β ≥ 1/16 as for the widening (s ≤ 2w).
+/// What this rules out: a ray that clips a ridge less deeply than Δ, so that the float line
+/// passes outside; it meets the entry face at a grazing angle the widening does not cover and
+/// leaves near the shared edge through the neighbour, whose widened float triangle reports the
+/// exit (the differential fuzzer, seed 703669: a level-2 icosphere, entry at β = 0.33°, the
+/// exit 5e-11 from the edge, tests/stress/regressions/refined-leak-clipping-a-ridge.txt).
+bool exits_well_inside(const Impl& a, const RayContext& c) {
+    const Hit& h = *c.best;
+    const Triangle t = a.scene->objects[h.object].mesh->triangle(h.primitive);
+    const Vec3d n = cross(t.b - t.a, t.c - t.a);
+    const double nn = length(n);
+    const Vec3d& d = c.ray->direction;
+    const double sin_beta = std::abs(dot(n, d)) / (nn * length(d));
+    if (!(sin_beta >= 1.0 / 16.0))
+        return false;
+    // Barycentric b_i times the altitude |n|/|e_i| is the distance from edge i; the double
+    // kernel's u, v are exact to far below Δ (16·u_f of the scene).
+    const double delta = 2.0 * a.pad;
+    const double inset = 2.0 * delta / sin_beta + 2.0 * delta;
+    const double w0 = 1.0 - h.u - h.v;
+    return w0 * nn >= inset * length(t.c - t.b) && h.u * nn >= inset * length(t.a - t.c) &&
+           h.v * nn >= inset * length(t.b - t.a);
+}
+
 bool rejected_before_best(const RayContext& c) {
     return static_cast<double>(c.rejected_tf) < static_cast<double>(c.best_tf) - c.margin;
 }
 bool hit_is_certain(const Impl& a, const RayContext& c) {
     if (c.best->front_face)
         return !rejected_before_best(c);
-    return a.certified_misses && !c.rejected();
+    return a.certified_misses && !c.rejected() && exits_well_inside(a, c);
 }
 
 /// The closest triangle hit, every triangle of the scene tested in double (spheres skipped:

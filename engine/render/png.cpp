@@ -1,7 +1,5 @@
 #include "engine/render/png.h"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <cstdint>
 #include <new>
@@ -9,6 +7,7 @@
 #include <vector>
 
 #include <tbb/parallel_for.h>
+#include <zlib.h>
 
 namespace raycastd::engine {
 
@@ -54,7 +53,7 @@ void put_chunk(std::string& out, const char* type, const std::string& data) {
 /// A z_stream for raw deflate (no zlib header or trailer: the bands are one stream's pieces),
 /// ended when it goes out of scope.
 class RawDeflate {
-public:
+  public:
     RawDeflate() {
         // Level 1 and Z_RLE: run-length matches only (png.h says why). windowBits −15: raw.
         const int rc = deflateInit2(&s_, 1, Z_DEFLATED, -15, 8, Z_RLE);
@@ -99,7 +98,7 @@ public:
         out.resize(produced);
     }
 
-private:
+  private:
     z_stream s_{};
 };
 

@@ -3,8 +3,6 @@
 
 #include "engine/render/png.h"
 
-#include <zlib.h>
-
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
@@ -15,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <stb_image.h>
 #include <tbb/task_arena.h>
+#include <zlib.h>
 
 namespace raycastd::engine {
 namespace {
@@ -61,8 +60,8 @@ std::vector<unsigned char> strict_decode(const std::string& png, int w, int h) {
         const std::uint32_t n = be32(png, at);
         const std::string type = png.substr(at + 4, 4);
         EXPECT_LE(at + 12 + n, png.size());
-        const std::uint32_t crc =
-            static_cast<std::uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(&png[at + 4]), 4 + n));
+        const std::uint32_t crc = static_cast<std::uint32_t>(
+            crc32(0, reinterpret_cast<const Bytef*>(&png[at + 4]), 4 + n));
         EXPECT_EQ(crc, be32(png, at + 8 + n)) << type;
         if (type == "IHDR") {
             EXPECT_EQ(n, 13u);
@@ -81,9 +80,9 @@ std::vector<unsigned char> strict_decode(const std::string& png, int w, int h) {
     const std::size_t stride = 1 + 3 * static_cast<std::size_t>(w);
     std::vector<unsigned char> raw(stride * h);
     uLongf raw_size = raw.size();
-    EXPECT_EQ(uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()),
-                         idat.size()),
-              Z_OK);
+    EXPECT_EQ(
+        uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()),
+        Z_OK);
     EXPECT_EQ(raw_size, raw.size());
     std::vector<unsigned char> px(3 * static_cast<std::size_t>(w) * h);
     for (int y = 0; y < h; ++y) {
@@ -99,8 +98,8 @@ std::vector<unsigned char> strict_decode(const std::string& png, int w, int h) {
 // Sizes from one pixel to several bands (a band is ~256 KB of rows: 300 × 1000 makes four, the
 // last shorter), a single column, a single row.
 TEST(Png, TwoDecodersReadBackTheSameBytes) {
-    for (const auto& [w, h] : {std::pair{1, 1}, {1, 37}, {53, 1}, {2, 2}, {64, 48}, {300, 1000},
-                              {1024, 257}}) {
+    for (const auto& [w, h] :
+         {std::pair{1, 1}, {1, 37}, {53, 1}, {2, 2}, {64, 48}, {300, 1000}, {1024, 257}}) {
         SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
         const std::vector<unsigned char> px = pattern(w, h);
         const std::string png = encode(w, h, px);
