@@ -419,45 +419,33 @@ bool miss_is_certain(const Impl& a, const RayContext& c) {
     return a.certified_misses && !c.rejected() && exact_ray_within_padding(a, c);
 }
 
-/// Whether the hit c.best found on the native BVH set up in `c` is refined's answer: the filter
-/// rejected nothing before it (a candidate rejected at the same crossing, within the float
-/// ray's margin, is the neighbour of the triangle hit there), and in a scene that is not
-/// certified, or after a rejection, it is a front face (a back face first: the ray may have
-/// slipped in through an edge; found by the fuzzer on a ray grazing an icosahedron at 0.015°,
-/// tests/stress/regressions/triangle-t-259-ulps.txt).
-/// Whether the back face c.best is crossed far enough inside its triangle that a ray coming in
-/// from outside must have shown itself to the float traversal. Δ = 2 pads bounds how far the
-/// float line strays from the double one relative to the float triangles (fat_triangles.h), and
-/// w = 16Δ is the widening. A length s = 2Δ/sin β before the exit the line runs 2Δ below the
-/// face's plane; where the exit lies at least s + 2Δ from every edge, that point lies over the
-/// face at least 2Δ from its edges, so it is more than Δ inside the solid (unless the solid is
-/// thinner there than ~3Δ, 48·u_f of the scene, or a wedge sharper than a right angle), and so
-/// is the float line. A ray that came from outside then crossed into the float solid before,
-/// which the traversal reports as a candidate: a front face closer than the back one, or a
-/// rejection. sin β ≥ 1/16 as for the widening (s ≤ 2w).
-/// What this rules out: a ray that clips a ridge less deeply than Δ, so that the float line
-/// passes outside; it meets the entry face at a grazing angle the widening does not cover and
-/// leaves near the shared edge through the neighbour, whose widened float triangle reports the
-/// exit (the differential fuzzer, seed 703669: a level-2 icosphere, entry at β = 0.33°, the
-/// exit 5e-11 from the edge, tests/stress/regressions/refined-leak-clipping-a-ridge.txt).
+/// Whether the back face c.best may be refined's answer in a certified scene where the filter
+/// rejected nothing: crossed at sin β ≥ 1/16 at least 2Δ/sin β + 2Δ from its triangle's edges
+/// (Δ = 2 pads, the float line's displacement; crossed_well_inside, fat_triangles.h). The float
+/// line's crossing of the face's float triangle then lies more than Δ inside that triangle, not
+/// in its widening: it genuinely leaves the float solid there, so it was inside just before,
+/// and a float ray that started outside the float solid crossed into it earlier, which the
+/// watertight traversal reports as a candidate (a closer front face, or a rejection). What it
+/// rules out: a ray that clips a ridge less deeply than Δ, so that the float line passes
+/// outside; it enters through a face at a grazing angle the widening does not cover and leaves
+/// near the shared edge through the neighbour, whose widened triangle reports the exit (the
+/// differential fuzzer, seed 703669: a level-2 icosphere, entry at β = 0.33°, the exit 5e-11
+/// from the edge, tests/stress/regressions/refined-leak-clipping-a-ridge.txt). What it assumes:
+/// the float ray starts outside the float solid whenever the double ray does, which fails only
+/// for an origin within ~Δ of the surface (a ray spawned on it at a grazing angle).
 bool exits_well_inside(const Impl& a, const RayContext& c) {
     const Hit& h = *c.best;
-    const Triangle t = a.scene->objects[h.object].mesh->triangle(h.primitive);
-    const Vec3d n = cross(t.b - t.a, t.c - t.a);
-    const double nn = length(n);
-    const Vec3d& d = c.ray->direction;
-    const double sin_beta = std::abs(dot(n, d)) / (nn * length(d));
-    if (!(sin_beta >= 1.0 / 16.0))
-        return false;
-    // Barycentric b_i times the altitude |n|/|e_i| is the distance from edge i; the double
-    // kernel's u, v are exact to far below Δ (16·u_f of the scene).
-    const double delta = 2.0 * a.pad;
-    const double inset = 2.0 * delta / sin_beta + 2.0 * delta;
-    const double w0 = 1.0 - h.u - h.v;
-    return w0 * nn >= inset * length(t.c - t.b) && h.u * nn >= inset * length(t.a - t.c) &&
-           h.v * nn >= inset * length(t.b - t.a);
+    return crossed_well_inside(a.scene->objects[h.object].mesh->triangle(h.primitive), h.u, h.v,
+                               c.ray->direction, 2.0 * a.pad);
 }
 
+/// Whether the hit c.best found on the native BVH set up in `c` is refined's answer: the filter
+/// rejected nothing before it (a candidate rejected at the same crossing, within the float
+/// ray's margin, is the neighbour of the triangle hit there), and a back face only in a
+/// certified scene, after no rejection at all, crossed well inside (exits_well_inside). A back
+/// face first otherwise goes to the exact path: the ray may have slipped in through an edge
+/// (found by the fuzzer on a ray grazing an icosahedron at 0.015°,
+/// tests/stress/regressions/triangle-t-259-ulps.txt) or clipped a ridge (above).
 bool rejected_before_best(const RayContext& c) {
     return static_cast<double>(c.rejected_tf) < static_cast<double>(c.best_tf) - c.margin;
 }

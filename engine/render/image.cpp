@@ -146,7 +146,8 @@ namespace {
 /// c^(1/2.4) · 2^-7 ≤ 0.88 (the linear segment: 12.92 · 255 · c · 2^-7 ≤ 0.08), so each bucket
 /// holds its first value's code and at most one step, at the first float whose code is higher.
 /// Below 2^-13 the code is 0 (12.92 · 255 · 2^-13 = 0.40 < 1/2).
-/// SrgbTable.MatchesTheFormulaOnEveryFloat compares the two on every float in [0, 1].
+/// Image.SrgbTableMatchesTheFormulaOnEveryFloat compares the two on every float in [2^-13, 1]
+/// and shows the formula's 0 just below 2^-13, below which it only falls.
 class SrgbTable {
   public:
     SrgbTable() {
@@ -204,7 +205,8 @@ unsigned char srgb_encode(float linear) {
 namespace {
 
 /// Round-half-up of c · 255 for c in [0, 1], as std::lround gives it (non-negative), without a
-/// libm call: the float product is exact in double, and adding 1/2 to it there is exact too.
+/// libm call: the float product is exact in double, and adding 1/2 to it there is exact from
+/// 2^-29 on (below, the sum rounds to 1/2 or just above it, which truncates to 0 all the same).
 unsigned char linear_8bit(float value) {
     const float c = std::isfinite(value) ? std::clamp(value, 0.0f, 1.0f) : 0.0f;
     return static_cast<unsigned char>(static_cast<double>(c * 255.0f) + 0.5);

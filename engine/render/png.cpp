@@ -112,7 +112,8 @@ std::string encode_png_rgb8(int width, int height,
     const std::size_t stride = 1 + bytes;  // the filter type byte, then the row
     const int band_rows = static_cast<int>(
         std::clamp<std::size_t>(kBandBytes / stride, 1, static_cast<std::size_t>(height)));
-    const int band_count = (height + band_rows - 1) / band_rows;
+    const int band_count = static_cast<int>((static_cast<std::int64_t>(height) + band_rows - 1) /
+                                            band_rows);  // no int overflow
     std::vector<Band> bands(static_cast<std::size_t>(band_count));
 
     tbb::parallel_for(0, band_count, [&](int b) {
@@ -149,7 +150,7 @@ std::string encode_png_rgb8(int width, int height,
     // The zlib trailer: the Adler-32 of the whole filtered image, combined from the bands'.
     uLong adler = bands[0].adler;
     for (std::size_t b = 1; b < bands.size(); ++b)
-        adler = adler32_combine(adler, bands[b].adler, static_cast<z_off_t>(bands[b].raw_size));
+        adler = adler32_combine64(adler, bands[b].adler, static_cast<z_off64_t>(bands[b].raw_size));
     std::string last = std::move(bands.back().idat);
     put_be32(last, static_cast<std::uint32_t>(adler));
     bands.back().idat.clear();

@@ -69,6 +69,19 @@ void occluded_filter(const RTCFilterFunctionNArguments* args) {
 
 }  // namespace
 
+bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d, double delta) {
+    const Vec3d n = cross(tri.b - tri.a, tri.c - tri.a);
+    const double nn = length(n);
+    const double sin_beta = std::abs(dot(n, d)) / (nn * length(d));
+    if (!(sin_beta >= 1.0 / 16.0))
+        return false;
+    // A barycentric weight times the altitude |n|/|e| over the opposite edge e is the distance
+    // from that edge; the double kernel's u, v are exact to far below Δ (16·u_f of the scene).
+    const double inset = 2.0 * delta / sin_beta + 2.0 * delta;
+    return (1.0 - u - v) * nn >= inset * length(tri.c - tri.b) &&
+           u * nn >= inset * length(tri.a - tri.c) && v * nn >= inset * length(tri.b - tri.a);
+}
+
 /// The three corners of `tri` (relative to the scene centre) with its edges moved out by w in
 /// its plane. Corner i lies on two edges with outward in-plane unit normals m₁, m₂; the moved
 /// edges meet at corner + x with x·m₁ = x·m₂ = w, i.e. x = w·(m₁ + m₂)/(1 + m₁·m₂), of length

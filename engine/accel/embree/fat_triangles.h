@@ -48,6 +48,14 @@ constexpr double kMinCornerSine = 1.0 / 32.0;
 /// `tri` must not be degenerate.
 void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped);
 
+/// Whether a double hit at barycentrics (u, v) of `tri` (u the weight of b, v of c), on a line
+/// along `d`, crosses at sin β ≥ 1/16 and at least 2Δ/sin β + 2Δ from every edge. The float
+/// line, within Δ of the double one relative to the float triangle, then crosses its plane at
+/// most Δ/sin β from the double crossing: more than Δ inside the unwidened float triangle
+/// (refined's back faces, embree_accel.cpp exits_well_inside). False for a degenerate triangle
+/// or a NaN anywhere.
+bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d, double delta);
+
 /// The float triangle geometry of `mesh` (in a's frame: Impl::frame) with each triangle
 /// widened by `widen` in its plane (three vertices of its own, so neighbours may overlap), the
 /// hit filters below attached, user data `data`. `capped` is set when a sliver could not be

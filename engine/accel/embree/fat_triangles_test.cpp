@@ -4,6 +4,7 @@
 
 #include "engine/accel/embree/fat_triangles.h"
 
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -108,6 +109,38 @@ TEST(FatTriangles, RefinedMissesNeedNoSecondTraversal) {
         ASSERT_TRUE(refined && exact) << i;
         EXPECT_NEAR(refined->t, exact->t, refined->t_err + exact->t_err) << i;
     }
+}
+
+// crossed_well_inside on a thin triangle, whose three edges (10, 1 and 10.05 long) tell a
+// pairing of barycentric and edge apart: a point just inside and just outside the inset of each
+// edge in turn, and the inset growing as the line tilts.
+TEST(FatTriangles, CrossedWellInsideMeasuresFromEachEdge) {
+    const Triangle t{{0, 0, 0}, {10, 0, 0}, {0, 1, 0}};
+    const Vec3d down{0, 0, -1};
+    const double delta = 0.025;  // head-on: inset 2Δ + 2Δ = 0.1
+    // (x, y) is at barycentrics u = x/10 (b's weight), v = y (c's).
+    auto inside = [&](double x, double y, const Vec3d& d) {
+        return crossed_well_inside(t, x / 10.0, y, d, delta);
+    };
+    EXPECT_TRUE(inside(0.5, 0.2, down));
+    EXPECT_TRUE(inside(0.5, 0.11, down));   // 0.11 from ab (y = 0)
+    EXPECT_FALSE(inside(0.5, 0.09, down));  // 0.09 from it
+    EXPECT_TRUE(inside(0.11, 0.5, down));   // from ac (x = 0)
+    EXPECT_FALSE(inside(0.09, 0.5, down));
+    // bc: x + 10y = 10, |(1, 10)| = √101; a point s from it along its inward normal.
+    const double r101 = std::sqrt(101.0);
+    auto off_bc = [&](double s) {
+        const Vec3d on{5, 0.5, 0};
+        return on - Vec3d{1, 10, 0} * (s / r101);
+    };
+    EXPECT_TRUE(inside(off_bc(0.11).x, off_bc(0.11).y, down));
+    EXPECT_FALSE(inside(off_bc(0.09).x, off_bc(0.09).y, down));
+    // Tilted to sin β = 1/2 the inset is 2Δ·2 + 2Δ = 0.15; below sin β = 1/16, nothing passes.
+    const Vec3d tilted{std::sqrt(3.0) / 2.0, 0, -0.5};
+    EXPECT_TRUE(inside(0.5, 0.16, tilted));
+    EXPECT_FALSE(inside(0.5, 0.14, tilted));
+    EXPECT_FALSE(inside(0.5, 0.3, Vec3d{1, 0, -0.06}));
+    EXPECT_FALSE(inside(0.5, 0.3, Vec3d{0, 0, 0}));  // no direction: NaN
 }
 
 }  // namespace
