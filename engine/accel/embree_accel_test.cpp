@@ -882,7 +882,10 @@ TEST(EmbreeAccel, RefinedTiesGoToTheLowerObjectThenPrimitive) {
                 EXPECT_EQ(answers[k]->t, ref->t) << what[k] << ", ray " << i;
             }
         }
-        EXPECT_GT(hits, static_cast<int>(rays.size()) * 9 / 10);
+        // Rays aimed at a corner pass it on the side their rounded direction gives, which the
+        // edge functions decide exactly since 2026-12-06: on the two tilted cubes 125 of 147 hit,
+        // as the quad-precision reference has it for every one (it had been more than 9 in 10).
+        EXPECT_GT(hits, static_cast<int>(rays.size()) * 8 / 10);
         EXPECT_GT(tied, static_cast<int>(rays.size()) / 3);
         std::printf("[ info ] %s: %d rays, %d hits, %d exact ties\n", name,
                     static_cast<int>(rays.size()), hits, tied);

@@ -7,6 +7,7 @@
 
 #include "engine/geometry/target_clones.h"
 #include "engine/math/double_double.h"
+#include "engine/math/exact_sign.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
@@ -215,6 +216,37 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
     return h;
 }
 
+/// An edge function e = px·qy − py·qx of the sheared corners p, q (of the triangle's corners
+/// `p3`, `q3`) within its rounding bound (woop): mag = |p|ₓ|q|_y + |p|_y|q|ₓ with each sheared
+/// coordinate's magnitude taken before its rounding (|X_kx| + |s_x·X_kz|); the sheared
+/// coordinates err by γ₅ of those (the corner minus the origin, the shear's quotient, product
+/// and difference: Higham 2002, Lemma 3.1), so e errs from ((p3 − o) × (q3 − o))·d / d_kz,
+/// whose sign it has by construction (Woop et al. §3), by less than γ₁₃·mag; woop tests
+/// γ₁₆·mag. Beyond that its sign is certain; within it the sign is the triple product's,
+/// computed exactly
+/// (triple_product_sign), and e is replaced by 0 where that is 0, or by the least normal double
+/// of that sign where its own sign differed (it is then within rounding of 0 anyway, and the
+/// barycentrics built from it stay in [0, 1]). Before 2026-12-06 only an e of exactly 0 was
+/// recomputed, in long double: the differential fuzzer (seed 1242742) found a line through an
+/// icosahedron passing 1e-16 (relative) beside an edge whose two edge functions rounded to 0,
+/// and long double gave the edge to the neighbour, 12 ulps of t away. Where the exact product
+/// cannot be formed (a product near underflow or overflow) the long double value decides, as
+/// before.
+double settle_edge(double e, const Vec3d& p3, const Vec3d& q3, const Ray& ray, double px, double qy,
+                   double py, double qx) {
+    bool exact = false;
+    const int sign = triple_product_sign(p3, q3, ray.origin, ray.direction, exact);
+    if (!exact) {
+        using LD = long double;
+        return static_cast<double>(LD(px) * LD(qy) - LD(py) * LD(qx));
+    }
+    if (sign == 0)
+        return 0.0;
+    if ((e > 0.0) == (sign > 0) && e != 0.0)
+        return e;
+    return sign > 0 ? std::numeric_limits<double>::min() : -std::numeric_limits<double>::min();
+}
+
 /// Woop et al.'s test; with `require_inside = false` the edge-function signs are not checked
 /// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere). `rescaled`:
 /// called by woop_rescaled, which is not asked again.
@@ -250,10 +282,25 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
             return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
         }
     }
-    if (u == 0.0 || v == 0.0 || w == 0.0) {
-        // An edge function that rounds to zero may have the wrong sign; recompute it with the
-        // 64-bit significand of long double, where the products of two doubles are far closer
-        // to exact (the paper's fallback, one precision up).
+    if (require_inside) {
+        // Each edge function's sign is certain where it exceeds its rounding bound; the rest
+        // are decided exactly (settle_edge). Two triangles sharing an edge compute the same
+        // value (negated) and the same bound from the same corners, so they take the same
+        // path and stay watertight.
+        // |X_kx| + |s_x·X_kz| ≤ 2·max|X| (|s_x|, |s_y| ≤ 1: kz is the dominant axis), so each
+        // bound is γ₁₆·8 times the product of its two corners' largest coordinates, formed as
+        // (m_p·m_q) so that both triangles of an edge round it alike.
+        const double ma = max_abs(A), mb = max_abs(B), mc = max_abs(C);
+        constexpr double k = 8.0 * gamma(16);
+        if (!(std::abs(u) > k * (mc * mb)))
+            u = settle_edge(u, tri.c, tri.b, ray, cx, by, cy, bx);
+        if (!(std::abs(v) > k * (ma * mc)))
+            v = settle_edge(v, tri.a, tri.c, ray, ax, cy, ay, cx);
+        if (!(std::abs(w) > k * (mb * ma)))
+            w = settle_edge(w, tri.b, tri.a, ray, bx, ay, by, ax);
+    } else if (u == 0.0 || v == 0.0 || w == 0.0) {
+        // Not deciding (the plane crossing of a hit decided elsewhere): the value in long
+        // double is enough for the barycentrics.
         using LD = long double;
         u = static_cast<double>(LD(cx) * LD(by) - LD(cy) * LD(bx));
         v = static_cast<double>(LD(ax) * LD(cy) - LD(ay) * LD(cx));

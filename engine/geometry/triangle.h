@@ -5,8 +5,12 @@
 // are translated to the ray origin, sheared so that the ray becomes the +z axis, and the 2-D
 // edge functions U, V, W decide inside/outside. Edges shared by two triangles produce exactly
 // negated edge functions, so a ray through a shared edge or vertex can never slip between them.
-// When an edge function is exactly zero it is recomputed in long double (as the paper does
-// with double for a float kernel). Edges and vertices belong to the triangle (closed test).
+// An edge function within its rounding bound takes the sign of the exact triple product
+// ((p − o) × (q − o))·d instead (engine/math/exact_sign.h; the paper recomputes a zero one
+// precision up, which long double did here until 2026-12-06 and which can round to the wrong
+// side: the differential fuzzer, seed 1242742). Both triangles of an edge take the same path,
+// so the test stays watertight, and it is now exact: a line is given to the triangle on its
+// side of the edge. Edges and vertices belong to the triangle (closed test).
 // Once a hit is decided, t is recomputed as the plane crossing t = n·(a − o) / n·d in
 // double-double (TwoSum/TwoProduct, Dekker 1971, Ogita, Rump & Oishi 2005): Woop's sheared t
 // loses digits in the shear (a few ulps) and for grazing rays (~u/cos θ); this one is rounded

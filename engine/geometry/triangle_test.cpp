@@ -355,5 +355,27 @@ TEST(Triangle, AnIntermediateOverflowIsNotAnswered) {
     }
 }
 
+// An edge whose edge function double (and long double) round to 0: the line along +z from the
+// origin passes beside the edge from b = (2^40, 2^40 + 1) to c = (−(2^40 − 1), −2^40), on the
+// side where the triple product is +1 (its products need 80 bits). Of the two triangles that
+// share the edge, with a third corner on either side, exactly the one on the line's side is
+// hit; the closed test had given the line to both.
+TEST(Triangle, EdgeDecidedExactlyWhereDoubleCannot) {
+    const double big = 0x1p40;
+    const Vec3d b{big, big + 1, 0}, c{-(big - 1), -big, 0};
+    const Ray ray{{0, 0, -1}, {0, 0, 1}};
+    const Triangle with_line{{-big, big, 0}, b, c};  // the corner on the line's side
+    const Triangle beyond{{big, -big, 0}, c, b};     // across the edge, wound the same way
+    const auto hit = intersect_triangle(with_line, ray);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_FALSE(hit->on_edge);
+    EXPECT_EQ(hit->t, 1.0);
+    EXPECT_FALSE(intersect_triangle(beyond, ray).has_value());
+    // The other way along the same line: the same side decides.
+    const Ray back{{0, 0, 1}, {0, 0, -1}};
+    EXPECT_TRUE(intersect_triangle(with_line, back).has_value());
+    EXPECT_FALSE(intersect_triangle(beyond, back).has_value());
+}
+
 }  // namespace
 }  // namespace raycastd::engine
