@@ -21,7 +21,7 @@ namespace raycastd::engine {
 
 /// A sum of doubles held exactly as nonoverlapping components in increasing magnitude.
 class Expansion {
-public:
+  public:
     /// Adds b exactly (GROW-EXPANSION).
     void add(double b) {
         double q = b;
@@ -39,7 +39,7 @@ public:
     /// −1, 0 or +1: the sign of the sum.
     int sign() const { return n_ == 0 ? 0 : (e_[n_ - 1] > 0.0 ? 1 : -1); }
 
-private:
+  private:
     static constexpr std::size_t kCapacity = 128;  // one more component per add at most
     double e_[kCapacity];
     std::size_t n_ = 0;
