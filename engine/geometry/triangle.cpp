@@ -216,6 +216,13 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
     return h;
 }
 
+/// px·qy − py·qx with the 64-bit significand of long double, where the products of two doubles
+/// are far closer to exact (the paper's fallback, one precision up).
+double edge_function_ld(double px, double qy, double py, double qx) {
+    using LD = long double;
+    return static_cast<double>(LD(px) * LD(qy) - LD(py) * LD(qx));
+}
+
 /// An edge function e = px·qy − py·qx of the sheared corners p, q (of the triangle's corners
 /// `p3`, `q3`) within its rounding bound (woop): mag = |p|ₓ|q|_y + |p|_y|q|ₓ with each sheared
 /// coordinate's magnitude taken before its rounding (|X_kx| + |s_x·X_kz|); the sheared
@@ -223,10 +230,9 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
 /// and difference: Higham 2002, Lemma 3.1), so e errs from ((p3 − o) × (q3 − o))·d / d_kz,
 /// whose sign it has by construction (Woop et al. §3), by less than γ₁₃·mag; woop tests
 /// γ₁₆·mag. Beyond that its sign is certain; within it the sign is the triple product's,
-/// computed exactly
-/// (triple_product_sign), and e is replaced by 0 where that is 0, or by the least normal double
-/// of that sign where its own sign differed (it is then within rounding of 0 anyway, and the
-/// barycentrics built from it stay in [0, 1]). Before 2026-12-06 only an e of exactly 0 was
+/// computed exactly (triple_product_sign), and e is replaced by 0 where that is 0, or by the
+/// least normal double of that sign where its own sign differed (it is then within rounding of
+/// 0 anyway, and the barycentrics built from it stay in [0, 1]). Before 2026-12-06 only an e of exactly 0 was
 /// recomputed, in long double: the differential fuzzer (seed 1242742) found a line through an
 /// icosahedron passing 1e-16 (relative) beside an edge whose two edge functions rounded to 0,
 /// and long double gave the edge to the neighbour, 12 ulps of t away. Where the exact product
@@ -236,10 +242,8 @@ double settle_edge(double e, const Vec3d& p3, const Vec3d& q3, const Ray& ray, d
                    double py, double qx) {
     bool exact = false;
     const int sign = triple_product_sign(p3, q3, ray.origin, ray.direction, exact);
-    if (!exact) {
-        using LD = long double;
-        return static_cast<double>(LD(px) * LD(qy) - LD(py) * LD(qx));
-    }
+    if (!exact)
+        return edge_function_ld(px, qy, py, qx);
     if (sign == 0)
         return 0.0;
     if ((e > 0.0) == (sign > 0) && e != 0.0)
@@ -301,10 +305,9 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     } else if (u == 0.0 || v == 0.0 || w == 0.0) {
         // Not deciding (the plane crossing of a hit decided elsewhere): the value in long
         // double is enough for the barycentrics.
-        using LD = long double;
-        u = static_cast<double>(LD(cx) * LD(by) - LD(cy) * LD(bx));
-        v = static_cast<double>(LD(ax) * LD(cy) - LD(ay) * LD(cx));
-        w = static_cast<double>(LD(bx) * LD(ay) - LD(by) * LD(ax));
+        u = edge_function_ld(cx, by, cy, bx);
+        v = edge_function_ld(ax, cy, ay, cx);
+        w = edge_function_ld(bx, ay, by, ax);
     }
     if (require_inside && (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
         return std::nullopt;
