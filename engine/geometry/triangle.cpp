@@ -232,10 +232,10 @@ double edge_function_ld(double px, double qy, double py, double qx) {
 /// γ₁₆·mag. Beyond that its sign is certain; within it the sign is the triple product's,
 /// computed exactly (triple_product_sign), and e is replaced by 0 where that is 0, or by the
 /// least normal double of that sign where its own sign differed (it is then within rounding of
-/// 0 anyway, and the barycentrics built from it stay in [0, 1]). Before 2026-12-06 only an e of exactly 0 was
-/// recomputed, in long double: the differential fuzzer (seed 1242742) found a line through an
-/// icosahedron passing 1e-16 (relative) beside an edge whose two edge functions rounded to 0,
-/// and long double gave the edge to the neighbour, 12 ulps of t away. Where the exact product
+/// 0 anyway, and the barycentrics built from it stay in [0, 1]). Before 2026-12-06 only an e of
+/// exactly 0 was recomputed, in long double: the differential fuzzer (seed 1242742) found a line
+/// through an icosahedron passing 1e-16 (relative) beside an edge whose two edge functions rounded
+/// to 0, and long double gave the edge to the neighbour, 12 ulps of t away. Where the exact product
 /// cannot be formed (a product near underflow or overflow) the long double value decides, as
 /// before.
 double settle_edge(double e, const Vec3d& p3, const Vec3d& q3, const Ray& ray, double px, double qy,
