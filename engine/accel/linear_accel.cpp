@@ -99,7 +99,7 @@ bool hits_object(const Object& o, const Ray& ray) {
     if (o.kind == ObjectKind::sphere)
         return intersect_sphere(o.sphere, ray, false).has_value();
     for (std::size_t p = 0; p < o.mesh->size(); ++p) {
-        if (intersect_triangle(o.mesh->triangle(p), ray, false))
+        if (decide_triangle(o.mesh->triangle(p), ray))  // intersect_triangle's decision
             return true;
     }
     return false;

@@ -293,6 +293,11 @@ std::optional<Hit> SceneScan::triangle(const Triangle& tri, const Ray& ray) cons
                  : intersect_triangle(tri, ray, /*want_normal=*/false);
 }
 
+bool SceneScan::hits_triangle(const Triangle& tri, const Ray& ray) const {
+    return fast_ ? intersect_triangle_fast(tri, ray, /*want_normal=*/false).has_value()
+                 : decide_triangle(tri, ray).has_value();
+}
+
 namespace {
 
 /// A closest hit being looked for, kept in scalars: whole Hits copied from the kernels' answers
@@ -424,7 +429,7 @@ bool SceneScan::any(const Ray& ray) const {
         if (p.is_sphere) {
             if (may_hit(candidates, p.index) && first_root_in_range(roots(p.sphere, ray), ray) >= 0)
                 return true;
-        } else if (!left_behind(p.plane, ray, p.tri.a) && triangle(p.tri, ray)) {
+        } else if (!left_behind(p.plane, ray, p.tri.a) && hits_triangle(p.tri, ray)) {
             return true;
         }
     }

@@ -106,6 +106,9 @@ class SceneScan {
 
     SphereRoots roots(const Sphere& s, const Ray& ray) const;
     std::optional<Hit> triangle(const Triangle& tri, const Ray& ray) const;
+    /// Whether triangle() would hit, for `any`: at refined and exact decide_triangle, which
+    /// decides as intersect_triangle without its plane crossing where Woop's t settles the range.
+    bool hits_triangle(const Triangle& tri, const Ray& ray) const;
 
     SceneBall ball_;  ///< for far()
     std::vector<Primitive> prims_;

@@ -159,10 +159,14 @@ namespace {
 enum class TFrom {
     plane,  ///< the plane crossing in double-double (plane_t): about an ulp
     shear,  ///< Woop's own sheared z, interpolated (pbrt-v4 §6.8.4): within its t_err
+    /// The sheared z where it and its t_err alone put the crossing inside [tmin, tmax], the
+    /// plane crossing elsewhere: plane's decision with shear's t (decide_triangle).
+    settled,
 };
 
 std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
-                        TFrom t_from = TFrom::plane, bool rescaled = false);
+                        TFrom t_from = TFrom::plane, bool rescaled = false,
+                        LineCrossing* outside = nullptr);
 
 /// The power of two woop_rescaled scales lengths by: the one that brings the geometric mean of
 /// the triangle's size E and the corners' distance from the origin L to 1 (the edge functions
@@ -189,7 +193,7 @@ double woop_scale(const Vec3d& A, const Vec3d& B, const Vec3d& C) {
 /// (unit_scale); where both are 1 this is woop() again, unscaled, not asked to rescale.
 std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_normal,
                                  bool require_inside, TFrom t_from, const Vec3d& A, const Vec3d& B,
-                                 const Vec3d& C) {
+                                 const Vec3d& C, LineCrossing* outside) {
     const double kl = woop_scale(A, B, C), kd = unit_scale(max_abs(ray.direction));
     const Triangle scaled{tri.a * kl, tri.b * kl, tri.c * kl};
     Ray r;
@@ -198,7 +202,8 @@ std::optional<Hit> woop_rescaled(const Triangle& tri, const Ray& ray, bool want_
     const int e = std::ilogb(kl) - std::ilogb(kd);  // kl/kd, which may itself overflow
     r.tmin = std::ldexp(ray.tmin, e);
     r.tmax = std::ldexp(ray.tmax, e);
-    std::optional<Hit> h = woop(scaled, r, /*want_normal=*/false, require_inside, t_from, true);
+    std::optional<Hit> h =
+        woop(scaled, r, /*want_normal=*/false, require_inside, t_from, true, outside);
     if (h) {
         // One power of two, kd/kl: applied in two steps t·kd/kl could overflow where the
         // result fits (a helper's review).
@@ -255,7 +260,7 @@ double settle_edge(double e, const Vec3d& p3, const Vec3d& q3, const Ray& ray, d
 /// and neither is [tmin, tmax] (the plane crossing of a hit decided elsewhere). `rescaled`:
 /// called by woop_rescaled, which is not asked again.
 std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, bool require_inside,
-                        TFrom t_from, bool rescaled) {
+                        TFrom t_from, bool rescaled, LineCrossing* outside) {
     const Vec3d A = tri.a - ray.origin;
     const Vec3d B = tri.b - ray.origin;
     const Vec3d C = tri.c - ray.origin;
@@ -283,7 +288,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         const double m = std::abs(u) + std::abs(v) + std::abs(w);
         const double dm = std::abs(ray.direction[s.kz]);  // max_abs(direction)
         if (!(m >= 0x1p-600 && m <= 0x1p600 && dm >= 0x1p-250 && dm <= 0x1p250)) {
-            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
+            return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C, outside);
         }
     }
     if (require_inside) {
@@ -344,8 +349,53 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
                       delta_z * (max_e * inv));
     };
 
+    // The hit at t, t_err (finite), with the barycentrics and side from the edge functions.
+    auto hit_at = [&](double at, double err) {
+        Hit hit;
+        hit.t = at;
+        hit.u = v * inv_det;
+        hit.v = w * inv_det;
+        hit.primitive = 0;
+        hit.on_edge = (u == 0.0 || v == 0.0 || w == 0.0);
+        // The sign of det is the winding of the triangle as seen along the ray (the kx/ky swap
+        // of make_shear keeps it meaningful): det > 0 means the ray meets (b−a)×(c−a) head on.
+        // Taking it from det rather than from the normal keeps it consistent with the inside
+        // test.
+        hit.front_face = det > 0.0;
+        hit.t_err = err;
+        if (want_normal)
+            hit.normal = triangle_normal(tri);
+        return hit;
+    };
+    // The line crosses the triangle (require_inside), but outside [tmin, tmax]: noted for the
+    // caller, the barycentrics as a hit's.
+    auto outside_range = [&]() -> std::optional<Hit> {
+        if (outside)
+            *outside = LineCrossing{v * inv_det, w * inv_det, true};
+        return std::nullopt;
+    };
+
     double t, t_err;
-    if (t_from == TFrom::plane) {
+    double shear_err = -1.0;  // t_error(), where the block below has computed it
+    if (t_from != TFrom::shear && require_inside) {
+        // Where the sheared t and its bound settle the range, the plane crossing's decision is
+        // known without it: plane_t is within an ulp or two of the exact crossing (above), the
+        // sheared t within t_err of it, so the two differ by less than t_err + 4u·|t|, and
+        // twice that is margin. Outside the range: no hit either way (a spawned ray's own
+        // triangle, behind its origin, is the usual one; plane_t had been a quarter of a
+        // refined render of the Duck, most of it for those). Inside it, for a caller that needs
+        // no more than the decision (TFrom::settled): the hit, with the sheared t.
+        const double ts = (u * az + v * bz + w * cz) * inv_det;
+        const double te = shear_err = t_error();
+        if (std::isfinite(ts) && std::isfinite(te)) {
+            const double margin = 2.0 * te + 8.0 * kDoubleUnitRoundoff * std::abs(ts);
+            if (ts + margin < ray.tmin || ts - margin > ray.tmax)
+                return outside_range();
+            if (t_from == TFrom::settled && ts - margin >= ray.tmin && ts + margin <= ray.tmax)
+                return hit_at(ts, te);
+        }
+    }
+    if (t_from != TFrom::shear) {
         t = plane_t(tri, ray);
         if (std::isnan(t))
             return std::nullopt;  // in the plane to double-double precision
@@ -358,24 +408,24 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     // comes back inf from it and is no hit (below). Before the range test, which an inf t fails
     // whenever tmax is finite (a helper's review).
     if (!rescaled && !std::isfinite(t))
-        return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
-    if (t_from == TFrom::plane) {
+        return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C, outside);
+    if (t_from != TFrom::shear) {
         if (require_inside && !(t >= ray.tmin && t <= ray.tmax))
-            return std::nullopt;
-        t_err = t_error();
+            return outside_range();
+        t_err = shear_err >= 0.0 ? shear_err : t_error();
     } else {
         t_err = t_error();
         // Only a hit certainly at or after tmin (pbrt-v4's t > δt): a ray spawned just off
         // this very triangle (shade/spawn.h) crosses its plane a hair behind its origin, which
         // the sheared t, off by up to t_err, could put in front.
         if (require_inside && !(t - t_err >= ray.tmin && t <= ray.tmax))
-            return std::nullopt;
+            return outside_range();
     }
 
     if (!std::isfinite(t_err) && !rescaled) {
         // t_err multiplies the sheared z (distance over direction length) by lengths: a
         // direction far shorter or longer than the distances (1e-300 against 1) overflowed it.
-        return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C);
+        return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C, outside);
     }
 
     // A t that overflowed double is no hit, even with the default tmax = +inf: it cannot be
@@ -383,28 +433,19 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     // pass gets here with one (the first hands it to the retry above).
     if (require_inside && !std::isfinite(t))
         return std::nullopt;
-    Hit hit;
-    hit.t = t;
-    hit.u = v * inv_det;
-    hit.v = w * inv_det;
-    hit.primitive = 0;
-    hit.on_edge = (u == 0.0 || v == 0.0 || w == 0.0);
-    // The sign of det is the winding of the triangle as seen along the ray (the kx/ky swap of
-    // make_shear keeps it meaningful): det > 0 means the ray meets (b−a)×(c−a) head on. Taking
-    // it from det rather than from the normal keeps it consistent with the inside test.
-    hit.front_face = det > 0.0;
-    hit.t_err = t_err;
-
-    if (want_normal) {
-        hit.normal = triangle_normal(tri);
-    }
-    return hit;
+    return hit_at(t, t_err);
 }
 
 }  // namespace
 
-std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal) {
-    return woop(tri, ray, want_normal, /*require_inside=*/true);
+std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal,
+                                      LineCrossing* outside) {
+    return woop(tri, ray, want_normal, /*require_inside=*/true, TFrom::plane, false, outside);
+}
+
+std::optional<Hit> decide_triangle(const Triangle& tri, const Ray& ray, LineCrossing* outside) {
+    return woop(tri, ray, /*want_normal=*/false, /*require_inside=*/true, TFrom::settled, false,
+                outside);
 }
 
 std::optional<Hit> intersect_triangle_fast(const Triangle& tri, const Ray& ray, bool want_normal) {

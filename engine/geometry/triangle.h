@@ -36,11 +36,30 @@ Vec3d triangle_normal(const Triangle& tri);
 /// True when (b−a)×(c−a) is exactly zero: such a triangle is never hit.
 bool is_degenerate(const Triangle& tri);
 
+/// Where a ray's line crosses a triangle that it hits outside [tmin, tmax] (intersect_triangle,
+/// decide_triangle): the barycentrics as a Hit's u (weight of b) and v (weight of c). `crossed`
+/// is set only then.
+struct LineCrossing {
+    double u = 0.0, v = 0.0;
+    bool crossed = false;
+};
+
 /// The hit with t in [ray.tmin, ray.tmax] as a Hit (object/primitive left for the caller):
 /// t, t_err, barycentrics u (weight of b) and v (weight of c); nullopt on a miss, for a ray in
 /// the triangle's plane, and for a degenerate triangle. Never produces NaN for finite input.
-/// front_face is always set; `want_normal = false` skips the normal.
-std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal = true);
+/// front_face is always set; `want_normal = false` skips the normal. Where the line crosses
+/// the triangle (the same inside test) but outside [tmin, tmax], `outside`, if given, receives
+/// the crossing (refined's hit filter tells a ray's own triangle behind its origin from a
+/// candidate missed at an edge).
+std::optional<Hit> intersect_triangle(const Triangle& tri, const Ray& ray, bool want_normal = true,
+                                      LineCrossing* outside = nullptr);
+
+/// intersect_triangle's decision, for a caller that needs only that (an occlusion test): the
+/// same rays hit and miss, and `outside` is the same, but where Woop's sheared t and its t_err
+/// alone put the crossing inside [tmin, tmax] the hit carries them (t within t_err, as
+/// intersect_triangle_fast's) instead of the double-double plane crossing; no normal.
+std::optional<Hit> decide_triangle(const Triangle& tri, const Ray& ray,
+                                   LineCrossing* outside = nullptr);
 
 /// The magnitudes of the terms of each component of e1 × e2: (|e1.y·e2.z| + |e1.z·e2.y|, …).
 /// With e1, e2 the edges b − a, c − a each rounded once, γ₅ of them bounds the rounding of the

@@ -301,6 +301,76 @@ TEST(Triangle, FastKernelDecidesAsTheExactOneWithinItsBound) {
     EXPECT_GT(hits, 2000);
 }
 
+// intersect_triangle settles [tmin, tmax] by Woop's sheared t and its t_err where they can,
+// without the double-double plane crossing, and decide_triangle takes its hit from them there
+// too: both must decide every range as the plane crossing does, and report the crossing they
+// leave out (LineCrossing) exactly when it lies outside. Ranges end at the crossing, a few ulps
+// and a few t_err on either side of it, and far from it; some triangles and rays are scaled by
+// 2^±700 (woop_rescaled), some rays graze their triangle.
+TEST(Triangle, RangeSettledByTheShearDecidesAsThePlaneCrossing) {
+    std::mt19937_64 rng(2026);
+    std::uniform_real_distribution<double> pos(-4.0, 4.0);
+    auto steps = [](double t, int n) {
+        for (; n > 0; --n)
+            t = std::nextafter(t, kInfinity);
+        for (; n < 0; ++n)
+            t = std::nextafter(t, -kInfinity);
+        return t;
+    };
+    int crossings = 0, checked = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const double k = i % 8 == 0 ? 0x1p700 : i % 8 == 1 ? 0x1p-700 : 1.0;
+        const Vec3d a{pos(rng), pos(rng), pos(rng)};
+        const Triangle tri{a * k, (a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.5) * k,
+                           (a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.5) * k};
+        const Vec3d o{pos(rng) * 3, pos(rng) * 3, pos(rng) * 3};
+        Vec3d d = a + Vec3d{pos(rng), pos(rng), pos(rng)} * 0.2 - o;
+        if (i % 4 == 3) {  // grazing: almost in the triangle's plane
+            const Vec3d n = triangle_normal(tri);
+            d = d - n * (dot(d, n) * (1.0 - 1e-7));
+        }
+        const Ray ray{o * k, d};
+        Ray open = ray;
+        open.tmin = -kInfinity;
+        const auto line = intersect_triangle(tri, open);  // never settled early: the plane's t
+        if (!line)
+            continue;
+        ++crossings;
+        const double t = line->t, e = line->t_err;
+        for (const double end :
+             {t, steps(t, 1), steps(t, -1), steps(t, 4), steps(t, -4), t + e, t - e, t + 2 * e,
+              t - 2 * e, t + 8 * e, t - 8 * e, t * 2 + 1, t * 0.5 - 1}) {
+            for (const bool is_tmin : {true, false}) {
+                Ray r = ray;
+                (is_tmin ? r.tmin : r.tmax) = end;
+                if (!is_tmin)
+                    r.tmin = -kInfinity;
+                const bool inside = t >= r.tmin && t <= r.tmax;
+                LineCrossing o1, o2;
+                const auto h1 = intersect_triangle(tri, r, true, &o1);
+                const auto h2 = decide_triangle(tri, r, &o2);
+                ++checked;
+                ASSERT_EQ(h1.has_value(), inside) << i << " " << end;
+                ASSERT_EQ(h2.has_value(), inside) << i << " " << end;
+                EXPECT_EQ(o1.crossed, !inside) << i;
+                EXPECT_EQ(o2.crossed, !inside) << i;
+                if (inside) {
+                    EXPECT_EQ(h1->t, t) << i;
+                    EXPECT_LE(std::abs(h2->t - t), h2->t_err) << i;
+                    EXPECT_EQ(h2->u, line->u);
+                    EXPECT_EQ(h2->front_face, line->front_face);
+                } else {
+                    EXPECT_EQ(o1.u, line->u) << i;
+                    EXPECT_EQ(o1.v, line->v) << i;
+                    EXPECT_EQ(o2.u, line->u) << i;
+                }
+            }
+        }
+    }
+    EXPECT_GT(crossings, 2000);
+    EXPECT_GT(checked, 50000);
+}
+
 // A hit the sheared t cannot place at or after tmin is not one for fast: a ray leaving a corner
 // of the triangle does not find the triangle it leaves, where the exact kernel reports t = 0.
 TEST(Triangle, FastKernelReportsNothingItCannotPlaceAfterTmin) {

@@ -39,6 +39,44 @@ double env_or(const char* name, double fallback) {
     return v && *v ? std::atof(v) : fallback;
 }
 
+/// Rays as a renderer spawns them (shade/spawn.h): from a point inside a triangle, moved off
+/// its plane to the side the ray goes by a few float ulps of the scene (what a float tracer's
+/// error adds to the offset), tmin 0. The float ray, started a margin before tmin, crosses the
+/// ray's own triangle behind the origin: refined's hit filter must take that for neither a hit
+/// nor a ray slipping past an edge (fat_triangles.h, outside_range_well_inside). Drawn from a
+/// stream of their own, after the others, so that every seed's other rays, and the saved
+/// cases' seeds, stay as they were.
+void add_spawned_rays(StressCase& c, std::uint64_t seed) {
+    std::mt19937_64 rng(seed ^ 0x9E3779B97F4A7C15ull);
+    std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+    std::vector<const engine::TriangleMesh*> meshes;
+    for (const Object& o : c.scene->objects) {
+        if (o.kind == ObjectKind::mesh)
+            meshes.push_back(o.mesh.get());
+    }
+    if (meshes.empty())
+        return;
+    const engine::Bounds3 b = c.scene->bounds();
+    for (int i = 0; i < 8; ++i) {
+        const engine::TriangleMesh& m = *meshes[rng() % meshes.size()];
+        const engine::Triangle t = m.triangle(rng() % m.size());
+        const double s = u01(rng), w = u01(rng) * (1 - s);
+        const Vec3d p = t.a + (t.b - t.a) * s + (t.c - t.a) * w;
+        const Vec3d n = engine::triangle_normal(t);
+        const Vec3d d = engine::normalize(Vec3d{u(rng), u(rng), u(rng)}) *
+                        std::pow(10.0, -3.0 + 6.0 * u01(rng));
+        if (!(engine::length(n) > 0) || !(engine::length(d) > 0))
+            continue;
+        // Float's unit roundoff times the float frame's magnitude (math/float_frame.h), 1 to 64
+        // times over.
+        const double frame = engine::length(p - b.center()) + 2.0 * engine::length(b.diagonal());
+        const double offset = std::ldexp(frame, -24) * std::pow(2.0, 6.0 * u01(rng));
+        Ray r{p + n * (engine::dot(n, d) >= 0 ? offset : -offset), d};
+        r.tmin = 0.0;
+        c.rays.push_back(r);
+    }
+}
+
 /// A random scene at a random scale and offset, and rays aimed at its features (vertices, edge
 /// points, sphere silhouettes, interiors) with random direction lengths.
 StressCase random_case(std::uint64_t seed) {
@@ -101,6 +139,7 @@ StressCase random_case(std::uint64_t seed) {
             r.tmin = u01(rng) * 0.5;
         c.rays.push_back(r);
     }
+    add_spawned_rays(c, seed);
     return c;
 }
 
@@ -126,6 +165,18 @@ std::string judge_case(const StressCase& c, std::vector<std::size_t>& bad_rays) 
                 bad_rays.push_back(i);
                 wrong += std::string(engine::to_string(res.precision)) + " ray " +
                          std::to_string(i) + ": " + m.summary() + "\n";
+            }
+        }
+        // `any` (a renderer's shadow rays): wherever the reference's hit or miss is robust.
+        opt.mode = engine::Mode::any;
+        const auto any = (*built)->intersect(c.rays, opt);
+        for (std::size_t i = 0; i < c.rays.size(); ++i) {
+            const RefAnswer& ref = exact ? refs.exact[i] : refs.coarse[i];
+            if (ref.hit_robust && any.hits[i].valid() != ref.hit) {
+                if (bad_rays.empty() || bad_rays.back() != i)
+                    bad_rays.push_back(i);
+                wrong += std::string(engine::to_string(any.precision)) + " any, ray " +
+                         std::to_string(i) + ": " + (ref.hit ? "missed\n" : "hit\n");
             }
         }
         if ((*built)->brute_force())

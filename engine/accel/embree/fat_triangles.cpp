@@ -31,7 +31,12 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
         // A packet's context carries its lanes; the ray id is the lane (fill_lanes).
         RayContext& lane = c.lanes ? c.lanes[RTCRayN_id(args->ray, args->N, i)] : c;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
-        auto h = intersect_triangle(mesh.triangle(prim), *lane.ray, /*want_normal=*/false);
+        const Triangle tri = mesh.triangle(prim);
+        // An occlusion query needs only the decision (decide_triangle: the plane crossing only
+        // where Woop's t does not settle the range).
+        LineCrossing outside;
+        auto h = occlusion ? decide_triangle(tri, *lane.ray, &outside)
+                           : intersect_triangle(tri, *lane.ray, /*want_normal=*/false, &outside);
         // Embree set tfar to the candidate's float t; keep_if_closer may move it.
         float& tfar = RTCRayN_tfar(args->ray, args->N, i);
         const float tf = tfar;
@@ -41,8 +46,12 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
             // it because keep_if_closer leaves tfar above (a neighbour's widening just behind
             // the hit) is not evidence that the ray slipped in before the hit, and counting
             // it would send every back face with such a neighbour to the exact path.
-            if (!lane.best || tf <= lane.best_tf)
+            // Nor is a crossing outside [tmin, tmax] well inside the triangle
+            // (outside_range_well_inside): a spawned ray's own triangle, behind its origin.
+            if ((!lane.best || tf <= lane.best_tf) &&
+                !outside_range_well_inside(tri, outside, *lane.ray, 2.0 * g->accel->pad)) {
                 lane.rejected_tf = std::min(lane.rejected_tf, tf);
+            }
             continue;
         }
         if (occlusion)
@@ -80,6 +89,11 @@ bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d
     const double inset = 2.0 * delta / sin_beta + 2.0 * delta;
     return (1.0 - u - v) * nn >= inset * length(tri.c - tri.b) &&
            u * nn >= inset * length(tri.a - tri.c) && v * nn >= inset * length(tri.b - tri.a);
+}
+
+bool outside_range_well_inside(const Triangle& tri, const LineCrossing& outside, const Ray& ray,
+                               double delta) {
+    return outside.crossed && crossed_well_inside(tri, outside.u, outside.v, ray.direction, delta);
 }
 
 /// The three corners of `tri` (relative to the scene centre) with its edges moved out by w in

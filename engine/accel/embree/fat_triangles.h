@@ -56,6 +56,27 @@ void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped);
 /// or a NaN anywhere.
 bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d, double delta);
 
+/// Whether `outside`, where intersect_triangle found the line of `ray` crossing `tri` outside
+/// [tmin, tmax], is crossed as crossed_well_inside asks (ray.direction, `delta`): a candidate the
+/// double test rejected for its t alone, far from the triangle's edges. The hit filter does not
+/// count such a rejection (RayContext::rejected_tf); what it spares is a spawned ray's own
+/// triangle, which the float ray, started a margin before tmin, crosses just behind the origin
+/// (in a refined render of the Duck 8.1 of 10.5 million unblocked shadow rays went to the exact
+/// path for it: docs/numerics.md).
+/// Why that is safe. A rejection stands for a ray that passed within the widening of an edge of
+/// a triangle it does not hit, where it may have slipped through the float surface. Here the
+/// float line crosses the unwidened float triangle more than Δ inside it, at sin β ≥ 1/16, and
+/// on the side the double line crosses the real one: a genuine crossing of the float surface,
+/// made by the double line too (before tmin or after tmax), and near none of the triangle's
+/// edges. Where the ray passes near an edge of another triangle, that triangle or its neighbours
+/// are offered and count as before. Nor can this crossing be the only sign of a slip into the
+/// solid it bounds: a line crosses the plane once, so if the double ray leaves the solid here it
+/// re-enters only through another face, and if it enters here its segment starts inside the
+/// solid, where a back face first is the answer (exits_well_inside still asked). The fuzzer
+/// spawns such rays, outward and inward, since 2026-12-06 (tests/stress/fuzz_test.cpp).
+bool outside_range_well_inside(const Triangle& tri, const LineCrossing& outside, const Ray& ray,
+                               double delta);
+
 /// The float triangle geometry of `mesh` (in a's frame: Impl::frame) with each triangle
 /// widened by `widen` in its plane (three vertices of its own, so neighbours may overlap), the
 /// hit filters below attached, user data `data`. `capped` is set when a sliver could not be

@@ -145,7 +145,8 @@ struct RayContext {
     float best_tf = std::numeric_limits<float>::infinity();
     /// The smallest float t at which the hit filter rejected a candidate (the ray passed within
     /// the widening of an edge of a triangle it does not hit in double); +inf if none. A miss,
-    /// or a hit beyond it, is then confirmed on the exact path.
+    /// or a hit beyond it, is then confirmed on the exact path. Not counted: a crossing well
+    /// inside its triangle rejected for its t alone (outside_range_well_inside).
     float rejected_tf = std::numeric_limits<float>::infinity();
     bool rejected() const { return rejected_tf < std::numeric_limits<float>::infinity(); }
     /// A packet's context: the lanes' own contexts, indexed by the Embree ray id.

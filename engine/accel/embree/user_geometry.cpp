@@ -16,8 +16,11 @@ namespace {
 /// In a context with a frame (a far ray moved to the scene, given relative to the centre) each
 /// primitive is translated by it first: the same difference the kernels form, a − o, up to the
 /// rounding of a − centre (exact where they lie within a factor of two, Sterbenz).
+/// `decision_only` (an occlusion query): a triangle's hit may carry Woop's t instead of the
+/// plane crossing (decide_triangle), the same decision.
 template <class F>
-void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t prim, F&& emit) {
+void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t prim, F&& emit,
+                       bool decision_only = false) {
     const Object& o = c.accel->scene->objects[object];
     const Ray& ray = *c.ray;
     if (o.kind == ObjectKind::sphere) {
@@ -55,7 +58,8 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
         }
         return;
     }
-    if (auto h = intersect_triangle(c.in_frame(o.mesh->triangle(prim)), ray, false)) {
+    const Triangle tri = c.in_frame(o.mesh->triangle(prim));
+    if (auto h = decision_only ? decide_triangle(tri, ray) : intersect_triangle(tri, ray, false)) {
         h->object = object;
         h->primitive = prim;
         emit(*h, nullptr);
@@ -136,10 +140,13 @@ void user_occluded(const RTCOccludedFunctionNArguments* args) {
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     RayContext& c = ctx_of(args->context);
     auto* ray = reinterpret_cast<RTCRay*>(args->ray);
-    double_candidates(c, g->object, args->primID, [&](const Hit&, const Hit*) {
-        ray->tfar = -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
-        return false;
-    });
+    double_candidates(
+        c, g->object, args->primID,
+        [&](const Hit&, const Hit*) {
+            ray->tfar = -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
+            return false;
+        },
+        /*decision_only=*/true);
 }
 
 }  // namespace
