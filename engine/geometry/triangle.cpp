@@ -332,14 +332,20 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     const double inv_det = 1.0 / det;
 
     // Conservative bound on |t_shear − t_exact| (pbrt-v4 §6.8.4, "Error bounds for t"); also
-    // reported with the plane crossing, which is far closer.
+    // reported with the plane crossing, which is far closer. The sheared x and y err by γ₅ of
+    // |X_kx| + |s_x·X_kz|, a length, where pbrt's δx takes the sheared z, X_kz/d_kz, which is
+    // that length only for |d_kz| ≤ 1 (above it, smaller): for a longer direction the bound is
+    // formed from |X_kz| itself. Until 2026-12-06 it was not, and t_err fell short by up to the
+    // direction's length (a grazing ray along a direction 1,024 long: |t_shear − t| was 117
+    // t_err; a helper's review, when the range began to be settled by this bound, below).
     auto t_error = [&] {
         const double max_z = max_abs(Vec3d{az, bz, cz});
         const double max_x = max_abs(Vec3d{ax, bx, cx});
         const double max_y = max_abs(Vec3d{ay, by, cy});
+        const double max_z_len = max_z * std::max(1.0, std::abs(ray.direction[s.kz]));
         const double delta_z = gamma(3) * max_z;
-        const double delta_x = gamma(5) * (max_x + max_z);
-        const double delta_y = gamma(5) * (max_y + max_z);
+        const double delta_x = gamma(5) * (max_x + max_z_len);
+        const double delta_y = gamma(5) * (max_y + max_z_len);
         const double delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
         const double max_e = max_abs(Vec3d{u, v, w});
         // Divided by det before the lengths multiply: max_e·max_z is a product of three
@@ -379,7 +385,8 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     double shear_err = -1.0;  // t_error(), where the block below has computed it
     if (t_from != TFrom::shear && require_inside) {
         // Where the sheared t and its bound settle the range, the plane crossing's decision is
-        // known without it: plane_t is within an ulp or two of the exact crossing (above), the
+        // known without it: plane_t is within an ulp or two of the exact crossing (above; or,
+        // where its numerator cancels, within ~u² of |v − o|/|n·d|, far below t_err), the
         // sheared t within t_err of it, so the two differ by less than t_err + 4u·|t|, and
         // twice that is margin. Outside the range: no hit either way (a spawned ray's own
         // triangle, behind its origin, is the usual one; plane_t had been a quarter of a
@@ -387,7 +394,9 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         // no more than the decision (TFrom::settled): the hit, with the sheared t.
         const double ts = (u * az + v * bz + w * cz) * inv_det;
         const double te = shear_err = t_error();
-        if (std::isfinite(ts) && std::isfinite(te)) {
+        // A bound below 2⁻¹⁰⁰⁰ (a triangle ~1e-320 off the origin's plane) is itself rounded:
+        // the plane crossing decides there.
+        if (std::isfinite(ts) && std::isfinite(te) && te >= 0x1p-1000) {
             const double margin = 2.0 * te + 8.0 * kDoubleUnitRoundoff * std::abs(ts);
             if (ts + margin < ray.tmin || ts - margin > ray.tmax)
                 return outside_range();

@@ -329,7 +329,9 @@ TEST(Triangle, RangeSettledByTheShearDecidesAsThePlaneCrossing) {
             const Vec3d n = triangle_normal(tri);
             d = d - n * (dot(d, n) * (1.0 - 1e-7));
         }
-        const Ray ray{o * k, d};
+        // Directions 1/32 to 2^20 long (exact powers of two: the same lines): t_err's bound
+        // had fallen short by up to the direction's length (t_error, triangle.cpp).
+        const Ray ray{o * k, d * std::ldexp(1.0, static_cast<int>(rng() % 26) - 5)};
         Ray open = ray;
         open.tmin = -kInfinity;
         const auto line = intersect_triangle(tri, open);  // never settled early: the plane's t
@@ -369,6 +371,33 @@ TEST(Triangle, RangeSettledByTheShearDecidesAsThePlaneCrossing) {
     }
     EXPECT_GT(crossings, 2000);
     EXPECT_GT(checked, 50000);
+}
+
+// A grazing line (β ≈ 0.048°) along a direction 32 long, where Woop's sheared t is 2.4 of
+// pbrt's t_err, as it stood, from the plane crossing (a helper's review): t_err now holds, and
+// the range ending at the crossing, or an ulp before it, is decided as the crossing decides.
+TEST(Triangle, TErrorHoldsForLongDirections) {
+    const Triangle tri{{0x1.39389ad56ee39p+10, 0x1.82c6eff68cd7ep+11, 0x1.1ea4b7d82000ap+10},
+                       {-0x1.8019ff082134ap+10, -0x1.7799046cf4d7ap+9, -0x1.9552c279581d3p+10},
+                       {0x1.77e75bd2db748p+10, -0x1.2283ee4638567p+11, 0x1.5cd7d9fd39a68p+10}};
+    const Ray ray{{0x1.febb13f74801dp+4, 0x1.4b7e394d297eap+5, -0x1.04bd95c02e254p+6},
+                  {0x1.6b20ccf84dfdbp+4, -0x1.bb05270dc3a2ap-6, 0x1.68f2175893194p+4}};
+    const double t = 0x1.217150d01a051p+2;  // the exact crossing, rounded (rational arithmetic)
+    const auto plane = intersect_triangle(tri, ray);
+    const auto fast = intersect_triangle_fast(tri, ray);
+    ASSERT_TRUE(plane && fast);
+    EXPECT_EQ(plane->t, t);
+    EXPECT_LE(std::abs(fast->t - t), fast->t_err);
+    Ray from_t = ray;
+    from_t.tmin = t;
+    EXPECT_TRUE(intersect_triangle(tri, from_t));
+    EXPECT_TRUE(decide_triangle(tri, from_t));
+    Ray before_t = ray;
+    before_t.tmax = std::nextafter(t, 0.0);
+    LineCrossing outside;
+    EXPECT_FALSE(intersect_triangle(tri, before_t));
+    EXPECT_FALSE(decide_triangle(tri, before_t, &outside));
+    EXPECT_TRUE(outside.crossed);
 }
 
 // A hit the sheared t cannot place at or after tmin is not one for fast: a ray leaving a corner
