@@ -165,7 +165,8 @@ std::string judge_case(const StressCase& c, std::vector<std::size_t>& bad_rays) 
                                       exact ? "exact" : "refined", "");
             if (m.wrong() || m.leaks || m.t_err_violations ||
                 (exact && m.max_ulps() > kExactMaxUlps)) {
-                bad_rays.push_back(i);
+                if (std::find(bad_rays.begin(), bad_rays.end(), i) == bad_rays.end())
+                    bad_rays.push_back(i);  // once, whichever precision or mode found it
                 wrong += std::string(engine::to_string(res.precision)) + " ray " +
                          std::to_string(i) + ": " + m.summary() + "\n";
             }
