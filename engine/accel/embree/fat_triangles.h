@@ -65,13 +65,13 @@ bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d
 /// path for it: docs/numerics.md).
 /// Why that is safe. A rejection stands for a ray that passed within the widening of an edge of
 /// a triangle it does not hit, where it may have slipped through the float surface. Here the
-/// float line crosses the unwidened float triangle more than Δ inside it (some 17Δ at least),
-/// at sin β ≥ 1/16, on the side the double line crosses the real one: a crossing the float and
-/// the double line both make, near none of the triangle's edges, after which both are on the
-/// same side of the surface. Not counting it leaves a spawned ray where any other ray is: float
-/// and double disagree unseen only where the double line makes a crossing the float line does
-/// not, at sin β < 1/16 within ~Δ/sin β of an edge (a ridge clipped less deeply than Δ, a part
-/// thinner than ~2Δ between the float start and tmin), inside the float bands of
+/// float line crosses the unwidened float triangle more than Δ inside it (Δ/sin β + 2Δ less
+/// the vertices' rounding), at sin β ≥ 1/16, on the side the double line crosses the real one:
+/// a crossing the float and the double line both make, near none of the triangle's edges,
+/// after which both are on the same side of the surface. Not counting it leaves a spawned ray where
+/// any other ray is: float and double disagree unseen only where the double line makes a crossing
+/// the float line does not, at sin β < 1/16 within ~Δ/sin β of an edge (a ridge clipped less deeply
+/// than Δ, a part thinner than ~2Δ between the float start and tmin), inside the float bands of
 /// docs/accuracy.md. What the old rule bought there was that every spawned ray took the exact
 /// path. The fuzzer spawns such rays, outward and inward, since 2026-12-06
 /// (tests/stress/fuzz_test.cpp, spawned_case); a helper's review found no case outside the bands.
