@@ -804,13 +804,6 @@ TEST(EmbreeAccel, RefinedFindsTrianglesFloatMissesAmongManySpheres) {
                 rays);
 }
 
-// Exact ties in t go to the lower object, then to the lower primitive (API.md): at refined as at
-// exact and in the linear scan, one ray at a time and in packets. Duplicated meshes (every face
-// tied with its copy), and rays aimed at shared vertices, at edges (a face's diagonal too) and at
-// faces, from outside and from inside, on cubes (axis aligned and tilted) and icospheres, each
-// scene above 16 triangles so that Embree answers. Until 2026-12-05 refined's hit filter kept
-// whichever candidate Embree offered last at the same float t: object 1 on two identical cubes,
-// and the higher-numbered triangle at a shared edge or vertex.
 // A renderer's spawned rays (shade/spawn.h: just off the surface by the float tracer's error,
 // tmin 0) leave their own triangle, which refined's float ray, started a margin before tmin,
 // crosses behind the origin; the hit filter rejects that crossing for its t. Counted as a
@@ -868,6 +861,13 @@ TEST(EmbreeAccel, RefinedRaysSpawnedOffTheirTriangleStayOnTheFloatPath) {
     }
 }
 
+// Exact ties in t go to the lower object, then to the lower primitive (API.md): at refined as at
+// exact and in the linear scan, one ray at a time and in packets. Duplicated meshes (every face
+// tied with its copy), and rays aimed at shared vertices, at edges (a face's diagonal too) and at
+// faces, from outside and from inside, on cubes (axis aligned and tilted) and icospheres, each
+// scene above 16 triangles so that Embree answers. Until 2026-12-05 refined's hit filter kept
+// whichever candidate Embree offered last at the same float t: object 1 on two identical cubes,
+// and the higher-numbered triangle at a shared edge or vertex.
 TEST(EmbreeAccel, RefinedTiesGoToTheLowerObjectThenPrimitive) {
     auto tilted = [](Object o) {
         auto mesh = std::make_shared<TriangleMesh>(*o.mesh);
