@@ -355,6 +355,8 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
                       delta_z * (max_e * inv));
     };
 
+    // Woop's own t: the sheared z interpolated by the edge functions.
+    auto sheared_t = [&] { return (u * az + v * bz + w * cz) * inv_det; };
     // The hit at t, t_err (finite), with the barycentrics and side from the edge functions.
     auto hit_at = [&](double at, double err) {
         Hit hit;
@@ -392,7 +394,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         // triangle, behind its origin, is the usual one; plane_t had been a quarter of a
         // refined render of the Duck, most of it for those). Inside it, for a caller that needs
         // no more than the decision (TFrom::settled): the hit, with the sheared t.
-        const double ts = (u * az + v * bz + w * cz) * inv_det;
+        const double ts = sheared_t();
         const double te = shear_err = t_error();
         // A bound below 2⁻¹⁰⁰⁰ (a triangle ~1e-320 off the origin's plane) is itself rounded:
         // the plane crossing decides there.
@@ -409,7 +411,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         if (std::isnan(t))
             return std::nullopt;  // in the plane to double-double precision
     } else {
-        t = (u * az + v * bz + w * cz) * inv_det;
+        t = sheared_t();
     }
     // An inf t here (or NaN from inf − inf in the sheared sum) can be an intermediate's overflow
     // alone: u·az passes 1.8e308 for a triangle 1e80 across seen 1e160 away along a unit
