@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 namespace raycastd::engine {
 
@@ -53,41 +54,45 @@ inline double unit_scale(double m) {
     return power_to_unit(m);
 }
 
+/// The next representable value above v (v itself for +inf and NaN), T float or double, by
+/// stepping its bit pattern as pbrt-v4 §6.8.2 does (NextFloatUp): the bits of positive values
+/// count up with their value, those of negative ones down. std::nextafter gives the same values
+/// (tested in float_bounds_test.cpp) but is a call into libm that GCC does not inline: a
+/// renderer spawning rays asks for three a ray (2% of a Duck render, perf), and float_up (below)
+/// for every other ray prepare_ray sets up.
+template <class T>
+inline T next_up(T v) {
+    static_assert(std::is_same<T, float>::value || std::is_same<T, double>::value,
+                  "next_up steps float or double");
+    using Bits = typename std::conditional<sizeof(T) == 4, std::uint32_t, std::uint64_t>::type;
+    if (!(v < std::numeric_limits<T>::infinity()))
+        return v;
+    if (v == T(0))  // both zeros
+        return std::numeric_limits<T>::denorm_min();
+    Bits bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    bits = v > T(0) ? bits + 1 : bits - 1;
+    std::memcpy(&v, &bits, sizeof bits);
+    return v;
+}
+/// The next representable value below v (v itself for −inf; a NaN stays a NaN, its sign
+/// flipped).
+template <class T>
+inline T next_down(T v) {
+    return -next_up(-v);
+}
+
 /// The largest float ≤ v: v rounded to the nearest float, stepped down when rounding went up.
 /// Lower corners of float boxes that must contain the double box. v must lie within float's
 /// range (beyond it the conversion is undefined; use to_float).
 inline float float_down(double v) {
     const float f = static_cast<float>(v);
-    return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity())
-                                      : f;
+    return static_cast<double>(f) > v ? next_down(f) : f;
 }
 /// The smallest float ≥ v (see float_down): upper corners of boxes, upper ends of ray ranges.
 inline float float_up(double v) {
     const float f = static_cast<float>(v);
-    return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity())
-                                      : f;
-}
-
-/// The next representable double above v (v itself for +inf and NaN), by stepping its bit
-/// pattern as pbrt-v4 §6.8.2 does (NextFloatUp): the bits of positive doubles count up with
-/// their value, those of negative ones down. std::nextafter gives the same values (tested in
-/// float_bounds_test.cpp) but is a call into libm that GCC does not inline, and a renderer
-/// spawning rays asks for three of them a ray (2% of a Duck render, perf).
-inline double next_up(double v) {
-    if (!(v < std::numeric_limits<double>::infinity()))
-        return v;
-    if (v == 0.0)  // both zeros
-        return std::numeric_limits<double>::denorm_min();
-    std::uint64_t bits;
-    std::memcpy(&bits, &v, sizeof bits);
-    bits = v > 0.0 ? bits + 1 : bits - 1;
-    std::memcpy(&v, &bits, sizeof bits);
-    return v;
-}
-/// The next representable double below v (v itself for −inf; a NaN stays a NaN, its sign
-/// flipped).
-inline double next_down(double v) {
-    return -next_up(-v);
+    return static_cast<double>(f) < v ? next_up(f) : f;
 }
 
 }  // namespace raycastd::engine

@@ -2,6 +2,10 @@
 
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "engine/math/double_double.h"
 
 namespace raycastd::engine::embree {
@@ -10,30 +14,55 @@ bool clip_to_bounds(const Impl& a, const Ray& ray, double& t0, double& t1) {
     return clip_to_bounds(a.padded_bounds, ray, t0, t1);
 }
 
+namespace {
+
+/// (lo, hi) = (x, y) if x > y is false, else (y, x), without a branch: for random directions
+/// that comparison is a coin toss, and the mispredicted swap it replaced in clip_to_bounds was
+/// most of that function's cost (perf: 17% of a random batch at refined, ~25 ns a ray). GCC
+/// turns std::min and the ternary back into a compare and jump, hence SSE2's minsd and maxsd,
+/// whose NaN rule (the second operand unless the comparison holds) gives the swap's values.
+inline void ordered(double x, double y, double& lo, double& hi) {
+#if defined(__SSE2__)
+    lo = _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(y), _mm_set_sd(x)));  // y < x ? y : x
+    hi = _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(x), _mm_set_sd(y)));  // x > y ? x : y
+#else
+    const bool swap = x > y;
+    lo = swap ? y : x;
+    hi = swap ? x : y;
+#endif
+}
+
+}  // namespace
+
 bool clip_to_bounds(const Bounds3& bounds, const Ray& ray, double& t0, double& t1) {
-    // Slab test in double (Kay & Kajiya 1986) against the padded bounds.
-    t0 = ray.tmin;
-    t1 = ray.tmax;
+    // Slab test in double (Kay & Kajiya 1986) against the padded bounds. In locals: t0 and t1
+    // could alias the ray, which kept them in memory through the loop.
+    double lo_t = ray.tmin, hi_t = ray.tmax;
+    bool meets = true;
     for (std::size_t k = 0; k < 3; ++k) {
         const double o = ray.origin[k], d = ray.direction[k];
         const double lo = bounds.lo[k], hi = bounds.hi[k];
         if (d == 0.0) {
-            if (o < lo || o > hi)
-                return false;
+            if (o < lo || o > hi) {
+                meets = false;
+                break;
+            }
             continue;
         }
         // One reciprocal rather than two divisions (the slab test was 7% of a refined batch,
         // perf): (lo − o)·(1/d) rounds three times, which the widening below covers.
         const double inv = 1.0 / d;
-        double ta = (lo - o) * inv, tb = (hi - o) * inv;
-        if (ta > tb)
-            std::swap(ta, tb);
+        const double tl = (lo - o) * inv, th = (hi - o) * inv;
+        double ta, tb;
+        ordered(tl, th, ta, tb);
         // Widen by a few ulps: the subtraction, reciprocal and product round (γ₃), and a hit at
         // the slab's edge must survive.
-        t0 = std::max(t0, ta - gamma(3) * std::abs(ta));
-        t1 = std::min(t1, tb + gamma(3) * std::abs(tb));
+        lo_t = std::max(lo_t, ta - gamma(3) * std::abs(ta));
+        hi_t = std::min(hi_t, tb + gamma(3) * std::abs(tb));
     }
-    return t0 <= t1;
+    t0 = lo_t;
+    t1 = hi_t;
+    return meets && lo_t <= hi_t;
 }
 
 namespace {
