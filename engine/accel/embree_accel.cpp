@@ -137,6 +137,7 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     if (!s)
         return linear_closest(*a.scene, ray, want_normal);
     c.exact = true;
+    c.want_normal = want_normal;
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
         return std::nullopt;
@@ -170,7 +171,9 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     Hit h = *c.best;
     if (want_normal) {
         const Object& o = a.scene->objects[h.object];
-        if (o.kind != ObjectKind::sphere)  // a sphere's came with the candidate (sphere_hits)
+        // A sphere's came with the candidate (sphere_hits), a triangle's too unless the
+        // triangle was translated into a far ray's frame (double_candidates).
+        if (o.kind != ObjectKind::sphere && c.frame)
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
     } else {
         h.normal = Vec3d{};  // a sphere's candidate came with one (sphere_hits)
@@ -482,7 +485,7 @@ std::optional<Hit> refined_answer(const Impl& a, const Ray& ray, const RayContex
             return kept_sphere_hit(c.best, want_normal);
         if (o.kind != ObjectKind::sphere && hit_is_certain(a, c)) {
             Hit h = *c.best;
-            if (want_normal)
+            if (want_normal && !c.want_normal)  // else the hit filter gave it (RayContext)
                 h.normal = triangle_normal(o.mesh->triangle(h.primitive));
             return h;
         }
@@ -501,11 +504,19 @@ bool prepare_refined_ray(const Impl& a, const Ray& ray, RayContext& c, FloatRay&
     return prepare_ray(a, ray, RayStart::backed_off, c, f);
 }
 
+/// prepare_refined_ray for a closest query whose answer wants the normal, which the hit filter
+/// then gives each double hit (RayContext::want_normal).
+bool prepare_refined_closest_ray(const Impl& a, const Ray& ray, bool want_normal, RayContext& c,
+                                 FloatRay& f) {
+    c.want_normal = want_normal;
+    return prepare_refined_ray(a, ray, c, f);
+}
+
 std::optional<Hit> refined_closest(const Impl& a, const Ray& ray, bool want_normal,
                                    bool& escalated) {
     RayContext c(a);
     FloatRay f;
-    if (!prepare_refined_ray(a, ray, c, f))
+    if (!prepare_refined_closest_ray(a, ray, want_normal, c, f))
         return std::nullopt;
     intersect1(a.native.get(), c, f);
     return refined_answer(a, ray, c, want_normal, escalated);
@@ -572,7 +583,7 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
             closest_packet(
                 a, a.native.get(), rays + i, m,
                 [&](const Ray& ray, RayContext& c, FloatRay& f) {
-                    return prepare_refined_ray(a, ray, c, f);
+                    return prepare_refined_closest_ray(a, ray, want_normal, c, f);
                 },
                 [&](std::size_t k, const RayContext& c, const NativeHit&) {
                     bool escalated = false;

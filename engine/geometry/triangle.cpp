@@ -323,7 +323,10 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     if (det == 0.0 || !std::isfinite(det))
         return std::nullopt;
 
-    if (is_degenerate(tri))
+    // The edge cross product is_degenerate() tests, kept for the hit's normal
+    // (triangle_normal's, bit for bit).
+    const Vec3d n = edge_cross(tri);
+    if (n == Vec3d{0.0, 0.0, 0.0})
         return std::nullopt;
     // The inside/outside decision above is Woop's (watertight); t is the plane crossing in
     // double-double, which Woop's sheared t (rounded in the shear, and ill-conditioned for a
@@ -372,7 +375,7 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         hit.front_face = det > 0.0;
         hit.t_err = err;
         if (want_normal)
-            hit.normal = triangle_normal(tri);
+            hit.normal = normalize(n);
         return hit;
     };
     // The line crosses the triangle (require_inside), but outside [tmin, tmax]: noted for the

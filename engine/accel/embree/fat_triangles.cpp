@@ -36,7 +36,7 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
         // where Woop's t does not settle the range).
         LineCrossing outside;
         auto h = occlusion ? decide_triangle(tri, *lane.ray, &outside)
-                           : intersect_triangle(tri, *lane.ray, /*want_normal=*/false, &outside);
+                           : intersect_triangle(tri, *lane.ray, lane.want_normal, &outside);
         // Embree set tfar to the candidate's float t; keep_if_closer may move it.
         float& tfar = RTCRayN_tfar(args->ray, args->N, i);
         const float tf = tfar;
