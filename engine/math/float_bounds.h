@@ -90,9 +90,19 @@ inline float float_down(double v) {
     return static_cast<double>(f) > v ? next_down(f) : f;
 }
 /// The smallest float ≥ v (see float_down): upper corners of boxes, upper ends of ray ranges.
+/// The step is selected without a branch: whether rounding went down is a coin toss, and
+/// prepare_ray takes every ray's tfar from here (a misprediction a ray in two).
 inline float float_up(double v) {
     const float f = static_cast<float>(v);
-    return static_cast<double>(f) < v ? next_up(f) : f;
+    const float up = next_up(f);
+    std::uint32_t fb, ub;
+    std::memcpy(&fb, &f, sizeof fb);
+    std::memcpy(&ub, &up, sizeof ub);
+    const std::uint32_t take_up = 0u - static_cast<std::uint32_t>(static_cast<double>(f) < v);
+    const std::uint32_t bits = (ub & take_up) | (fb & ~take_up);
+    float out;
+    std::memcpy(&out, &bits, sizeof out);
+    return out;
 }
 
 }  // namespace raycastd::engine
