@@ -137,7 +137,9 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     if (!s)
         return linear_closest(*a.scene, ray, want_normal);
     c.exact = true;
-    c.want_normal = want_normal;
+    // Not for a far ray moved to the scene: its triangles are translated into the centre's
+    // frame, and the answer's normal is the triangle's own (formed below).
+    c.want_normal = want_normal && frame == RayFrame::world;
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
         return std::nullopt;
@@ -171,9 +173,9 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     Hit h = *c.best;
     if (want_normal) {
         const Object& o = a.scene->objects[h.object];
-        // A sphere's came with the candidate (sphere_hits), a triangle's too unless the
-        // triangle was translated into a far ray's frame (double_candidates).
-        if (o.kind != ObjectKind::sphere && c.frame)
+        // A sphere's came with the candidate (sphere_hits), a triangle's too where the
+        // context asked for it (RayContext::want_normal).
+        if (o.kind != ObjectKind::sphere && !c.want_normal)
             h.normal = triangle_normal(o.mesh->triangle(h.primitive));
     } else {
         h.normal = Vec3d{};  // a sphere's candidate came with one (sphere_hits)

@@ -142,8 +142,9 @@ struct RayContext {
     /// A closest query that wants the normal: refined's hit filter and the exact BVH's callback
     /// give each double hit on a triangle its unit normal (intersect_triangle's, from the edge
     /// cross product its degeneracy test formed), so that the answer need not read the triangle
-    /// again for it (9% of a refined batch of camera rays, perf). Not on a triangle translated
-    /// into a far ray's frame (`frame`), whose normal is not the triangle's own.
+    /// again for it (9% of a refined batch of camera rays, perf); where it is not set, the
+    /// answer forms the normal itself. Not set for a far ray moved into the centre's frame
+    /// (`frame`), whose translated triangles' normals are not the triangles' own.
     bool want_normal = false;
     bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
     bool fast = false;   ///< precision fast: spheres by the plain-double kernel

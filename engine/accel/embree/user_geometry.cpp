@@ -59,11 +59,9 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
         return;
     }
     const Triangle tri = c.in_frame(o.mesh->triangle(prim));
-    // The normal with the hit where the caller wants it (RayContext::want_normal), unless the
-    // triangle was translated into a far ray's frame: the answer's is the triangle's own.
-    const bool want_normal = c.want_normal && !c.frame;
-    if (auto h =
-            decision_only ? decide_triangle(tri, ray) : intersect_triangle(tri, ray, want_normal)) {
+    // The normal with the hit where the caller wants it (RayContext::want_normal).
+    if (auto h = decision_only ? decide_triangle(tri, ray)
+                               : intersect_triangle(tri, ray, c.want_normal)) {
         h->object = object;
         h->primitive = prim;
         emit(*h, nullptr);
