@@ -6,13 +6,14 @@
 #include "engine/accel/embree/float_ray.h"
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <random>
 #include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "engine/testing/bits.h"
 
 namespace raycastd::engine::embree {
 namespace {
@@ -40,9 +41,7 @@ bool clip_with_swap(const Bounds3& bounds, const Ray& ray, double& t0, double& t
     return t0 <= t1;
 }
 
-bool same_bits(double a, double b) {
-    return std::memcmp(&a, &b, sizeof a) == 0 || (std::isnan(a) && std::isnan(b));
-}
+using testing::same_bits;
 
 TEST(FloatRay, ClipToBoundsOrdersTheSlabsAsTheSwapDid) {
     Bounds3 box;

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/testing/bits.h"
+
 namespace raycastd::engine::embree {
 namespace {
 
@@ -145,9 +147,7 @@ TEST(FastLanes, AvxFillsTheLanesOneByOneFills) {
     }
 }
 
-bool same_bits(double a, double b) {
-    return std::memcmp(&a, &b, sizeof a) == 0;
-}
+using testing::same_bits;
 
 TEST(FastLanes, AvxAnswersAsOneByOne) {
     if (widest_fast_lanes() != FastLanes::avx)
