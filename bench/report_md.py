@@ -540,13 +540,15 @@ ISSUE_17_NOTE = (
     "answer (perf of 1M rays on A, 2026-12-06: on camera rays Woop's test 13% of refined's "
     "time, the double-double plane crossing 16%, the double triangle's read 4%; on random rays "
     "that read alone 12%, a cache miss a candidate), ROBUST traversal (10-15%) and the clipped, "
-    "normalised ray set-up (13% of camera rays). `exact` is unchanged: every candidate is "
-    "Embree user geometry decided in double. "
+    "normalised ray set-up (13% of camera rays). `exact` decides every candidate in double; "
+    "since 2026-12-06 its BVH is our own (eight-wide, a leaf's primitive in its parent's child "
+    "code) instead of Embree's user geometry, at the same speed within this host's noise and "
+    "20-30 B a triangle less. "
     "The memory row is the resident growth of a process of its own (`bench_intersect "
     "--memory-probe W`) from before the scene is made to after one `refined` and one `exact` "
     "query: the scene's vertices and indices (~24 B a triangle), the native BVH over the "
-    "widened triangles with their own float vertices (~138 B), and the exact BVH of user "
-    "primitives (~64 B); `fast`'s BVH, built on a first `fast` query, is not in it."
+    "widened triangles with their own float vertices (~138 B), and exact's BVH (61-77 B); "
+    "`fast`'s BVH, built on a first `fast` query, is not in it."
 )
 
 POINTS_NOTE = (

@@ -56,21 +56,8 @@ GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh
 }  // namespace
 
 void Impl::build_exact() const {
-    RTCDevice device = shared_device();
-    take_error("");
-    SceneHandle s(rtcNewScene(device));
-    rtcSetSceneFlags(s.get(), RTC_SCENE_FLAG_ROBUST);
-    for (std::uint32_t i = 0; i < scene->objects.size(); ++i) {
-        const Object& o = scene->objects[i];
-        const GeometryHandle g = make_user_geometry(device, const_cast<GeomData*>(&geoms[i]),
-                                                    static_cast<unsigned>(o.primitive_count()));
-        rtcCommitGeometry(g.get());
-        rtcAttachGeometryByID(s.get(), g.get(), i);
-    }
-    rtcCommitScene(s.get());
-    exact_status = take_error("building the exact BVH");
-    exact = std::move(s);             // written once, under call_once, before any query reads it
-    exact_ready = exact_status.ok();  // counted in memory_bytes once it exists
+    exact_status = exact.build(*this);  // written once, under call_once, before any query reads it
+    exact_ready = exact_status.ok();    // counted in memory_bytes once it exists
 }
 
 void Impl::build_fast() const {
@@ -133,10 +120,9 @@ void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
 std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal,
                                  RayFrame frame = RayFrame::world, FarSpheres* far = nullptr) {
     RayContext c(a);
-    RTCScene s = a.exact_scene();
-    if (!s)
+    const ExactBvh* bvh = a.exact_bvh();
+    if (!bvh)
         return linear_closest(*a.scene, ray, want_normal);
-    c.exact = true;
     // Not for a far ray moved to the scene: its triangles are translated into the centre's
     // frame, and the answer's normal is the triangle's own (formed below).
     c.want_normal = want_normal && frame == RayFrame::world;
@@ -161,7 +147,10 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     if (!exact_ray_within_padding(a, c))
         return linear_closest(*a.scene, far ? *far->client : ray, want_normal);
     c.far_spheres = far;
-    intersect1(s, c, f);  // the callback keeps the closest candidate in c.best
+    bvh->closest(f, [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
+        keep_candidates(c, object, prim, tfar);  // the closest in c.best
+        return true;
+    });
     if (!c.best)
         return std::nullopt;
     if (far && far->best) {  // a sphere's, decided on the client's ray, with its normal
@@ -193,8 +182,8 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
 bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world,
                FarSpheres* far = nullptr) {
     RayContext c(a);
-    RTCScene s = a.exact_scene();
-    if (!s)
+    const ExactBvh* bvh = a.exact_bvh();
+    if (!bvh)
         return linear_any(*a.scene, ray);
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
@@ -215,7 +204,12 @@ bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world,
     if (!exact_ray_within_padding(a, c))
         return linear_any(*a.scene, far ? *far->client : ray);
     c.far_spheres = far;
-    return occluded1(s, c, f);
+    bool hit = false;
+    bvh->any(f, [&c, &hit](std::uint32_t object, std::uint32_t prim, float&) {
+        hit = occludes(c, object, prim);
+        return !hit;
+    });
+    return hit;
 }
 
 /// Every hit decided in double (refined's `all` too: counting crossings must not leak through
@@ -224,10 +218,9 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
                RayFrame frame = RayFrame::world, FarSpheres* far = nullptr) {
     RayContext c(a);
     c.collect = &out;
-    RTCScene s = a.exact_scene();
-    if (!s)
+    const ExactBvh* bvh = a.exact_bvh();
+    if (!bvh)
         return linear_all(*a.scene, ray, want_normal, out);
-    c.exact = true;
     FloatRay f;
     if (!prepare_ray(a, ray, RayStart::backed_off, c, f, frame))
         return;
@@ -248,7 +241,11 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
     if (!exact_ray_within_padding(a, c))
         return linear_all(*a.scene, far ? *far->client : ray, want_normal, out);
     c.far_spheres = far;
-    intersect1(s, c, f);  // every candidate goes to c.collect (a far ray's spheres' to far->hits)
+    // Every candidate goes to c.collect (a far ray's spheres' to far->hits).
+    bvh->any(f, [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
+        keep_candidates(c, object, prim, tfar);
+        return true;
+    });
     // Triangles' moved crossings, and then spheres', in the moved ray's frame, for the order.
     std::vector<Hit> moved;
     if (far) {
@@ -805,7 +802,7 @@ std::size_t EmbreeAccel::memory_bytes() const {
     std::size_t bytes = a.triangles * (embree::kBytesPerTriangle + 12 * sizeof(float)) +
                         a.spheres * embree::kBytesPerUserPrimitive;
     if (a.exact_ready)
-        bytes += (a.triangles + a.spheres) * embree::kBytesPerUserPrimitive;
+        bytes += a.exact.memory_bytes();
     if (a.fast_ready)  // its own BVH and float triangles (vertices shared there: ~half a vertex
                        // a triangle, and the index triple)
         bytes += a.triangles * (embree::kBytesPerTriangle + 6 + 3 * sizeof(unsigned)) +

@@ -12,10 +12,11 @@
 //            by the double watertight test, so a float miss is a miss. The exact path decides
 //            where that argument does not hold (the filter rejected a candidate before the
 //            answer, a far origin, a scene with slivers); all/count run on the exact BVH.
-//   exact    a second BVH whose triangles are user geometry: Embree's float boxes (padded to
-//            cover the float rounding of the ray and of the boxes) only cull; every candidate is
-//            decided by the double watertight test and the closest is chosen by the API's tie
-//            rules. Built on the first exact query ("skip what nobody asked for").
+//   exact    a second BVH, our own (embree/exact_bvh.h), over every primitive's float box
+//            (padded to cover the float rounding of the ray and of the boxes), which only culls;
+//            every candidate is decided by the double watertight test and the closest is chosen
+//            by the API's tie rules. Built on the first exact query ("skip what nobody asked
+//            for"). Until 2026-12-06 it was an Embree scene of user geometry (docs/numerics.md).
 //
 // Embree sees coordinates relative to the scene's centre, and the float ray starts where the
 // double ray enters the (padded) scene bounds, with a unit direction: a scene far from the
@@ -24,7 +25,8 @@
 // The parts, one concept a file, in engine/accel/embree/: device (the shared RTCDevice, errors
 // → Status, RAII handles), impl.h (the BVHs, RayContext, NativeHit), float_ray (clipping, the
 // float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks),
-// fat_triangles (refined's widened triangles and their hit filter), packets
+// exact_bvh (exact's tree and its walk), fat_triangles (refined's widened triangles and their
+// hit filter), packets
 // (16-wide traversal, the one coherence test), point_query (closest points through
 // rtcPointQuery). embree_accel.cpp holds the builds and, for each query, one function per
 // precision.

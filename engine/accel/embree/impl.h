@@ -14,6 +14,7 @@
 #include <embree3/rtcore.h>
 
 #include "engine/accel/embree/device.h"
+#include "engine/accel/embree/exact_bvh.h"
 #include "engine/accel/embree/user_geometry.h"
 #include "engine/accel/far_ray.h"
 #include "engine/scene/scene.h"
@@ -33,7 +34,7 @@ struct Impl {
     mutable std::atomic<bool> fast_ready{false};
     mutable std::once_flag fast_once;
     mutable Status fast_status;
-    mutable SceneHandle exact;  ///< every primitive as user geometry, double tests
+    mutable ExactBvh exact;  ///< every primitive's padded box, double tests (exact_bvh.h)
     mutable std::atomic<bool> exact_ready{false};
     mutable std::once_flag exact_once;
     mutable Status exact_status;
@@ -73,9 +74,9 @@ struct Impl {
         return fast_status.ok() ? fast.get() : native.get();
     }
     /// The exact BVH, or nullptr if it could not be built (the caller then scans linearly).
-    RTCScene exact_scene() const {
+    const ExactBvh* exact_bvh() const {
         std::call_once(exact_once, [this] { build_exact(); });
-        return exact_status.ok() ? exact.get() : nullptr;
+        return exact_status.ok() ? &exact : nullptr;
     }
 };
 
@@ -146,8 +147,7 @@ struct RayContext {
     /// answer forms the normal itself. Not set for a far ray moved into the centre's frame
     /// (`frame`), whose translated triangles' normals are not the triangles' own.
     bool want_normal = false;
-    bool exact = false;  ///< the exact BVH: candidates compete in double, not by float tfar
-    bool fast = false;   ///< precision fast: spheres by the plain-double kernel
+    bool fast = false;  ///< precision fast: spheres by the plain-double kernel
     /// Float t (Embree's units) of `best` on the native BVH.
     float best_tf = std::numeric_limits<float>::infinity();
     /// The smallest float t at which the hit filter rejected a candidate (the ray passed within

@@ -1,8 +1,8 @@
 #pragma once
 // Embree's 16-wide packets for a batch's closest and any queries: the rays of a group are
 // traced together by rtcIntersect16 / rtcOccluded16, flagged coherent (camera rays) or not.
-// Packets carry only Embree's own triangles: user geometry (spheres, the exact BVH) is traced
-// one ray at a time, so a packet's lanes are never handed to our callbacks.
+// Packets carry only Embree's own triangles: user geometry (spheres) and the exact BVH are
+// traced one ray at a time, so a packet's lanes are never handed to our callbacks.
 //
 //   fast_packet     fast's common case: every lane takes the unclipped float ray, so the lanes
 //   fast_any_packet are filled straight from the double rays and answered straight from

@@ -68,38 +68,32 @@ void double_candidates(const RayContext& c, std::uint32_t object, std::uint32_t 
     }
 }
 
-void user_bounds(const RTCBoundsFunctionArguments* args) {
-    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
-    const Object& o = g->accel->scene->objects[g->object];
+}  // namespace
+
+FloatBox primitive_box(const Impl& a, const Object& o, std::uint32_t prim) {
     Bounds3 b;
     if (o.kind == ObjectKind::sphere) {
         b = object_bounds(o);  // rounded outward: a radius below an ulp of the centre counts
     } else {
-        const Triangle t = o.mesh->triangle(args->primID);
+        const Triangle t = o.mesh->triangle(prim);
         b.extend(t.a);
         b.extend(t.b);
         b.extend(t.c);
     }
-    const double p = g->accel->pad;
-    b.lo -= g->accel->center;
-    b.hi -= g->accel->center;
-    RTCBounds* out = args->bounds_o;
-    const double u = g->accel->unit;  // Embree's frame: exact scaling
-    out->lower_x = float_down((b.lo.x - p) * u);
-    out->lower_y = float_down((b.lo.y - p) * u);
-    out->lower_z = float_down((b.lo.z - p) * u);
-    out->upper_x = float_up((b.hi.x + p) * u);
-    out->upper_y = float_up((b.hi.y + p) * u);
-    out->upper_z = float_up((b.hi.z + p) * u);
+    const double p = a.pad;
+    b.lo -= a.center;
+    b.hi -= a.center;
+    const double u = a.unit;  // Embree's frame: exact scaling
+    FloatBox out;
+    for (int k = 0; k < 3; ++k) {
+        out.lo[k] = float_down((b.lo[k] - p) * u);
+        out.hi[k] = float_up((b.hi[k] + p) * u);
+    }
+    return out;
 }
 
-void user_intersect(const RTCIntersectFunctionNArguments* args) {
-    if (!args->valid[0])
-        return;
-    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
-    RayContext& c = ctx_of(args->context);
-    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
-    double_candidates(c, g->object, args->primID, [&](const Hit& h, const Hit* client) {
+void keep_candidates(RayContext& c, std::uint32_t object, std::uint32_t prim, float& tfar) {
+    double_candidates(c, object, prim, [&](const Hit& h, const Hit* client) {
         if (c.collect) {
             if (client) {
                 c.far_spheres->hits.push_back(*client);
@@ -109,19 +103,58 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
             }
             return true;
         }
-        if (c.exact) {
-            if (!c.best || closer(h, *c.best)) {
-                c.best = h;
-                if (c.far_spheres)
-                    c.far_spheres->best = client ? std::optional<Hit>(*client) : std::nullopt;
-                rh->ray.tfar = std::min(rh->ray.tfar, tfar_for(c, h.t));
-                rh->hit.geomID = h.object;
-                rh->hit.primID = h.primitive;
-            }
-            return true;
+        if (!c.best || closer(h, *c.best)) {
+            c.best = h;
+            if (c.far_spheres)
+                c.far_spheres->best = client ? std::optional<Hit>(*client) : std::nullopt;
+            tfar = std::min(tfar, tfar_for(c, h.t));
         }
-        // The native BVH: a sphere is offered within Embree's float tfar, as a triangle is,
-        // and competes with the best so far in double (keep_if_closer).
+        return true;
+    });
+}
+
+bool occludes(const RayContext& c, std::uint32_t object, std::uint32_t prim) {
+    bool hit = false;
+    double_candidates(
+        c, object, prim,
+        [&](const Hit&, const Hit*) {
+            hit = true;
+            return false;
+        },
+        /*decision_only=*/true);
+    return hit;
+}
+
+namespace {
+
+void user_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    const FloatBox b = primitive_box(*g->accel, g->accel->scene->objects[g->object], args->primID);
+    RTCBounds* out = args->bounds_o;
+    out->lower_x = b.lo[0];
+    out->lower_y = b.lo[1];
+    out->lower_z = b.lo[2];
+    out->upper_x = b.hi[0];
+    out->upper_y = b.hi[1];
+    out->upper_z = b.hi[2];
+}
+
+/// A sphere of a native BVH: collected (all, count), or offered to refined's and fast's closest
+/// within Embree's float tfar.
+void user_intersect(const RTCIntersectFunctionNArguments* args) {
+    if (!args->valid[0])
+        return;
+    const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
+    RayContext& c = ctx_of(args->context);
+    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only call rtcIntersect1
+    if (c.collect) {
+        float tfar = rh->ray.tfar;  // collecting lowers nothing
+        keep_candidates(c, g->object, args->primID, tfar);
+        return;
+    }
+    double_candidates(c, g->object, args->primID, [&](const Hit& h, const Hit*) {
+        // A sphere is offered within Embree's float tfar, as a triangle is, and competes with
+        // the best so far in double (keep_if_closer).
         const float tf = to_float((h.t - c.shift) * c.len);
         if (!(tf <= rh->ray.tfar))
             return true;
@@ -140,15 +173,9 @@ void user_occluded(const RTCOccludedFunctionNArguments* args) {
     if (!args->valid[0])
         return;
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
-    RayContext& c = ctx_of(args->context);
-    auto* ray = reinterpret_cast<RTCRay*>(args->ray);
-    double_candidates(
-        c, g->object, args->primID,
-        [&](const Hit&, const Hit*) {
-            ray->tfar = -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
-            return false;
-        },
-        /*decision_only=*/true);
+    if (occludes(ctx_of(args->context), g->object, args->primID))
+        reinterpret_cast<RTCRay*>(args->ray)->tfar =
+            -std::numeric_limits<float>::infinity();  // Embree's "occluded" signal
 }
 
 }  // namespace

@@ -1,0 +1,122 @@
+#pragma once
+// exact's BVH: a tree of our own over every primitive's padded float box, walked with the float
+// ray prepare_ray sets up, every candidate decided by the double kernels (keep_candidates and
+// occludes, user_geometry.h). Until 2026-12-06 this was an Embree scene of user geometry, whose
+// tree (Embree's BVH8<object>) held about one leaf per primitive and took 91–106 B a triangle of
+// resident memory (issue 17's target is 130 B for everything; docs/numerics.md).
+//
+// The boxes are those Embree had (primitive_box: the double box relative to the scene centre,
+// padded by Impl::pad, in Embree's frame, rounded outward to float), so a float ray within the
+// padding of the double one cannot cull a double hit (embree_accel.cpp, the padding). The walk
+// tests a node's eight boxes at once with the slab test (Kay & Kajiya 1986) in float, kept
+// conservative as Embree's ROBUST traversal keeps it (Ize, "Robust BVH Ray Traversal", JCGT 2(2),
+// 2013): each slab distance (b − o)·(1/d) is three roundings off the real one, a relative error
+// below 3u_f + O(u_f²), so a box is kept when tnear·(1 − 3ε) ≤ tfar·(1 + 3ε) (ε = 2u_f), with
+// room to spare. A direction component below 1e-18 in magnitude is replaced by ±1e-18 (its
+// reciprocal then finite, so no 0·∞ = NaN): the ray is then taken to run along the slab at a
+// slope far below the padding over any segment it has in the scene (|t| ≲ 10 in the frame).
+//
+// The tree is built by binned SAH (Wald, "On fast Construction of SAH-based Bounding Volume
+// Hierarchies", RT 2007; 32 bins on the centres' longest axis), eight children a node (the child
+// of largest surface area split next, as Embree widens its trees), a leaf for each primitive,
+// held in its parent's child code (no array of references to read on the way).
+
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+#include "engine/accel/embree/user_geometry.h"
+#include "engine/status.h"
+
+namespace raycastd::engine::embree {
+
+struct Impl;
+
+class ExactBvh {
+  public:
+    static constexpr int kWidth = 8;
+
+    /// The tree over every primitive of a's scene (its spheres, and every triangle of its
+    /// meshes); too_large where the scene has more primitives than a leaf's code can address
+    /// (2^31 − 1), and then no tree.
+    Status build(const Impl& a);
+
+    /// Walks the tree with `f` (a FloatRay: float_ray.h, which includes the header that
+    /// includes this one), nearest box first, calling visit(object, prim, tfar) for each
+    /// primitive of each leaf whose box meets the ray's [tnear, tfar]; visit may lower tfar (the
+    /// walk then culls by it) and returns false to end the walk.
+    template <class FloatRay, class Visit>
+    void closest(const FloatRay& f, Visit&& visit) const {
+        walk(lanes_of(f.org_x, f.org_y, f.org_z, f.dir_x, f.dir_y, f.dir_z), f.tnear, f.tfar,
+             /*ordered=*/true, &call<std::remove_reference_t<Visit>>, &visit);
+    }
+    /// The same in no particular order (an occlusion query: the first hit ends it; or all hits).
+    template <class FloatRay, class Visit>
+    void any(const FloatRay& f, Visit&& visit) const {
+        walk(lanes_of(f.org_x, f.org_y, f.org_z, f.dir_x, f.dir_y, f.dir_z), f.tnear, f.tfar,
+             /*ordered=*/false, &call<std::remove_reference_t<Visit>>, &visit);
+    }
+
+    /// Bytes the tree occupies (the node array's unused reserve is never touched: build).
+    std::size_t memory_bytes() const {
+        return nodes_.size() * sizeof(Node) + first_.capacity() * sizeof(std::uint32_t);
+    }
+
+    /// Eight children's boxes, lane by lane, and what each child is: an inner node's index, a
+    /// primitive (kLeafBit | its index among the scene's, first_), or kNoChild, whose box is
+    /// empty (lo = +∞, hi = −∞: no slab test meets it).
+    struct alignas(32) Node {
+        float lo[3][kWidth], hi[3][kWidth];
+        std::uint32_t child[kWidth];
+    };
+    /// The ray as the box test takes it: origin, reciprocal direction, and which of a node's
+    /// planes it meets first on each axis (hi where the direction is negative).
+    struct Lanes {
+        float org[3], inv[3];
+        bool neg[3];
+    };
+    /// The float ray (origin, direction) as Lanes; a direction component below 1e-18 in
+    /// magnitude taken as ±1e-18 (the file comment).
+    static Lanes lanes_of(float ox, float oy, float oz, float dx, float dy, float dz);
+    /// The box test: bit k for each child k of `n` whose box meets [tnear, tfar] (tnear ≥ 0),
+    /// its entry distance, rounded down, in near[k]. With AVX (the CPU must have it) or as two
+    /// SSE halves: the same operations, so the same answers. The walk takes AVX where the CPU
+    /// has it.
+    static unsigned meets(const Node& n, const Lanes& r, float tnear, float tfar, float near[8],
+                          bool avx);
+
+  private:
+    static constexpr std::uint32_t kLeafBit = 0x80000000u;
+    static constexpr std::uint32_t kNoChild = 0xFFFFFFFFu;
+    /// Deepest SAH level: below it the build splits at the median (a node's first split halves
+    /// its primitives), so a tree of fewer than 2^31 primitives is at most kSahDepth + 31 nodes
+    /// deep, each pushing at most kWidth − 1 entries beyond the one it takes.
+    static constexpr int kSahDepth = 32;
+    static constexpr int kStack = (kWidth - 1) * (kSahDepth + 31) + kWidth;
+
+    struct Entry {
+        std::uint32_t code;
+        float tnear;  ///< rounded down (meets)
+    };
+
+    /// A visitor behind a plain function pointer, so that the walk is compiled once, in
+    /// exact_bvh.cpp, with its box test for AVX and without; a call per primitive costs little
+    /// beside the double test behind it.
+    using VisitFn = bool (*)(void* visit, std::uint32_t object, std::uint32_t prim, float& tfar);
+    template <class Visit>
+    static bool call(void* visit, std::uint32_t object, std::uint32_t prim, float& tfar) {
+        return (*static_cast<Visit*>(visit))(object, prim, tfar);
+    }
+    void walk(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit) const;
+    template <bool ordered>
+    void walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn, void* visit) const;
+
+    friend struct ExactBvhBuilder;
+    std::vector<Node> nodes_;
+    /// first_[i]: the index of object i's first primitive among the scene's; one more entry, the
+    /// total.
+    std::vector<std::uint32_t> first_;
+    std::uint32_t root_ = kNoChild;  ///< an inner node, a leaf, or kNoChild (no primitives)
+};
+
+}  // namespace raycastd::engine::embree

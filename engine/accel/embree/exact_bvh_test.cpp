@@ -1,0 +1,246 @@
+// exact's BVH on its own (exact_bvh.h): the walk offers every primitive whose box the ray meets,
+// and only those; a closest walk culls nothing before the tfar its visitor lowered; the AVX and
+// SSE box tests agree bit for bit; degenerate trees (one primitive, none, a hundred identical
+// boxes) are walked. That exact answers as the linear scan does, through this tree, is
+// embree_accel_test.cpp's (EmbreeAccel.*AgreesWithLinearScan*) and the stress suites'.
+
+#include "engine/accel/embree/exact_bvh.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <set>
+#include <utility>
+
+#include <gtest/gtest.h>
+
+#include "engine/accel/embree/float_ray.h"
+#include "engine/accel/embree/impl.h"
+#include "engine/geometry/target_clones.h"
+#include "engine/math/float_bounds.h"
+#include "engine/testing/bits.h"
+#include "engine/testing/scenes.h"
+
+namespace raycastd::engine::embree {
+namespace {
+
+using Prim = std::pair<std::uint32_t, std::uint32_t>;  // object, primitive
+
+/// The frame EmbreeAccel::build sets up for `scene` (embree_accel.cpp).
+void set_frame(Impl& a, const Scene& scene) {
+    a.scene = &scene;
+    const Bounds3 b = scene.bounds();
+    if (b.empty())
+        return;
+    a.center = b.center();
+    a.float_scale = 2.0 * scaled_length(b.diagonal()) + 1e-300;
+    a.pad = 8.0 * kFloatUnitRoundoff * a.float_scale + 1e-300;
+    a.unit = power_to_unit(a.float_scale);
+}
+
+/// The entry of the segment [t0, t1] of the line o + t·d into `box` grown by `grow` on every
+/// side (in double: exact enough beside the margins the tests leave), or +inf if it misses.
+double entry(const FloatBox& box, double grow, const double o[3], const double d[3], double t0,
+             double t1) {
+    for (int k = 0; k < 3; ++k) {
+        const double lo = box.lo[k] - grow, hi = box.hi[k] + grow;
+        if (d[k] == 0.0) {
+            if (o[k] < lo || o[k] > hi)
+                return std::numeric_limits<double>::infinity();
+            continue;
+        }
+        double a = (lo - o[k]) / d[k], b = (hi - o[k]) / d[k];
+        if (a > b)
+            std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+    }
+    return t0 <= t1 ? t0 : std::numeric_limits<double>::infinity();
+}
+
+/// Spheres, single triangles and an icosphere of 5,120 triangles (a tree many levels deep),
+/// with an empty mesh among them, so that the leaves' object numbers are checked across an
+/// object without primitives.
+Scene mixed_scene(std::uint64_t seed) {
+    Scene s = testing::random_scene(seed);
+    s.objects.insert(s.objects.begin() + static_cast<std::ptrdiff_t>(s.objects.size() / 2),
+                     testing::mesh_object("empty", {}, {}));
+    s.objects.push_back(testing::icosphere_object(4, {1.0, -0.5, 0.5}, 3.0));
+    return s;
+}
+
+/// A float ray in a's frame from around the scene towards a point inside its bounds, some of its
+/// direction's components exactly zero (the walk's ±1e-18), its range [0, ∞) or shorter.
+FloatRay random_ray(const Impl& a, std::mt19937_64& rng) {
+    const Bounds3 b = a.scene->bounds();
+    const Vec3d lo = a.frame(b.lo), hi = a.frame(b.hi);
+    std::uniform_real_distribution<double> u(0.0, 1.0), around(-1.0, 1.0);
+    const Vec3d target{lo.x + u(rng) * (hi.x - lo.x), lo.y + u(rng) * (hi.y - lo.y),
+                       lo.z + u(rng) * (hi.z - lo.z)};
+    const Vec3d origin{around(rng), around(rng), around(rng)};
+    Vec3d d = target - origin;
+    if (rng() % 8 == 0)
+        d.x = 0.0;
+    if (rng() % 8 == 0)
+        d.y = 0.0;
+    FloatRay f;
+    f.org_x = static_cast<float>(origin.x);
+    f.org_y = static_cast<float>(origin.y);
+    f.org_z = static_cast<float>(origin.z);
+    f.dir_x = static_cast<float>(d.x);
+    f.dir_y = static_cast<float>(d.y);
+    f.dir_z = static_cast<float>(d.z);
+    f.tnear = 0.0f;
+    f.tfar = rng() % 2 ? std::numeric_limits<float>::infinity() : static_cast<float>(u(rng) * 1.5);
+    return f;
+}
+
+TEST(ExactBvh, OffersEveryPrimitiveWhoseBoxTheRayMeetsAndNoOther) {
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+        const Scene scene = mixed_scene(seed);
+        Impl a;
+        set_frame(a, scene);
+        ExactBvh bvh;
+        ASSERT_TRUE(bvh.build(a).ok());
+        std::vector<std::pair<Prim, FloatBox>> boxes;
+        for (std::uint32_t i = 0; i < scene.objects.size(); ++i)
+            for (std::uint32_t p = 0; p < scene.objects[i].primitive_count(); ++p)
+                boxes.push_back({{i, p}, primitive_box(a, scene.objects[i], p)});
+        std::mt19937_64 rng(seed);
+        int offered = 0;
+        for (int n = 0; n < 1000; ++n) {
+            const FloatRay f = random_ray(a, rng);
+            std::set<Prim> seen;
+            bvh.any(f, [&](std::uint32_t object, std::uint32_t prim, float&) {
+                EXPECT_TRUE(seen.insert({object, prim}).second) << "offered twice";
+                return true;
+            });
+            offered += static_cast<int>(seen.size());
+            const double o[3] = {f.org_x, f.org_y, f.org_z}, d[3] = {f.dir_x, f.dir_y, f.dir_z};
+            for (const auto& [prim, box] : boxes) {
+                // Met with room to spare (the box shrunk by 1e-5 of the unit frame): offered;
+                // missed with room to spare: not.
+                const bool met = entry(box, -1e-5, o, d, f.tnear, f.tfar) < 1e300;
+                const bool near = entry(box, 1e-5, o, d, f.tnear, f.tfar) < 1e300;
+                if (met) {
+                    EXPECT_TRUE(seen.count(prim))
+                        << "seed " << seed << " ray " << n << ": object " << prim.first
+                        << " primitive " << prim.second << " not offered";
+                }
+                if (!near) {
+                    EXPECT_FALSE(seen.count(prim))
+                        << "seed " << seed << " ray " << n << ": object " << prim.first
+                        << " primitive " << prim.second << " offered";
+                }
+            }
+        }
+        EXPECT_GT(offered, 500) << "the rays should meet boxes";
+    }
+}
+
+TEST(ExactBvh, ClosestWalkCullsOnlyBeyondTheTfarItsVisitorSet) {
+    const Scene scene = mixed_scene(11);
+    Impl a;
+    set_frame(a, scene);
+    ExactBvh bvh;
+    ASSERT_TRUE(bvh.build(a).ok());
+    std::mt19937_64 rng(5);
+    for (int n = 0; n < 1000; ++n) {
+        const FloatRay f = random_ray(a, rng);
+        const double o[3] = {f.org_x, f.org_y, f.org_z}, d[3] = {f.dir_x, f.dir_y, f.dir_z};
+        // The visitor lowers tfar to each primitive's box entry plus a little, as a hit there
+        // would; every primitive whose box the ray meets well before the final tfar must have
+        // been offered.
+        std::set<Prim> seen;
+        float tfar = f.tfar;
+        bvh.closest(f, [&](std::uint32_t object, std::uint32_t prim, float& t) {
+            seen.insert({object, prim});
+            const double e =
+                entry(primitive_box(a, scene.objects[object], prim), 0.0, o, d, f.tnear, t);
+            if (e < 1e300)
+                t = std::min(t, static_cast<float>(e + 0.05));
+            tfar = t;
+            return true;
+        });
+        for (std::uint32_t i = 0; i < scene.objects.size(); ++i)
+            for (std::uint32_t p = 0; p < scene.objects[i].primitive_count(); ++p) {
+                const FloatBox box = primitive_box(a, scene.objects[i], p);
+                if (entry(box, -1e-5, o, d, f.tnear, static_cast<double>(tfar) - 1e-5) < 1e300) {
+                    EXPECT_TRUE(seen.count({i, p}))
+                        << "ray " << n << ": object " << i << " primitive " << p << " culled";
+                }
+            }
+    }
+}
+
+TEST(ExactBvh, AvxAndSseBoxTestsAgree) {
+    if (!cpu_has_avx())
+        GTEST_SKIP() << "this processor has no AVX: only the SSE box test runs here";
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<float> c(-2.0f, 2.0f);
+    for (int n = 0; n < 20000; ++n) {
+        ExactBvh::Node node;
+        for (int k = 0; k < ExactBvh::kWidth; ++k)
+            for (int ax = 0; ax < 3; ++ax) {
+                if (rng() % 8 == 0) {  // an empty lane
+                    node.lo[ax][k] = std::numeric_limits<float>::infinity();
+                    node.hi[ax][k] = -std::numeric_limits<float>::infinity();
+                    continue;
+                }
+                const float x = c(rng), y = c(rng);
+                node.lo[ax][k] = std::min(x, y);
+                node.hi[ax][k] = std::max(x, y);
+            }
+        const float dz = rng() % 4 == 0 ? 0.0f : c(rng);
+        const ExactBvh::Lanes r = ExactBvh::lanes_of(c(rng), c(rng), c(rng), c(rng), c(rng), dz);
+        const float tfar = rng() % 2 ? std::numeric_limits<float>::infinity() : std::abs(c(rng));
+        alignas(32) float near_avx[8], near_sse[8];
+        const unsigned m_avx = ExactBvh::meets(node, r, 0.0f, tfar, near_avx, true);
+        const unsigned m_sse = ExactBvh::meets(node, r, 0.0f, tfar, near_sse, false);
+        ASSERT_EQ(m_avx, m_sse) << "case " << n;
+        for (int k = 0; k < 8; ++k)
+            ASSERT_TRUE(testing::same_bits(near_avx[k], near_sse[k])) << "case " << n;
+    }
+}
+
+TEST(ExactBvh, DegenerateTreesAreWalked) {
+    // No primitive at all: nothing offered. One: offered (the root is that leaf). A hundred copies
+    // of one triangle (every centre the same: split by index) beside a sphere off the ray: every
+    // copy offered, the sphere not.
+    for (int copies : {0, 1, 100}) {
+        std::vector<Vec3d> positions;
+        std::vector<std::array<std::uint32_t, 3>> triangles;
+        for (int i = 0; i < copies; ++i) {
+            const auto base = static_cast<std::uint32_t>(positions.size());
+            positions.insert(positions.end(), {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+            triangles.push_back({base, base + 1, base + 2});
+        }
+        Scene scene;
+        scene.objects.push_back(testing::mesh_object("m", positions, triangles));
+        if (copies > 1)
+            scene.objects.push_back(testing::sphere("s", {5, 5, 5}, 0.5, 0));
+        Impl a;
+        set_frame(a, scene);
+        ExactBvh bvh;
+        ASSERT_TRUE(bvh.build(a).ok());
+        // Down the z axis through the triangle, in Embree's frame.
+        const Vec3d o = a.frame({0.25, 0.25, 3.0});
+        FloatRay f;
+        f.org_x = static_cast<float>(o.x);
+        f.org_y = static_cast<float>(o.y);
+        f.org_z = static_cast<float>(o.z);
+        f.dir_z = -1.0f;
+        f.tnear = 0.0f;
+        f.tfar = std::numeric_limits<float>::infinity();
+        int triangles_offered = 0, spheres_offered = 0;
+        bvh.closest(f, [&](std::uint32_t object, std::uint32_t, float&) {
+            (object == 0 ? triangles_offered : spheres_offered) += 1;
+            return true;
+        });
+        EXPECT_EQ(triangles_offered, copies);
+        EXPECT_EQ(spheres_offered, 0);
+    }
+}
+
+}  // namespace
+}  // namespace raycastd::engine::embree
