@@ -12,9 +12,13 @@
 // conservative as Embree's ROBUST traversal keeps it (Ize, "Robust BVH Ray Traversal", JCGT 2(2),
 // 2013): each slab distance (b − o)·(1/d) is three roundings off the real one, a relative error
 // below 3u_f + O(u_f²), so a box is kept when tnear·(1 − 3ε) ≤ tfar·(1 + 3ε) (ε = 2u_f), with
-// room to spare. A direction component below 1e-18 in magnitude is replaced by ±1e-18 (its
-// reciprocal then finite, so no 0·∞ = NaN): the ray is then taken to run along the slab at a
-// slope far below the padding over any segment it has in the scene (|t| ≲ 10 in the frame).
+// room to spare (`ExactBvh.BoxTestNeverCullsABoxTheRayMeets` checks it against exact
+// arithmetic). A direction component below 1e-18 in magnitude is replaced by ±1e-18 (its
+// reciprocal then finite, so no 0·∞ = NaN). That tilts the ray by at most 1e-18 over a segment
+// of a few frame units, far below the padding; and where the component is zero and the origin
+// lies exactly on a face of a box, the tilted ray may leave the box at t = 0⁺ where the real one
+// runs along the face. Neither loses a hit: a box's faces lie a pad beyond its primitive, and
+// the double ray stays within a quarter pad of the float one (exact_ray_within_padding).
 //
 // The tree is built by binned SAH (Wald, "On fast Construction of SAH-based Bounding Volume
 // Hierarchies", RT 2007; 32 bins on the centres' longest axis), eight children a node (the child
@@ -37,14 +41,15 @@ class ExactBvh {
     static constexpr int kWidth = 8;
 
     /// The tree over every primitive of a's scene (its spheres, and every triangle of its
-    /// meshes); too_large where the scene has more primitives than a leaf's code can address
-    /// (2^31 − 1), and then no tree.
+    /// meshes); too_large, and no tree, where the scene has more primitives than a leaf's code
+    /// can address (2^31 − 1) or the memory runs out (the caller then scans linearly).
     Status build(const Impl& a);
 
     /// Walks the tree with `f` (a FloatRay: float_ray.h, which includes the header that
     /// includes this one), nearest box first, calling visit(object, prim, tfar) for each
-    /// primitive of each leaf whose box meets the ray's [tnear, tfar]; visit may lower tfar (the
-    /// walk then culls by it) and returns false to end the walk.
+    /// primitive whose box meets the ray's [tnear, tfar] (and for the only primitive of a tree
+    /// of one, whose root is that leaf: offered untested); visit may lower tfar (the walk then
+    /// culls by it) and returns false to end the walk.
     template <class FloatRay, class Visit>
     void closest(const FloatRay& f, Visit&& visit) const {
         walk(lanes_of(f.org_x, f.org_y, f.org_z, f.dir_x, f.dir_y, f.dir_z), f.tnear, f.tfar,
@@ -57,9 +62,9 @@ class ExactBvh {
              /*ordered=*/false, &call<std::remove_reference_t<Visit>>, &visit);
     }
 
-    /// Bytes the tree occupies (the node array's unused reserve is never touched: build).
+    /// Bytes the tree holds.
     std::size_t memory_bytes() const {
-        return nodes_.size() * sizeof(Node) + first_.capacity() * sizeof(std::uint32_t);
+        return nodes_.capacity() * sizeof(Node) + first_.capacity() * sizeof(std::uint32_t);
     }
 
     /// Eight children's boxes, lane by lane, and what each child is: an inner node's index, a
@@ -108,6 +113,7 @@ class ExactBvh {
         return (*static_cast<Visit*>(visit))(object, prim, tfar);
     }
     void walk(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit) const;
+    Status build_tree(const Impl& a);
     template <bool ordered>
     void walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn, void* visit) const;
 
