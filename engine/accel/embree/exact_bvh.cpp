@@ -368,7 +368,7 @@ Status ExactBvh::build_tree(const Impl& a) {
     // Every inner node has two children or more, so there are fewer than there are items: room
     // for that many, so that the build never reallocates (a vector growing by doubling had held
     // up to twice the tree, and copied it each time), then one copy of the nodes it used: the
-    // reserve is 224 B a primitive, about four times what the tree takes, and whether its
+    // reserve is 224 B a primitive, three to four times what the tree takes, and whether its
     // untouched pages cost anything depends on the allocator and the system's overcommit policy.
     nodes_.reserve(items.size());
     ExactBvhBuilder builder{*this};
