@@ -55,6 +55,26 @@ GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh
 
 }  // namespace
 
+void Impl::set_frame(const Bounds3& b) {
+    if (b.empty())
+        return;
+    // Padding of the exact BVH's boxes: the float ray differs from the double one by the
+    // rounding of its origin (inside the bounds, relative to their centre, so ≤ u_f·diagonal)
+    // and of its unit direction (≤ u_f per component, times at most the diagonal along the
+    // segment); boxes round outward. 8·u_f·(2·diagonal) covers all three with room to spare.
+    center = b.center();
+    float_scale = 2.0 * scaled_length(b.diagonal()) + 1e-300;
+    pad = 8.0 * kFloatUnitRoundoff * float_scale + 1e-300;
+    unit = power_to_unit(float_scale);
+    padded_bounds = b;
+    padded_bounds.lo -= Vec3d{pad, pad, pad} * 2.0;
+    padded_bounds.hi += Vec3d{pad, pad, pad} * 2.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+        padded_bounds_rel.lo[k] = next_down(padded_bounds.lo[k] - center[k]);
+        padded_bounds_rel.hi[k] = next_up(padded_bounds.hi[k] - center[k]);
+    }
+}
+
 void Impl::build_exact() const {
     exact_status = exact.build(*this);  // written once, under call_once, before any query reads it
     exact_ready = exact_status.ok();    // counted in memory_bytes once it exists
@@ -654,24 +674,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
     impl->scene = &scene;
     impl->geoms.reserve(scene.objects.size());
 
-    // Padding of the exact BVH's boxes: the float ray differs from the double one by the
-    // rounding of its origin (inside the bounds, relative to their centre, so ≤ u_f·diagonal)
-    // and of its unit direction (≤ u_f per component, times at most the diagonal along the
-    // segment); boxes round outward. 8·u_f·(2·diagonal) covers all three with room to spare.
-    const Bounds3 b = scene.bounds();
-    if (!b.empty()) {
-        impl->center = b.center();
-        impl->float_scale = 2.0 * scaled_length(b.diagonal()) + 1e-300;
-        impl->pad = 8.0 * kFloatUnitRoundoff * impl->float_scale + 1e-300;
-        impl->unit = power_to_unit(impl->float_scale);
-        impl->padded_bounds = b;
-        impl->padded_bounds.lo -= Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
-        impl->padded_bounds.hi += Vec3d{impl->pad, impl->pad, impl->pad} * 2.0;
-        for (std::size_t k = 0; k < 3; ++k) {
-            impl->padded_bounds_rel.lo[k] = next_down(impl->padded_bounds.lo[k] - impl->center[k]);
-            impl->padded_bounds_rel.hi[k] = next_up(impl->padded_bounds.hi[k] - impl->center[k]);
-        }
-    }
+    impl->set_frame(scene.bounds());
 
     embree::take_error("");  // start clean on this thread
     impl->native.reset(rtcNewScene(device));

@@ -352,17 +352,16 @@ Status ExactBvh::build_tree(const Impl& a) {
         for (std::uint32_t p = 0; p < prims; ++p) {
             Item it;
             it.box = primitive_box(a, o, p);
-            for (int k = 0; k < 3; ++k)
+            for (int k = 0; k < 3; ++k) {
+                if (!(it.box.lo[k] <= it.box.hi[k]))  // a NaN (the scene's checks let none through)
+                    return Status::error(Code::internal, "a primitive's box is not a box");
                 it.centre[k] = 0.5f * it.box.lo[k] + 0.5f * it.box.hi[k];
+            }
             it.index = static_cast<std::uint32_t>(items.size());
             items.push_back(it);
         }
     }
     first_.push_back(static_cast<std::uint32_t>(items.size()));
-    for (const Item& it : items)
-        for (int k = 0; k < 3; ++k)
-            if (!(it.box.lo[k] <= it.box.hi[k]))  // a NaN (the scene's checks let none through)
-                return Status::error(Code::internal, "a primitive's box is not a box");
     if (items.empty())
         return Status{};
     // Every inner node has two children or more, so there are fewer than there are items: room

@@ -17,7 +17,6 @@
 #include "engine/accel/embree/float_ray.h"
 #include "engine/accel/embree/impl.h"
 #include "engine/geometry/target_clones.h"
-#include "engine/math/float_bounds.h"
 #include "engine/testing/bits.h"
 #include "engine/testing/scenes.h"
 
@@ -26,16 +25,10 @@ namespace {
 
 using Prim = std::pair<std::uint32_t, std::uint32_t>;  // object, primitive
 
-/// The frame EmbreeAccel::build sets up for `scene` (embree_accel.cpp).
+/// The accelerator's frame for `scene`, as EmbreeAccel::build sets it up.
 void set_frame(Impl& a, const Scene& scene) {
     a.scene = &scene;
-    const Bounds3 b = scene.bounds();
-    if (b.empty())
-        return;
-    a.center = b.center();
-    a.float_scale = 2.0 * scaled_length(b.diagonal()) + 1e-300;
-    a.pad = 8.0 * kFloatUnitRoundoff * a.float_scale + 1e-300;
-    a.unit = power_to_unit(a.float_scale);
+    a.set_frame(scene.bounds());
 }
 
 /// The entry of the segment [t0, t1] of the line o + t·d into `box` grown by `grow` on every

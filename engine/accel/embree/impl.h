@@ -65,6 +65,9 @@ struct Impl {
     /// The objects that are triangles or meshes, in order (refined's scan of few triangles).
     std::vector<std::uint32_t> triangle_objects;
 
+    /// The frame, the padding and the padded bounds for a scene whose bounds are `b` (nothing
+    /// for empty bounds): what EmbreeAccel::build sets up before any BVH.
+    void set_frame(const Bounds3& b);
     void build_exact() const;
     void build_fast() const;
     /// The scene fast's closest and any trace: the non-robust one, or `native` if it could not
