@@ -96,6 +96,10 @@ TEST(Stress, FarOrigins) {
     check(far_origins(options()));
 }
 
+TEST(Stress, ManyObjectsWithEmptyMeshes) {
+    check(many_objects(options()));
+}
+
 TEST(Stress, ClosedModels) {
     const auto cases = closed_models(options(), RAYCASTD_SHARED_DIR);
     if (cases.empty())

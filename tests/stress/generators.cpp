@@ -588,6 +588,43 @@ std::vector<StressCase> far_origins(const GenOptions& g) {
     return out;
 }
 
+std::vector<StressCase> many_objects(const GenOptions& g) {
+    Rng rng(g.seed * 1000 + 14);
+    Scene s = empty_scene();
+    s.objects.push_back(engine::testing::mesh_object("empty first", {}, {}));
+    std::vector<Vec3d> centres;
+    for (int i = 0; i < 3; ++i) {
+        centres.push_back({3.0 * i - 3.0, uniform(rng, -1, 1), uniform(rng, -1, 1)});
+        s.objects.push_back(engine::testing::icosphere_object(2, centres.back(), 1.0));
+        s.objects.push_back(engine::testing::mesh_object("empty", {}, {}));
+    }
+    for (int i = 0; i < 20; ++i) {
+        s.objects.push_back(sphere({uniform(rng, -5, 5), uniform(rng, 2, 4), uniform(rng, -2, 2)},
+                                   uniform(rng, 0.1, 0.5)));
+        s.objects.push_back(
+            triangle({uniform(rng, -5, 5), uniform(rng, -4, -2), uniform(rng, -2, 2)},
+                     {uniform(rng, -5, 5), uniform(rng, -4, -2), uniform(rng, -2, 2)},
+                     {uniform(rng, -5, 5), uniform(rng, -4, -2), uniform(rng, -2, 2)}));
+    }
+    s.objects.push_back(engine::testing::mesh_object("empty last", {}, {}));
+    std::vector<bool> closed(s.objects.size(), false);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 3; ++i) {
+        const std::size_t object = 1 + 2 * static_cast<std::size_t>(i);
+        closed[object] = true;
+        const Vec3d c = centres[static_cast<std::size_t>(i)];
+        auto edges = edge_and_vertex_rays(rng, *s.objects[object].mesh, g.rays / 4, 3.0,
+                                          [&](const Vec3d& p) { return engine::normalize(p - c); });
+        rays.insert(rays.end(), edges.begin(), edges.end());
+    }
+    // The rest from around the scene at random points of its spheres' and triangles' extent.
+    while (rays.size() < static_cast<std::size_t>(g.rays)) {
+        const Vec3d o{uniform(rng, -8, 8), uniform(rng, -8, 8), uniform(rng, -8, 8)};
+        rays.push_back(ray_to(o, {uniform(rng, -5, 5), uniform(rng, -4, 4), uniform(rng, -2, 2)}));
+    }
+    return embree_only("many objects", std::move(s), std::move(rays), std::move(closed));
+}
+
 std::vector<StressCase> all_suites(const GenOptions& g, const std::string& shared_dir) {
     std::vector<StressCase> out;
     auto add = [&](std::vector<StressCase> v) {

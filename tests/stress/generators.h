@@ -60,6 +60,13 @@ std::vector<StressCase> far_origins(const GenOptions& g);
 /// Every suite above, in one list.
 std::vector<StressCase> all_suites(const GenOptions& g, const std::string& shared_dir);
 
+/// Three closed icospheres (level 2), 20 spheres and 20 single triangles, with meshes of no
+/// triangles first, between the icospheres and last: exact's BVH names each primitive by its
+/// index among the scene's and finds the object from it (engine/accel/embree/exact_bvh.h),
+/// which a wrong object or primitive would show. Rays at the icospheres' edges and vertices,
+/// and from around the scene. Not in all_suites (the accuracy report's suites).
+std::vector<StressCase> many_objects(const GenOptions& g);
+
 /// A scene with one default material and no objects.
 engine::Scene empty_scene();
 /// A sphere object.
