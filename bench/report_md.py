@@ -542,12 +542,13 @@ ISSUE_17_NOTE = (
     "that read alone 12%, a cache miss a candidate), ROBUST traversal (10-15%) and the clipped, "
     "normalised ray set-up (13% of camera rays). `exact` decides every candidate in double; "
     "since 2026-12-06 its BVH is our own (eight-wide, a leaf's primitive in its parent's child "
-    "code) instead of Embree's user geometry: 20-30 B a triangle less, and its speed within "
-    "about 10% either way of Embree's in paired runs (docs/numerics.md). "
+    "code) instead of Embree's user geometry, with its bottom nodes full since that evening: "
+    "60-70 B a triangle less in all, and its speed within about 10% either way of Embree's in "
+    "paired runs (docs/numerics.md). "
     "The memory row is the resident growth of a process of its own (`bench_intersect "
     "--memory-probe W`) from before the scene is made to after one `refined` and one `exact` "
     "query: the scene's vertices and indices (~24 B a triangle), the native BVH over the "
-    "widened triangles with their own float vertices (~138 B), and exact's BVH (61-77 B); "
+    "widened triangles with their own float vertices (~138 B), and exact's BVH (37-38 B); "
     "`fast`'s BVH, built on a first `fast` query, is not in it."
 )
 

@@ -64,10 +64,9 @@ unsigned ExactBvh::meets(const Node& n, const Lanes& r, float tnear, float tfar,
     return avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
 }
 
-template <bool ordered>
+template <bool ordered, bool avx>
 void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn,
                              void* visit) const {
-    const bool avx = cpu_has_avx();
     Entry stack[kStack];
     int sp = 0;
     std::uint32_t code = root_;
@@ -76,7 +75,8 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
         while (!(code & kLeafBit)) {
             const Node& n = nodes_[code];
             alignas(32) float near[kWidth];
-            unsigned mask = meets(n, r, tnear, tfar, near, avx);
+            unsigned mask =
+                avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
             if (!mask) {
                 code = kNoChild;
                 break;
@@ -132,12 +132,33 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
     }
 }
 
+// The walk compiled twice, for AVX and without, each with its box test inlined: `flatten` inlines
+// walk_in_order and what it calls into the entry point, whose target then admits meets_avx. (As
+// a call, the box test, its ray loaded from memory each time, had been 30% of an exact query's
+// time on A's camera rays: perf, 2026-12-06.)
+[[gnu::target("avx"), gnu::flatten]] void ExactBvh::walk_avx(const Lanes& r, float tnear,
+                                                             float tfar, bool ordered, VisitFn fn,
+                                                             void* visit) const {
+    if (ordered)
+        walk_in_order<true, true>(r, tnear, tfar, fn, visit);
+    else
+        walk_in_order<false, true>(r, tnear, tfar, fn, visit);
+}
+
+[[gnu::flatten]] void ExactBvh::walk_sse(const Lanes& r, float tnear, float tfar, bool ordered,
+                                         VisitFn fn, void* visit) const {
+    if (ordered)
+        walk_in_order<true, false>(r, tnear, tfar, fn, visit);
+    else
+        walk_in_order<false, false>(r, tnear, tfar, fn, visit);
+}
+
 void ExactBvh::walk(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn,
                     void* visit) const {
-    if (ordered)
-        walk_in_order<true>(r, tnear, tfar, fn, visit);
+    if (cpu_has_avx())
+        walk_avx(r, tnear, tfar, ordered, fn, visit);
     else
-        walk_in_order<false>(r, tnear, tfar, fn, visit);
+        walk_sse(r, tnear, tfar, ordered, fn, visit);
 }
 
 ExactBvh::Lanes ExactBvh::lanes_of(float ox, float oy, float oz, float dx, float dy, float dz) {
@@ -186,10 +207,16 @@ float half_area(const FloatBox& b) {
     return x < 0.0f ? 0.0f : x * y + y * z + z * x;
 }
 
+/// The most items split() cuts after a multiple of kWidth (exact_bvh.h: the nodes at the bottom
+/// full). One level more (cuts after multiples of kWidth² up to kWidth³ items) left the nodes
+/// above them as sparse as before and took A's tree from 38.5 to 39.9 B a triangle.
+constexpr std::ptrdiff_t kFew = ExactBvh::kWidth * ExactBvh::kWidth;
+
 /// Splits items[begin, end) (at least two) in two, in place, and returns where the second part
 /// starts (strictly inside): binned SAH over the centres on their longest axis (exact_bvh.h), or
 /// with `median` the centres' median on that axis; the middle by index where the centres all
-/// fall in one bin.
+/// fall in one bin. A range of at most kFew items (and more than kWidth) is split after a multiple
+/// of kWidth items, so that the nodes at the bottom of the tree take kWidth primitives each.
 Item* split(Item* begin, Item* end, bool median) {
     FloatBox c = kEmpty;
     for (const Item* i = begin; i != end; ++i)
@@ -202,6 +229,38 @@ Item* split(Item* begin, Item* end, bool median) {
         if (c.hi[k] - c.lo[k] > c.hi[axis] - c.lo[axis])
             axis = k;
     const float extent = c.hi[axis] - c.lo[axis];
+    const std::ptrdiff_t items_n = end - begin;
+    if (items_n <= kFew && items_n > ExactBvh::kWidth) {
+        if (extent > 0.0f)
+            std::sort(begin, end, [axis](const Item& x, const Item& y) {
+                return x.centre[axis] < y.centre[axis];
+            });
+        // The boxes' union from the right, at each multiple of kWidth from the left.
+        std::array<float, kFew / ExactBvh::kWidth> right_area{};
+        FloatBox acc = kEmpty;
+        for (std::ptrdiff_t i = items_n - 1; i >= ExactBvh::kWidth; --i) {
+            grow(acc, begin[i].box);
+            if (i % ExactBvh::kWidth == 0)
+                right_area[i / ExactBvh::kWidth] = half_area(acc);
+        }
+        acc = kEmpty;
+        std::ptrdiff_t best = ExactBvh::kWidth;
+        float best_cost = kInf;
+        for (std::ptrdiff_t i = 0; i + 1 < items_n; ++i) {
+            grow(acc, begin[i].box);
+            const std::ptrdiff_t left = i + 1;
+            if (left % ExactBvh::kWidth != 0)
+                continue;
+            const float cost =
+                half_area(acc) * static_cast<float>(left) +
+                right_area[left / ExactBvh::kWidth] * static_cast<float>(items_n - left);
+            if (cost < best_cost) {
+                best_cost = cost;
+                best = left;
+            }
+        }
+        return begin + best;
+    }
     Item* const mid = begin + (end - begin) / 2;
     if (!(extent > 0.0f))  // every centre the same: any split is as good
         return mid;
@@ -269,37 +328,49 @@ struct ExactBvhBuilder {
             return ExactBvh::kLeafBit | begin->index;
         const bool median = depth >= ExactBvh::kSahDepth;
         // Up to kWidth children: the range split in two, then again and again the child with
-        // the largest surface area that is not a leaf; a child whose primitives all fit in the
-        // node's free lanes becomes that many leaves at once, so that the lowest nodes fill more
-        // of their lanes (split by split, the nodes had held 3.4 children on average on A, 93 B
-        // a triangle; now 3.9, 77 B).
+        // the largest surface area among those of more than kWidth primitives; once none is
+        // left, children whose primitives fit in the node's free lanes become that many leaves,
+        // the smallest first. What remains of at most kWidth primitives becomes a node of that
+        // many leaves below, and split() cuts ranges of up to kWidth² primitives after multiples
+        // of kWidth, so that those nodes are full. (Splitting the largest child down to single
+        // primitives had left most nodes at the bottom with two to four leaves: 3.9 children a
+        // node on A, 77 B a triangle.)
         Item* bounds[ExactBvh::kWidth + 1] = {begin, end};
         FloatBox box[ExactBvh::kWidth] = {box_of(begin, end)};
         int children = 1;
+        const auto size_of = [&](int k) { return static_cast<int>(bounds[k + 1] - bounds[k]); };
         while (children < ExactBvh::kWidth) {
             int pick = -1;
             for (int k = 0; k < children; ++k)
-                if (bounds[k + 1] - bounds[k] > 1 &&
+                if (size_of(k) > ExactBvh::kWidth &&
                     (pick < 0 || half_area(box[k]) > half_area(box[pick])))
                     pick = k;
-            if (pick < 0)
-                break;
-            const int size = static_cast<int>(bounds[pick + 1] - bounds[pick]);
-            const int add = children - 1 + size <= ExactBvh::kWidth ? size - 1 : 1;
-            for (int k = children; k > pick; --k) {
-                bounds[k + add] = bounds[k];
-                box[k + add - 1] = box[k - 1];
-            }
-            if (add == size - 1) {  // every primitive a leaf of its own
-                for (int k = 0; k < size; ++k) {
-                    bounds[pick + k] = bounds[pick] + k;
-                    box[pick + k] = bounds[pick][k].box;
+            if (pick >= 0) {  // split in two
+                for (int k = children; k > pick; --k) {
+                    bounds[k + 1] = bounds[k];
+                    box[k] = box[k - 1];
                 }
-            } else {
                 Item* const mid = split(bounds[pick], bounds[pick + 2], median);
                 bounds[pick + 1] = mid;
                 box[pick] = box_of(bounds[pick], mid);
                 box[pick + 1] = box_of(mid, bounds[pick + 2]);
+                ++children;
+                continue;
+            }
+            for (int k = 0; k < children; ++k)
+                if (size_of(k) > 1 && children - 1 + size_of(k) <= ExactBvh::kWidth &&
+                    (pick < 0 || size_of(k) < size_of(pick)))
+                    pick = k;
+            if (pick < 0)
+                break;
+            const int size = size_of(pick), add = size - 1;  // every primitive a leaf of its own
+            for (int k = children; k > pick; --k) {
+                bounds[k + add] = bounds[k];
+                box[k + add - 1] = box[k - 1];
+            }
+            for (int k = 0; k < size; ++k) {
+                bounds[pick + k] = bounds[pick] + k;
+                box[pick + k] = bounds[pick][k].box;
             }
             children += add;
         }

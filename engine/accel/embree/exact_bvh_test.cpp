@@ -331,5 +331,25 @@ TEST(ExactBvh, DegenerateTreesAreWalked) {
     }
 }
 
+TEST(ExactBvh, NodesAtTheBottomArePacked) {
+    // A node holds kWidth children, and a leaf is a child of its own (no leaf nodes): a tree of
+    // n primitives has at least n / (kWidth − 1) nodes. The build cuts ranges of up to kWidth²
+    // primitives into groups of kWidth (exact_bvh.cpp, split), so that the nodes at the bottom
+    // are full; splitting the largest child down to single primitives, as it did until
+    // 2026-12-06, had left them with two to four leaves, and icospheres at about three nodes
+    // in eight primitives.
+    for (int level : {3, 4, 5}) {
+        Scene scene;
+        scene.objects.push_back(testing::icosphere_object(level, {1.0, -0.5, 0.5}, 3.0));
+        Impl a;
+        set_frame(a, scene);
+        ExactBvh bvh;
+        ASSERT_TRUE(bvh.build(a).ok());
+        const double prims = static_cast<double>(scene.objects[0].primitive_count());
+        const double nodes = static_cast<double>(bvh.memory_bytes()) / sizeof(ExactBvh::Node);
+        EXPECT_LT(nodes, prims / 5.0) << "level " << level << ": " << nodes << " nodes";
+    }
+}
+
 }  // namespace
 }  // namespace raycastd::engine::embree
