@@ -548,7 +548,9 @@ ISSUE_17_NOTE = (
     "The memory row is the resident growth of a process of its own (`bench_intersect "
     "--memory-probe W`) from before the scene is made to after one `refined` and one `exact` "
     "query: the scene's vertices and indices (~24 B a triangle), the native BVH over the "
-    "widened triangles with their own float vertices (~138 B), and exact's BVH (37-38 B); "
+    "widened triangles (~66 B; the float vertices it was built from are given back after the "
+    "build, since its leaves hold copies: embree/build_buffer.h), exact's BVH (37-38 B), and "
+    "heap the build freed that the allocator keeps (~8 B on B; docs/numerics.md); "
     "`fast`'s BVH, built on a first `fast` query, is not in it."
 )
 

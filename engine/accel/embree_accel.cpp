@@ -28,16 +28,22 @@ constexpr std::size_t kBytesPerUserPrimitive = 64;
 // ---------------------------------------------------------------------------------------------
 // The builds.
 
-GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a) {
+/// fast's float triangles as they are, their vertices and indices in two BuildBuffers appended
+/// to `buffers` (released once the BVH is built: embree/build_buffer.h); null where the system
+/// has no memory for them.
+GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
+                                      std::vector<BuildBuffer>& buffers) {
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0,
-                                                          RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                          mesh.positions.size()));
-    auto* idx = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                3 * sizeof(unsigned), mesh.triangles.size()));
+    buffers.emplace_back(3 * mesh.positions.size() * sizeof(float));
+    auto* v = static_cast<float*>(buffers.back().data());
+    buffers.emplace_back(3 * mesh.triangles.size() * sizeof(unsigned));
+    auto* idx = static_cast<unsigned*>(buffers.back().data());
     if (!v || !idx)
-        return g;  // the error callback has recorded why; commit reports it
+        return nullptr;
+    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
+                               3 * sizeof(float), mesh.positions.size());
+    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,
+                               3 * sizeof(unsigned), mesh.triangles.size());
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         const Vec3d q = a.frame(mesh.positions[i]);
         // to_float, should a coordinate exceed float's range all the same.
@@ -97,12 +103,24 @@ void Impl::build_fast() const {
             rtcAttachGeometryByID(s.get(), rtcGetGeometry(native.get(), i), i);
             continue;
         }
-        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, *this);
+        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, *this, fast_buffers);
+        if (!g) {
+            fast_status =
+                Status::error(Code::too_large, "out of memory for the fast BVH's triangles");
+            fast_buffers.clear();
+            return;  // fast's queries trace native
+        }
         rtcCommitGeometry(g.get());
         rtcAttachGeometryByID(s.get(), g.get(), i);
     }
     rtcCommitScene(s.get());
     fast_status = take_error("building the fast BVH");
+    if (fast_status.ok() && kReleaseBuiltBuffers) {
+        // A BVH of Triangle4 leaves (neither ROBUST nor COMPACT), which hold copies of the
+        // vertices as the Triangle4v leaves of native do (embree/build_buffer.h).
+        for (BuildBuffer& b : fast_buffers)
+            b.release();
+    }
     fast = std::move(s);  // written once, under call_once, before any query reads it
     fast_ready = fast_status.ok();
 }
@@ -695,7 +713,10 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
         } else {
             bool capped = false;
             g = embree::make_fat_triangle_geometry(device, *o.mesh, *impl, widen_by,
-                                                   &impl->geoms.back(), capped);
+                                                   &impl->geoms.back(), capped,
+                                                   impl->native_buffers);
+            if (!g)
+                return Status::error(Code::too_large, "out of memory for the BVH's triangles");
             impl->certified_misses = impl->certified_misses && !capped;
             impl->triangles += o.mesh->size();
             impl->triangle_objects.push_back(i);
@@ -721,6 +742,11 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
         return cancel.status();
     if (!st.ok())
         return st;
+    if (embree::kReleaseBuiltBuffers) {
+        // Embree read them while it built; its leaves hold copies (embree/build_buffer.h).
+        for (embree::BuildBuffer& b : impl->native_buffers)
+            b.release();
+    }
     return std::unique_ptr<EmbreeAccel>(new EmbreeAccel(std::move(impl)));
 }
 
@@ -802,14 +828,18 @@ FloatFrame EmbreeAccel::float_frame() const {
 
 std::size_t EmbreeAccel::memory_bytes() const {
     const embree::Impl& a = *impl_;
-    std::size_t bytes = a.triangles * (embree::kBytesPerTriangle + 12 * sizeof(float)) +
-                        a.spheres * embree::kBytesPerUserPrimitive;
+    std::size_t bytes =
+        a.triangles * embree::kBytesPerTriangle + a.spheres * embree::kBytesPerUserPrimitive;
+    for (const embree::BuildBuffer& b : a.native_buffers)  // none once released
+        bytes += b.resident_bytes();
     if (a.exact_ready)
         bytes += a.exact.memory_bytes();
-    if (a.fast_ready)  // its own BVH and float triangles (vertices shared there: ~half a vertex
-                       // a triangle, and the index triple)
-        bytes += a.triangles * (embree::kBytesPerTriangle + 6 + 3 * sizeof(unsigned)) +
-                 a.spheres * embree::kBytesPerUserPrimitive;
+    if (a.fast_ready) {  // its own BVH (over native's sphere geometries, shared)
+        bytes +=
+            a.triangles * embree::kBytesPerTriangle + a.spheres * embree::kBytesPerUserPrimitive;
+        for (const embree::BuildBuffer& b : a.fast_buffers)  // none once released
+            bytes += b.resident_bytes();
+    }
     return bytes;
 }
 

@@ -26,7 +26,8 @@
 // → Status, RAII handles), impl.h (the BVHs, RayContext, NativeHit), float_ray (clipping, the
 // float ray set-ups, the one lane fill), user_geometry (the double-precision callbacks),
 // exact_bvh (exact's tree and its walk), fat_triangles (refined's widened triangles and their
-// hit filter), packets
+// hit filter), build_buffer (the triangles' float buffers, given back once Embree has built from
+// them), packets
 // (16-wide traversal, the one coherence test), point_query (closest points through
 // rtcPointQuery). embree_accel.cpp holds the builds and, for each query, one function per
 // precision.

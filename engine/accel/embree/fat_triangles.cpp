@@ -128,15 +128,21 @@ void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped) {
 }
 
 GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
-                                          double widen_by, GeomData* data, bool& capped) {
+                                          double widen_by, GeomData* data, bool& capped,
+                                          std::vector<BuildBuffer>& buffers) {
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
     const std::size_t n = mesh.size();
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-        g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
-    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
+    // In buffers of ours, which EmbreeAccel::build releases once the BVH is built (build_buffer.h).
+    buffers.emplace_back(9 * n * sizeof(float));
+    auto* v = static_cast<float*>(buffers.back().data());
+    buffers.emplace_back(3 * n * sizeof(unsigned));
+    auto* idx = static_cast<unsigned*>(buffers.back().data());
     if (!v || !idx)
-        return g;  // the error callback has recorded why; commit reports it
+        return nullptr;  // no memory (the caller says so)
+    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
+                               3 * sizeof(float), 3 * n);
+    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,
+                               3 * sizeof(unsigned), n);
     for (std::size_t i = 0; i < n; ++i) {
         const Triangle t = mesh.triangle(i);
         // Widened in Embree's frame (Impl::frame, an exact scaling): its cross products are of

@@ -26,8 +26,11 @@
 // (Impl::certified_misses = false) and refined confirms its float misses on the exact BVH as
 // before. Degenerate triangles (never hit in double) are left as they are.
 
+#include <vector>
+
 #include <embree3/rtcore.h>
 
+#include "engine/accel/embree/build_buffer.h"
 #include "engine/accel/embree/device.h"
 #include "engine/scene/scene.h"
 
@@ -81,8 +84,11 @@ bool outside_range_well_inside(const Triangle& tri, const LineCrossing& outside,
 /// The float triangle geometry of `mesh` (in a's frame: Impl::frame) with each triangle
 /// widened by `widen` in its plane (three vertices of its own, so neighbours may overlap), the
 /// hit filters below attached, user data `data`. `capped` is set when a sliver could not be
-/// widened fully (see above). Not yet committed.
+/// widened fully (see above). Its vertices and indices are in two BuildBuffers appended to
+/// `buffers`, which must outlive the geometry (build_buffer.h); null where the system has no memory
+/// for them. Not yet committed.
 GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
-                                          double widen, GeomData* data, bool& capped);
+                                          double widen, GeomData* data, bool& capped,
+                                          std::vector<BuildBuffer>& buffers);
 
 }  // namespace raycastd::engine::embree

@@ -13,6 +13,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "engine/accel/embree/build_buffer.h"
 #include "engine/accel/embree/device.h"
 #include "engine/accel/embree/exact_bvh.h"
 #include "engine/accel/embree/user_geometry.h"
@@ -24,9 +25,14 @@ namespace raycastd::engine::embree {
 /// The BVHs over one scene and the frame they share.
 struct Impl {
     const Scene* scene = nullptr;
+    /// The vertices and indices of native's triangles, released once it is built (and so
+    /// before any query), freed after it (declared before it: build_buffer.h).
+    std::vector<BuildBuffer> native_buffers;
     /// Fat float triangles (fat_triangles.h) + sphere user geometry, ROBUST: refined, fast's
     /// all, and the point queries' culling.
     SceneHandle native;
+    /// fast's vertices and indices, as native_buffers are native's (declared before `fast`).
+    mutable std::vector<BuildBuffer> fast_buffers;
     /// The float triangles as they are, and the same spheres, in a BVH without
     /// RTC_SCENE_FLAG_ROBUST, for fast's closest and any (see build_fast); built by the first
     /// such query.
