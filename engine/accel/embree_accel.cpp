@@ -28,18 +28,15 @@ constexpr std::size_t kBytesPerUserPrimitive = 64;
 // ---------------------------------------------------------------------------------------------
 // The builds.
 
-/// fast's float triangles as they are, their vertices and indices in two BuildBuffers appended
-/// to `buffers` (released once the BVH is built: embree/build_buffer.h); null where the system
-/// has no memory for them.
+/// fast's float triangles as they are, their vertices and indices carved from `buffer`
+/// (released once the BVH is built: embree/build_buffer.h); null where it has no room.
 GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
-                                      std::vector<BuildBuffer>& buffers) {
-    GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
-    buffers.emplace_back(3 * mesh.positions.size() * sizeof(float));
-    auto* v = static_cast<float*>(buffers.back().data());
-    buffers.emplace_back(3 * mesh.triangles.size() * sizeof(unsigned));
-    auto* idx = static_cast<unsigned*>(buffers.back().data());
+                                      BuildBuffer& buffer) {
+    auto* v = static_cast<float*>(buffer.carve(3 * mesh.positions.size() * sizeof(float)));
+    auto* idx = static_cast<unsigned*>(buffer.carve(3 * mesh.triangles.size() * sizeof(unsigned)));
     if (!v || !idx)
         return nullptr;
+    GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
     rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
                                3 * sizeof(float), mesh.positions.size());
     rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,
@@ -97,17 +94,24 @@ void Impl::build_fast() const {
     RTCDevice device = shared_device();
     take_error("");
     SceneHandle s(rtcNewScene(device));
+    std::size_t bytes = 0;  // every mesh's buffers in one mapping (embree/build_buffer.h)
+    for (const Object& o : scene->objects)
+        if (o.kind != ObjectKind::sphere)
+            bytes += BuildBuffer::carved(3 * o.mesh->positions.size() * sizeof(float)) +
+                     BuildBuffer::carved(3 * o.mesh->triangles.size() * sizeof(unsigned));
+    fast_buffer = BuildBuffer(bytes);
     for (std::uint32_t i = 0; i < scene->objects.size(); ++i) {
         const Object& o = scene->objects[i];
         if (o.kind == ObjectKind::sphere) {
             rtcAttachGeometryByID(s.get(), rtcGetGeometry(native.get(), i), i);
             continue;
         }
-        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, *this, fast_buffers);
+        const GeometryHandle g = make_triangle_geometry(device, *o.mesh, *this, fast_buffer);
         if (!g) {
             fast_status =
                 Status::error(Code::too_large, "out of memory for the fast BVH's triangles");
-            fast_buffers.clear();
+            s.reset();  // the scene, and the geometries sharing the buffer, before the buffer
+            fast_buffer = BuildBuffer();
             return;  // fast's queries trace native
         }
         rtcCommitGeometry(g.get());
@@ -115,11 +119,10 @@ void Impl::build_fast() const {
     }
     rtcCommitScene(s.get());
     fast_status = take_error("building the fast BVH");
-    if (fast_status.ok() && kReleaseBuiltBuffers) {
+    if (fast_status.ok() && can_release_built_buffers(device)) {
         // A BVH of Triangle4 leaves (neither ROBUST nor COMPACT), which hold copies of the
         // vertices as the Triangle4v leaves of native do (embree/build_buffer.h).
-        for (BuildBuffer& b : fast_buffers)
-            b.release();
+        fast_buffer.release();
     }
     fast = std::move(s);  // written once, under call_once, before any query reads it
     fast_ready = fast_status.ok();
@@ -703,6 +706,11 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
     // unwidened triangles (build_fast).
     rtcSetSceneFlags(impl->native.get(), RTC_SCENE_FLAG_ROBUST);
     const double widen_by = embree::kWidenPads * impl->pad;
+    std::size_t bytes = 0;  // every mesh's buffers in one mapping (embree/build_buffer.h)
+    for (const Object& o : scene.objects)
+        if (o.kind != ObjectKind::sphere)
+            bytes += embree::fat_triangle_bytes(o.mesh->size());
+    impl->native_buffer = embree::BuildBuffer(bytes);
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         impl->geoms.push_back(embree::GeomData{impl.get(), i});
@@ -712,9 +720,8 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
             ++impl->spheres;
         } else {
             bool capped = false;
-            g = embree::make_fat_triangle_geometry(device, *o.mesh, *impl, widen_by,
-                                                   &impl->geoms.back(), capped,
-                                                   impl->native_buffers);
+            g = embree::make_fat_triangle_geometry(
+                device, *o.mesh, *impl, widen_by, &impl->geoms.back(), capped, impl->native_buffer);
             if (!g)
                 return Status::error(Code::too_large, "out of memory for the BVH's triangles");
             impl->certified_misses = impl->certified_misses && !capped;
@@ -742,11 +749,8 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
         return cancel.status();
     if (!st.ok())
         return st;
-    if (embree::kReleaseBuiltBuffers) {
-        // Embree read them while it built; its leaves hold copies (embree/build_buffer.h).
-        for (embree::BuildBuffer& b : impl->native_buffers)
-            b.release();
-    }
+    if (embree::can_release_built_buffers(device))  // Embree's leaves hold copies (build_buffer.h)
+        impl->native_buffer.release();
     return std::unique_ptr<EmbreeAccel>(new EmbreeAccel(std::move(impl)));
 }
 
@@ -830,15 +834,13 @@ std::size_t EmbreeAccel::memory_bytes() const {
     const embree::Impl& a = *impl_;
     std::size_t bytes =
         a.triangles * embree::kBytesPerTriangle + a.spheres * embree::kBytesPerUserPrimitive;
-    for (const embree::BuildBuffer& b : a.native_buffers)  // none once released
-        bytes += b.resident_bytes();
+    bytes += a.native_buffer.resident_bytes();  // none once released
     if (a.exact_ready)
         bytes += a.exact.memory_bytes();
     if (a.fast_ready) {  // its own BVH (over native's sphere geometries, shared)
         bytes +=
             a.triangles * embree::kBytesPerTriangle + a.spheres * embree::kBytesPerUserPrimitive;
-        for (const embree::BuildBuffer& b : a.fast_buffers)  // none once released
-            bytes += b.resident_bytes();
+        bytes += a.fast_buffer.resident_bytes();  // none once released
     }
     return bytes;
 }

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/accel/embree/build_buffer.h"
+#include "engine/accel/embree/device.h"
 #include "engine/accel/far_ray.h"
 #include "engine/accel/linear_accel.h"
 #include "engine/accel/scene_scan.h"
@@ -742,6 +744,8 @@ TEST(EmbreeAccel, RefinedPacketsAimedAtEdgesAgreeWithExact) {
 // counted. Released means mapped without access: every query of this file, and of the stress
 // and fuzz suites, runs on scenes whose buffers would fault if Embree read them.
 TEST(EmbreeAccel, RefinedTriangleBuffersAreReleasedAfterTheBuild) {
+    if (!embree::can_release_built_buffers(embree::shared_device()))
+        GTEST_SKIP() << "not Embree 3.13: the buffers are kept (embree/build_buffer.h)";
     Scene s;
     s.materials.push_back(Material{});
     s.objects.push_back(testing::icosphere_object(4, {0, 0, 0}, 1.0));

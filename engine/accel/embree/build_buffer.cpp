@@ -28,6 +28,7 @@ BuildBuffer& BuildBuffer::operator=(BuildBuffer&& other) noexcept {
             munmap(data_, size_);
         data_ = std::exchange(other.data_, nullptr);
         size_ = std::exchange(other.size_, 0);
+        used_ = std::exchange(other.used_, 0);
         released_ = std::exchange(other.released_, false);
     }
     return *this;
@@ -38,14 +39,36 @@ BuildBuffer::~BuildBuffer() {
         munmap(data_, size_);
 }
 
+void* BuildBuffer::carve(std::size_t bytes) {
+    const std::size_t take = carved(bytes);
+    if (!data_ || released_ || take > size_ - 16 - used_)
+        return nullptr;
+    void* p = static_cast<char*>(data_) + used_;
+    used_ += take;
+    return p;
+}
+
 void BuildBuffer::release() {
     if (!data_ || released_)
         return;
-    // MADV_DONTNEED drops the pages of a private anonymous mapping at once (a later touch would
-    // find zeroes); PROT_NONE turns any touch into a fault instead.
+    // No access first: where the system refuses (mprotect can fail with ENOMEM when it would
+    // split a mapping past the process's limit) the buffer stays as it was, resident, readable
+    // and counted, rather than zeroed and readable. Then MADV_DONTNEED, which drops the pages of
+    // a private anonymous mapping at once.
+    if (mprotect(data_, size_, PROT_NONE) != 0)
+        return;
     madvise(data_, size_, MADV_DONTNEED);
-    mprotect(data_, size_, PROT_NONE);
     released_ = true;
+}
+
+bool can_release_built_buffers(RTCDevice device) {
+#if RTC_VERSION_MAJOR == 3 && RTC_VERSION_MINOR == 13
+    return device && rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION_MAJOR) == 3 &&
+           rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION_MINOR) == 13;
+#else
+    (void)device;
+    return false;
+#endif
 }
 
 }  // namespace raycastd::engine::embree

@@ -1,6 +1,6 @@
 #pragma once
-// Memory for an Embree geometry's vertex and index buffers that gives its pages back once the
-// BVH is built.
+// Memory for the vertex and index buffers of a scene's Embree geometries, one mapping for all of
+// them, that gives its pages back once the BVH is built.
 //
 // Why: refined's triangles are widened each on its own (fat_triangles.h), three float vertices
 // and an index triple a triangle, 48 B, which Embree reads while it builds and, in a scene
@@ -11,7 +11,11 @@
 // double triangles. Kept, the buffers were a quarter of the resident memory of a scene that has
 // answered refined queries (issue 17's target is 130 B a triangle for everything;
 // docs/numerics.md). A compact scene (Triangle4i leaves, which index the buffers), rtcInterpolate
-// or a second commit would read them: none is used on a scene whose buffers are released.
+// or a second commit would read them: none is used on a scene whose buffers are released. A
+// helper's review read the rest of 3.13.5 for readers after the build (refit, the two-level
+// builder, verify, point queries, filters, the destruction of a shared buffer) and found none
+// on our paths. The same holds for fast's non-robust BVH (Triangle4 leaves, kernels/geometry/
+// triangle.h).
 //
 // After release() the range stays mapped, with no access: a read by Embree that this reasoning
 // missed faults at once, in the tests that run every query on such scenes, instead of reading
@@ -19,7 +23,7 @@
 
 #include <cstddef>
 
-#include <embree3/rtcore_config.h>
+#include <embree3/rtcore.h>
 
 namespace raycastd::engine::embree {
 
@@ -36,6 +40,12 @@ class BuildBuffer {
     ~BuildBuffer();
 
     void* data() const { return data_; }
+    /// The next `bytes` of the buffer, 16-byte aligned (several geometries' buffers in one
+    /// mapping: a mapping each took a page each, 8 KiB a lone triangle, and a mapping count the
+    /// system limits; a helper's review); null past its end or without memory.
+    void* carve(std::size_t bytes);
+    /// Bytes carve() takes for `bytes`.
+    static std::size_t carved(std::size_t bytes) { return (bytes + 15) / 16 * 16; }
     /// Gives the pages back to the system and makes the range inaccessible (the file comment).
     void release();
     /// Bytes resident until release(), 0 after.
@@ -44,16 +54,13 @@ class BuildBuffer {
   private:
     void* data_ = nullptr;
     std::size_t size_ = 0;  ///< the whole mapping
+    std::size_t used_ = 0;  ///< carved so far
     bool released_ = false;
 };
 
-/// Whether the buffers of a ROBUST, non-compact triangle scene may be released after its build
-/// with the Embree this was compiled against (the file comment: 3.13's Triangle4v leaves).
-constexpr bool kReleaseBuiltBuffers =
-#if RTC_VERSION_MAJOR == 3 && RTC_VERSION_MINOR == 13
-    true;
-#else
-    false;
-#endif
+/// Whether the buffers of a triangle scene (ROBUST or not, never COMPACT) may be released after
+/// its build: only with Embree 3.13 (the file comment: its Triangle4v and Triangle4 leaves), both
+/// the headers compiled against and the library `device` runs.
+bool can_release_built_buffers(RTCDevice device);
 
 }  // namespace raycastd::engine::embree

@@ -67,6 +67,28 @@ TEST(BuildBuffer, ReleaseGivesItsPagesBackAndLeavesTheRangeWithoutAccess) {
     EXPECT_EQ(resident_pages(b.data(), kBytes), 0u);
 }
 
+TEST(BuildBuffer, CarvesAlignedPiecesUpToItsSize) {
+    // Every geometry of a scene in one mapping: a mapping each had cost a page each (8 KiB for a
+    // lone triangle's 48 B) and a mapping count the system limits.
+    const std::size_t sizes[] = {12, 36, 4096, 1, 100};
+    std::size_t total = 0;
+    for (std::size_t n : sizes)
+        total += BuildBuffer::carved(n);
+    BuildBuffer b(total);
+    ASSERT_NE(b.data(), nullptr);
+    char* expected = static_cast<char*>(b.data());
+    for (std::size_t n : sizes) {
+        void* p = b.carve(n);
+        ASSERT_EQ(p, expected) << n;
+        EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % 16, 0u);
+        std::memset(p, 1, n);
+        expected += BuildBuffer::carved(n);
+    }
+    EXPECT_EQ(b.carve(1), nullptr) << "past its end";
+    b.release();
+    EXPECT_EQ(b.carve(0), nullptr) << "released";
+}
+
 TEST(BuildBuffer, MovesHandOverTheMappingOnce) {
     BuildBuffer a(4096);
     void* p = a.data();

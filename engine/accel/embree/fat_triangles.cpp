@@ -129,16 +129,14 @@ void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped) {
 
 GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
                                           double widen_by, GeomData* data, bool& capped,
-                                          std::vector<BuildBuffer>& buffers) {
-    GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
+                                          BuildBuffer& buffer) {
     const std::size_t n = mesh.size();
-    // In buffers of ours, which EmbreeAccel::build releases once the BVH is built (build_buffer.h).
-    buffers.emplace_back(9 * n * sizeof(float));
-    auto* v = static_cast<float*>(buffers.back().data());
-    buffers.emplace_back(3 * n * sizeof(unsigned));
-    auto* idx = static_cast<unsigned*>(buffers.back().data());
+    // In memory of ours, which EmbreeAccel::build releases once the BVH is built (build_buffer.h).
+    auto* v = static_cast<float*>(buffer.carve(9 * n * sizeof(float)));
+    auto* idx = static_cast<unsigned*>(buffer.carve(3 * n * sizeof(unsigned)));
     if (!v || !idx)
         return nullptr;  // no memory (the caller says so)
+    GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
     rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
                                3 * sizeof(float), 3 * n);
     rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,

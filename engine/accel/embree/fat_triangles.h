@@ -84,11 +84,16 @@ bool outside_range_well_inside(const Triangle& tri, const LineCrossing& outside,
 /// The float triangle geometry of `mesh` (in a's frame: Impl::frame) with each triangle
 /// widened by `widen` in its plane (three vertices of its own, so neighbours may overlap), the
 /// hit filters below attached, user data `data`. `capped` is set when a sliver could not be
-/// widened fully (see above). Its vertices and indices are in two BuildBuffers appended to
-/// `buffers`, which must outlive the geometry (build_buffer.h); null where the system has no memory
-/// for them. Not yet committed.
+/// widened fully (see above). Its vertices and indices are carved from `buffer`, which must
+/// outlive the geometry (build_buffer.h: fat_triangle_bytes of it); null where it has no room.
+/// Not yet committed.
 GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
                                           double widen, GeomData* data, bool& capped,
-                                          std::vector<BuildBuffer>& buffers);
+                                          BuildBuffer& buffer);
+/// Bytes of a BuildBuffer make_fat_triangle_geometry carves for `triangles` triangles.
+inline std::size_t fat_triangle_bytes(std::size_t triangles) {
+    return BuildBuffer::carved(9 * triangles * sizeof(float)) +
+           BuildBuffer::carved(3 * triangles * sizeof(unsigned));
+}
 
 }  // namespace raycastd::engine::embree

@@ -27,12 +27,12 @@ struct Impl {
     const Scene* scene = nullptr;
     /// The vertices and indices of native's triangles, released once it is built (and so
     /// before any query), freed after it (declared before it: build_buffer.h).
-    std::vector<BuildBuffer> native_buffers;
+    BuildBuffer native_buffer;
     /// Fat float triangles (fat_triangles.h) + sphere user geometry, ROBUST: refined, fast's
     /// all, and the point queries' culling.
     SceneHandle native;
-    /// fast's vertices and indices, as native_buffers are native's (declared before `fast`).
-    mutable std::vector<BuildBuffer> fast_buffers;
+    /// fast's vertices and indices, as native_buffer holds native's (declared before `fast`).
+    mutable BuildBuffer fast_buffer;
     /// The float triangles as they are, and the same spheres, in a BVH without
     /// RTC_SCENE_FLAG_ROBUST, for fast's closest and any (see build_fast); built by the first
     /// such query.
