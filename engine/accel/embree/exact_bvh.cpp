@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <new>
 
 #include <immintrin.h>
@@ -20,14 +21,15 @@ namespace {
 constexpr float kDown = 1.0f - 3.0f * std::numeric_limits<float>::epsilon();  // exact_bvh.h
 constexpr float kUp = 1.0f + 3.0f * std::numeric_limits<float>::epsilon();
 
-[[gnu::target("avx")]] unsigned meets_avx(const ExactBvh::Node& n, const ExactBvh::Lanes& r,
-                                          float tnear, float tfar, float near[8]) {
+/// The slab test of eight boxes (their planes lo[axis], hi[axis]), as ExactBvh::meets says.
+[[gnu::target("avx")]] inline unsigned slabs_avx(const __m256 lo[3], const __m256 hi[3],
+                                                 const ExactBvh::Lanes& r, float tnear, float tfar,
+                                                 float near[8]) {
     __m256 tn = _mm256_set1_ps(tnear), tf = _mm256_set1_ps(tfar);
     for (int k = 0; k < 3; ++k) {
         const __m256 o = _mm256_set1_ps(r.org[k]), inv = _mm256_set1_ps(r.inv[k]);
-        const __m256 lo = _mm256_load_ps(n.lo[k]), hi = _mm256_load_ps(n.hi[k]);
-        tn = _mm256_max_ps(tn, _mm256_mul_ps(_mm256_sub_ps(r.neg[k] ? hi : lo, o), inv));
-        tf = _mm256_min_ps(tf, _mm256_mul_ps(_mm256_sub_ps(r.neg[k] ? lo : hi, o), inv));
+        tn = _mm256_max_ps(tn, _mm256_mul_ps(_mm256_sub_ps(r.neg[k] ? hi[k] : lo[k], o), inv));
+        tf = _mm256_min_ps(tf, _mm256_mul_ps(_mm256_sub_ps(r.neg[k] ? lo[k] : hi[k], o), inv));
     }
     tn = _mm256_mul_ps(tn, _mm256_set1_ps(kDown));
     _mm256_store_ps(near, tn);
@@ -35,15 +37,15 @@ constexpr float kUp = 1.0f + 3.0f * std::numeric_limits<float>::epsilon();
     return static_cast<unsigned>(_mm256_movemask_ps(ok));
 }
 
-/// Four lanes of meets_avx from `lane` on, with SSE's four-wide forms of the same operations.
-unsigned meets_sse_half(const ExactBvh::Node& n, const ExactBvh::Lanes& r, float tnear, float tfar,
-                        float near[8], int lane) {
+/// Four lanes of slabs_avx (from `lane` on: near + lane), with SSE's four-wide forms of the same
+/// operations.
+inline unsigned slabs_sse(const __m128 lo[3], const __m128 hi[3], const ExactBvh::Lanes& r,
+                          float tnear, float tfar, float near[8], int lane) {
     __m128 tn = _mm_set1_ps(tnear), tf = _mm_set1_ps(tfar);
     for (int k = 0; k < 3; ++k) {
         const __m128 o = _mm_set1_ps(r.org[k]), inv = _mm_set1_ps(r.inv[k]);
-        const __m128 lo = _mm_load_ps(n.lo[k] + lane), hi = _mm_load_ps(n.hi[k] + lane);
-        tn = _mm_max_ps(tn, _mm_mul_ps(_mm_sub_ps(r.neg[k] ? hi : lo, o), inv));
-        tf = _mm_min_ps(tf, _mm_mul_ps(_mm_sub_ps(r.neg[k] ? lo : hi, o), inv));
+        tn = _mm_max_ps(tn, _mm_mul_ps(_mm_sub_ps(r.neg[k] ? hi[k] : lo[k], o), inv));
+        tf = _mm_min_ps(tf, _mm_mul_ps(_mm_sub_ps(r.neg[k] ? lo[k] : hi[k], o), inv));
     }
     tn = _mm_mul_ps(tn, _mm_set1_ps(kDown));
     _mm_store_ps(near + lane, tn);
@@ -51,10 +53,83 @@ unsigned meets_sse_half(const ExactBvh::Node& n, const ExactBvh::Lanes& r, float
         _mm_movemask_ps(_mm_cmple_ps(tn, _mm_mul_ps(tf, _mm_set1_ps(kUp)))));
 }
 
+/// Eight lanes' planes of one axis (`q`: their bytes): origin + q·scale, a product and a sum
+/// in float as quantize() checked them.
+[[gnu::target("avx")]] inline __m256 planes_avx(const std::uint8_t* q, float origin, float scale) {
+    const __m128i b = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(q));
+    const __m128i first = _mm_cvtepu8_epi32(b), second = _mm_cvtepu8_epi32(_mm_srli_si128(b, 4));
+    const __m256 f =
+        _mm256_cvtepi32_ps(_mm256_insertf128_si256(_mm256_castsi128_si256(first), second, 1));
+    return _mm256_add_ps(_mm256_set1_ps(origin), _mm256_mul_ps(f, _mm256_set1_ps(scale)));
+}
+
+/// Four lanes' planes from `lane` on, with SSE2 alone (a processor without AVX may lack SSE4.1).
+inline __m128 planes_sse(const std::uint8_t* q, int lane, float origin, float scale) {
+    std::int32_t four;
+    std::memcpy(&four, q + lane, sizeof four);
+    const __m128i z = _mm_setzero_si128();
+    const __m128i w = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(four), z), z);
+    return _mm_add_ps(_mm_set1_ps(origin), _mm_mul_ps(_mm_cvtepi32_ps(w), _mm_set1_ps(scale)));
+}
+
+[[gnu::target("avx")]] unsigned meets_avx(const ExactBvh::Node& n, const ExactBvh::Lanes& r,
+                                          float tnear, float tfar, float near[8]) {
+    __m256 lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = _mm256_load_ps(n.lo[k]);
+        hi[k] = _mm256_load_ps(n.hi[k]);
+    }
+    return slabs_avx(lo, hi, r, tnear, tfar, near);
+}
+
+/// slabs_sse on both halves of a node, `planes(lane, lo, hi)` giving each half's planes.
+template <class Planes>
+unsigned halves_sse(Planes planes, const ExactBvh::Lanes& r, float tnear, float tfar,
+                    float near[8]) {
+    unsigned mask = 0;
+    for (int lane = 0; lane < ExactBvh::kWidth; lane += 4) {
+        __m128 lo[3], hi[3];
+        planes(lane, lo, hi);
+        mask |= slabs_sse(lo, hi, r, tnear, tfar, near, lane) << lane;
+    }
+    return mask;
+}
+
 unsigned meets_sse(const ExactBvh::Node& n, const ExactBvh::Lanes& r, float tnear, float tfar,
                    float near[8]) {
-    return meets_sse_half(n, r, tnear, tfar, near, 0) | meets_sse_half(n, r, tnear, tfar, near, 4)
-                                                            << 4;
+    const auto planes = [&n](int lane, __m128 lo[3], __m128 hi[3]) {
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = _mm_load_ps(n.lo[k] + lane);
+            hi[k] = _mm_load_ps(n.hi[k] + lane);
+        }
+    };
+    return halves_sse(planes, r, tnear, tfar, near);
+}
+
+[[gnu::target("avx")]] unsigned meets_avx(const ExactBvh::QNode& n, const ExactBvh::Lanes& r,
+                                          float tnear, float tfar, float near[8]) {
+    __m256 lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = planes_avx(n.lo[k], n.origin[k], n.scale[k]);
+        hi[k] = planes_avx(n.hi[k], n.origin[k], n.scale[k]);
+    }
+    return slabs_avx(lo, hi, r, tnear, tfar, near) & ~static_cast<unsigned>(n.empty);
+}
+
+unsigned meets_sse(const ExactBvh::QNode& n, const ExactBvh::Lanes& r, float tnear, float tfar,
+                   float near[8]) {
+    const auto planes = [&n](int lane, __m128 lo[3], __m128 hi[3]) {
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = planes_sse(n.lo[k], lane, n.origin[k], n.scale[k]);
+            hi[k] = planes_sse(n.hi[k], lane, n.origin[k], n.scale[k]);
+        }
+    };
+    return halves_sse(planes, r, tnear, tfar, near) & ~static_cast<unsigned>(n.empty);
+}
+
+/// A plane as the walk forms it (planes_avx, planes_sse).
+float plane(float origin, std::uint8_t q, float scale) {
+    return origin + static_cast<float>(q) * scale;
 }
 
 }  // namespace
@@ -62,6 +137,78 @@ unsigned meets_sse(const ExactBvh::Node& n, const ExactBvh::Lanes& r, float tnea
 unsigned ExactBvh::meets(const Node& n, const Lanes& r, float tnear, float tfar, float near[8],
                          bool avx) {
     return avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
+}
+
+unsigned ExactBvh::meets(const QNode& n, const Lanes& r, float tnear, float tfar, float near[8],
+                         bool avx) {
+    return avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
+}
+
+bool ExactBvh::quantize(const Node& n, QNode& q) {
+    q = QNode{};
+    q.empty = 0;
+    for (int k = 0; k < kWidth; ++k) {
+        q.child[k] = n.child[k];
+        if (!(n.lo[0][k] <= n.hi[0][k] && n.lo[1][k] <= n.hi[1][k] && n.lo[2][k] <= n.hi[2][k]))
+            q.empty = static_cast<std::uint8_t>(q.empty | 1u << k);
+    }
+    for (int a = 0; a < 3; ++a) {
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        for (int k = 0; k < kWidth; ++k)
+            if (!(q.empty >> k & 1u)) {
+                lo = std::min(lo, n.lo[a][k]);
+                hi = std::max(hi, n.hi[a][k]);
+            }
+        if (q.empty == 0xFF) {  // no child: no box to give
+            lo = hi = 0.0f;
+        }
+        if (!std::isfinite(lo) || !std::isfinite(hi))
+            return false;
+        // The step: the extent over 255, raised until the last byte reaches the top plane.
+        float scale = (hi - lo) / 255.0f;
+        if (!std::isfinite(scale))
+            return false;
+        while (plane(lo, 255, scale) < hi)
+            scale = std::nextafter(scale, std::numeric_limits<float>::infinity());
+        q.origin[a] = lo;
+        q.scale[a] = scale;
+        for (int k = 0; k < kWidth; ++k) {
+            if (q.empty >> k & 1u) {  // no box: bytes that give none, and the lane masked out
+                q.lo[a][k] = 255;
+                q.hi[a][k] = 0;
+                continue;
+            }
+            // A first guess, then stepped outward until the plane contains the box's (byte 0 is
+            // the origin itself, byte 255 at or beyond the top: above).
+            const auto guess = [&](float x) {
+                const float g = scale > 0.0f ? (x - lo) / scale : 0.0f;
+                return static_cast<int>(std::min(std::max(g, 0.0f), 255.0f));
+            };
+            const auto at = [&](int byte) {
+                return plane(lo, static_cast<std::uint8_t>(byte), scale);
+            };
+            int b = guess(n.lo[a][k]);
+            while (b > 0 && at(b) > n.lo[a][k])
+                --b;
+            while (b < 255 && at(b + 1) <= n.lo[a][k])
+                ++b;
+            int t = guess(n.hi[a][k]);
+            while (t < 255 && at(t) < n.hi[a][k])
+                ++t;
+            while (t > 0 && at(t - 1) >= n.hi[a][k])
+                --t;
+            q.lo[a][k] = static_cast<std::uint8_t>(b);
+            q.hi[a][k] = static_cast<std::uint8_t>(t);
+        }
+    }
+    return true;
+}
+
+void ExactBvh::dequantize(const QNode& q, int k, float lo[3], float hi[3]) {
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = plane(q.origin[a], q.lo[a][k], q.scale[a]);
+        hi[a] = plane(q.origin[a], q.hi[a][k], q.scale[a]);
+    }
 }
 
 template <bool ordered, bool avx>
@@ -73,10 +220,20 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
     for (;;) {
         // Down: into the nearest child the ray meets, the others pushed, the nearest on top.
         while (!(code & kLeafBit)) {
-            const Node& n = nodes_[code];
             alignas(32) float near[kWidth];
-            unsigned mask =
-                avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
+            unsigned mask;
+            const std::uint32_t* child;
+            if (code & kBottomBit) {
+                const QNode& n = bottom_[code & ~kBottomBit];
+                mask =
+                    avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
+                child = n.child;
+            } else {
+                const Node& n = nodes_[code];
+                mask =
+                    avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
+                child = n.child;
+            }
             if (!mask) {
                 code = kNoChild;
                 break;
@@ -84,12 +241,12 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
             int k = __builtin_ctz(mask);
             mask &= mask - 1;
             if (!mask) {  // one child: the common case, no stack
-                code = n.child[k];
+                code = child[k];
                 continue;
             }
             const int base = sp;
             for (;;) {
-                const Entry x{n.child[k], near[k]};
+                const Entry x{child[k], near[k]};
                 int i = sp++;
                 if (ordered) {  // insertion: decreasing tnear from the base up
                     while (i > base && stack[i - 1].tnear < x.tnear) {
@@ -317,9 +474,10 @@ Item* split(Item* begin, Item* end, bool median) {
 
 }  // namespace
 
-/// Builds the tree depth first into ExactBvh::nodes_ (reserved beforehand: never reallocated).
+/// Builds the tree depth first into `nodes` (reserved beforehand: never reallocated), as Nodes
+/// of float boxes; build_tree then quantizes them into the tree's QNodes.
 struct ExactBvhBuilder {
-    ExactBvh& bvh;
+    std::vector<ExactBvh::Node>& nodes;
 
     /// The child code of items[begin, end) (depth: nodes above it).
     std::uint32_t build(Item* begin, Item* end, int depth) {
@@ -374,12 +532,12 @@ struct ExactBvhBuilder {
             }
             children += add;
         }
-        const std::uint32_t index = static_cast<std::uint32_t>(bvh.nodes_.size());
-        bvh.nodes_.emplace_back();
+        const std::uint32_t index = static_cast<std::uint32_t>(nodes.size());
+        nodes.emplace_back();
         std::uint32_t codes[ExactBvh::kWidth];
         for (int k = 0; k < children; ++k)
             codes[k] = build(bounds[k], bounds[k + 1], depth + 1);
-        ExactBvh::Node& node = bvh.nodes_[index];  // after the children: no reallocation anyway
+        ExactBvh::Node& node = nodes[index];  // after the children: no reallocation anyway
         for (int k = 0; k < ExactBvh::kWidth; ++k) {
             const FloatBox& b = k < children ? box[k] : kEmpty;
             for (int a = 0; a < 3; ++a) {
@@ -394,6 +552,7 @@ struct ExactBvhBuilder {
 
 Status ExactBvh::build(const Impl& a) {
     nodes_.clear();
+    bottom_.clear();
     first_.clear();
     root_ = kNoChild;
     try {
@@ -401,6 +560,7 @@ Status ExactBvh::build(const Impl& a) {
     } catch (const std::bad_alloc&) {
         // As an Embree build that ran out of memory did: no tree, and the linear scan answers.
         std::vector<Node>().swap(nodes_);
+        std::vector<QNode>().swap(bottom_);
         std::vector<std::uint32_t>().swap(first_);
         root_ = kNoChild;
         return Status::error(Code::too_large, "out of memory building exact's BVH");
@@ -437,13 +597,45 @@ Status ExactBvh::build_tree(const Impl& a) {
         return Status{};
     // Every inner node has two children or more, so there are fewer than there are items: room
     // for that many, so that the build never reallocates (a vector growing by doubling had held
-    // up to twice the tree, and copied it each time), then one copy of the nodes it used: the
-    // reserve is 224 B a primitive, three to four times what the tree takes, and whether its
-    // untouched pages cost anything depends on the allocator and the system's overcommit policy.
-    nodes_.reserve(items.size());
-    ExactBvhBuilder builder{*this};
+    // up to twice the tree, and copied it each time); only the pages it uses are touched. The
+    // float nodes are then quantized into the tree (128 B a node against 224), and freed.
+    std::vector<Node> built;
+    built.reserve(items.size());
+    ExactBvhBuilder builder{built};
     root_ = builder.build(items.data(), items.data() + items.size(), 0);
-    nodes_.shrink_to_fit();
+    std::vector<Item>().swap(items);
+    // The nodes whose children are all leaves, most of the tree, quantized into bottom_; the
+    // others kept as they are (a walk passes more of them, and they are few).
+    std::vector<std::uint32_t> code(built.size());
+    std::size_t inner = 0, bottom = 0;
+    for (std::size_t i = 0; i < built.size(); ++i) {
+        bool leaves = true;
+        for (std::uint32_t c : built[i].child)
+            leaves = leaves && (c & kLeafBit);
+        code[i] = leaves ? kBottomBit | static_cast<std::uint32_t>(bottom++)
+                         : static_cast<std::uint32_t>(inner++);
+    }
+    if (bottom >= kBottomBit)
+        return Status::error(Code::too_large, "the scene has too many primitives for exact's BVH");
+    const auto renamed = [&](std::uint32_t c) { return c & kLeafBit ? c : code[c]; };
+    nodes_.reserve(inner);
+    bottom_.resize(bottom);
+    for (std::size_t i = 0; i < built.size(); ++i) {
+        Node& n = built[i];
+        for (std::uint32_t& c : n.child)
+            c = renamed(c);
+        if (code[i] & kBottomBit) {
+            if (!quantize(n, bottom_[code[i] & ~kBottomBit])) {
+                nodes_.clear();
+                bottom_.clear();
+                root_ = kNoChild;
+                return Status::error(Code::internal, "a box of exact's BVH is not finite");
+            }
+        } else {
+            nodes_.push_back(n);
+        }
+    }
+    root_ = renamed(root_);
     return Status{};
 }
 

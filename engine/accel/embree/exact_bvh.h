@@ -27,7 +27,13 @@
 // 64 primitives are cut into groups of eight (the SAH's cheapest cut among those after a
 // multiple of eight, on the sorted centres), so that the nodes at the bottom, most of the tree,
 // are full: 38 B a triangle on A and 37 on B, where splitting down to single primitives had
-// left them two to four leaves and taken 77 and 61.
+// left them two to four leaves and taken 77 and 61. Those nodes, whose children are all leaves
+// (seven in ten), are kept quantized (QNode: a byte a plane, in 128 bytes against 224; Mahovsky
+// & Wyvill, "Memory-Conserving Bounding Volume Hierarchies with Coherent Ray Tracing", CGF 25(2),
+// 2006; Embree's quantized nodes, kernels/bvh/bvh_node_qaabb.h, are the same idea), rounded
+// outward so that each box contains the float one: the tree takes 27 B a triangle on A and 26
+// on B. The other nodes, which every walk passes more
+// of, stay in float, so that the walk pays the bytes' conversion only at the bottom.
 
 #include <cstdint>
 #include <type_traits>
@@ -66,18 +72,36 @@ class ExactBvh {
              /*ordered=*/false, &call<std::remove_reference_t<Visit>>, &visit);
     }
 
+    /// The tree's nodes (inner and quantized).
+    std::size_t node_count() const { return nodes_.size() + bottom_.size(); }
     /// Bytes the tree holds.
     std::size_t memory_bytes() const {
-        return nodes_.capacity() * sizeof(Node) + first_.capacity() * sizeof(std::uint32_t);
+        return nodes_.capacity() * sizeof(Node) + bottom_.capacity() * sizeof(QNode) +
+               first_.capacity() * sizeof(std::uint32_t);
     }
 
     /// Eight children's boxes, lane by lane, and what each child is: an inner node's index, a
     /// primitive (kLeafBit | its index among the scene's, first_), or kNoChild, whose box is
-    /// empty (lo = +∞, hi = −∞: no slab test meets it).
+    /// empty (lo = +∞, hi = −∞). The build's form of a node; the tree keeps each as a QNode.
     struct alignas(32) Node {
         float lo[3][kWidth], hi[3][kWidth];
         std::uint32_t child[kWidth];
     };
+    /// A Node as the tree keeps it, in two cache lines instead of four: each plane as a byte,
+    /// origin + q·scale on its axis (a float product and a float sum, as the walk forms them),
+    /// rounded outward so that the box it gives contains the Node's (quantize). At the bottom
+    /// of the tree, where a node's eight primitives share its box, a step of scale is 1/255 of
+    /// that box, a few thousandths of a primitive's own size.
+    struct alignas(64) QNode {
+        float origin[3], scale[3];
+        std::uint8_t lo[3][kWidth], hi[3][kWidth];
+        std::uint32_t child[kWidth];
+        std::uint8_t empty;  ///< bit k: lane k has no child (its bytes give no box)
+    };
+    /// `n` quantized; false where a box is not finite (the tree is then not built).
+    static bool quantize(const Node& n, QNode& q);
+    /// Lane k's box of `q`, as the walk forms it.
+    static void dequantize(const QNode& q, int k, float lo[3], float hi[3]);
     /// The ray as the box test takes it: origin, reciprocal direction, and which of a node's
     /// planes it meets first on each axis (hi where the direction is negative).
     struct Lanes {
@@ -93,10 +117,15 @@ class ExactBvh {
     /// has it.
     static unsigned meets(const Node& n, const Lanes& r, float tnear, float tfar, float near[8],
                           bool avx);
+    /// The same for a quantized node (its lanes' boxes as dequantize gives them).
+    static unsigned meets(const QNode& n, const Lanes& r, float tnear, float tfar, float near[8],
+                          bool avx);
 
   private:
     static constexpr std::uint32_t kLeafBit = 0x80000000u;
     static constexpr std::uint32_t kNoChild = 0xFFFFFFFFu;
+    /// In an inner child's code: the child is bottom_[code & ~kBottomBit], not nodes_[code].
+    static constexpr std::uint32_t kBottomBit = 0x40000000u;
     /// Deepest SAH level: below it the build splits at the median (a node's first split halves
     /// its primitives) down to 64 primitives, which take two levels more (their cuts fall after
     /// multiples of eight, so a node of eight children has none of more than eight), so a tree
@@ -128,7 +157,8 @@ class ExactBvh {
     void walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn, void* visit) const;
 
     friend struct ExactBvhBuilder;
-    std::vector<Node> nodes_;
+    std::vector<Node> nodes_;    ///< the inner nodes with an inner child
+    std::vector<QNode> bottom_;  ///< the nodes whose children are all leaves (kBottomBit)
     /// first_[i]: the index of object i's first primitive among the scene's; one more entry, the
     /// total.
     std::vector<std::uint32_t> first_;

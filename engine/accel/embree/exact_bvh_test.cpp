@@ -112,9 +112,11 @@ TEST(ExactBvh, OffersEveryPrimitiveWhoseBoxTheRayMeetsAndNoOther) {
             const double o[3] = {f.org_x, f.org_y, f.org_z}, d[3] = {f.dir_x, f.dir_y, f.dir_z};
             for (const auto& [prim, box] : boxes) {
                 // Met with room to spare (the box shrunk by 1e-5 of the unit frame): offered;
-                // missed with room to spare: not.
+                // missed with room to spare: not. The room on that side is a step of the
+                // quantized nodes at the bottom (1/255 of a node's box, which holds primitives
+                // from all over this small scene): 0.01.
                 const bool met = entry(box, -1e-5, o, d, f.tnear, f.tfar) < 1e300;
-                const bool near = entry(box, 1e-5, o, d, f.tnear, f.tfar) < 1e300;
+                const bool near = entry(box, 0.01, o, d, f.tnear, f.tfar) < 1e300;
                 if (met) {
                     EXPECT_TRUE(seen.count(prim))
                         << "seed " << seed << " ray " << n << ": object " << prim.first
@@ -242,11 +244,15 @@ TEST(ExactBvh, BoxTestNeverCullsABoxTheRayMeets) {
         if (rng() % 2)
             tfar = rng() % 2 ? 1.0f : std::nextafter(1.0f, 0.0f);  // p is at t = 1
         const ExactBvh::Lanes r = ExactBvh::lanes_of(o[0], o[1], o[2], d[0], d[1], d[2]);
-        for (const bool avx : {false, true}) {
+        ExactBvh::QNode q;
+        ASSERT_TRUE(ExactBvh::quantize(node, q));
+        for (const int form : {0, 1, 2, 3}) {  // float or quantized, SSE or AVX
+            const bool avx = form & 1, quantized = form & 2;
             if (avx && !cpu_has_avx())
                 continue;
             alignas(32) float near[8];
-            const unsigned mask = ExactBvh::meets(node, r, 0.0f, tfar, near, avx);
+            const unsigned mask = quantized ? ExactBvh::meets(q, r, 0.0f, tfar, near, avx)
+                                            : ExactBvh::meets(node, r, 0.0f, tfar, near, avx);
             for (int k = 0; k < ExactBvh::kWidth; ++k) {
                 const float lo[3] = {node.lo[0][k], node.lo[1][k], node.lo[2][k]};
                 const float hi[3] = {node.hi[0][k], node.hi[1][k], node.hi[2][k]};
@@ -254,8 +260,8 @@ TEST(ExactBvh, BoxTestNeverCullsABoxTheRayMeets) {
                     continue;
                 ++met;
                 ASSERT_TRUE(mask >> k & 1u)
-                    << "case " << n << " lane " << k << (avx ? " (AVX)" : " (SSE)")
-                    << ": culled a box the ray meets";
+                    << "case " << n << " lane " << k << (avx ? " (AVX" : " (SSE")
+                    << (quantized ? ", quantized)" : ")") << ": culled a box the ray meets";
             }
         }
     }
@@ -284,11 +290,22 @@ TEST(ExactBvh, AvxAndSseBoxTestsAgree) {
         const ExactBvh::Lanes r = ExactBvh::lanes_of(c(rng), c(rng), c(rng), c(rng), c(rng), dz);
         const float tfar = rng() % 2 ? std::numeric_limits<float>::infinity() : std::abs(c(rng));
         alignas(32) float near_avx[8], near_sse[8];
-        const unsigned m_avx = ExactBvh::meets(node, r, 0.0f, tfar, near_avx, true);
-        const unsigned m_sse = ExactBvh::meets(node, r, 0.0f, tfar, near_sse, false);
-        ASSERT_EQ(m_avx, m_sse) << "case " << n;
+        ASSERT_EQ(ExactBvh::meets(node, r, 0.0f, tfar, near_avx, true),
+                  ExactBvh::meets(node, r, 0.0f, tfar, near_sse, false))
+            << "case " << n;
         for (int k = 0; k < 8; ++k)
             ASSERT_TRUE(testing::same_bits(near_avx[k], near_sse[k])) << "case " << n;
+        ExactBvh::QNode q;
+        ASSERT_TRUE(ExactBvh::quantize(node, q));
+        const unsigned m_avx = ExactBvh::meets(q, r, 0.0f, tfar, near_avx, true);
+        const unsigned m_sse = ExactBvh::meets(q, r, 0.0f, tfar, near_sse, false);
+        ASSERT_EQ(m_avx, m_sse) << "case " << n << ", quantized";
+        for (int k = 0; k < 8; ++k) {
+            if (m_avx >> k & 1u) {  // an empty lane's distance is never read
+                ASSERT_TRUE(testing::same_bits(near_avx[k], near_sse[k]))
+                    << "case " << n << ", quantized";
+            }
+        }
     }
 }
 
@@ -331,6 +348,63 @@ TEST(ExactBvh, DegenerateTreesAreWalked) {
     }
 }
 
+TEST(ExactBvh, QuantizedBoxesContainTheirNodesWithinAStep) {
+    // Each lane's box as the walk forms it from the bytes contains the float box, and exceeds it
+    // by at most a step (1/255 of the node's box and a rounding) on each side: random boxes,
+    // flat ones, nodes of one box, empty lanes, all lanes empty, and boxes 1e-30 and 1e30 across.
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<float> c(-1.0f, 1.0f);
+    for (int n = 0; n < 20000; ++n) {
+        const float size = n % 3 == 0 ? 1e-30f : n % 3 == 1 ? 1.0f : 1e30f;
+        const float shift = (n % 7) * 0.5f;
+        ExactBvh::Node node;
+        for (int k = 0; k < ExactBvh::kWidth; ++k) {
+            node.child[k] = static_cast<std::uint32_t>(k);
+            const bool empty = n % 101 == 0 || (k > 0 && rng() % 5 == 0);
+            for (int ax = 0; ax < 3; ++ax) {
+                if (empty) {
+                    node.lo[ax][k] = std::numeric_limits<float>::infinity();
+                    node.hi[ax][k] = -std::numeric_limits<float>::infinity();
+                    continue;
+                }
+                const float x = shift + c(rng) * size,
+                            y = rng() % 4 == 0 ? x : shift + c(rng) * size;
+                node.lo[ax][k] = std::min(x, y);
+                node.hi[ax][k] = std::max(x, y);
+            }
+        }
+        ExactBvh::QNode q;
+        ASSERT_TRUE(ExactBvh::quantize(node, q));
+        for (int k = 0; k < ExactBvh::kWidth; ++k) {
+            const bool empty = !(node.lo[0][k] <= node.hi[0][k]);
+            EXPECT_EQ(q.empty >> k & 1u, empty ? 1u : 0u) << "case " << n << " lane " << k;
+            if (empty)
+                continue;
+            float lo[3], hi[3];
+            ExactBvh::dequantize(q, k, lo, hi);
+            for (int ax = 0; ax < 3; ++ax) {
+                ASSERT_LE(lo[ax], node.lo[ax][k])
+                    << "case " << n << " lane " << k << " axis " << ax;
+                ASSERT_GE(hi[ax], node.hi[ax][k])
+                    << "case " << n << " lane " << k << " axis " << ax;
+                const float step = q.scale[ax] * 1.0001f + 1e-37f;
+                EXPECT_LE(node.lo[ax][k] - lo[ax], step) << "case " << n << " lane " << k;
+                EXPECT_LE(hi[ax] - node.hi[ax][k], step) << "case " << n << " lane " << k;
+            }
+        }
+    }
+    // A box that is not finite is refused (the tree is then not built: the linear scan answers).
+    ExactBvh::Node bad{};
+    for (int k = 0; k < ExactBvh::kWidth; ++k)
+        for (int ax = 0; ax < 3; ++ax) {
+            bad.lo[ax][k] = 0.0f;
+            bad.hi[ax][k] = 1.0f;
+        }
+    bad.hi[1][3] = std::numeric_limits<float>::infinity();
+    ExactBvh::QNode q;
+    EXPECT_FALSE(ExactBvh::quantize(bad, q));
+}
+
 TEST(ExactBvh, NodesAtTheBottomArePacked) {
     // A node holds kWidth children, and a leaf is a child of its own (no leaf nodes): a tree of
     // n primitives has at least n / (kWidth − 1) nodes. The build cuts ranges of up to kWidth²
@@ -346,7 +420,7 @@ TEST(ExactBvh, NodesAtTheBottomArePacked) {
         ExactBvh bvh;
         ASSERT_TRUE(bvh.build(a).ok());
         const double prims = static_cast<double>(scene.objects[0].primitive_count());
-        const double nodes = static_cast<double>(bvh.memory_bytes()) / sizeof(ExactBvh::Node);
+        const double nodes = static_cast<double>(bvh.node_count());
         EXPECT_LT(nodes, prims / 5.0) << "level " << level << ": " << nodes << " nodes";
     }
 }
