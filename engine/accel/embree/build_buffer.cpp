@@ -20,6 +20,7 @@ BuildBuffer::BuildBuffer(std::size_t bytes) {
 BuildBuffer::BuildBuffer(BuildBuffer&& other) noexcept
     : data_(std::exchange(other.data_, nullptr)),
       size_(std::exchange(other.size_, 0)),
+      used_(std::exchange(other.used_, 0)),
       released_(std::exchange(other.released_, false)) {}
 
 BuildBuffer& BuildBuffer::operator=(BuildBuffer&& other) noexcept {

@@ -93,9 +93,12 @@ TEST(BuildBuffer, MovesHandOverTheMappingOnce) {
     BuildBuffer a(4096);
     void* p = a.data();
     ASSERT_NE(p, nullptr);
+    ASSERT_EQ(a.carve(100), p);
     BuildBuffer b(std::move(a));
     EXPECT_EQ(b.data(), p);
     EXPECT_EQ(a.data(), nullptr);  // NOLINT(bugprone-use-after-move): moved-from is empty
+    // What was carved stays carved (a move that forgot it would hand the same bytes out twice).
+    EXPECT_EQ(b.carve(16), static_cast<char*>(p) + BuildBuffer::carved(100));
     std::vector<BuildBuffer> many;
     many.push_back(std::move(b));
     many.emplace_back(4096);

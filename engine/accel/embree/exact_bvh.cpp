@@ -615,7 +615,7 @@ Status ExactBvh::build_tree(const Impl& a) {
         code[i] = leaves ? kBottomBit | static_cast<std::uint32_t>(bottom++)
                          : static_cast<std::uint32_t>(inner++);
     }
-    if (bottom >= kBottomBit)
+    if (bottom >= kBottomBit || inner >= kBottomBit)  // either index would read as the other
         return Status::error(Code::too_large, "the scene has too many primitives for exact's BVH");
     const auto renamed = [&](std::uint32_t c) { return c & kLeafBit ? c : code[c]; };
     nodes_.reserve(inner);

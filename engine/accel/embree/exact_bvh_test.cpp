@@ -313,7 +313,7 @@ TEST(ExactBvh, DegenerateTreesAreWalked) {
     // No primitive at all: nothing offered. One: offered (the root is that leaf). A hundred copies
     // of one triangle (every centre the same: split by index) beside a sphere off the ray: every
     // copy offered, the sphere not.
-    for (int copies : {0, 1, 100}) {
+    for (int copies : {0, 1, 5, 100}) {  // 5: the root is a quantized node
         std::vector<Vec3d> positions;
         std::vector<std::array<std::uint32_t, 3>> triangles;
         for (int i = 0; i < copies; ++i) {
@@ -367,8 +367,10 @@ TEST(ExactBvh, QuantizedBoxesContainTheirNodesWithinAStep) {
                     node.hi[ax][k] = -std::numeric_limits<float>::infinity();
                     continue;
                 }
-                const float x = shift + c(rng) * size,
-                            y = rng() % 4 == 0 ? x : shift + c(rng) * size;
+                // Tiny boxes at an offset too, a few ulps of it wide (else 1e-30 on 1.5 is a
+                // point).
+                const float base = n % 5 == 0 ? std::nextafter(shift + 1.0f, 4.0f) : shift;
+                const float x = base + c(rng) * size, y = rng() % 4 == 0 ? x : base + c(rng) * size;
                 node.lo[ax][k] = std::min(x, y);
                 node.hi[ax][k] = std::max(x, y);
             }
@@ -387,9 +389,59 @@ TEST(ExactBvh, QuantizedBoxesContainTheirNodesWithinAStep) {
                     << "case " << n << " lane " << k << " axis " << ax;
                 ASSERT_GE(hi[ax], node.hi[ax][k])
                     << "case " << n << " lane " << k << " axis " << ax;
-                const float step = q.scale[ax] * 1.0001f + 1e-37f;
+                // A step, and the rounding of origin + q·step (an ulp or two of the plane,
+                // more than a step where the box is a few ulps wide).
+                const float step = q.scale[ax] * 1.0001f +
+                                   2.0f * std::numeric_limits<float>::epsilon() *
+                                       std::max(std::abs(lo[ax]), std::abs(hi[ax])) +
+                                   1e-37f;
                 EXPECT_LE(node.lo[ax][k] - lo[ax], step) << "case " << n << " lane " << k;
                 EXPECT_LE(hi[ax] - node.hi[ax][k], step) << "case " << n << " lane " << k;
+            }
+        }
+    }
+    // The walk's planes (AVX, SSE) are dequantize's, bit for bit: the box test of a QNode is
+    // that of the float node made of its dequantized boxes, mask and distances alike.
+    std::mt19937_64 rays(9);
+    for (int n = 0; n < 20000; ++n) {
+        ExactBvh::Node node;
+        const float size = n % 2 ? 1.0f : 1e-3f;
+        for (int k = 0; k < ExactBvh::kWidth; ++k) {
+            node.child[k] = static_cast<std::uint32_t>(k);
+            const bool empty = k > 0 && rays() % 6 == 0;
+            for (int ax = 0; ax < 3; ++ax) {
+                const float x = 0.5f + c(rays) * size, y = 0.5f + c(rays) * size;
+                node.lo[ax][k] = empty ? std::numeric_limits<float>::infinity() : std::min(x, y);
+                node.hi[ax][k] = empty ? -std::numeric_limits<float>::infinity() : std::max(x, y);
+            }
+        }
+        ExactBvh::QNode q;
+        ASSERT_TRUE(ExactBvh::quantize(node, q));
+        ExactBvh::Node planes = node;
+        for (int k = 0; k < ExactBvh::kWidth; ++k) {
+            if (q.empty >> k & 1u)
+                continue;
+            float lo[3], hi[3];
+            ExactBvh::dequantize(q, k, lo, hi);
+            for (int ax = 0; ax < 3; ++ax) {
+                planes.lo[ax][k] = lo[ax];
+                planes.hi[ax][k] = hi[ax];
+            }
+        }
+        const ExactBvh::Lanes r =
+            ExactBvh::lanes_of(c(rays) * 2, c(rays) * 2, c(rays) * 2, c(rays), c(rays), c(rays));
+        for (const bool avx : {false, true}) {
+            if (avx && !cpu_has_avx())
+                continue;
+            alignas(32) float near_q[8], near_f[8];
+            const unsigned mq = ExactBvh::meets(q, r, 0.0f, 10.0f, near_q, avx);
+            const unsigned mf = ExactBvh::meets(planes, r, 0.0f, 10.0f, near_f, avx);
+            ASSERT_EQ(mq, mf) << "case " << n << (avx ? " (AVX)" : " (SSE)");
+            for (int k = 0; k < ExactBvh::kWidth; ++k) {
+                if (!(q.empty >> k & 1u)) {
+                    ASSERT_TRUE(testing::same_bits(near_q[k], near_f[k]))
+                        << "case " << n << " lane " << k << (avx ? " (AVX)" : " (SSE)");
+                }
             }
         }
     }
