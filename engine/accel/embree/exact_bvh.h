@@ -32,8 +32,8 @@
 // & Wyvill, "Memory-Conserving Bounding Volume Hierarchies with Coherent Ray Tracing", CGF 25(2),
 // 2006; Embree's quantized nodes, kernels/bvh/bvh_node_qaabb.h, are the same idea), rounded
 // outward so that each box contains the float one: the tree takes 27 B a triangle on A and 26
-// on B. The other nodes, which every walk passes more
-// of, stay in float, so that the walk pays the bytes' conversion only at the bottom.
+// on B. The other nodes, which every walk passes more of, stay in float, so that the walk pays
+// the bytes' conversion only at the bottom.
 
 #include <cstdint>
 #include <type_traits>
@@ -82,16 +82,17 @@ class ExactBvh {
 
     /// Eight children's boxes, lane by lane, and what each child is: an inner node's index, a
     /// primitive (kLeafBit | its index among the scene's, first_), or kNoChild, whose box is
-    /// empty (lo = +∞, hi = −∞). The build's form of a node; the tree keeps each as a QNode.
+    /// empty (lo = +∞, hi = −∞). The build makes every node so; the tree keeps those with an
+    /// inner child so, and those whose children are all leaves as QNodes.
     struct alignas(32) Node {
         float lo[3][kWidth], hi[3][kWidth];
         std::uint32_t child[kWidth];
     };
-    /// A Node as the tree keeps it, in two cache lines instead of four: each plane as a byte,
-    /// origin + q·scale on its axis (a float product and a float sum, as the walk forms them),
-    /// rounded outward so that the box it gives contains the Node's (quantize). At the bottom
-    /// of the tree, where a node's eight primitives share its box, a step of scale is 1/255 of
-    /// that box, a few thousandths of a primitive's own size.
+    /// A node of leaves as the tree keeps it, in two cache lines instead of four: each plane a
+    /// byte, origin + q·scale on its axis (a float product and a float sum, as the walk forms
+    /// them), rounded outward so that the box it gives contains the Node's (quantize). At the
+    /// bottom of the tree, where a node's eight primitives share its box, a step of scale is 1/255
+    /// of that box, about a hundredth of a primitive's own.
     struct alignas(64) QNode {
         float origin[3], scale[3];
         std::uint8_t lo[3][kWidth], hi[3][kWidth];
