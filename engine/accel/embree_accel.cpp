@@ -32,15 +32,12 @@ constexpr std::size_t kBytesPerUserPrimitive = 64;
 /// (released once the BVH is built: embree/build_buffer.h); null where it has no room.
 GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
                                       BuildBuffer& buffer) {
-    auto* v = static_cast<float*>(buffer.carve(3 * mesh.positions.size() * sizeof(float)));
-    auto* idx = static_cast<unsigned*>(buffer.carve(3 * mesh.triangles.size() * sizeof(unsigned)));
-    if (!v || !idx)
-        return nullptr;
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
-    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
-                               3 * sizeof(float), mesh.positions.size());
-    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,
-                               3 * sizeof(unsigned), mesh.triangles.size());
+    float* v;
+    unsigned* idx;
+    if (!share_triangle_buffers(g.get(), buffer, mesh.positions.size(), mesh.triangles.size(), v,
+                                idx))
+        return nullptr;
     for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
         const Vec3d q = a.frame(mesh.positions[i]);
         // to_float, should a coordinate exceed float's range all the same.
@@ -54,6 +51,21 @@ GeometryHandle make_triangle_geometry(RTCDevice device, const TriangleMesh& mesh
         idx[3 * i + 2] = mesh.triangles[i][2];
     }
     return g;
+}
+
+/// Bytes of a BuildBuffer make_triangle_geometry carves for `mesh`.
+std::size_t triangle_geometry_bytes(const TriangleMesh& mesh) {
+    return triangle_buffer_bytes(mesh.positions.size(), mesh.triangles.size());
+}
+
+/// One BuildBuffer for the geometries of every mesh of `scene`, `bytes(mesh)` each: one mapping
+/// a scene (embree/build_buffer.h).
+BuildBuffer buffer_for_meshes(const Scene& scene, std::size_t (*bytes)(const TriangleMesh&)) {
+    std::size_t total = 0;
+    for (const Object& o : scene.objects)
+        if (o.kind != ObjectKind::sphere)
+            total += bytes(*o.mesh);
+    return BuildBuffer(total);
 }
 
 }  // namespace
@@ -94,12 +106,7 @@ void Impl::build_fast() const {
     RTCDevice device = shared_device();
     take_error("");
     SceneHandle s(rtcNewScene(device));
-    std::size_t bytes = 0;  // every mesh's buffers in one mapping (embree/build_buffer.h)
-    for (const Object& o : scene->objects)
-        if (o.kind != ObjectKind::sphere)
-            bytes += BuildBuffer::carved(3 * o.mesh->positions.size() * sizeof(float)) +
-                     BuildBuffer::carved(3 * o.mesh->triangles.size() * sizeof(unsigned));
-    fast_buffer = BuildBuffer(bytes);
+    fast_buffer = buffer_for_meshes(*scene, triangle_geometry_bytes);
     for (std::uint32_t i = 0; i < scene->objects.size(); ++i) {
         const Object& o = scene->objects[i];
         if (o.kind == ObjectKind::sphere) {
@@ -706,11 +713,7 @@ Result<std::unique_ptr<EmbreeAccel>> EmbreeAccel::build(const Scene& scene,
     // unwidened triangles (build_fast).
     rtcSetSceneFlags(impl->native.get(), RTC_SCENE_FLAG_ROBUST);
     const double widen_by = embree::kWidenPads * impl->pad;
-    std::size_t bytes = 0;  // every mesh's buffers in one mapping (embree/build_buffer.h)
-    for (const Object& o : scene.objects)
-        if (o.kind != ObjectKind::sphere)
-            bytes += embree::fat_triangle_bytes(o.mesh->size());
-    impl->native_buffer = embree::BuildBuffer(bytes);
+    impl->native_buffer = embree::buffer_for_meshes(scene, embree::fat_triangle_bytes);
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
         const Object& o = scene.objects[i];
         impl->geoms.push_back(embree::GeomData{impl.get(), i});

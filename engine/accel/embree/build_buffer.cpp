@@ -62,6 +62,19 @@ void BuildBuffer::release() {
     released_ = true;
 }
 
+bool share_triangle_buffers(RTCGeometry g, BuildBuffer& buffer, std::size_t vertices,
+                            std::size_t triangles, float*& v, unsigned*& idx) {
+    v = static_cast<float*>(buffer.carve(vertices * 3 * sizeof(float)));
+    idx = static_cast<unsigned*>(buffer.carve(triangles * 3 * sizeof(unsigned)));
+    if (!v || !idx)
+        return false;
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
+                               3 * sizeof(float), vertices);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,
+                               3 * sizeof(unsigned), triangles);
+    return true;
+}
+
 bool can_release_built_buffers(RTCDevice device) {
 #if RTC_VERSION_MAJOR == 3 && RTC_VERSION_MINOR == 13
     return device && rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION_MAJOR) == 3 &&

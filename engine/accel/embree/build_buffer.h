@@ -58,6 +58,19 @@ class BuildBuffer {
     bool released_ = false;
 };
 
+/// Bytes share_triangle_buffers carves for `vertices` float3 vertices and `triangles` index
+/// triples.
+inline std::size_t triangle_buffer_bytes(std::size_t vertices, std::size_t triangles) {
+    return BuildBuffer::carved(vertices * 3 * sizeof(float)) +
+           BuildBuffer::carved(triangles * 3 * sizeof(unsigned));
+}
+
+/// A triangle geometry's vertex buffer (`vertices` float3) and index buffer (`triangles` uint3)
+/// carved from `buffer` and shared with `g`, for the caller to fill through `v` and `idx`; false
+/// where the buffer has no room (no memory), and nothing shared then.
+bool share_triangle_buffers(RTCGeometry g, BuildBuffer& buffer, std::size_t vertices,
+                            std::size_t triangles, float*& v, unsigned*& idx);
+
 /// Whether the buffers of a triangle scene (ROBUST or not, never COMPACT) may be released after
 /// its build: only with Embree 3.13 (the file comment: its Triangle4v and Triangle4 leaves), both
 /// the headers compiled against and the library `device` runs.

@@ -172,21 +172,20 @@ bool ExactBvh::quantize(const Node& n, QNode& q) {
             scale = std::nextafter(scale, std::numeric_limits<float>::infinity());
         q.origin[a] = lo;
         q.scale[a] = scale;
+        // A byte's first guess for a plane x, and the plane a byte gives.
+        const auto guess = [&](float x) {
+            const float g = scale > 0.0f ? (x - lo) / scale : 0.0f;
+            return static_cast<int>(std::min(std::max(g, 0.0f), 255.0f));
+        };
+        const auto at = [&](int byte) { return plane(lo, static_cast<std::uint8_t>(byte), scale); };
         for (int k = 0; k < kWidth; ++k) {
             if (q.empty >> k & 1u) {  // no box: bytes that give none, and the lane masked out
                 q.lo[a][k] = 255;
                 q.hi[a][k] = 0;
                 continue;
             }
-            // A first guess, then stepped outward until the plane contains the box's (byte 0 is
-            // the origin itself, byte 255 at or beyond the top: above).
-            const auto guess = [&](float x) {
-                const float g = scale > 0.0f ? (x - lo) / scale : 0.0f;
-                return static_cast<int>(std::min(std::max(g, 0.0f), 255.0f));
-            };
-            const auto at = [&](int byte) {
-                return plane(lo, static_cast<std::uint8_t>(byte), scale);
-            };
+            // The guess, then stepped outward until the plane contains the box's (byte 0 is the
+            // origin itself, byte 255 at or beyond the top: above).
             int b = guess(n.lo[a][k]);
             while (b > 0 && at(b) > n.lo[a][k])
                 --b;
@@ -498,6 +497,13 @@ struct ExactBvhBuilder {
         FloatBox box[ExactBvh::kWidth] = {box_of(begin, end)};
         int children = 1;
         const auto size_of = [&](int k) { return static_cast<int>(bounds[k + 1] - bounds[k]); };
+        // Room for `add` more children after child `pick`: the ones after it move up.
+        const auto make_room = [&](int pick, int add) {
+            for (int k = children; k > pick; --k) {
+                bounds[k + add] = bounds[k];
+                box[k + add - 1] = box[k - 1];
+            }
+        };
         while (children < ExactBvh::kWidth) {
             int pick = -1;
             for (int k = 0; k < children; ++k)
@@ -505,10 +511,7 @@ struct ExactBvhBuilder {
                     (pick < 0 || half_area(box[k]) > half_area(box[pick])))
                     pick = k;
             if (pick >= 0) {  // split in two
-                for (int k = children; k > pick; --k) {
-                    bounds[k + 1] = bounds[k];
-                    box[k] = box[k - 1];
-                }
+                make_room(pick, 1);
                 Item* const mid = split(bounds[pick], bounds[pick + 2], median);
                 bounds[pick + 1] = mid;
                 box[pick] = box_of(bounds[pick], mid);
@@ -523,10 +526,7 @@ struct ExactBvhBuilder {
             if (pick < 0)
                 break;
             const int size = size_of(pick), add = size - 1;  // every primitive a leaf of its own
-            for (int k = children; k > pick; --k) {
-                bounds[k + add] = bounds[k];
-                box[k + add - 1] = box[k - 1];
-            }
+            make_room(pick, add);
             for (int k = 0; k < size; ++k) {
                 bounds[pick + k] = bounds[pick] + k;
                 box[pick + k] = bounds[pick][k].box;
@@ -556,16 +556,20 @@ Status ExactBvh::build(const Impl& a) {
     bottom_.clear();
     first_.clear();
     root_ = kNoChild;
+    Status st;
     try {
-        return build_tree(a);
+        st = build_tree(a);
     } catch (const std::bad_alloc&) {
         // As an Embree build that ran out of memory did: no tree, and the linear scan answers.
+        st = Status::error(Code::too_large, "out of memory building exact's BVH");
+    }
+    if (!st.ok()) {  // whatever build_tree had made: none of it is walked
         std::vector<Node>().swap(nodes_);
         std::vector<QNode>().swap(bottom_);
         std::vector<std::uint32_t>().swap(first_);
         root_ = kNoChild;
-        return Status::error(Code::too_large, "out of memory building exact's BVH");
     }
+    return st;
 }
 
 Status ExactBvh::build_tree(const Impl& a) {
@@ -626,12 +630,8 @@ Status ExactBvh::build_tree(const Impl& a) {
         for (std::uint32_t& c : n.child)
             c = renamed(c);
         if (code[i] & kBottomBit) {
-            if (!quantize(n, bottom_[code[i] & ~kBottomBit])) {
-                nodes_.clear();
-                bottom_.clear();
-                root_ = kNoChild;
+            if (!quantize(n, bottom_[code[i] & ~kBottomBit]))
                 return Status::error(Code::internal, "a box of exact's BVH is not finite");
-            }
         } else {
             nodes_.push_back(n);
         }

@@ -132,15 +132,11 @@ GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& 
                                           BuildBuffer& buffer) {
     const std::size_t n = mesh.size();
     // In memory of ours, which EmbreeAccel::build releases once the BVH is built (build_buffer.h).
-    auto* v = static_cast<float*>(buffer.carve(9 * n * sizeof(float)));
-    auto* idx = static_cast<unsigned*>(buffer.carve(3 * n * sizeof(unsigned)));
-    if (!v || !idx)
-        return nullptr;  // no memory (the caller says so)
     GeometryHandle g(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE));
-    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, v, 0,
-                               3 * sizeof(float), 3 * n);
-    rtcSetSharedGeometryBuffer(g.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, idx, 0,
-                               3 * sizeof(unsigned), n);
+    float* v;
+    unsigned* idx;
+    if (!share_triangle_buffers(g.get(), buffer, 3 * n, n, v, idx))
+        return nullptr;  // no memory (the caller says so)
     for (std::size_t i = 0; i < n; ++i) {
         const Triangle t = mesh.triangle(i);
         // Widened in Embree's frame (Impl::frame, an exact scaling): its cross products are of

@@ -90,10 +90,10 @@ bool outside_range_well_inside(const Triangle& tri, const LineCrossing& outside,
 GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& mesh, const Impl& a,
                                           double widen, GeomData* data, bool& capped,
                                           BuildBuffer& buffer);
-/// Bytes of a BuildBuffer make_fat_triangle_geometry carves for `triangles` triangles.
-inline std::size_t fat_triangle_bytes(std::size_t triangles) {
-    return BuildBuffer::carved(9 * triangles * sizeof(float)) +
-           BuildBuffer::carved(3 * triangles * sizeof(unsigned));
+/// Bytes of a BuildBuffer make_fat_triangle_geometry carves for `mesh`: three vertices of its
+/// own a triangle.
+inline std::size_t fat_triangle_bytes(const TriangleMesh& mesh) {
+    return triangle_buffer_bytes(3 * mesh.size(), mesh.size());
 }
 
 }  // namespace raycastd::engine::embree
