@@ -627,10 +627,13 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
                 escalations += escalated;
             }
         } else {
-            closest_packet(
+            const auto prepare = [&](const Ray& ray, RayContext& c, FloatRay& f) {
+                return prepare_refined_closest_ray(a, ray, want_normal, c, f);
+            };
+            closest_packet_filled(
                 a, a.native.get(), rays + i, m,
-                [&](const Ray& ray, RayContext& c, FloatRay& f) {
-                    return prepare_refined_closest_ray(a, ray, want_normal, c, f);
+                [&](RayContext* lanes, RTCRay16& r16, int* valid) {
+                    fill_refined_lanes(a, rays + i, m, want_normal, prepare, lanes, r16, valid);
                 },
                 [&](std::size_t k, const RayContext& c, const NativeHit&) {
                     bool escalated = false;
@@ -669,10 +672,14 @@ void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) 
                     ++escalations;
             }
         } else {
-            any_packet(
+            const auto prepare = [&](const Ray& ray, RayContext& c, FloatRay& f) {
+                return prepare_refined_ray(a, ray, c, f);
+            };
+            any_packet_filled(
                 a, a.native.get(), rays + i, m,
-                [&](const Ray& ray, RayContext& c, FloatRay& f) {
-                    return prepare_refined_ray(a, ray, c, f);
+                [&](RayContext* lanes, RTCRay16& r16, int* valid) {
+                    fill_refined_lanes(a, rays + i, m, /*want_normal=*/false, prepare, lanes, r16,
+                                       valid);
                 },
                 [&](std::size_t k, const RayContext& c) {
                     escalations += !miss_is_certain(a, c);

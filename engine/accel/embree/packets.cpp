@@ -194,6 +194,130 @@ static_assert(sizeof(Ray) == 8 * sizeof(double) && offsetof(Ray, direction) == 3
                                         _mm256_mul_pd(z, z)));
 }
 
+/// Four 64-bit lane masks as four 32-bit ones.
+[[gnu::target("avx"), gnu::always_inline]] inline __m128 narrowed(__m256d mask) {
+    return _mm_shuffle_ps(_mm256_castps256_ps128(_mm256_castpd_ps(mask)),
+                          _mm256_extractf128_ps(_mm256_castpd_ps(mask), 1),
+                          _MM_SHUFFLE(2, 0, 2, 0));
+}
+
+/// float_up on four lanes: each value rounded to float, stepped up to the next float where
+/// that went down (next_up's bit steps: +1 above zero, −1 below, the least subnormal from
+/// either zero, +∞ and NaN as they are).
+[[gnu::target("avx"), gnu::always_inline]] inline __m128 float_up_avx(__m256d v) {
+    const __m128 f = _mm256_cvtpd_ps(v);
+    const __m128 take_up = narrowed(_mm256_cmp_pd(_mm256_cvtps_pd(f), v, _CMP_LT_OQ));
+    const __m128 zero = _mm_setzero_ps();
+    const __m128i bits = _mm_castps_si128(f), one = _mm_set1_epi32(1);
+    const __m128 above = _mm_castsi128_ps(_mm_add_epi32(bits, one));
+    const __m128 below = _mm_castsi128_ps(_mm_sub_epi32(bits, one));
+    __m128 up = _mm_blendv_ps(below, above, _mm_cmpgt_ps(f, zero));
+    up = _mm_blendv_ps(up, _mm_castsi128_ps(one), _mm_cmpeq_ps(f, zero));  // denorm_min
+    up = _mm_blendv_ps(f, up, _mm_cmplt_ps(f, _mm_set1_ps(std::numeric_limits<float>::infinity())));
+    return _mm_blendv_ps(f, up, take_up);
+}
+
+/// What four_refined_lanes_avx made of four lanes (bit j each).
+struct FourLanes {
+    alignas(32) double shift[4], len[4], origin_err[4];
+    int on = 0;   ///< set up, as prepare_ray would: valid, context below
+    int off = 0;  ///< prepare_ray's false (the segment misses the bounds): valid 0
+    // The others: a ray that takes another branch of prepare_ray (a zero or NaN direction
+    // component, a length beyond 2^±500, an origin far enough for the double-double start
+    // point, a start point it leaves unplaced), left to prepare_ray itself.
+};
+
+/// prepare_ray (RayStart::backed_off, RayFrame::world) on rays k..k+3, in AVX's registers: the
+/// same operations in the same order (clip_to_bounds' slabs, with its min/max operand order;
+/// no FMA: -ffp-contract=off), so the same bits. The float rays go straight into lanes k..k+3
+/// of r16 (fill_lane's values: an off lane's FloatRay{} with tfar −1; the lanes left to
+/// prepare_ray are written again by it).
+[[gnu::target("avx")]] void four_refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t k,
+                                                   std::size_t m, RTCRay16& r16, FourLanes& out) {
+    const __m256d zero = _mm256_setzero_pd();
+    const __m256d sign = _mm256_set1_pd(-0.0);
+    const __m256d g3 = _mm256_set1_pd(gamma(3));
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+    __m256d col[8];  // ox, oy, oz, dx, dy, dz, tmin, tmax: four rays each
+    load_rays_avx(rays, k, m, col);
+    // clip_to_bounds against the padded bounds (its other branch, for a zero direction
+    // component, is prepare_ray's: such a lane is not sloped).
+    __m256d lo_t = col[6], hi_t = col[7];
+    __m256d sloped = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    for (int j = 0; j < 3; ++j) {
+        const __m256d o = col[j], d = col[3 + j];
+        sloped = _mm256_and_pd(sloped, _mm256_cmp_pd(d, zero, _CMP_NEQ_OQ));
+        const __m256d inv = _mm256_div_pd(one, d);
+        const __m256d tl =
+            _mm256_mul_pd(_mm256_sub_pd(_mm256_set1_pd(a.padded_bounds.lo[j]), o), inv);
+        const __m256d th =
+            _mm256_mul_pd(_mm256_sub_pd(_mm256_set1_pd(a.padded_bounds.hi[j]), o), inv);
+        const __m256d ta = _mm256_min_pd(th, tl), tb = _mm256_max_pd(tl, th);  // ordered()
+        // std::max(lo_t, x) is max_pd(x, lo_t), std::min(hi_t, y) is min_pd(y, hi_t), NaNs
+        // and signed zeros alike.
+        lo_t =
+            _mm256_max_pd(_mm256_sub_pd(ta, _mm256_mul_pd(g3, _mm256_andnot_pd(sign, ta))), lo_t);
+        hi_t =
+            _mm256_min_pd(_mm256_add_pd(tb, _mm256_mul_pd(g3, _mm256_andnot_pd(sign, tb))), hi_t);
+    }
+    const __m256d meets = _mm256_cmp_pd(lo_t, hi_t, _CMP_LE_OQ);
+    const __m256d dx = col[3], dy = col[4], dz = col[5];
+    const __m256d dlen = length_avx(dx, dy, dz);
+    __m256d ok = _mm256_and_pd(_mm256_and_pd(sloped, meets),
+                               _mm256_cmp_pd(dlen, _mm256_set1_pd(0x1p-500), _CMP_GT_OQ));
+    ok = _mm256_and_pd(ok, _mm256_cmp_pd(dlen, _mm256_set1_pd(0x1p500), _CMP_LT_OQ));
+    const __m256d len = _mm256_mul_pd(dlen, _mm256_set1_pd(a.unit));
+    const __m256d shift = _mm256_sub_pd(lo_t, _mm256_div_pd(_mm256_set1_pd(4.0 * a.pad), dlen));
+    const __m256d qx = _mm256_sub_pd(col[0], _mm256_set1_pd(a.center.x)),
+                  qy = _mm256_sub_pd(col[1], _mm256_set1_pd(a.center.y)),
+                  qz = _mm256_sub_pd(col[2], _mm256_set1_pd(a.center.z));
+    const __m256d far =
+        _mm256_add_pd(length_avx(qx, qy, qz), _mm256_mul_pd(_mm256_andnot_pd(sign, shift), dlen));
+    const __m256d origin_err = _mm256_mul_pd(_mm256_set1_pd(8.0 * kDoubleUnitRoundoff), far);
+    ok = _mm256_and_pd(ok, _mm256_cmp_pd(origin_err, _mm256_set1_pd(0.25 * a.pad), _CMP_LE_OQ));
+    const __m256d org[3] = {_mm256_add_pd(qx, _mm256_mul_pd(dx, shift)),
+                            _mm256_add_pd(qy, _mm256_mul_pd(dy, shift)),
+                            _mm256_add_pd(qz, _mm256_mul_pd(dz, shift))};
+    const __m256d inv_len = _mm256_div_pd(one, dlen);
+    // prepare_ray's checks before it places the start point (ordered comparisons: a NaN fails).
+    const __m256d reach = _mm256_set1_pd(4.0 * a.float_scale);
+    for (int j = 0; j < 3; ++j)
+        ok = _mm256_and_pd(ok, _mm256_cmp_pd(_mm256_andnot_pd(sign, org[j]), reach, _CMP_LE_OQ));
+    ok = _mm256_and_pd(ok, _mm256_cmp_pd(len, zero, _CMP_GT_OQ));
+    ok = _mm256_and_pd(ok, _mm256_cmp_pd(len, inf, _CMP_LT_OQ));
+    const double margin = 4.0 * a.pad * a.unit;
+    const __m256d margin_over_len =
+        _mm256_andnot_pd(sign, _mm256_div_pd(_mm256_set1_pd(margin), len));
+    ok = _mm256_and_pd(ok, _mm256_cmp_pd(margin_over_len, inf, _CMP_LT_OQ));
+    // tfar: +∞ for an infinite end (std::isinf), else tfar_for's float_up((t1 − shift)·len +
+    // margin); a NaN is left to prepare_ray (it leaves the ray unplaced).
+    const __m128 tf_up = float_up_avx(
+        _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(hi_t, shift), len), _mm256_set1_pd(margin)));
+    const __m128 endless = narrowed(_mm256_cmp_pd(_mm256_andnot_pd(sign, hi_t), inf, _CMP_EQ_OQ));
+    const __m128 tf =
+        _mm_blendv_ps(tf_up, _mm_set1_ps(std::numeric_limits<float>::infinity()), endless);
+    out.on = _mm256_movemask_pd(ok) & _mm_movemask_ps(_mm_cmpord_ps(tf, tf));
+    out.off = _mm256_movemask_pd(_mm256_andnot_pd(meets, sloped));
+    // The lanes: the float ray where on, FloatRay{} (tfar −1) where off or left (those are
+    // written again by prepare_ray).
+    const __m128 on4 = _mm_and_ps(narrowed(ok), _mm_cmpord_ps(tf, tf));
+    const __m256d unit = _mm256_set1_pd(a.unit);
+    const __m256d dir[3] = {dx, dy, dz};
+    float* const org_out[3] = {r16.org_x + k, r16.org_y + k, r16.org_z + k};
+    float* const dir_out[3] = {r16.dir_x + k, r16.dir_y + k, r16.dir_z + k};
+    for (int j = 0; j < 3; ++j) {
+        _mm_store_ps(org_out[j],
+                     _mm_and_ps(on4, _mm256_cvtpd_ps(saturated_avx(_mm256_mul_pd(org[j], unit)))));
+        _mm_store_ps(dir_out[j], _mm_and_ps(on4, _mm256_cvtpd_ps(_mm256_mul_pd(dir[j], inv_len))));
+    }
+    _mm_store_ps(r16.tnear + k, _mm_setzero_ps());
+    _mm_store_ps(r16.tfar + k, _mm_blendv_ps(_mm_set1_ps(-1.0f), tf, on4));
+    _mm256_store_pd(out.shift, shift);
+    _mm256_store_pd(out.len, len);
+    _mm256_store_pd(out.origin_err, origin_err);
+}
+
 /// fast_packet's answers one lane at a time: fast_hit with fast's unclipped mapping (shift 0,
 /// len Impl::unit), a miss as Hit{}.
 void fast_answers_scalar(const Impl& a, const Ray* rays, std::size_t m, const RTCRayHit16& rh,
@@ -308,6 +432,47 @@ std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* ray
         },
         spread2);
     return flagged_context(together);
+}
+
+unsigned refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
+                           RayContext* lanes, RTCRay16& r16, int* valid) {
+    unsigned left = 0;
+    const double margin = 4.0 * a.pad * a.unit;
+    for (std::size_t k = 0; k < kLanes; ++k) {  // fill_lane's constant fields
+        r16.time[k] = 0.0f;
+        r16.mask[k] = 0xFFFFFFFFu;
+        r16.id[k] = static_cast<unsigned>(k);
+        r16.flags[k] = 0;
+    }
+    for (std::size_t k = 0; k < m; k += 4) {
+        FourLanes four;
+        four_refined_lanes_avx(a, rays, k, m, r16, four);
+        for (std::size_t j = 0; j < 4 && k + j < m; ++j) {
+            const std::size_t lane = k + j;
+            RayContext& c = lanes[lane];
+            if (four.on >> j & 1) {
+                c.accel = &a;
+                c.want_normal = want_normal;  // as prepare_refined_closest_ray
+                c.ray = &rays[lane];
+                c.frame = nullptr;
+                c.far = false;
+                c.len = four.len[j];
+                c.margin = margin;
+                c.shift = four.shift[j];
+                c.origin_err = four.origin_err[j];
+                valid[lane] = -1;
+            } else if (four.off >> j & 1) {  // prepare_ray's false, which sets nothing else
+                c.accel = &a;
+                c.want_normal = want_normal;
+                valid[lane] = 0;
+            } else {
+                left |= 1u << lane;
+            }
+        }
+    }
+    for (std::size_t lane = m; lane < kLanes; ++lane)  // fill_lanes' own
+        left |= 1u << lane;
+    return left;
 }
 
 bool fast_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, bool want_normal,

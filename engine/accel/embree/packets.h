@@ -97,34 +97,68 @@ bool fast_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, 
 /// hit filter (the packet's context is a plain one).
 bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Hit* out);
 
+/// Lane k of a packet as fill_lanes makes it.
+template <class Prepare>
+void prepare_lane(const Impl& a, const Ray* rays, std::size_t m, Prepare& prepare, std::size_t k,
+                  RayContext* lanes, RTCRay16& r16, int* valid) {
+    FloatRay f;
+    lanes[k].accel = &a;
+    const bool on = k < m && prepare(rays[k], lanes[k], f);
+    if (!on)
+        f.tfar = -1.0f;
+    fill_lane(r16, k, f, static_cast<unsigned>(k));
+    valid[k] = on ? -1 : 0;
+}
+
 /// Lanes 0..16 of a packet from rays[0..m): lane k < m is on (valid −1) when prepare(ray,
 /// lanes[k], float_ray) set it up; lanes past m, and rays whose segment misses the bounds, are
 /// off (valid 0, tfar −1).
 template <class Prepare>
 void fill_lanes(const Impl& a, const Ray* rays, std::size_t m, Prepare& prepare, RayContext* lanes,
                 RTCRay16& r16, int* valid) {
+    for (std::size_t k = 0; k < kLanes; ++k)
+        prepare_lane(a, rays, m, prepare, k, lanes, r16, valid);
+}
+
+/// refined's lanes (prepare_ray from where the segment enters the padded bounds, backed off,
+/// in the world frame; RayContext::want_normal as prepare_refined_closest_ray sets it) for the
+/// rays of rays[0..m) it can set up four at a time in AVX's registers (the processor must have
+/// it): the same operations as prepare_ray's, so the same bits. Returns the lanes it left (bit
+/// k): a ray that takes another branch of prepare_ray (a direction with a zero component, an
+/// origin far from the scene, a length beyond 2^±500, a start point it leaves unplaced), and
+/// the lanes past m.
+unsigned refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
+                           RayContext* lanes, RTCRay16& r16, int* valid);
+
+/// fill_lanes(prepare) for refined's packets, where `prepare` is prepare_ray as
+/// refined_lanes_avx takes it: the lanes refined_lanes_avx sets up where the processor has AVX
+/// (and `how` allows), `prepare` the others. One ray at a time, prepare_ray and its slab test
+/// were a sixth of a refined batch of camera rays on workload B (perf: prepare_ray,
+/// clip_to_bounds, their square roots and divisions waiting on each other).
+template <class Prepare>
+void fill_refined_lanes(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
+                        Prepare& prepare, RayContext* lanes, RTCRay16& r16, int* valid,
+                        FastLanes how = FastLanes::avx) {
+    unsigned left = (1u << kLanes) - 1;
+    if (how == FastLanes::avx && widest_fast_lanes() == FastLanes::avx)
+        left = refined_lanes_avx(a, rays, m, want_normal, lanes, r16, valid);
     for (std::size_t k = 0; k < kLanes; ++k) {
-        FloatRay f;
-        lanes[k].accel = &a;
-        const bool on = k < m && prepare(rays[k], lanes[k], f);
-        if (!on)
-            f.tfar = -1.0f;
-        fill_lane(r16, k, f, static_cast<unsigned>(k));
-        valid[k] = on ? -1 : 0;
+        if (left >> k & 1)
+            prepare_lane(a, rays, m, prepare, k, lanes, r16, valid);
     }
 }
 
 /// Closest hits of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one packet on `scene`:
-/// lanes from prepare(ray, context, float_ray) (fill_lanes); out[k] is answer(k, context,
-/// native_hit) as a Hit (an empty optional: a miss), or Hit{} where the ray's segment misses the
-/// bounds.
-template <class Prepare, class Answer>
-void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
-                    Prepare&& prepare, Answer&& answer, Hit* out) {
+/// lanes from fill(lanes, r16, valid) (fill_lanes, fill_refined_lanes); out[k] is answer(k,
+/// context, native_hit) as a Hit (an empty optional: a miss), or Hit{} where the lane is off (the
+/// ray's segment misses the bounds).
+template <class Fill, class Answer>
+void closest_packet_filled(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
+                           Fill&& fill, Answer&& answer, Hit* out) {
     RayContext lanes[kLanes];
     alignas(64) RTCRayHit16 rh;
     alignas(64) int valid[kLanes];
-    fill_lanes(a, rays, m, prepare, lanes, rh.ray, valid);
+    fill(lanes, rh.ray, valid);
     for (std::size_t k = 0; k < kLanes; ++k)
         rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
     // The lanes travel in the context: refined's hit filter finds a lane's double ray and
@@ -143,16 +177,28 @@ void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t 
     }
 }
 
+/// closest_packet_filled with the lanes from prepare(ray, context, float_ray) (fill_lanes).
+template <class Prepare, class Answer>
+void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
+                    Prepare&& prepare, Answer&& answer, Hit* out) {
+    closest_packet_filled(
+        a, scene, rays, m,
+        [&](RayContext* lanes, RTCRay16& r16, int* valid) {
+            fill_lanes(a, rays, m, prepare, lanes, r16, valid);
+        },
+        answer, out);
+}
+
 /// `any` answers (any_answer) of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one occlusion
-/// packet on `scene`, lanes as in closest_packet; a lane that met the bounds but found nothing
-/// is answered by confirm_miss(k, its context).
-template <class Prepare, class ConfirmMiss>
-void any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Prepare&& prepare,
-                ConfirmMiss&& confirm_miss, Hit* out) {
+/// packet on `scene`, lanes as in closest_packet_filled; a lane that met the bounds but found
+/// nothing is answered by confirm_miss(k, its context).
+template <class Fill, class ConfirmMiss>
+void any_packet_filled(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Fill&& fill,
+                       ConfirmMiss&& confirm_miss, Hit* out) {
     RayContext lanes[kLanes];
     alignas(64) RTCRay16 r16;
     alignas(64) int valid[kLanes];
-    fill_lanes(a, rays, m, prepare, lanes, r16, valid);
+    fill(lanes, r16, valid);
     RayContext pc(a);
     pc.rtc = packet_context(rays, m, a.float_scale);
     pc.lanes = lanes;
@@ -163,6 +209,18 @@ void any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, P
             hit = confirm_miss(k, lanes[k]);
         out[k] = any_answer(hit);
     }
+}
+
+/// any_packet_filled with the lanes from prepare(ray, context, float_ray) (fill_lanes).
+template <class Prepare, class ConfirmMiss>
+void any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Prepare&& prepare,
+                ConfirmMiss&& confirm_miss, Hit* out) {
+    any_packet_filled(
+        a, scene, rays, m,
+        [&](RayContext* lanes, RTCRay16& r16, int* valid) {
+            fill_lanes(a, rays, m, prepare, lanes, r16, valid);
+        },
+        confirm_miss, out);
 }
 
 }  // namespace raycastd::engine::embree

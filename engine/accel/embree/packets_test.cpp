@@ -1,6 +1,7 @@
 // fast's packets (packets.h): lanes filled four at a time in AVX's registers are the lanes
 // filled one ray at a time, bit for bit, with the same coherence flag and the same refusals; and
-// answers made four lanes at a time are the Hits fast_hit makes lane by lane.
+// answers made four lanes at a time are the Hits fast_hit makes lane by lane. refined's lanes
+// set up four at a time are prepare_ray's, lane by lane, context and float ray alike.
 
 #include "engine/accel/embree/packets.h"
 
@@ -12,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/accel/embree/float_ray.h"
 #include "engine/testing/bits.h"
 
 namespace raycastd::engine::embree {
@@ -217,6 +219,129 @@ TEST(FastLanes, AvxAnswersAsOneByOne) {
     EXPECT_GT(misses, 500);
     EXPECT_GT(clamped, 500);
     EXPECT_GT(zero_segments, 50);
+}
+
+/// refined's lanes of `rays` (fill_refined_lanes), each lane's context and the packet, with
+/// junk in every byte first (a field one way leaves unwritten shows as a difference).
+struct RefinedLanes {
+    RayContext lanes[kLanes];
+    RTCRay16 r16;
+    int valid[kLanes];
+};
+
+void fill_refined(const Impl& a, const std::vector<Ray>& rays, bool want_normal, FastLanes how,
+                  unsigned char junk, RefinedLanes& out) {
+    std::memset(&out.r16, junk, sizeof out.r16);
+    std::memset(out.valid, junk, sizeof out.valid);
+    for (RayContext& c : out.lanes) {
+        c = RayContext{};
+        c.ray = nullptr;
+        c.shift = c.len = c.margin = c.origin_err = -7.0;
+        c.far = true;
+    }
+    const auto prepare = [&](const Ray& ray, RayContext& c, FloatRay& f) {
+        c.want_normal = want_normal;  // as prepare_refined_closest_ray
+        return prepare_ray(a, ray, RayStart::backed_off, c, f);
+    };
+    fill_refined_lanes(a, rays.data(), rays.size(), want_normal, prepare, out.lanes, out.r16,
+                       out.valid, how);
+}
+
+TEST(RefinedLanes, AvxSetsUpTheLanesPrepareRaySetsUp) {
+    if (widest_fast_lanes() != FastLanes::avx)
+        GTEST_SKIP() << "this processor has no AVX: only prepare_ray's lanes run here";
+    Impl a;
+    a.set_frame(Bounds3{{-1.5, 0.25, 3.0}, {2.5, 4.0, 5.5}});
+    const Vec3d c = a.center;
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> in(-12.0, 12.0), unit(-1.0, 1.0), expo(-3.0, 3.0);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    // What each lane was: set up by AVX (on), off (its segment misses the bounds), or left to
+    // prepare_ray; each must come out as prepare_ray makes it.
+    int on = 0, off = 0, special = 0, by_avx = 0;
+    auto static_on = [](const RefinedLanes& x, std::size_t k) { return x.valid[k] == -1; };
+    for (int round = 0; round < 400; ++round) {
+        const std::size_t m = 4 + round % 13;
+        std::vector<Ray> rays(m);
+        for (Ray& r : rays) {
+            r.origin = c + Vec3d{in(rng), in(rng), in(rng)};
+            // Aimed near the scene three times in four (most of those meet the bounds).
+            const Vec3d target = c + Vec3d{unit(rng), unit(rng), unit(rng)} * 2.0;
+            r.direction = rng() % 4 ? (target - r.origin) * std::pow(10.0, expo(rng))
+                                    : Vec3d{unit(rng), unit(rng), unit(rng)};
+            r.tmin = rng() % 3 == 0 ? 0.5 : 0.0;
+            r.tmax = rng() % 2 ? kInfinity : std::pow(10.0, expo(rng));
+            switch (rng() % 24) {  // now and then a ray of another branch of prepare_ray
+                case 0:
+                    r.direction.x = 0.0;
+                    break;
+                case 1:
+                    r.direction.z = -0.0;
+                    break;
+                case 2:
+                    r.direction.y = nan;
+                    break;
+                case 3:
+                    r.direction = r.direction * 0x1p-520;  // |d| below 2^-500
+                    break;
+                case 4:
+                    r.direction = r.direction * 0x1p520;
+                    break;
+                case 5:
+                    r.origin = c + (c - target) * 1e9;  // the double-double start point
+                    r.direction = target - r.origin;
+                    break;
+                case 6:
+                    r.origin = c + (c - target) * 1e18;  // left unplaced
+                    r.direction = target - r.origin;
+                    break;
+                case 7:
+                    r.tmin = 3.0;
+                    r.tmax = 1.0;  // an empty segment
+                    break;
+                case 8:
+                    r.origin.x = nan;
+                    break;
+                case 9:
+                    r.tmax = -0.0;
+                    break;
+                default:
+                    break;
+            }
+        }
+        {
+            // How many lanes AVX set up itself (the rest went to prepare_ray).
+            RefinedLanes x;
+            const unsigned left =
+                refined_lanes_avx(a, rays.data(), m, false, x.lanes, x.r16, x.valid);
+            by_avx += static_cast<int>(m) - __builtin_popcount(left & ((1u << m) - 1));
+        }
+        for (const bool want_normal : {false, true}) {
+            RefinedLanes one, avx;
+            fill_refined(a, rays, want_normal, FastLanes::one_by_one, 0x5A, one);
+            fill_refined(a, rays, want_normal, FastLanes::avx, 0xA5, avx);
+            EXPECT_EQ(std::memcmp(&one.r16, &avx.r16, sizeof one.r16), 0) << "round " << round;
+            EXPECT_EQ(std::memcmp(one.valid, avx.valid, sizeof one.valid), 0) << "round " << round;
+            for (std::size_t k = 0; k < kLanes; ++k) {
+                const RayContext& x = one.lanes[k];
+                const RayContext& y = avx.lanes[k];
+                EXPECT_TRUE(x.accel == y.accel && x.ray == y.ray && x.frame == y.frame &&
+                            x.far == y.far && x.want_normal == y.want_normal &&
+                            same_bits(x.len, y.len) && same_bits(x.margin, y.margin) &&
+                            same_bits(x.shift, y.shift) && same_bits(x.origin_err, y.origin_err))
+                    << "round " << round << " lane " << k << ": shift " << x.shift << " / "
+                    << y.shift << ", origin_err " << x.origin_err << " / " << y.origin_err;
+                if (k < m && !want_normal) {
+                    const bool plain = x.ray && !x.far && x.frame == nullptr;
+                    (static_on(one, k) ? (plain ? on : special) : off) += 1;
+                }
+            }
+        }
+    }
+    EXPECT_GT(on, 800);  // lanes of every kind were compared
+    EXPECT_GT(off, 500);
+    EXPECT_GT(special, 50);
+    EXPECT_GT(by_avx, 3000);  // and most were set up by AVX
 }
 
 }  // namespace
