@@ -17,6 +17,7 @@
 #include "engine/accel/scene_scan.h"
 #include "engine/geometry/triangle.h"
 #include "engine/math/float_bounds.h"
+#include "engine/testing/bits.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -632,7 +633,8 @@ TEST(EmbreeAccel, WatertightOnSharedEdgesAndVertices) {
                 fast_leaks, fast_odd, rays);
 }
 
-// Packets (camera rays) and single rays give the same answers.
+// Packets (camera rays) and single rays give the same answers; so do exact's batches (their
+// rays set up four at a time: backed_off_lanes_avx) and its single rays, bit for bit.
 TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
     Scene s;
     s.materials.push_back(Material{});
@@ -651,7 +653,7 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
     for (int k = 0; k < 7; ++k)
         rays.push_back(Ray{{0.5, 0.5, -6}, {0.01 * k, -0.02 * k, 1}});
     rays[40] = Ray{{0.5, 0.5, -600}, {-0.5, -0.5, 600}};  // at the icosphere's centre
-    for (Precision p : {Precision::fast, Precision::refined}) {
+    for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
         std::vector<Hit> packed(rays.size());
         b.accel->closest_range(rays.data(), rays.size(), p, true, packed.data());
         int hits = 0, edge_ties = 0;
@@ -672,9 +674,18 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
             }
             EXPECT_EQ(one->t, packed[i].t);
             EXPECT_EQ(one->normal, packed[i].normal);
+            if (p == Precision::exact) {
+                EXPECT_TRUE(testing::same_bits(one->t, packed[i].t) &&
+                            testing::same_bits(one->t_err, packed[i].t_err) &&
+                            testing::same_bits(one->u, packed[i].u) &&
+                            testing::same_bits(one->v, packed[i].v) &&
+                            one->front_face == packed[i].front_face &&
+                            one->on_edge == packed[i].on_edge)
+                    << i;
+            }
         }
         EXPECT_LT(edge_ties, 64);
-        if (p == Precision::refined) {
+        if (p != Precision::fast) {
             EXPECT_EQ(edge_ties, 0);
         }
         EXPECT_GT(hits, 1500);

@@ -217,7 +217,7 @@ static_assert(sizeof(Ray) == 8 * sizeof(double) && offsetof(Ray, direction) == 3
     return _mm_blendv_ps(f, up, take_up);
 }
 
-/// What four_refined_lanes_avx made of four lanes (bit j each).
+/// What four_backed_off_lanes_avx made of four lanes (bit j each).
 struct FourLanes {
     alignas(32) double shift[4], len[4], origin_err[4];
     int on = 0;   ///< set up, as prepare_ray would: valid, context below
@@ -232,8 +232,9 @@ struct FourLanes {
 /// no FMA: -ffp-contract=off), so the same bits. The float rays go straight into lanes k..k+3
 /// of r16 (fill_lane's values: an off lane's FloatRay{} with tfar −1; the lanes left to
 /// prepare_ray are written again by it).
-[[gnu::target("avx")]] void four_refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t k,
-                                                   std::size_t m, RTCRay16& r16, FourLanes& out) {
+[[gnu::target("avx")]] void four_backed_off_lanes_avx(const Impl& a, const Ray* rays, std::size_t k,
+                                                      std::size_t m, RTCRay16& r16,
+                                                      FourLanes& out) {
     const __m256d zero = _mm256_setzero_pd();
     const __m256d sign = _mm256_set1_pd(-0.0);
     const __m256d g3 = _mm256_set1_pd(gamma(3));
@@ -434,8 +435,8 @@ std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* ray
     return flagged_context(together);
 }
 
-unsigned refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
-                           RayContext* lanes, RTCRay16& r16, int* valid) {
+unsigned backed_off_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
+                              RayContext* lanes, RTCRay16& r16, int* valid) {
     unsigned left = 0;
     const double margin = 4.0 * a.pad * a.unit;
     for (std::size_t k = 0; k < kLanes; ++k) {  // fill_lane's constant fields
@@ -446,7 +447,7 @@ unsigned refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool w
     }
     for (std::size_t k = 0; k < m; k += 4) {
         FourLanes four;
-        four_refined_lanes_avx(a, rays, k, m, r16, four);
+        four_backed_off_lanes_avx(a, rays, k, m, r16, four);
         for (std::size_t j = 0; j < 4 && k + j < m; ++j) {
             const std::size_t lane = k + j;
             RayContext& c = lanes[lane];

@@ -120,28 +120,28 @@ void fill_lanes(const Impl& a, const Ray* rays, std::size_t m, Prepare& prepare,
         prepare_lane(a, rays, m, prepare, k, lanes, r16, valid);
 }
 
-/// refined's lanes (prepare_ray from where the segment enters the padded bounds, backed off,
-/// in the world frame; RayContext::want_normal as prepare_refined_closest_ray sets it) for the
-/// rays of rays[0..m) it can set up four at a time in AVX's registers (the processor must have
-/// it): the same operations as prepare_ray's, so the same bits. Returns the lanes it left (bit
-/// k): a ray that takes another branch of prepare_ray (a direction with a zero component, an
-/// origin far from the scene, a length beyond 2^±500, a start point it leaves unplaced), and
-/// the lanes past m.
-unsigned refined_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
-                           RayContext* lanes, RTCRay16& r16, int* valid);
+/// Lanes as prepare_ray(RayStart::backed_off, RayFrame::world) sets them up (refined's packets,
+/// exact's batches), with RayContext::want_normal = `want_normal` (as
+/// prepare_refined_closest_ray and exact_closest set it first), for the rays of rays[0..m) it
+/// can set up four at a time in AVX's registers (the processor must have it): the same
+/// operations as prepare_ray's, so the same bits. Returns the lanes it left (bit k): a ray that
+/// takes another branch of prepare_ray (a direction with a zero component, an origin far from
+/// the scene, a length beyond 2^±500, a start point it leaves unplaced), and the lanes past m.
+unsigned backed_off_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
+                              RayContext* lanes, RTCRay16& r16, int* valid);
 
-/// fill_lanes(prepare) for refined's packets, where `prepare` is prepare_ray as
-/// refined_lanes_avx takes it: the lanes refined_lanes_avx sets up where the processor has AVX
-/// (and `how` allows), `prepare` the others. One ray at a time, prepare_ray and its slab test
-/// were a sixth of a refined batch of camera rays on workload B (perf: prepare_ray,
-/// clip_to_bounds, their square roots and divisions waiting on each other).
+/// fill_lanes(prepare) where `prepare` is prepare_ray as backed_off_lanes_avx takes it (refined's
+/// packets): the lanes backed_off_lanes_avx sets up where the processor has AVX (and `how`
+/// allows), `prepare` the others. One ray at a time, prepare_ray and its slab test were a sixth
+/// of a refined batch of camera rays on workload B (perf: prepare_ray, clip_to_bounds, their
+/// square roots and divisions waiting on each other).
 template <class Prepare>
-void fill_refined_lanes(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
-                        Prepare& prepare, RayContext* lanes, RTCRay16& r16, int* valid,
-                        FastLanes how = FastLanes::avx) {
+void fill_backed_off_lanes(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
+                           Prepare& prepare, RayContext* lanes, RTCRay16& r16, int* valid,
+                           FastLanes how = FastLanes::avx) {
     unsigned left = (1u << kLanes) - 1;
     if (how == FastLanes::avx && widest_fast_lanes() == FastLanes::avx)
-        left = refined_lanes_avx(a, rays, m, want_normal, lanes, r16, valid);
+        left = backed_off_lanes_avx(a, rays, m, want_normal, lanes, r16, valid);
     for (std::size_t k = 0; k < kLanes; ++k) {
         if (left >> k & 1)
             prepare_lane(a, rays, m, prepare, k, lanes, r16, valid);
@@ -149,7 +149,7 @@ void fill_refined_lanes(const Impl& a, const Ray* rays, std::size_t m, bool want
 }
 
 /// Closest hits of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one packet on `scene`:
-/// lanes from fill(lanes, r16, valid) (fill_lanes, fill_refined_lanes); out[k] is answer(k,
+/// lanes from fill(lanes, r16, valid) (fill_lanes, fill_backed_off_lanes); out[k] is answer(k,
 /// context, native_hit) as a Hit (an empty optional: a miss), or Hit{} where the lane is off (the
 /// ray's segment misses the bounds).
 template <class Fill, class Answer>

@@ -221,16 +221,16 @@ TEST(FastLanes, AvxAnswersAsOneByOne) {
     EXPECT_GT(zero_segments, 50);
 }
 
-/// refined's lanes of `rays` (fill_refined_lanes), each lane's context and the packet, with
+/// refined's lanes of `rays` (fill_backed_off_lanes), each lane's context and the packet, with
 /// junk in every byte first (a field one way leaves unwritten shows as a difference).
-struct RefinedLanes {
+struct BackedOffLanes {
     RayContext lanes[kLanes];
     RTCRay16 r16;
     int valid[kLanes];
 };
 
 void fill_refined(const Impl& a, const std::vector<Ray>& rays, bool want_normal, FastLanes how,
-                  unsigned char junk, RefinedLanes& out) {
+                  unsigned char junk, BackedOffLanes& out) {
     std::memset(&out.r16, junk, sizeof out.r16);
     std::memset(out.valid, junk, sizeof out.valid);
     for (RayContext& c : out.lanes) {
@@ -243,11 +243,11 @@ void fill_refined(const Impl& a, const std::vector<Ray>& rays, bool want_normal,
         c.want_normal = want_normal;  // as prepare_refined_closest_ray
         return prepare_ray(a, ray, RayStart::backed_off, c, f);
     };
-    fill_refined_lanes(a, rays.data(), rays.size(), want_normal, prepare, out.lanes, out.r16,
-                       out.valid, how);
+    fill_backed_off_lanes(a, rays.data(), rays.size(), want_normal, prepare, out.lanes, out.r16,
+                          out.valid, how);
 }
 
-TEST(RefinedLanes, AvxSetsUpTheLanesPrepareRaySetsUp) {
+TEST(BackedOffLanes, AvxSetsUpTheLanesPrepareRaySetsUp) {
     if (widest_fast_lanes() != FastLanes::avx)
         GTEST_SKIP() << "this processor has no AVX: only prepare_ray's lanes run here";
     Impl a;
@@ -259,7 +259,7 @@ TEST(RefinedLanes, AvxSetsUpTheLanesPrepareRaySetsUp) {
     // What each lane was: set up by AVX (on), off (its segment misses the bounds), or left to
     // prepare_ray; each must come out as prepare_ray makes it.
     int on = 0, off = 0, special = 0, by_avx = 0;
-    auto static_on = [](const RefinedLanes& x, std::size_t k) { return x.valid[k] == -1; };
+    auto static_on = [](const BackedOffLanes& x, std::size_t k) { return x.valid[k] == -1; };
     for (int round = 0; round < 400; ++round) {
         const std::size_t m = 4 + round % 13;
         std::vector<Ray> rays(m);
@@ -311,13 +311,13 @@ TEST(RefinedLanes, AvxSetsUpTheLanesPrepareRaySetsUp) {
         }
         {
             // How many lanes AVX set up itself (the rest went to prepare_ray).
-            RefinedLanes x;
+            BackedOffLanes x;
             const unsigned left =
-                refined_lanes_avx(a, rays.data(), m, false, x.lanes, x.r16, x.valid);
+                backed_off_lanes_avx(a, rays.data(), m, false, x.lanes, x.r16, x.valid);
             by_avx += static_cast<int>(m) - __builtin_popcount(left & ((1u << m) - 1));
         }
         for (const bool want_normal : {false, true}) {
-            RefinedLanes one, avx;
+            BackedOffLanes one, avx;
             fill_refined(a, rays, want_normal, FastLanes::one_by_one, 0x5A, one);
             fill_refined(a, rays, want_normal, FastLanes::avx, 0xA5, avx);
             EXPECT_EQ(std::memcmp(&one.r16, &avx.r16, sizeof one.r16), 0) << "round " << round;
