@@ -11,6 +11,8 @@
 //   bench_intersect --memory-probe W   one JSON line: the resident bytes the engine keeps for
 //                                   workload W after a refined and an exact query (run by the
 //                                   others, a process of its own for each mesh workload)
+//   bench_intersect --memory-probe-trimmed W   the same with the heap freed so far given back
+//                                   (malloc_trim) before each reading
 //   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
 //            --raw-only (raw Embree's builds and traces alone, no engine)
 //            --ceiling-only (raw rtcIntersect1 alone: run_all.py times it around each peer)
@@ -28,6 +30,9 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "bench/bench_files.h"
 #include "bench/raw_embree.h"
@@ -79,6 +84,7 @@ struct Args {
     std::string modes = "closest,any,all,count";    ///< engine modes measured
     std::string precisions = "fast,refined,exact";  ///< engine precisions measured
     char memory_probe = 0;                          ///< --memory-probe W: that probe alone
+    bool memory_trimmed = false;                    ///< --memory-probe-trimmed W: trimmed
     std::string self;                               ///< argv[0], to run the probe
 };
 
@@ -104,13 +110,14 @@ bool parse_args(int argc, char** argv, Args& a) {
             a.raw_only = true;
         } else if (arg == "--json") {
             a.json_path = value();
-        } else if (arg == "--memory-probe") {
+        } else if (arg == "--memory-probe" || arg == "--memory-probe-trimmed") {
             const std::string w = value();
             if (w != "A" && w != "B" && w != "C") {
-                std::fprintf(stderr, "bench_intersect: --memory-probe takes A, B or C\n");
+                std::fprintf(stderr, "bench_intersect: %s takes A, B or C\n", arg.c_str());
                 return false;
             }
             a.memory_probe = w[0];
+            a.memory_trimmed = arg == "--memory-probe-trimmed";
         } else if (arg == "--modes") {
             a.modes = value();
         } else if (arg == "--precisions") {
@@ -167,9 +174,11 @@ class Report {
         const double after = probe.value("resident_refined_exact", 0.0);
         std::printf(
             "%-2s %-10s resident after refined and exact queries %.1f MB: %.0f B a triangle "
-            "(after the build alone %.0f B; the engine's own estimate %.0f B)\n",
+            "(after the build alone %.0f B; with the freed heap given back %.0f B; the engine's "
+            "own estimate %.0f B)\n",
             probe.value("workload", "").c_str(), "memory", after / 1e6, after / tris,
             probe.value("resident_after_build", 0.0) / tris,
+            probe.value("held_refined_exact", 0.0) / tris,
             probe.value("engine_estimate", 0.0) / tris);
         json row = probe;
         row["kind"] = "memory";
@@ -552,12 +561,22 @@ std::size_t resident_bytes() {
     return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
 }
 
+/// Gives the heap's free pages back to the system (glibc's malloc_trim); false elsewhere.
+bool trim_heap() {
+#if defined(__GLIBC__)
+    malloc_trim(0);
+    return true;
+#else
+    return false;
+#endif
+}
+
 /// --memory-probe W (run as a process of its own, from bench_workload): what the engine keeps
 /// resident for workload W once it has answered a refined and an exact query (issue 17: the
 /// native BVH with its widened triangles, the exact BVH, the scene's own vertices and indices),
 /// as one JSON line. A small scene is built and queried first, so that Embree's device, TBB's
 /// threads and the allocator's first arenas are not counted.
-int memory_probe(char name, const Sizes& sizes) {
+int memory_probe(char name, const Sizes& sizes, bool trimmed) {
     const rb::Workload warm = make_workload('A', kSmoke);
     const re::Ray probe{{0.0, 0.0, -10.0}, {0.0, 0.0, 1.0}};
     for (re::Precision p : {re::Precision::refined, re::Precision::exact}) {
@@ -569,6 +588,12 @@ int memory_probe(char name, const Sizes& sizes) {
     const rb::Workload w = make_workload(name, sizes);
     const auto bs = w.bounding_sphere();
     const re::Ray ray{{bs[0], bs[1], bs[2] - 2.0 * bs[3]}, {0.0, 0.0, 1.0}};
+    // `trimmed` (--memory-probe-trimmed): the heap freed so far given back before each reading,
+    // so that the growth is what the engine holds, not the heap its build freed and glibc kept
+    // for later allocations (its mmap threshold rises with each large block freed:
+    // docs/numerics.md, the memory of a scene). The row itself is the process as it is.
+    if (trimmed && !trim_heap())
+        return 1;
     const std::size_t before = resident_bytes();
     auto built = re::QueryEngine::build(std::make_shared<const re::Scene>(rb::to_engine_scene(w)));
     if (!built.ok())
@@ -577,8 +602,11 @@ int memory_probe(char name, const Sizes& sizes) {
     const std::size_t after_build = resident_bytes();
     engine->intersect({ray}, re::QueryOptions{re::Mode::closest, re::Precision::refined});
     engine->intersect({ray}, re::QueryOptions{re::Mode::closest, re::Precision::exact});
+    if (trimmed)
+        trim_heap();
     const std::size_t after = resident_bytes();
     std::printf("%s\n", json{{"workload", w.name},
+                             {"trimmed", trimmed},
                              {"triangles", engine->scene().triangle_count()},
                              {"resident_after_build", after_build - before},
                              {"resident_refined_exact", after - before},
@@ -593,10 +621,16 @@ void bench_memory(Report& report, const std::string& self, const Sizes& sizes, c
     const std::string flag = sizes.name == std::string(kQuick.name)   ? " --quick"
                              : sizes.name == std::string(kSmoke.name) ? " --smoke"
                                                                       : "";
-    const json j = json::parse(rb::command_output(self + flag + " --memory-probe " + name), nullptr,
-                               /*allow_exceptions=*/false);
+    json j = json::parse(rb::command_output(self + flag + " --memory-probe " + name), nullptr,
+                         /*allow_exceptions=*/false);
     if (!j.is_object())
         return;
+    // The same in a process of its own with the freed heap given back before each reading.
+    const json t =
+        json::parse(rb::command_output(self + flag + " --memory-probe-trimmed " + name), nullptr,
+                    /*allow_exceptions=*/false);
+    if (t.is_object() && t.value("trimmed", false))
+        j["held_refined_exact"] = t.value("resident_refined_exact", 0.0);
     report.memory(j);
 }
 
@@ -615,7 +649,7 @@ int main(int argc, char** argv) {
         return 2;
     args.self = argv[0];
     if (args.memory_probe)
-        return memory_probe(args.memory_probe, args.sizes);
+        return memory_probe(args.memory_probe, args.sizes, args.memory_trimmed);
     // Every TBB loop in the process (ours, the engine's, Embree's BVH build) uses this many
     // threads.
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
