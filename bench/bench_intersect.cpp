@@ -12,7 +12,7 @@
 //                                   workload W after a refined and an exact query (run by the
 //                                   others, a process of its own for each mesh workload)
 //   bench_intersect --memory-probe-trimmed W   the same with the heap freed so far given back
-//                                   (malloc_trim) before each reading
+//                                   (malloc_trim) before the first reading and the last
 //   options: --threads N  --budget SECONDS  --workloads ABC  --data-dir DIR  --json FILE
 //            --raw-only (raw Embree's builds and traces alone, no engine)
 //            --ceiling-only (raw rtcIntersect1 alone: run_all.py times it around each peer)
@@ -172,13 +172,16 @@ class Report {
         if (!(tris > 0))
             return;
         const double after = probe.value("resident_refined_exact", 0.0);
+        const double held = probe.value("held_refined_exact", 0.0);
+        char held_text[64] = "";
+        if (held > 0)  // the trimmed probe ran (glibc)
+            std::snprintf(held_text, sizeof held_text, "; with the freed heap given back %.0f B",
+                          held / tris);
         std::printf(
             "%-2s %-10s resident after refined and exact queries %.1f MB: %.0f B a triangle "
-            "(after the build alone %.0f B; with the freed heap given back %.0f B; the engine's "
-            "own estimate %.0f B)\n",
+            "(after the build alone %.0f B%s; the engine's own estimate %.0f B)\n",
             probe.value("workload", "").c_str(), "memory", after / 1e6, after / tris,
-            probe.value("resident_after_build", 0.0) / tris,
-            probe.value("held_refined_exact", 0.0) / tris,
+            probe.value("resident_after_build", 0.0) / tris, held_text,
             probe.value("engine_estimate", 0.0) / tris);
         json row = probe;
         row["kind"] = "memory";
@@ -588,8 +591,9 @@ int memory_probe(char name, const Sizes& sizes, bool trimmed) {
     const rb::Workload w = make_workload(name, sizes);
     const auto bs = w.bounding_sphere();
     const re::Ray ray{{bs[0], bs[1], bs[2] - 2.0 * bs[3]}, {0.0, 0.0, 1.0}};
-    // `trimmed` (--memory-probe-trimmed): the heap freed so far given back before each reading,
-    // so that the growth is what the engine holds, not the heap its build freed and glibc kept
+    // `trimmed` (--memory-probe-trimmed): the heap freed so far given back before the first
+    // reading and the last (not the one after the build), so that the growth is what the engine
+    // holds, not the heap its build freed and glibc kept
     // for later allocations (its mmap threshold rises with each large block freed:
     // docs/numerics.md, the memory of a scene). The row itself is the process as it is.
     if (trimmed && !trim_heap())

@@ -633,6 +633,71 @@ TEST(EmbreeAccel, WatertightOnSharedEdgesAndVertices) {
                 fast_leaks, fast_odd, rays);
 }
 
+// exact's batches (rays set up four at a time: backed_off_lanes_avx) answer as exact's single
+// rays, bit for bit, on a scene with spheres among its meshes, with and without normals, for
+// rays of every branch of prepare_ray (a zero direction component, a far origin, one that
+// misses the bounds).
+TEST(EmbreeAccel, ExactBatchesAgreeWithSingleRays) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::icosphere_object(3, {0.2, -0.1, 0.3}, 1.0));
+    s.objects.push_back(testing::sphere("ball", {1.8, 0.4, -0.5}, 0.6, 0));
+    s.objects.push_back(testing::cube_object(1.5, 2.5));
+    s.objects.push_back(testing::sphere("small", {-1.5, 1.2, 0.8}, 0.3, 0));
+    Built b = build(s);
+    ASSERT_TRUE(b.accel);
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 3000; ++i) {
+        Ray r;
+        r.origin = Vec3d{u(rng), u(rng), u(rng)} * 6.0;
+        const Vec3d target = Vec3d{u(rng), u(rng), u(rng)} * 1.8;  // the scene's middle
+        r.direction = (target - r.origin) * (0.6 + 0.5 * u(rng));
+        switch (i % 41) {
+            case 0:
+                r.direction.y = 0.0;
+                break;
+            case 1:
+                r.origin = r.origin * 1e12;  // far: moved to the scene by exact_closest
+                r.direction = Vec3d{u(rng), u(rng), u(rng)} * 0.5 - r.origin;
+                break;
+            case 2:
+                r.tmax = 0.01;  // stops short
+                break;
+            default:
+                break;
+        }
+        rays.push_back(r);
+    }
+    int hits = 0, spheres = 0;
+    for (const bool want_normal : {false, true}) {
+        std::vector<Hit> packed(rays.size());
+        b.accel->closest_range(rays.data(), rays.size(), Precision::exact, want_normal,
+                               packed.data());
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const auto one = b.accel->closest(rays[i], Precision::exact, want_normal);
+            ASSERT_EQ(one.has_value(), packed[i].valid()) << i;
+            if (!one)
+                continue;
+            const Hit& x = *one;
+            const Hit& y = packed[i];
+            EXPECT_TRUE(x.object == y.object && x.primitive == y.primitive &&
+                        testing::same_bits(x.t, y.t) && testing::same_bits(x.t_err, y.t_err) &&
+                        testing::same_bits(x.u, y.u) && testing::same_bits(x.v, y.v) &&
+                        testing::same_bits(x.normal.x, y.normal.x) &&
+                        testing::same_bits(x.normal.y, y.normal.y) &&
+                        testing::same_bits(x.normal.z, y.normal.z) &&
+                        x.front_face == y.front_face && x.on_edge == y.on_edge)
+                << i << " want_normal " << want_normal;
+            ++hits;
+            spheres += x.object == 1 || x.object == 3;
+        }
+    }
+    EXPECT_GT(hits, 1500);
+    EXPECT_GT(spheres, 100);
+}
+
 // Packets (camera rays) and single rays give the same answers; so do exact's batches (their
 // rays set up four at a time: backed_off_lanes_avx) and its single rays, bit for bit.
 TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {

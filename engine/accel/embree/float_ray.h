@@ -64,6 +64,21 @@ inline void fill_lane(EmbreeRay& r, std::size_t k, const FloatRay& f, unsigned i
     lane(r.flags, k) = 0;
 }
 
+/// The float ray fill_lane wrote into `r` (k ignored) or lane k of an RTCRay16.
+template <class EmbreeRay>
+inline FloatRay float_ray_of(const EmbreeRay& r, std::size_t k) {
+    FloatRay f;
+    f.org_x = lane(r.org_x, k);
+    f.org_y = lane(r.org_y, k);
+    f.org_z = lane(r.org_z, k);
+    f.dir_x = lane(r.dir_x, k);
+    f.dir_y = lane(r.dir_y, k);
+    f.dir_z = lane(r.dir_z, k);
+    f.tnear = lane(r.tnear, k);
+    f.tfar = lane(r.tfar, k);
+    return f;
+}
+
 /// What Embree reported for an RTCRayHit (k ignored) or lane k of an RTCRayHit16.
 template <class EmbreeRayHit>
 inline NativeHit native_hit(const EmbreeRayHit& rh, std::size_t k) {

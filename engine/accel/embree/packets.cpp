@@ -435,6 +435,10 @@ std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* ray
     return flagged_context(together);
 }
 
+[[gnu::target("avx")]] void float_up_four_avx(const double* in, float* out) {
+    _mm_storeu_ps(out, float_up_avx(_mm256_loadu_pd(in)));
+}
+
 unsigned backed_off_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
                               RayContext* lanes, RTCRay16& r16, int* valid) {
     unsigned left = 0;

@@ -127,8 +127,15 @@ void fill_lanes(const Impl& a, const Ray* rays, std::size_t m, Prepare& prepare,
 /// operations as prepare_ray's, so the same bits. Returns the lanes it left (bit k): a ray that
 /// takes another branch of prepare_ray (a direction with a zero component, an origin far from
 /// the scene, a length beyond 2^±500, a start point it leaves unplaced), and the lanes past m.
+/// The lanes it leaves may hold anything (valid[] unwritten, a copy of the last ray's lane past
+/// m): the caller fills every one of them (fill_backed_off_lanes) or reads none (exact's
+/// batches read only the lanes it set up).
 unsigned backed_off_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
                               RayContext* lanes, RTCRay16& r16, int* valid);
+
+/// float_up (float_bounds.h) of in[0..4) into out[0..4), as backed_off_lanes_avx forms tfar, four
+/// at a time; for its test. The processor must have AVX.
+void float_up_four_avx(const double* in, float* out);
 
 /// fill_lanes(prepare) where `prepare` is prepare_ray as backed_off_lanes_avx takes it (refined's
 /// packets): the lanes backed_off_lanes_avx sets up where the processor has AVX (and `how`

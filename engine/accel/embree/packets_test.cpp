@@ -6,6 +6,7 @@
 #include "engine/accel/embree/packets.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -14,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/accel/embree/float_ray.h"
+#include "engine/math/float_bounds.h"
 #include "engine/testing/bits.h"
 
 namespace raycastd::engine::embree {
@@ -250,98 +252,197 @@ void fill_refined(const Impl& a, const std::vector<Ray>& rays, bool want_normal,
 TEST(BackedOffLanes, AvxSetsUpTheLanesPrepareRaySetsUp) {
     if (widest_fast_lanes() != FastLanes::avx)
         GTEST_SKIP() << "this processor has no AVX: only prepare_ray's lanes run here";
-    Impl a;
-    a.set_frame(Bounds3{{-1.5, 0.25, 3.0}, {2.5, 4.0, 5.5}});
-    const Vec3d c = a.center;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    // Scenes of ordinary size, 2^±1000 across, and 1e12 from the origin: prepare_ray's checks on
+    // the length and the start point (len over- and underflowing, margin/len, the reach) bite
+    // only at the extremes (a helper's review: with `len < inf` deleted, a scene 2^-1001 across
+    // and a direction 2^400 long went through AVX with len = +inf).
+    struct Frame {
+        Vec3d centre;
+        double size;
+    };
+    const Frame frames[] = {{{0.5, 2.125, 4.25}, 1.0},
+                            {{0.3, -0.2, 0.1}, 0x1p-1002},
+                            {{-3.0, 1.0, 2.0}, 0x1p999},
+                            {{1e12, -2e12, 5e11}, 1.0}};
     std::mt19937_64 rng(23);
     std::uniform_real_distribution<double> in(-12.0, 12.0), unit(-1.0, 1.0), expo(-3.0, 3.0);
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    // What each lane was: set up by AVX (on), off (its segment misses the bounds), or left to
-    // prepare_ray; each must come out as prepare_ray makes it.
+    // What each lane was: set up by AVX (on), off (its segment misses the bounds), or another
+    // branch of prepare_ray; each must come out as prepare_ray makes it.
     int on = 0, off = 0, special = 0, by_avx = 0;
-    auto static_on = [](const BackedOffLanes& x, std::size_t k) { return x.valid[k] == -1; };
-    for (int round = 0; round < 400; ++round) {
-        const std::size_t m = 4 + round % 13;
-        std::vector<Ray> rays(m);
-        for (Ray& r : rays) {
-            r.origin = c + Vec3d{in(rng), in(rng), in(rng)};
-            // Aimed near the scene three times in four (most of those meet the bounds).
-            const Vec3d target = c + Vec3d{unit(rng), unit(rng), unit(rng)} * 2.0;
-            r.direction = rng() % 4 ? (target - r.origin) * std::pow(10.0, expo(rng))
-                                    : Vec3d{unit(rng), unit(rng), unit(rng)};
-            r.tmin = rng() % 3 == 0 ? 0.5 : 0.0;
-            r.tmax = rng() % 2 ? kInfinity : std::pow(10.0, expo(rng));
-            switch (rng() % 24) {  // now and then a ray of another branch of prepare_ray
-                case 0:
-                    r.direction.x = 0.0;
-                    break;
-                case 1:
-                    r.direction.z = -0.0;
-                    break;
-                case 2:
-                    r.direction.y = nan;
-                    break;
-                case 3:
-                    r.direction = r.direction * 0x1p-520;  // |d| below 2^-500
-                    break;
-                case 4:
-                    r.direction = r.direction * 0x1p520;
-                    break;
-                case 5:
-                    r.origin = c + (c - target) * 1e9;  // the double-double start point
-                    r.direction = target - r.origin;
-                    break;
-                case 6:
-                    r.origin = c + (c - target) * 1e18;  // left unplaced
-                    r.direction = target - r.origin;
-                    break;
-                case 7:
-                    r.tmin = 3.0;
-                    r.tmax = 1.0;  // an empty segment
-                    break;
-                case 8:
-                    r.origin.x = nan;
-                    break;
-                case 9:
-                    r.tmax = -0.0;
-                    break;
-                default:
-                    break;
+    for (const Frame& frame : frames) {
+        Impl a;
+        const Vec3d half = Vec3d{2.0, 1.875, 1.25} * frame.size;
+        a.set_frame(Bounds3{frame.centre - half, frame.centre + half});
+        const Vec3d c = a.center;
+        const double s = frame.size;
+        for (int round = 0; round < 200; ++round) {
+            const std::size_t m = 4 + round % 13;
+            std::vector<Ray> rays(m);
+            for (Ray& r : rays) {
+                r.origin = c + Vec3d{in(rng), in(rng), in(rng)} * s;
+                // Aimed near the scene three times in four (most of those meet the bounds).
+                const Vec3d target = c + Vec3d{unit(rng), unit(rng), unit(rng)} * (2.0 * s);
+                r.direction = rng() % 4 ? (target - r.origin) * (std::pow(10.0, expo(rng)) / s)
+                                        : Vec3d{unit(rng), unit(rng), unit(rng)};
+                r.tmin = rng() % 3 == 0 ? 0.5 : 0.0;
+                r.tmax = rng() % 2 ? kInfinity : std::pow(10.0, expo(rng));
+                switch (rng() % 32) {  // now and then an edge of prepare_ray's arithmetic
+                    case 0:
+                        r.direction.x = 0.0;
+                        break;
+                    case 1:
+                        r.direction.z = -0.0;
+                        break;
+                    case 2:
+                        r.direction.y = nan;
+                        break;
+                    case 3:
+                        r.direction = r.direction * 0x1p-520;  // |d| below 2^-500
+                        break;
+                    case 4:
+                        r.direction = r.direction * 0x1p520;
+                        break;
+                    case 5:
+                        r.direction = r.direction * 0x1p400;  // len overflows in a tiny scene
+                        break;
+                    case 6:
+                        r.direction = r.direction * 0x1p-400;
+                        break;
+                    case 7:
+                        r.origin = c + (c - target) * 1e9;  // the double-double start point
+                        r.direction = target - r.origin;
+                        break;
+                    case 8:
+                        r.origin = c + (c - target) * 1e18;  // left unplaced
+                        r.direction = target - r.origin;
+                        break;
+                    case 9:
+                        r.tmin = 3.0;
+                        r.tmax = 1.0;  // an empty segment
+                        break;
+                    case 10:
+                        r.origin.x = nan;
+                        break;
+                    case 11:
+                        r.tmax = -0.0;
+                        break;
+                    case 12:
+                        r.tmin = -1.0;
+                        break;
+                    case 13:
+                        r.tmin = -kInfinity;
+                        break;
+                    case 14:
+                        r.tmin = nan;
+                        break;
+                    case 15:
+                        r.tmax = nan;
+                        break;
+                    case 16:
+                        r.tmax = -kInfinity;
+                        break;
+                    case 17:
+                        r.origin.y = a.padded_bounds.lo.y;  // on the padded bounds
+                        break;
+                    case 18:
+                        r.origin.z = a.padded_bounds.hi.z;
+                        break;
+                    case 19:
+                        // From the centre, 2^30 long: in the tiny scene len = |d|·unit
+                        // overflows while the backing off, 4·pad/|d|, does not underflow.
+                        r.origin = c;
+                        r.direction = Vec3d{1.0, 1.06, -1.19} * 0x1p30;
+                        break;
+                    default:
+                        break;
+                }
             }
-        }
-        {
-            // How many lanes AVX set up itself (the rest went to prepare_ray).
-            BackedOffLanes x;
-            const unsigned left =
-                backed_off_lanes_avx(a, rays.data(), m, false, x.lanes, x.r16, x.valid);
-            by_avx += static_cast<int>(m) - __builtin_popcount(left & ((1u << m) - 1));
-        }
-        for (const bool want_normal : {false, true}) {
-            BackedOffLanes one, avx;
-            fill_refined(a, rays, want_normal, FastLanes::one_by_one, 0x5A, one);
-            fill_refined(a, rays, want_normal, FastLanes::avx, 0xA5, avx);
-            EXPECT_EQ(std::memcmp(&one.r16, &avx.r16, sizeof one.r16), 0) << "round " << round;
-            EXPECT_EQ(std::memcmp(one.valid, avx.valid, sizeof one.valid), 0) << "round " << round;
-            for (std::size_t k = 0; k < kLanes; ++k) {
-                const RayContext& x = one.lanes[k];
-                const RayContext& y = avx.lanes[k];
-                EXPECT_TRUE(x.accel == y.accel && x.ray == y.ray && x.frame == y.frame &&
-                            x.far == y.far && x.want_normal == y.want_normal &&
-                            same_bits(x.len, y.len) && same_bits(x.margin, y.margin) &&
-                            same_bits(x.shift, y.shift) && same_bits(x.origin_err, y.origin_err))
-                    << "round " << round << " lane " << k << ": shift " << x.shift << " / "
-                    << y.shift << ", origin_err " << x.origin_err << " / " << y.origin_err;
-                if (k < m && !want_normal) {
-                    const bool plain = x.ray && !x.far && x.frame == nullptr;
-                    (static_on(one, k) ? (plain ? on : special) : off) += 1;
+            {
+                // How many lanes AVX set up itself (the rest went to prepare_ray).
+                BackedOffLanes x;
+                const unsigned left =
+                    backed_off_lanes_avx(a, rays.data(), m, false, x.lanes, x.r16, x.valid);
+                by_avx += static_cast<int>(m) - __builtin_popcount(left & ((1u << m) - 1));
+            }
+            for (const bool want_normal : {false, true}) {
+                BackedOffLanes one, avx;
+                fill_refined(a, rays, want_normal, FastLanes::one_by_one, 0x5A, one);
+                fill_refined(a, rays, want_normal, FastLanes::avx, 0xA5, avx);
+                EXPECT_EQ(std::memcmp(&one.r16, &avx.r16, sizeof one.r16), 0)
+                    << "size " << s << " round " << round;
+                EXPECT_EQ(std::memcmp(one.valid, avx.valid, sizeof one.valid), 0)
+                    << "size " << s << " round " << round;
+                for (std::size_t k = 0; k < kLanes; ++k) {
+                    const RayContext& x = one.lanes[k];
+                    const RayContext& y = avx.lanes[k];
+                    EXPECT_TRUE(x.accel == y.accel && x.ray == y.ray && x.frame == y.frame &&
+                                x.far == y.far && x.want_normal == y.want_normal &&
+                                same_bits(x.len, y.len) && same_bits(x.margin, y.margin) &&
+                                same_bits(x.shift, y.shift) &&
+                                same_bits(x.origin_err, y.origin_err))
+                        << "size " << s << " round " << round << " lane " << k << ": shift "
+                        << x.shift << " / " << y.shift << ", len " << x.len << " / " << y.len;
+                    if (k < m && !want_normal) {
+                        const bool plain = x.ray && !x.far && x.frame == nullptr;
+                        (one.valid[k] == -1 ? (plain ? on : special) : off) += 1;
+                    }
                 }
             }
         }
     }
-    EXPECT_GT(on, 800);  // lanes of every kind were compared
-    EXPECT_GT(off, 500);
-    EXPECT_GT(special, 50);
-    EXPECT_GT(by_avx, 3000);  // and most were set up by AVX
+    EXPECT_GT(on, 1500);  // lanes of every kind were compared
+    EXPECT_GT(off, 1000);
+    EXPECT_GT(special, 100);
+    EXPECT_GT(by_avx, 4000);  // and most were set up by AVX
+}
+
+// float_up four values at a time is float_up, for every kind of double (the set-up itself
+// meets only positive values and +inf).
+TEST(BackedOffLanes, FloatUpOnFourLanesIsFloatUp) {
+    if (widest_fast_lanes() != FastLanes::avx)
+        GTEST_SKIP() << "this processor has no AVX";
+    const double inf = std::numeric_limits<double>::infinity();
+    const double fmax = std::numeric_limits<float>::max();
+    std::vector<double> values = {0.0,
+                                  -0.0,
+                                  inf,
+                                  -inf,
+                                  std::numeric_limits<double>::quiet_NaN(),
+                                  fmax,
+                                  -fmax,
+                                  std::nextafter(fmax, inf),
+                                  std::nextafter(-fmax, -inf),
+                                  1e39,
+                                  -1e39,
+                                  std::numeric_limits<double>::denorm_min(),
+                                  -std::numeric_limits<double>::denorm_min(),
+                                  std::numeric_limits<float>::denorm_min(),
+                                  -std::numeric_limits<float>::denorm_min(),
+                                  0.5 * std::numeric_limits<float>::denorm_min(),
+                                  1.0,
+                                  -1.0,
+                                  1.0 + 0x1p-30,
+                                  -1.0 - 0x1p-30};
+    std::mt19937_64 rng(29);
+    for (int i = 0; i < 200000; ++i) {  // random bit patterns: every sign, exponent and NaN
+        const std::uint64_t bits = rng();
+        double v;
+        std::memcpy(&v, &bits, sizeof v);
+        values.push_back(v);
+        values.push_back(static_cast<double>(static_cast<float>(i % 2 ? v : 1.0 / (i + 1))));
+    }
+    while (values.size() % 4)
+        values.push_back(1.0);
+    for (std::size_t i = 0; i < values.size(); i += 4) {
+        float four[4];
+        float_up_four_avx(&values[i], four);
+        for (std::size_t j = 0; j < 4; ++j) {
+            const double v = values[i + j];
+            ASSERT_TRUE(same_bits(four[j], float_up(v)) || (std::isnan(v) && std::isnan(four[j])))
+                << v << ": " << four[j] << " / " << float_up(v);
+        }
+    }
 }
 
 }  // namespace
