@@ -204,6 +204,16 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
+    // The Duck preview goes beside the table as duck_preview.png (write_preview): a table of
+    // that name and the preview would overwrite each other (it happened: the table was left).
+    if (!a.out.empty()) {
+        const std::size_t slash = a.out.rfind('/');
+        if (a.out.substr(slash == std::string::npos ? 0 : slash + 1) == "duck_preview.png") {
+            std::cerr << "bench_render: --out names the table's file, and the Duck preview is "
+                         "written beside it as duck_preview.png: give the table another name\n";
+            return 2;
+        }
+    }
     const int w = a.smoke ? 128 : 1024, h = a.smoke ? 96 : 768;
     const std::vector<std::string> scenes = a.smoke
                                                 ? std::vector<std::string>{"tutorial_like"}
