@@ -96,7 +96,7 @@ bool prepare_ray(const Impl& a, const Ray& ray, RayStart start, RayContext& c, F
     if (!(dlen > 0x1p-500 && dlen < 0x1p500))
         dlen = scaled_length(ray.direction);  // |d|² over- or underflowed (a direction 1e160 long)
     c.len = dlen * a.unit;                    // float t in Embree's frame (Impl::unit)
-    c.margin = 4.0 * a.pad * a.unit;
+    c.margin = float_margin(a);
     c.shift = start == RayStart::backed_off ? t0 - 4.0 * a.pad / dlen : t0;
     // (o − centre) + s·d rather than (o + s·d) − centre: the first difference is exact or nearly
     // so when the origin is near the scene (Sterbenz), so the float origin is accurate to the

@@ -102,6 +102,13 @@ inline bool enters_bounds(const Impl& a, const Ray& ray) {
     return clip_to_bounds(a, ray, t0, t1);
 }
 
+/// The slack prepare_ray leaves above a segment's float end (RayContext::margin): the exact
+/// BVH's 4 pads, in Embree's frame (Impl::unit). One expression, so that the set-up four lanes
+/// at a time (embree/packets.cpp) forms the same bits.
+inline double float_margin(const Impl& a) {
+    return 4.0 * a.pad * a.unit;
+}
+
 /// tfar for a candidate at double t: never below it, whatever the float rounding.
 inline float tfar_for(const RayContext& c, double t) {
     return float_up((t - c.shift) * c.len + c.margin);

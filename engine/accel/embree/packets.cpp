@@ -93,6 +93,17 @@ static_assert(sizeof(Ray) == 8 * sizeof(double) && offsetof(Ray, direction) == 3
     transposed_avx(hi, col + 4);
 }
 
+/// The fields fill_lane writes alike in every lane (time 0, every mask bit, the lane's id, no
+/// flags), for the fills that write the rays four lanes at a time.
+void fill_lane_constants(RTCRay16& r16) {
+    for (std::size_t k = 0; k < kLanes; ++k) {
+        r16.time[k] = 0.0f;
+        r16.mask[k] = 0xFFFFFFFFu;  // as fill_lane
+        r16.id[k] = static_cast<unsigned>(k);
+        r16.flags[k] = 0;
+    }
+}
+
 /// The same, four rays at a time in AVX's registers (load_rays_avx), unclipped_float_ray's tests
 /// and conversions done on the four lanes at once, and the lanes stored four floats at a time.
 /// The same operations in the same order as unclipped_float_ray (no FMA: the project builds
@@ -137,13 +148,9 @@ static_assert(sizeof(Ray) == 8 * sizeof(double) && offsetof(Ray, direction) == 3
         _mm_store_ps(r16.tnear + k, _mm256_cvtpd_ps(saturated_avx(_mm256_mul_pd(tmin, unit))));
         _mm_store_ps(r16.tfar + k, _mm256_cvtpd_ps(saturated_avx(_mm256_mul_pd(tmax, unit))));
     }
-    for (std::size_t k = 0; k < kLanes; ++k) {
-        r16.time[k] = 0.0f;
-        r16.mask[k] = 0xFFFFFFFFu;  // as fill_lane
-        r16.id[k] = static_cast<unsigned>(k);
-        r16.flags[k] = 0;
+    fill_lane_constants(r16);
+    for (std::size_t k = 0; k < kLanes; ++k)
         valid[k] = k < m ? -1 : 0;
-    }
     return true;
 }
 
@@ -287,7 +294,7 @@ struct FourLanes {
         ok = _mm256_and_pd(ok, _mm256_cmp_pd(_mm256_andnot_pd(sign, org[j]), reach, _CMP_LE_OQ));
     ok = _mm256_and_pd(ok, _mm256_cmp_pd(len, zero, _CMP_GT_OQ));
     ok = _mm256_and_pd(ok, _mm256_cmp_pd(len, inf, _CMP_LT_OQ));
-    const double margin = 4.0 * a.pad * a.unit;
+    const double margin = float_margin(a);
     const __m256d margin_over_len =
         _mm256_andnot_pd(sign, _mm256_div_pd(_mm256_set1_pd(margin), len));
     ok = _mm256_and_pd(ok, _mm256_cmp_pd(margin_over_len, inf, _CMP_LT_OQ));
@@ -442,13 +449,8 @@ std::optional<RTCIntersectContext> fill_fast_lanes(const Impl& a, const Ray* ray
 unsigned backed_off_lanes_avx(const Impl& a, const Ray* rays, std::size_t m, bool want_normal,
                               RayContext* lanes, RTCRay16& r16, int* valid) {
     unsigned left = 0;
-    const double margin = 4.0 * a.pad * a.unit;
-    for (std::size_t k = 0; k < kLanes; ++k) {  // fill_lane's constant fields
-        r16.time[k] = 0.0f;
-        r16.mask[k] = 0xFFFFFFFFu;
-        r16.id[k] = static_cast<unsigned>(k);
-        r16.flags[k] = 0;
-    }
+    const double margin = float_margin(a);
+    fill_lane_constants(r16);
     for (std::size_t k = 0; k < m; k += 4) {
         FourLanes four;
         four_backed_off_lanes_avx(a, rays, k, m, r16, four);
