@@ -127,8 +127,6 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
 
 }  // namespace
 
-namespace {
-
 /// (b − a) × (c − a), its edges brought to unit scale (unit_scale) where the plain product
 /// would overflow or lose its digits to underflow: its direction is all triangle_normal and
 /// is_degenerate ask of it. (A triangle 1e155 across had a NaN normal, one 1e-170 across was
@@ -142,8 +140,6 @@ Vec3d edge_cross(const Triangle& tri) {
     const double k = unit_scale(std::max(max_abs(e1), max_abs(e2)));
     return k == 1.0 ? n : cross(e1 * k, e2 * k);
 }
-
-}  // namespace
 
 Vec3d triangle_normal(const Triangle& tri) {
     return normalize(edge_cross(tri));

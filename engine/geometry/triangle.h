@@ -29,6 +29,11 @@ struct Triangle {
     Vec3d a, b, c;
 };
 
+/// (b−a)×(c−a), with the edges brought to unit scale where the plain product would overflow or
+/// underflow: what triangle_normal normalizes and is_degenerate compares with zero (for a caller
+/// that needs both of one triangle).
+Vec3d edge_cross(const Triangle& tri);
+
 /// Unit geometric normal normalize((b−a)×(c−a)) (counter-clockwise front faces); zero vector
 /// for a degenerate triangle.
 Vec3d triangle_normal(const Triangle& tri);

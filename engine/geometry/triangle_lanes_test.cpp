@@ -1,0 +1,282 @@
+#include "engine/geometry/triangle_lanes.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace raycastd::engine {
+namespace {
+
+std::uint64_t bits(double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+}
+
+/// Whether two answers are the same to the bit (NaNs by their bits too).
+bool same(const std::optional<Hit>& a, const std::optional<Hit>& b) {
+    if (a.has_value() != b.has_value())
+        return false;
+    if (!a)
+        return true;
+    return bits(a->t) == bits(b->t) && bits(a->t_err) == bits(b->t_err) &&
+           bits(a->u) == bits(b->u) && bits(a->v) == bits(b->v) &&
+           bits(a->normal.x) == bits(b->normal.x) && bits(a->normal.y) == bits(b->normal.y) &&
+           bits(a->normal.z) == bits(b->normal.z) && a->front_face == b->front_face &&
+           a->on_edge == b->on_edge && a->object == b->object && a->primitive == b->primitive;
+}
+
+bool same(const LineCrossing& a, const LineCrossing& b) {
+    return bits(a.u) == bits(b.u) && bits(a.v) == bits(b.v) && a.crossed == b.crossed;
+}
+
+/// Cases of every kind: ordinary triangles and rays aimed near them (inside, outside, at their
+/// edges and corners), ranges that cut the crossing off, grazing rays, degenerate triangles,
+/// scales far from 1, directions of every length, and special values.
+class Cases {
+  public:
+    explicit Cases(std::uint32_t seed) : rng_(seed) {}
+
+    double uni(double lo, double hi) {
+        return std::uniform_real_distribution<double>(lo, hi)(rng_);
+    }
+    int pick(int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng_); }
+    Vec3d point(double r) { return {uni(-r, r), uni(-r, r), uni(-r, r)}; }
+
+    Triangle triangle() {
+        // Of a mesh's size (a corner's distance from its neighbours 1e-4 to 1 of the scene's),
+        // where the plane crossing mostly takes its plain-double normal, and larger.
+        const Vec3d centre = point(1.0);
+        const double size = std::pow(10.0, pick(4) != 0 ? uni(-4.0, -1.0) : uni(-1.0, 0.3));
+        Triangle t{centre + point(size), centre + point(size), centre + point(size)};
+        switch (pick(8)) {
+            case 0:  // degenerate: c on the line through a and b
+                t.c = t.a + (t.b - t.a) * uni(-1.0, 2.0);
+                break;
+            case 1:  // a sliver
+                t.c = t.a + (t.b - t.a) * 0.5 + point(1e-9);
+                break;
+            case 2:  // axis-aligned (a floor)
+                t.a.y = t.b.y = t.c.y = 0.25;
+                break;
+            default:
+                break;
+        }
+        return t;
+    }
+
+    Ray ray(const Triangle& t) {
+        Ray r;
+        r.origin = point(5.0);
+        // A point of the triangle's plane by barycentrics: inside, outside, on an edge, a corner.
+        double b1 = uni(-0.3, 1.3), b2 = uni(-0.3, 1.3);
+        switch (pick(6)) {
+            case 0:
+                b1 = 0.0;
+                break;
+            case 1:
+                b2 = 1.0 - b1;
+                break;
+            case 2:
+                b1 = 1.0, b2 = 0.0;
+                break;
+            default:
+                break;
+        }
+        const Vec3d target = t.a + (t.b - t.a) * b1 + (t.c - t.a) * b2;
+        r.direction = target - r.origin;
+        switch (pick(10)) {
+            case 0:  // grazing: the direction nearly in the plane
+                r.origin = target - (t.b - t.a) * 3.0 + cross(t.b - t.a, t.c - t.a) * 1e-9;
+                r.direction = target - r.origin;
+                break;
+            case 1:  // a component exactly zero
+                r.direction[static_cast<std::size_t>(pick(3))] = 0.0;
+                break;
+            case 2:  // every length of direction
+                r.direction = r.direction * std::ldexp(1.0, pick(1200) - 600);
+                break;
+            default:
+                break;
+        }
+        // The range: open, cut before or after the crossing, negative, empty, NaN.
+        const double len2 = dot(r.direction, r.direction);
+        const double t_cross = len2 > 0.0 ? dot(target - r.origin, r.direction) / len2 : 1.0;
+        switch (pick(12)) {
+            case 10:  // a range ending within a few hundred ulps of the crossing, where the
+                      // sheared t's margin decides
+                r.tmax = t_cross * (1.0 - std::ldexp(pick(400) - 100, -53));
+                break;
+            case 11:
+                r.tmin = t_cross * (1.0 + std::ldexp(pick(400) - 100, -53));
+                break;
+            case 0:
+                r.tmax = t_cross * uni(0.5, 1.0);
+                break;
+            case 1:
+                r.tmin = t_cross * uni(1.0, 1.5);
+                break;
+            case 2:
+                r.tmin = -uni(0.0, 10.0);
+                break;
+            case 3:
+                r.tmin = t_cross * (1.0 - 1e-15), r.tmax = t_cross * (1.0 + 1e-15);
+                break;
+            case 4:
+                r.tmin = 2.0, r.tmax = 1.0;
+                break;
+            default:
+                r.tmax =
+                    pick(2) ? std::numeric_limits<double>::infinity() : t_cross * uni(1.0, 3.0);
+                break;
+        }
+        if (pick(200) == 0) {  // a special value anywhere
+            const double specials[] = {std::numeric_limits<double>::quiet_NaN(),
+                                       std::numeric_limits<double>::infinity(),
+                                       -std::numeric_limits<double>::infinity(),
+                                       0.0,
+                                       1e308,
+                                       4.9e-324};
+            double* fields[] = {&r.origin.x,    &r.origin.y,    &r.origin.z, &r.direction.x,
+                                &r.direction.y, &r.direction.z, &r.tmin,     &r.tmax};
+            *fields[pick(8)] = specials[pick(6)];
+        }
+        return r;
+    }
+
+    /// The triangle and its rays moved to another scale (a power of two: exact), or far away.
+    void rescale(Triangle& t, Ray* rays, unsigned n) {
+        const int kind = pick(8);
+        if (kind == 0) {
+            const double k = std::ldexp(1.0, pick(1400) - 700);
+            t = Triangle{t.a * k, t.b * k, t.c * k};
+            for (unsigned i = 0; i < n; ++i) {
+                rays[i].origin = rays[i].origin * k;
+            }
+        } else if (kind == 1) {
+            const Vec3d far{1e12, -3e11, 7e12};
+            t = Triangle{t.a + far, t.b + far, t.c + far};
+            for (unsigned i = 0; i < n; ++i)
+                rays[i].origin = rays[i].origin + far;
+        }
+    }
+
+  private:
+    std::mt19937 rng_;
+};
+
+TEST(TriangleLanes, DecidesAsIntersectTriangleBitForBit) {
+    if (!triangle_lanes_available())
+        GTEST_SKIP() << "this processor has no AVX2 and FMA: every lane is left undecided";
+    Cases cases(20261206);
+    long lanes = 0, decided = 0, hits = 0, outsides = 0, misses = 0, mismatches = 0;
+    for (int round = 0; round < 200000; ++round) {
+        Triangle tri = cases.triangle();
+        const unsigned count = 1u + static_cast<unsigned>(cases.pick(4));
+        Ray rays[4];
+        for (unsigned k = 0; k < count; ++k)
+            rays[k] = cases.ray(tri);
+        cases.rescale(tri, rays, count);
+        const bool want_normal = cases.pick(2) == 0;
+        const Ray* ptrs[4] = {&rays[0], &rays[1], &rays[2], &rays[3]};
+        std::optional<Hit> got[4];
+        LineCrossing got_outside[4];
+        for (auto& h : got)
+            h = Hit{};  // a stale answer, which a decided lane must replace
+        const unsigned undecided =
+            intersect_triangle_lanes(tri, ptrs, count, want_normal, got, got_outside);
+        ASSERT_EQ(undecided & ~((1u << count) - 1u), 0u);
+        for (unsigned k = 0; k < count; ++k) {
+            ++lanes;
+            if (undecided & (1u << k))
+                continue;
+            ++decided;
+            LineCrossing want_outside;
+            const std::optional<Hit> want =
+                intersect_triangle(tri, rays[k], want_normal, &want_outside);
+            if (!same(got[k], want) || !same(got_outside[k], want_outside)) {
+                if (++mismatches <= 5)
+                    ADD_FAILURE() << "round " << round << " lane " << k << ": hit "
+                                  << got[k].has_value() << " against " << want.has_value();
+            }
+            if (want)
+                ++hits;
+            else if (want_outside.crossed)
+                ++outsides;
+            else
+                ++misses;
+        }
+    }
+    EXPECT_EQ(mismatches, 0);
+    // The vector path must carry its share, or this test proves nothing: over a third of the
+    // lanes are decided (half the rays aim at edges and corners, others graze, sit at other
+    // scales or have ranges that need the plane crossing in double-double), and among them
+    // hits, crossings outside the range and misses each in thousands (2026-12-06: 220,227 of
+    // 499,847 lanes; 14,007 hits, 10,789 outside, 195k misses). MeshLikeHitsAreDecided holds
+    // the common case to more.
+    EXPECT_GT(decided, lanes / 3) << decided << " of " << lanes;
+    EXPECT_GT(hits, 10000);
+    EXPECT_GT(outsides, 8000);
+    EXPECT_GT(misses, 50000);
+}
+
+TEST(TriangleLanes, MeshLikeHitsAreDecided) {
+    if (!triangle_lanes_available())
+        GTEST_SKIP() << "this processor has no AVX2 and FMA";
+    // Triangles of a mesh's size (1e-3 to 1e-2 of the scene), rays from a few scene sizes away
+    // through their interiors: what refined's filter is handed on a closed mesh. Nearly all are
+    // decided here (the plane crossing's plain-double normal settles them).
+    Cases cases(7);
+    int decided = 0, total = 0;
+    for (int round = 0; round < 10000; ++round) {
+        const Vec3d centre = cases.point(1.0);
+        const double size = std::pow(10.0, cases.uni(-3.0, -2.0));
+        const Triangle tri{centre + cases.point(size), centre + cases.point(size),
+                           centre + cases.point(size)};
+        Ray rays[4];
+        const Ray* ptrs[4] = {&rays[0], &rays[1], &rays[2], &rays[3]};
+        for (auto& r : rays) {
+            const double b1 = cases.uni(0.05, 0.45), b2 = cases.uni(0.05, 0.45);
+            r.origin = cases.point(5.0);
+            r.direction = tri.a + (tri.b - tri.a) * b1 + (tri.c - tri.a) * b2 - r.origin;
+        }
+        std::optional<Hit> got[4];
+        LineCrossing outside[4];
+        const unsigned undecided = intersect_triangle_lanes(tri, ptrs, 4, true, got, outside);
+        for (unsigned k = 0; k < 4; ++k) {
+            ++total;
+            if (undecided & (1u << k))
+                continue;
+            ++decided;
+            EXPECT_TRUE(same(got[k], intersect_triangle(tri, rays[k], true)));
+        }
+    }
+    EXPECT_GT(decided, total * 95 / 100) << decided << " of " << total;
+}
+
+TEST(TriangleLanes, OrdinaryLanesAreDecided) {
+    if (!triangle_lanes_available())
+        GTEST_SKIP() << "this processor has no AVX2 and FMA";
+    // Four camera-like rays through the middle of a triangle of ordinary size: all decided, all
+    // hits (the filter's usual call).
+    const Triangle tri{{-1, -1, 5}, {1, -1, 5}, {0, 1, 5}};
+    Ray rays[4];
+    for (int k = 0; k < 4; ++k)
+        rays[k] = Ray{{0.1 * k, 0.05 * k, 0}, {0.01 * k, -0.02, 1}};
+    const Ray* ptrs[4] = {&rays[0], &rays[1], &rays[2], &rays[3]};
+    std::optional<Hit> got[4];
+    LineCrossing outside[4];
+    EXPECT_EQ(intersect_triangle_lanes(tri, ptrs, 4, true, got, outside), 0u);
+    for (int k = 0; k < 4; ++k) {
+        ASSERT_TRUE(got[k]);
+        EXPECT_TRUE(same(got[k], intersect_triangle(tri, rays[k], true)));
+    }
+}
+
+}  // namespace
+}  // namespace raycastd::engine
