@@ -106,7 +106,7 @@ PlaneOf plane_of(const Triangle& tri) {
 /// statements in its order, on four lanes; lanes that leave its common path are undecided.
 [[gnu::target("avx2,fma")]] void decide_lanes(const Triangle& tri, const Ray* const rays[4],
                                               const PlaneOf& plane, bool degenerate,
-                                              Verdicts& out) {
+                                              bool decision_only, Verdicts& out) {
     constexpr double kMax = std::numeric_limits<double>::max();
     const V ox = RAYCASTD_LANES_OF(origin.x), oy = RAYCASTD_LANES_OF(origin.y),
             oz = RAYCASTD_LANES_OF(origin.z);
@@ -213,6 +213,30 @@ PlaneOf plane_of(const Triangle& tri) {
     const V early_out = _mm256_or_pd(_mm256_cmp_pd(ts + margin, tmin, _CMP_LT_OQ),
                                      _mm256_cmp_pd(ts - margin, tmax, _CMP_GT_OQ));
     V outside = _mm256_andnot_pd(_mm256_or_pd(undecided, miss), early_out);
+    // decide_triangle (TFrom::settled): where the sheared t and its margin lie inside the range,
+    // the hit with the sheared t and no plane crossing.
+    V sheared_hit = zero;
+    if (decision_only) {
+        sheared_hit = _mm256_andnot_pd(_mm256_or_pd(_mm256_or_pd(undecided, miss), outside),
+                                       _mm256_and_pd(_mm256_cmp_pd(ts - margin, tmin, _CMP_GE_OQ),
+                                                     _mm256_cmp_pd(ts + margin, tmax, _CMP_LE_OQ)));
+    }
+    const V open2 = _mm256_andnot_pd(
+        _mm256_or_pd(_mm256_or_pd(undecided, miss), _mm256_or_pd(outside, sheared_hit)), ones);
+    _mm256_store_pd(out.t_err, te);
+    _mm256_store_pd(out.u, v * inv_det);
+    _mm256_store_pd(out.v, w * inv_det);
+    _mm256_store_pd(out.det, det);
+    _mm256_store_pd(out.edge_u, u);
+    _mm256_store_pd(out.edge_v, v);
+    _mm256_store_pd(out.edge_w, w);
+    if (_mm256_movemask_pd(open2) == 0) {  // no lane needs the plane crossing
+        out.undecided = static_cast<unsigned>(_mm256_movemask_pd(undecided));
+        out.outside = static_cast<unsigned>(_mm256_movemask_pd(outside));
+        out.hit = static_cast<unsigned>(_mm256_movemask_pd(sheared_hit));
+        _mm256_store_pd(out.t, ts);
+        return;
+    }
 
     // The plane crossing (triangle.cpp's plane_t, its plain-double normal's path): the anchor
     // vertex nearest the origin (max norm: max_abs(a − o) is ma), v − o exact, both dot products
@@ -244,34 +268,28 @@ PlaneOf plane_of(const Triangle& tri) {
                       _mm256_and_pd(_mm256_cmp_pd(allowed, splat(0x1p-1000), _CMP_GT_OQ),
                                     _mm256_cmp_pd(vp0 + vp1 + vp2, splat(0x1p70), _CMP_LT_OQ))),
         _mm256_and_pd(_mm256_cmp_pd(splat(8.0) * shift, allowed, _CMP_LE_OQ), finite(t)));
-    const V open2 = _mm256_andnot_pd(_mm256_or_pd(_mm256_or_pd(undecided, miss), outside), ones);
     undecided = _mm256_or_pd(undecided, _mm256_andnot_pd(settled, open2));
     const V in_range =
         _mm256_and_pd(_mm256_cmp_pd(t, tmin, _CMP_GE_OQ), _mm256_cmp_pd(t, tmax, _CMP_LE_OQ));
     const V open3 = _mm256_andnot_pd(undecided, open2);
     outside = _mm256_or_pd(outside, _mm256_andnot_pd(in_range, open3));
-    const V hit = _mm256_and_pd(in_range, open3);
+    const V hit = _mm256_or_pd(_mm256_and_pd(in_range, open3), sheared_hit);
 
     out.undecided = static_cast<unsigned>(_mm256_movemask_pd(undecided));
     out.outside = static_cast<unsigned>(_mm256_movemask_pd(outside));
     out.hit = static_cast<unsigned>(_mm256_movemask_pd(hit));
-    _mm256_store_pd(out.t, t);
-    _mm256_store_pd(out.t_err, te);
-    _mm256_store_pd(out.u, v * inv_det);
-    _mm256_store_pd(out.v, w * inv_det);
-    _mm256_store_pd(out.det, det);
-    _mm256_store_pd(out.edge_u, u);
-    _mm256_store_pd(out.edge_v, v);
-    _mm256_store_pd(out.edge_w, w);
+    _mm256_store_pd(out.t, select(t, ts, sheared_hit));
 }
 
 #undef RAYCASTD_LANES_OF
 
 }  // namespace
 
-unsigned intersect_triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned count,
-                                  bool want_normal, std::optional<Hit> hits[],
-                                  LineCrossing outside[]) {
+namespace {
+
+unsigned triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned count,
+                        bool want_normal, bool decision_only, std::optional<Hit> hits[],
+                        LineCrossing outside[]) {
     const unsigned all = (1u << count) - 1u;
     if (count == 0 || count > 4 || !triangle_lanes_available())
         return all;
@@ -283,7 +301,7 @@ unsigned intersect_triangle_lanes(const Triangle& tri, const Ray* const rays[], 
     // degeneracy test, and the hit's normal) and plane_t's scaled normal.
     const Vec3d n = edge_cross(tri);
     Verdicts verdicts;
-    decide_lanes(tri, lanes, plane_of(tri), n == Vec3d{0.0, 0.0, 0.0}, verdicts);
+    decide_lanes(tri, lanes, plane_of(tri), n == Vec3d{0.0, 0.0, 0.0}, decision_only, verdicts);
     const Vec3d normal = want_normal && verdicts.hit != 0 ? normalize(n) : Vec3d{};
     for (unsigned k = 0; k < count; ++k) {
         const unsigned bit = 1u << k;
@@ -308,6 +326,19 @@ unsigned intersect_triangle_lanes(const Triangle& tri, const Ray* const rays[], 
         }
     }
     return verdicts.undecided & all;
+}
+
+}  // namespace
+
+unsigned intersect_triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned count,
+                                  bool want_normal, std::optional<Hit> hits[],
+                                  LineCrossing outside[]) {
+    return triangle_lanes(tri, rays, count, want_normal, false, hits, outside);
+}
+
+unsigned decide_triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned count,
+                               std::optional<Hit> hits[], LineCrossing outside[]) {
+    return triangle_lanes(tri, rays, count, false, true, hits, outside);
 }
 
 }  // namespace raycastd::engine

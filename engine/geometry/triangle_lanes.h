@@ -36,4 +36,9 @@ unsigned intersect_triangle_lanes(const Triangle& tri, const Ray* const rays[], 
                                   bool want_normal, std::optional<Hit> hits[],
                                   LineCrossing outside[]);
 
+/// The same for decide_triangle(tri, *rays[k], &outside[k]) (an occlusion test's decision: the
+/// sheared t where it settles the range).
+unsigned decide_triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned count,
+                               std::optional<Hit> hits[], LineCrossing outside[]);
+
 }  // namespace raycastd::engine

@@ -170,10 +170,11 @@ class Cases {
     std::mt19937 rng_;
 };
 
-TEST(TriangleLanes, DecidesAsIntersectTriangleBitForBit) {
+TEST(TriangleLanes, DecidesAsIntersectAndDecideTriangleBitForBit) {
     if (!triangle_lanes_available())
         GTEST_SKIP() << "this processor has no AVX2 and FMA: every lane is left undecided";
     Cases cases(20261206);
+    long decided_hits = 0;
     long lanes = 0, decided = 0, hits = 0, outsides = 0, misses = 0, mismatches = 0;
     for (int round = 0; round < 200000; ++round) {
         Triangle tri = cases.triangle();
@@ -183,13 +184,16 @@ TEST(TriangleLanes, DecidesAsIntersectTriangleBitForBit) {
             rays[k] = cases.ray(tri);
         cases.rescale(tri, rays, count);
         const bool want_normal = cases.pick(2) == 0;
+        // A third of the rounds ask for decide_triangle's decision (occlusion) instead.
+        const bool decision = cases.pick(3) == 0;
         const Ray* ptrs[4] = {&rays[0], &rays[1], &rays[2], &rays[3]};
         std::optional<Hit> got[4];
         LineCrossing got_outside[4];
         for (auto& h : got)
             h = Hit{};  // a stale answer, which a decided lane must replace
         const unsigned undecided =
-            intersect_triangle_lanes(tri, ptrs, count, want_normal, got, got_outside);
+            decision ? decide_triangle_lanes(tri, ptrs, count, got, got_outside)
+                     : intersect_triangle_lanes(tri, ptrs, count, want_normal, got, got_outside);
         ASSERT_EQ(undecided & ~((1u << count) - 1u), 0u);
         for (unsigned k = 0; k < count; ++k) {
             ++lanes;
@@ -198,7 +202,10 @@ TEST(TriangleLanes, DecidesAsIntersectTriangleBitForBit) {
             ++decided;
             LineCrossing want_outside;
             const std::optional<Hit> want =
-                intersect_triangle(tri, rays[k], want_normal, &want_outside);
+                decision ? decide_triangle(tri, rays[k], &want_outside)
+                         : intersect_triangle(tri, rays[k], want_normal, &want_outside);
+            if (decision && want)
+                ++decided_hits;
             if (!same(got[k], want) || !same(got_outside[k], want_outside)) {
                 if (++mismatches <= 5)
                     ADD_FAILURE() << "round " << round << " lane " << k << ": hit "
@@ -223,6 +230,7 @@ TEST(TriangleLanes, DecidesAsIntersectTriangleBitForBit) {
     EXPECT_GT(hits, 10000);
     EXPECT_GT(outsides, 8000);
     EXPECT_GT(misses, 50000);
+    EXPECT_GT(decided_hits, 3000);
 }
 
 TEST(TriangleLanes, MeshLikeHitsAreDecided) {

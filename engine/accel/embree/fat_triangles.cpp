@@ -46,13 +46,14 @@ void settle(const RTCFilterFunctionNArguments* args, unsigned i, RayContext& lan
         args->valid[i] = 0;  // Embree then restores tfar to the best's
 }
 
-/// A packet's closest (or all) candidates on one triangle, up to four lanes at a time
-/// (intersect_triangle_lanes, the same answers bit for bit; the lanes it leaves undecided by
-/// intersect_triangle). Embree's packet kernels report a triangle with every lane of the packet
-/// that hit it: about four on the bench's camera rays (workload A), where Woop's test and the
-/// plane crossing one lane at a time had been over half of a refined batch (callgrind).
+/// A packet's candidates on one triangle, up to four lanes at a time (intersect_triangle_lanes,
+/// or decide_triangle_lanes for `occlusion`: the same answers bit for bit; the lanes it leaves
+/// undecided by intersect_triangle or decide_triangle). Embree's packet kernels report a triangle
+/// with every lane of the packet that hit it: about four on the bench's camera rays (workload A),
+/// where Woop's test and the plane crossing one lane at a time had been over half of a refined
+/// batch (callgrind).
 void decide_packet(const RTCFilterFunctionNArguments* args, RayContext& c, const GeomData& g,
-                   const TriangleMesh& mesh) {
+                   const TriangleMesh& mesh, bool occlusion) {
     unsigned lane_of[4];      // the filter's lane i
     RayContext* contexts[4];  // its ray's context (by the ray's id: Embree may hand a packet of
                               // 16 over in halves of 8, whose lane i is ray 8 + i)
@@ -66,11 +67,14 @@ void decide_packet(const RTCFilterFunctionNArguments* args, RayContext& c, const
         std::optional<Hit> hits[4];
         LineCrossing outside[4];
         const unsigned undecided =
-            intersect_triangle_lanes(tri, rays, count, want_normal, hits, outside);
+            occlusion ? decide_triangle_lanes(tri, rays, count, hits, outside)
+                      : intersect_triangle_lanes(tri, rays, count, want_normal, hits, outside);
         for (unsigned k = 0; k < count; ++k) {
-            if (undecided & (1u << k))
-                hits[k] = intersect_triangle(tri, *rays[k], want_normal, &outside[k]);
-            settle(args, lane_of[k], *contexts[k], g, prim, tri, hits[k], outside[k], false);
+            if (undecided & (1u << k)) {
+                hits[k] = occlusion ? decide_triangle(tri, *rays[k], &outside[k])
+                                    : intersect_triangle(tri, *rays[k], want_normal, &outside[k]);
+            }
+            settle(args, lane_of[k], *contexts[k], g, prim, tri, hits[k], outside[k], occlusion);
         }
         count = 0;
     };
@@ -107,8 +111,8 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
     RayContext& c = ctx_of(args->context);
     const auto* g = static_cast<const GeomData*>(args->geometryUserPtr);
     const TriangleMesh& mesh = *g->accel->scene->objects[g->object].mesh;
-    if (!occlusion && c.lanes && triangle_lanes_available()) {
-        decide_packet(args, c, *g, mesh);
+    if (c.lanes && triangle_lanes_available()) {
+        decide_packet(args, c, *g, mesh, occlusion);
         return;
     }
     for (unsigned i = 0; i < args->N; ++i) {
