@@ -54,10 +54,19 @@ class Cases {
         const Vec3d centre = point(1.0);
         const double size = std::pow(10.0, pick(4) != 0 ? uni(-4.0, -1.0) : uni(-1.0, 0.3));
         Triangle t{centre + point(size), centre + point(size), centre + point(size)};
-        switch (pick(8)) {
+        switch (pick(10)) {
             case 0:  // degenerate: c on the line through a and b
                 t.c = t.a + (t.b - t.a) * uni(-1.0, 2.0);
                 break;
+            case 8:  // degenerate to the bit: its edge cross product is exactly zero
+                t.c = pick(2) ? t.a : t.b;
+                break;
+            case 9: {  // corners of wildly different magnitudes (a cross product that underflows)
+                const double ka = std::ldexp(1.0, pick(200) - 100);
+                const double kb = std::ldexp(1.0, pick(200) - 100);
+                t = Triangle{t.a * ka, t.b * kb, t.c};
+                break;
+            }
             case 1:  // a sliver
                 t.c = t.a + (t.b - t.a) * 0.5 + point(1e-9);
                 break;
@@ -101,6 +110,14 @@ class Cases {
             case 2:  // every length of direction
                 r.direction = r.direction * std::ldexp(1.0, pick(1200) - 600);
                 break;
+            case 3: {  // components of equal magnitude (the shear frame's ties), one maybe zero
+                const double m = uni(0.1, 10.0);
+                for (std::size_t i = 0; i < 3; ++i)
+                    r.direction[i] = pick(2) ? m : -m;
+                if (pick(2))
+                    r.direction[static_cast<std::size_t>(pick(3))] = 0.0;
+                break;
+            }
             default:
                 break;
         }
@@ -158,6 +175,14 @@ class Cases {
             for (unsigned i = 0; i < n; ++i) {
                 rays[i].origin = rays[i].origin * k;
             }
+        } else if (kind == 2 || kind == 3) {
+            // Near the bounds of woop's ordinary scale (edge functions, products of two lengths,
+            // within 2^±600): a triangle 1e-4 to 1 across a few units away lands there.
+            const int e = 270 + pick(60);
+            const double k = std::ldexp(1.0, kind == 2 ? e : -e);
+            t = Triangle{t.a * k, t.b * k, t.c * k};
+            for (unsigned i = 0; i < n; ++i)
+                rays[i].origin = rays[i].origin * k;
         } else if (kind == 1) {
             const Vec3d far{1e12, -3e11, 7e12};
             t = Triangle{t.a + far, t.b + far, t.c + far};
@@ -176,7 +201,7 @@ TEST(TriangleLanes, DecidesAsIntersectAndDecideTriangleBitForBit) {
     Cases cases(20261206);
     long decided_hits = 0;
     long lanes = 0, decided = 0, hits = 0, outsides = 0, misses = 0, mismatches = 0;
-    for (int round = 0; round < 200000; ++round) {
+    for (int round = 0; round < 300000; ++round) {
         Triangle tri = cases.triangle();
         const unsigned count = 1u + static_cast<unsigned>(cases.pick(4));
         Ray rays[4];
@@ -188,9 +213,12 @@ TEST(TriangleLanes, DecidesAsIntersectAndDecideTriangleBitForBit) {
         const bool decision = cases.pick(3) == 0;
         const Ray* ptrs[4] = {&rays[0], &rays[1], &rays[2], &rays[3]};
         std::optional<Hit> got[4];
-        LineCrossing got_outside[4];
+        // A stale answer and a LineCrossing of its own in every lane: a decided lane must replace
+        // the answer, and write the LineCrossing exactly where intersect_triangle does.
+        const LineCrossing stale{-7.0, 3.0, false};
+        LineCrossing got_outside[4] = {stale, stale, stale, stale};
         for (auto& h : got)
-            h = Hit{};  // a stale answer, which a decided lane must replace
+            h = Hit{};
         const unsigned undecided =
             decision ? decide_triangle_lanes(tri, ptrs, count, got, got_outside)
                      : intersect_triangle_lanes(tri, ptrs, count, want_normal, got, got_outside);
@@ -200,7 +228,7 @@ TEST(TriangleLanes, DecidesAsIntersectAndDecideTriangleBitForBit) {
             if (undecided & (1u << k))
                 continue;
             ++decided;
-            LineCrossing want_outside;
+            LineCrossing want_outside = stale;
             const std::optional<Hit> want =
                 decision ? decide_triangle(tri, rays[k], &want_outside)
                          : intersect_triangle(tri, rays[k], want_normal, &want_outside);
@@ -231,6 +259,36 @@ TEST(TriangleLanes, DecidesAsIntersectAndDecideTriangleBitForBit) {
     EXPECT_GT(outsides, 8000);
     EXPECT_GT(misses, 50000);
     EXPECT_GT(decided_hits, 3000);
+}
+
+TEST(TriangleLanes, ATriangleWhoseEdgeCrossIsZeroIsMissed) {
+    if (!triangle_lanes_available())
+        GTEST_SKIP() << "this processor has no AVX2 and FMA";
+    // Corners of wildly different magnitudes: the edge cross product rounds to exactly zero
+    // (is_degenerate), though the sheared edge functions do not, and the range starts beyond the
+    // crossing. intersect_triangle answers a miss without writing the crossing; a kernel that
+    // forgot the degeneracy test wrote it (a helper's review, 2026-12-06).
+    const Triangle tri{{-0x1.d1955a959847dp+56, 0x1.3bc99cd9908cp+91, 0x1.197ec5b718718p+19},
+                       {-0x1.4e67e43d0f7e8p-49, -0x1.dc487a28cc413p-51, -0x1.43f9c50895a5p-76},
+                       {-0x1.2e728e31af8aap-23, -0x1.7c26442e5377cp-91, 0x1.02a5ddf230704p-69}};
+    ASSERT_TRUE(is_degenerate(tri));
+    Ray ray{{0, 3, 0.5}, {0x1.33079a32b1b74p-48, 0x1.77bc2a16d3d6p-51, 0x1.cb78f363d0e9cp-26}};
+    ray.tmin = 0x1p250;
+    const Ray* ptrs[1] = {&ray};
+    for (int decision = 0; decision < 2; ++decision) {
+        std::optional<Hit> got[1] = {Hit{}};
+        LineCrossing outside[1];
+        const unsigned undecided = decision
+                                       ? decide_triangle_lanes(tri, ptrs, 1, got, outside)
+                                       : intersect_triangle_lanes(tri, ptrs, 1, true, got, outside);
+        if (undecided == 0) {
+            EXPECT_FALSE(got[0]);
+            EXPECT_FALSE(outside[0].crossed);
+        }
+    }
+    LineCrossing scalar;
+    EXPECT_FALSE(intersect_triangle(tri, ray, true, &scalar));
+    EXPECT_FALSE(scalar.crossed);
 }
 
 TEST(TriangleLanes, MeshLikeHitsAreDecided) {
