@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
-#include <utility>
 
 #include <immintrin.h>
 
@@ -72,8 +71,7 @@ struct DD4 {
     return t + r / d.hi;
 }
 
-/// b where `mask` is set, else a, for the three components of a vector: X where `x`, else Y
-/// where `y`, else Z.
+/// One of a vector's three components by lane: X where `x` is set, else Y where `y`, else Z.
 [[gnu::target("avx2,fma"), gnu::always_inline]] inline V pick(V X, V Y, V Z, V x, V y) {
     return select(select(Z, Y, y), X, x);
 }
@@ -290,7 +288,7 @@ namespace {
 unsigned triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned count,
                         bool want_normal, bool decision_only, std::optional<Hit> hits[],
                         LineCrossing outside[]) {
-    const unsigned all = (1u << count) - 1u;
+    const unsigned all = count >= 32 ? ~0u : (1u << count) - 1u;
     if (count == 0 || count > 4 || !triangle_lanes_available())
         return all;
     // Lanes past `count` repeat the first ray (their answers are not read).
