@@ -52,6 +52,29 @@ const Vec3d& anchor_vertex(const Triangle& tri, const Vec3d& origin) {
     return *anchor;
 }
 
+/// plane_normal's body, kept in line in plane_t (hot in refined and exact) as it was before the
+/// four-lane kernels came to share it; they call plane_normal once per triangle.
+[[gnu::always_inline]] inline PlaneNormal plane_normal_in_line(const Triangle& tri) {
+    // t is the same for any multiple of n: the edges are brought to unit scale (unit_scale),
+    // so that n's products neither overflow nor underflow for a triangle far larger or
+    // smaller than its distance (or than 1).
+    PlaneNormal p;
+    const Vec3d e1_raw = tri.b - tri.a, e2_raw = tri.c - tri.a;
+    p.ke = unit_scale(std::max(max_abs(e1_raw), max_abs(e2_raw)));
+    const Vec3d e1 = e1_raw * p.ke, e2 = e2_raw * p.ke;
+    p.n = cross(e1, e2);
+    p.dn = gamma(5) * cross_magnitudes(e1, e2);
+    return p;
+}
+
+}  // namespace
+
+PlaneNormal plane_normal(const Triangle& tri) {
+    return plane_normal_in_line(tri);
+}
+
+namespace {
+
 /// Where the ray's line crosses the triangle's plane: t = n·(v − o) / n·d with v the anchor
 /// vertex and n = (b − a)×(c − a), v − o exact (TwoSum) and both dot products double-double, so
 /// that t is rounded once. A grazing ray, a sliver or a far origin, whose Woop t loses digits in
@@ -70,14 +93,10 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
     const Vec3d& v = anchor_vertex(tri, ray.origin);
     const DD vo[3] = {two_sum(v.x, -ray.origin.x), two_sum(v.y, -ray.origin.y),
                       two_sum(v.z, -ray.origin.z)};
-    // t is the same for any multiple of n: the edges are brought to unit scale (unit_scale),
-    // so that n's products neither overflow nor underflow for a triangle far larger or
-    // smaller than its distance (or than 1).
-    const Vec3d e1_raw = tri.b - tri.a, e2_raw = tri.c - tri.a;
-    const double ke = unit_scale(std::max(max_abs(e1_raw), max_abs(e2_raw)));
+    const PlaneNormal pn = plane_normal_in_line(tri);
+    const double ke = pn.ke;
     {
-        const Vec3d e1 = e1_raw * ke, e2 = e2_raw * ke;
-        const Vec3d n = cross(e1, e2);
+        const Vec3d& n = pn.n;
         const DD num = add(add(mul(vo[0], n.x), mul(vo[1], n.y)), mul(vo[2], n.z));
         const DD den = add(add(two_prod(n.x, d.x), two_prod(n.y, d.y)), two_prod(n.z, d.z));
         if (den.hi != 0.0) {
@@ -85,7 +104,7 @@ RAYCASTD_FMA_CLONES double plane_t(const Triangle& tri, const Ray& ray) {
             // The normal's error, component by component (cross_magnitudes): a
             // coordinate-aligned triangle (a floor) has δn only along its normal, where v − p
             // has no component.
-            const Vec3d dn = gamma(5) * cross_magnitudes(e1, e2);
+            const Vec3d& dn = pn.dn;
             // |v − p| from the computed crossing p = o + t·d, with 4u of its terms for the
             // rounding of vo's low part, the product and the difference. The true crossing is
             // |Δt|·|d| further, so |Δt| ≤ δn·|v − p| / (|n·d| − δn·|d|). Accept when that is

@@ -34,6 +34,16 @@ struct Triangle {
 /// that needs both of one triangle).
 Vec3d edge_cross(const Triangle& tri);
 
+/// The plane crossing's normal (intersect_triangle's plane_t, and the four-lane kernels of
+/// triangle_lanes.h, which must form the same bits): the edges b − a and c − a brought to unit
+/// scale by the power of two `ke` (unit_scale), their cross product `n`, and γ₅ of its terms'
+/// magnitudes `dn`, the bound of n's rounding by component.
+struct PlaneNormal {
+    double ke = 1.0;
+    Vec3d n, dn;
+};
+PlaneNormal plane_normal(const Triangle& tri);
+
 /// Unit geometric normal normalize((b−a)×(c−a)) (counter-clockwise front faces); zero vector
 /// for a degenerate triangle.
 Vec3d triangle_normal(const Triangle& tri);

@@ -1,6 +1,5 @@
 #include "engine/geometry/triangle_lanes.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -84,26 +83,12 @@ struct DD4 {
 struct Verdicts {
     unsigned undecided = 0, hit = 0, outside = 0;  // the rest: a miss
     alignas(32) double t[4], t_err[4], u[4], v[4], det[4];
-    alignas(32) double edge_u[4], edge_v[4], edge_w[4];
 };
-
-/// The per-triangle quantities: the plane crossing's edges brought to unit scale (plane_t in
-/// triangle.cpp: ke), their cross product and the bound of its rounding.
-struct PlaneOf {
-    Vec3d n, dn;
-};
-
-PlaneOf plane_of(const Triangle& tri) {
-    const Vec3d e1_raw = tri.b - tri.a, e2_raw = tri.c - tri.a;
-    const double ke = unit_scale(std::max(max_abs(e1_raw), max_abs(e2_raw)));
-    const Vec3d e1 = e1_raw * ke, e2 = e2_raw * ke;
-    return {cross(e1, e2), gamma(5) * cross_magnitudes(e1, e2)};
-}
 
 /// woop() of triangle.cpp (require_inside, t from the plane crossing, not rescaled), its
 /// statements in its order, on four lanes; lanes that leave its common path are undecided.
 [[gnu::target("avx2,fma")]] void decide_lanes(const Triangle& tri, const Ray* const rays[4],
-                                              const PlaneOf& plane, bool degenerate,
+                                              const PlaneNormal& plane, bool degenerate,
                                               bool decision_only, Verdicts& out) {
     constexpr double kMax = std::numeric_limits<double>::max();
     const V ox = RAYCASTD_LANES_OF(origin.x), oy = RAYCASTD_LANES_OF(origin.y),
@@ -225,9 +210,6 @@ PlaneOf plane_of(const Triangle& tri) {
     _mm256_store_pd(out.u, v * inv_det);
     _mm256_store_pd(out.v, w * inv_det);
     _mm256_store_pd(out.det, det);
-    _mm256_store_pd(out.edge_u, u);
-    _mm256_store_pd(out.edge_v, v);
-    _mm256_store_pd(out.edge_w, w);
     if (_mm256_movemask_pd(open2) == 0) {  // no lane needs the plane crossing
         out.undecided = static_cast<unsigned>(_mm256_movemask_pd(undecided));
         out.outside = static_cast<unsigned>(_mm256_movemask_pd(outside));
@@ -299,7 +281,7 @@ unsigned triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned c
     // degeneracy test, and the hit's normal) and plane_t's scaled normal.
     const Vec3d n = edge_cross(tri);
     Verdicts verdicts;
-    decide_lanes(tri, lanes, plane_of(tri), n == Vec3d{0.0, 0.0, 0.0}, decision_only, verdicts);
+    decide_lanes(tri, lanes, plane_normal(tri), n == Vec3d{0.0, 0.0, 0.0}, decision_only, verdicts);
     const Vec3d normal = want_normal && verdicts.hit != 0 ? normalize(n) : Vec3d{};
     for (unsigned k = 0; k < count; ++k) {
         const unsigned bit = 1u << k;
@@ -315,8 +297,9 @@ unsigned triangle_lanes(const Triangle& tri, const Ray* const rays[], unsigned c
             h.u = verdicts.u[k];
             h.v = verdicts.v[k];
             h.primitive = 0;
-            h.on_edge =
-                verdicts.edge_u[k] == 0.0 || verdicts.edge_v[k] == 0.0 || verdicts.edge_w[k] == 0.0;
+            // woop's on_edge (an edge function exactly 0) is never set here: a decided lane's
+            // edge functions all cleared their rounding bounds, so none is 0.
+            h.on_edge = false;
             h.front_face = verdicts.det[k] > 0.0;
             h.t_err = verdicts.t_err[k];
             if (want_normal)
