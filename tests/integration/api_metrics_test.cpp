@@ -75,12 +75,17 @@ TEST_F(Metrics, CountersMoveWithTheRequestsServed) {
     EXPECT_EQ(missing->status, 404);
 
     // A request is counted once its answer has been written, so the client may see the answer
-    // a moment before the counter moves: the scrape is repeated until the last one is counted.
+    // a moment before the counters move: the scrape is repeated until the last one is counted.
+    // Both its counters are waited for: a scrape is no snapshot, and one read the status counter
+    // before the 404's increment and the histogram after it (asan CI, 2026-12-07).
     const std::string intersect = R"(method="POST",route="/v1/scenes/{id}/intersect")";
+    auto counted = [&](const std::string& text) {
+        return sample(text, "raycastd_http_request_duration_seconds_count{" + intersect + "}") >=
+                   3 &&
+               sample(text, "raycastd_http_requests_total{" + intersect + R"(,status="404"})") >= 1;
+    };
     std::string after = scrape();
-    for (int i = 0; i < 100 && sample(after, "raycastd_http_request_duration_seconds_count{" +
-                                                 intersect + "}") < 3;
-         ++i) {
+    for (int i = 0; i < 100 && !counted(after); ++i) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
         after = scrape();
     }
