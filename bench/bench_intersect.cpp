@@ -29,7 +29,6 @@
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
-#include <unistd.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -39,6 +38,7 @@
 #include "bench/timing.h"
 #include "bench/workloads.h"
 #include "engine/huge_pages.h"
+#include "engine/process_memory.h"
 #include "engine/query/intersect.h"
 
 namespace rb = raycastd::bench;
@@ -555,15 +555,6 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
     return true;
 }
 
-/// This process's resident bytes (/proc/self/statm), 0 where there is no such file.
-std::size_t resident_bytes() {
-    std::ifstream f("/proc/self/statm");
-    std::size_t pages = 0, resident = 0;
-    if (!(f >> pages >> resident))
-        return 0;
-    return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
-}
-
 /// Gives the heap's free pages back to the system (glibc's malloc_trim); false elsewhere.
 bool trim_heap() {
 #if defined(__GLIBC__)
@@ -598,17 +589,17 @@ int memory_probe(char name, const Sizes& sizes, bool trimmed) {
     // docs/numerics.md, the memory of a scene). The row itself is the process as it is.
     if (trimmed && !trim_heap())
         return 1;
-    const std::size_t before = resident_bytes();
+    const std::size_t before = re::process_resident_bytes();
     auto built = re::QueryEngine::build(std::make_shared<const re::Scene>(rb::to_engine_scene(w)));
     if (!built.ok())
         return 1;
     const auto& engine = *built;
-    const std::size_t after_build = resident_bytes();
+    const std::size_t after_build = re::process_resident_bytes();
     engine->intersect({ray}, re::QueryOptions{re::Mode::closest, re::Precision::refined});
     engine->intersect({ray}, re::QueryOptions{re::Mode::closest, re::Precision::exact});
     if (trimmed)
         trim_heap();
-    const std::size_t after = resident_bytes();
+    const std::size_t after = re::process_resident_bytes();
     std::printf("%s\n", json{{"workload", w.name},
                              {"trimmed", trimmed},
                              {"triangles", engine->scene().triangle_count()},

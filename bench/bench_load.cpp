@@ -21,6 +21,7 @@
 #include "bench/bench_files.h"
 #include "bench/workloads.h"
 #include "engine/load/model_loader.h"
+#include "engine/process_memory.h"
 #include "engine/query/intersect.h"
 #include "server/content_hash.h"
 
@@ -31,13 +32,6 @@ namespace {
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::size_t rss_bytes() {
-    std::ifstream f("/proc/self/statm");
-    std::size_t total = 0, resident = 0;
-    f >> total >> resident;
-    return resident * 4096;
 }
 
 std::string read_bytes(const fs::path& p) {
@@ -71,11 +65,11 @@ void row(const std::string& name, const std::string& bytes, engine::ModelFormat 
         scene->objects.push_back(std::move(o));
     }
     const std::size_t tris = scene->triangle_count();
-    const std::size_t rss0 = rss_bytes();
+    const std::size_t rss0 = raycastd::engine::process_resident_bytes();
     t0 = std::chrono::steady_clock::now();
     auto engine = engine::QueryEngine::build(scene);
     const double build_ms = ms_since(t0);
-    const std::size_t rss1 = rss_bytes();
+    const std::size_t rss1 = raycastd::engine::process_resident_bytes();
     if (!engine.ok()) {
         std::printf("| %s | build failed: %s |\n", name.c_str(), engine.status().message.c_str());
         return;

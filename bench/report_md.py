@@ -566,7 +566,10 @@ ISSUE_17_NOTE = (
     "widened triangles (~66 B; the float vertices it was built from are given back after the "
     "build, since its leaves hold copies: embree/build_buffer.h), and exact's BVH (26-27 B, its "
     "bottom nodes quantized to a byte a plane; docs/numerics.md); "
-    "`fast`'s BVH, built on a first `fast` query, is not in it."
+    "`fast`'s BVH, built on a first `fast` query, is not in it. Since 2026-12-07 the builds "
+    "leave no freed heap behind on A (the topology's edges reserved to their count, exact's "
+    "build scratch in mappings of its own: engine/mapped_allocator.h), so the untrimmed row "
+    "reads what the trimmed one does."
 )
 
 POINTS_NOTE = (

@@ -1,5 +1,6 @@
 // reserve_fresh: room without copying, and (where the kernel offers transparent huge pages) the
-// room backed by them once touched.
+// room backed by them once touched. MappedAllocator (mapped_allocator.h): a build's scratch that
+// gives its pages back when freed, whatever malloc's thresholds.
 
 #include "engine/huge_pages.h"
 
@@ -10,6 +11,13 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "engine/mapped_allocator.h"
+#include "engine/process_memory.h"
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 namespace raycastd::engine {
 namespace {
@@ -103,6 +111,59 @@ TEST(HugePages, SmallBuffersAreNotAdvised) {
     const long kb = anon_huge_kb(reinterpret_cast<std::uintptr_t>(v.data() + n / 2));
     EXPECT_LE(kb, 0L);
 }
+
+TEST(MappedAllocator, VectorsGrowCopyAndKeepTheirElements) {
+    MappedVector<std::uint64_t> v;
+    for (std::uint64_t i = 0; i < 100000; ++i)
+        v.push_back(i * i);  // grows by reallocation, each block a mapping of its own
+    const MappedVector<std::uint64_t> copy = v;
+    v.resize(10);
+    v.shrink_to_fit();
+    ASSERT_EQ(copy.size(), 100000u);
+    for (std::uint64_t i = 0; i < 100000; i += 997)
+        EXPECT_EQ(copy[i], i * i);
+    EXPECT_EQ(v.size(), 10u);
+    EXPECT_EQ(v[9], 81u);
+    MappedVector<int> none(0);  // no allocation, or one of a byte: either way valid
+    none.reserve(0);
+    EXPECT_TRUE(none.empty());
+    MappedVector<int> zeros(5000);
+    EXPECT_EQ(zeros[4999], 0);
+}
+
+#if defined(__GLIBC__)
+TEST(MappedAllocator, AFreedArrayGivesItsPagesBackWhateverMallocsThresholds) {
+    if (kSanitizerAllocator)
+        GTEST_SKIP() << "a sanitizer's allocator maps this process's memory";
+    if (process_resident_bytes() == 0)
+        GTEST_SKIP() << "no /proc/self/statm to read the resident memory from";
+    // The thresholds glibc moves to after a scene build has freed a large block (its mmap
+    // threshold raised to that block's size, the trim threshold to twice it), set here outright.
+    // This process's later tests only run with them (ctest runs each test on its own).
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, 256 << 20);
+    constexpr std::size_t kBytes = std::size_t{24} << 20;
+    constexpr std::size_t kMost = std::size_t{20} << 20;
+    // The control: a vector of the same size, freed, stays in the heap and resident. Without it
+    // the test could not tell the allocator apart from malloc.
+    std::size_t before = process_resident_bytes();
+    {
+        std::vector<char> heap(kBytes, 1);
+        EXPECT_GE(process_resident_bytes(), before + kMost);
+    }
+    const std::size_t kept = process_resident_bytes();
+    EXPECT_GE(kept, before + kMost) << "glibc gave back a freed heap block below its thresholds";
+    before = kept;
+    {
+        MappedVector<char> mapped(kBytes, 1);
+        EXPECT_GE(process_resident_bytes(), before + kMost);
+    }
+    EXPECT_LT(process_resident_bytes(), before + (std::size_t{4} << 20));
+    malloc_trim(0);  // the control's block
+    mallopt(M_MMAP_THRESHOLD, 128 << 10);
+    mallopt(M_TRIM_THRESHOLD, 128 << 10);
+}
+#endif
 
 }  // namespace
 }  // namespace raycastd::engine

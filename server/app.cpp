@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "engine/process_memory.h"
 #include "server/content_hash.h"
 #include "server/request_cancel.h"
 #include "server/request_log.h"
@@ -296,7 +297,7 @@ void App::add_gauges() {
                        [this] { return static_cast<double>(registry_->resident_bytes()); });
     metrics_.add_gauge("process_resident_memory_bytes", "gauge",
                        "Resident set size of the process (/proc/self/statm).",
-                       [] { return static_cast<double>(resident_memory_bytes()); });
+                       [] { return static_cast<double>(engine::process_resident_bytes()); });
     metrics_.add_gauge("raycastd_answer_bytes", "gauge",
                        "Bytes of answers being built or written (--answer-budget-mb bounds it).",
                        [this] { return static_cast<double>(answers_.used()); });

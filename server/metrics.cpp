@@ -3,9 +3,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-
-#include <unistd.h>
 
 namespace raycastd::server {
 
@@ -237,15 +234,6 @@ std::string Metrics::render() const {
         out += g.name + " " + number(g.read()) + "\n";
     }
     return out;
-}
-
-std::size_t resident_memory_bytes() {
-    std::ifstream f("/proc/self/statm");
-    std::size_t pages_total = 0, pages_resident = 0;
-    if (!(f >> pages_total >> pages_resident))
-        return 0;
-    const long page = ::sysconf(_SC_PAGESIZE);
-    return pages_resident * static_cast<std::size_t>(page > 0 ? page : 4096);
 }
 
 }  // namespace raycastd::server

@@ -112,7 +112,4 @@ class Metrics {
     std::vector<Gauge> gauges_;
 };
 
-/// This process's resident set size in bytes, from /proc/self/statm (0 where unavailable).
-std::size_t resident_memory_bytes();
-
 }  // namespace raycastd::server

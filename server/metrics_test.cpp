@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/process_memory.h"
 #include "server/request_log.h"
 
 namespace raycastd::server {
@@ -98,7 +99,7 @@ TEST(Metrics, RaysErrorsAndGauges) {
 
 TEST(Metrics, ResidentMemoryIsReadFromProc) {
     // A running test binary holds at least a megabyte resident.
-    EXPECT_GT(resident_memory_bytes(), 1u << 20);
+    EXPECT_GT(engine::process_resident_bytes(), 1u << 20);
 }
 
 TEST(RequestLog, LinesAreJsonWithTheRequestId) {

@@ -3,6 +3,7 @@
 #include <thread>
 
 #include "engine/backend.h"
+#include "engine/process_memory.h"
 #include "server/app.h"
 #include "server/openapi.h"
 #include "server/schema/json_writer.h"
@@ -35,7 +36,7 @@ void install_meta_routes(App& app) {
                   {"answer_budget_bytes", c.limits.answer_budget_bytes},
                   {"job_budget_bytes", c.limits.job_budget_bytes}}},
                 {"requests_in_flight", app.requests_in_flight()},
-                {"memory_resident_bytes", resident_memory_bytes()},
+                {"memory_resident_bytes", engine::process_resident_bytes()},
             };
             app.add_registry_info(info);
             send_json(res, info.dump());

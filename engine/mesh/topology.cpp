@@ -35,11 +35,16 @@ struct HalfEdgeCounts {
 };
 
 /// OpenMesh's half-edge structure of the faces (reversed where `flip` says), and what it says.
+/// `edges` is the edge map's count of distinct edges, which the structure never exceeds (add_face
+/// refuses a face that would give an edge a third side): reserving 3 × faces, as for triangles
+/// that share none, made its edge array a block twice the size it needed (7.9 MB for 82k faces),
+/// and glibc, once such a block mapped on its own is freed, raises its mmap threshold to it and
+/// keeps later blocks below it in the heap (docs/numerics.md, the memory of a scene).
 HalfEdgeCounts half_edge_counts(const WeldedTriangles& w, const std::vector<std::uint8_t>& flip,
-                                std::size_t faces) {
+                                std::size_t faces, std::size_t edges) {
     HalfEdgeCounts out;
     OpenMesh::TriConnectivity m;
-    m.reserve(w.vertices, 3 * faces, faces);
+    m.reserve(w.vertices, edges, faces);
     for (std::uint32_t v = 0; v < w.vertices; ++v)
         m.new_vertex();
     OpenMesh::VertexHandle h[3];
@@ -117,7 +122,7 @@ MeshTopology compute_topology(const TriangleMesh& mesh) {
         // The orientation walk only where some edge says a triangle is flipped.
         const std::vector<std::uint8_t> flip =
             e.same_direction_edges > 0 ? orientation_flips(w, e) : std::vector<std::uint8_t>{};
-        const HalfEdgeCounts he = half_edge_counts(w, flip, e.faces);
+        const HalfEdgeCounts he = half_edge_counts(w, flip, e.faces, e.edges);
         out.boundary_loops = he.boundary_loops;
         out.refused_triangles = he.refused;
     } else {

@@ -10,6 +10,7 @@
 
 #include "engine/accel/embree/impl.h"
 #include "engine/geometry/target_clones.h"
+#include "engine/mapped_allocator.h"
 
 namespace raycastd::engine::embree {
 
@@ -477,7 +478,7 @@ Item* split(Item* begin, Item* end, bool median) {
 /// Builds the tree depth first into `nodes` (reserved beforehand: never reallocated), as Nodes
 /// of float boxes; build_tree then quantizes them into the tree's QNodes.
 struct ExactBvhBuilder {
-    std::vector<ExactBvh::Node>& nodes;
+    MappedVector<ExactBvh::Node>& nodes;
 
     /// The child code of items[begin, end) (depth: nodes above it).
     std::uint32_t build(Item* begin, Item* end, int depth) {
@@ -579,7 +580,9 @@ Status ExactBvh::build_tree(const Impl& a) {
         total += o.primitive_count();
     if (total >= kNoChild - kLeafBit)  // a leaf's code holds its primitive's index in 31 bits
         return Status::error(Code::too_large, "the scene has too many primitives for exact's BVH");
-    std::vector<Item> items;
+    // The build's scratch (items, float nodes, codes) in mappings of their own
+    // (engine/mapped_allocator.h): freed, they leave nothing in the heap.
+    MappedVector<Item> items;
     items.reserve(total);
     first_.reserve(scene.objects.size() + 1);
     for (const Object& o : scene.objects) {
@@ -604,14 +607,14 @@ Status ExactBvh::build_tree(const Impl& a) {
     // for that many, so that the build never reallocates (a vector growing by doubling had held
     // up to twice the tree, and copied it each time); only the pages it uses are touched. The
     // float nodes are then quantized into the tree (128 B a node against 224), and freed.
-    std::vector<Node> built;
+    MappedVector<Node> built;
     built.reserve(items.size());
     ExactBvhBuilder builder{built};
     root_ = builder.build(items.data(), items.data() + items.size(), 0);
-    std::vector<Item>().swap(items);
+    MappedVector<Item>().swap(items);
     // The nodes whose children are all leaves, most of the tree, quantized into bottom_; the
     // others kept as they are (a walk passes more of them, and they are few).
-    std::vector<std::uint32_t> code(built.size());
+    MappedVector<std::uint32_t> code(built.size());
     std::size_t inner = 0, bottom = 0;
     for (std::size_t i = 0; i < built.size(); ++i) {
         bool leaves = true;
