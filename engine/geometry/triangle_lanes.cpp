@@ -6,12 +6,14 @@
 
 #include <immintrin.h>
 
+#include "engine/geometry/target_clones.h"
 #include "engine/math/float_bounds.h"
 
 namespace raycastd::engine {
 
 bool triangle_lanes_available() {
-    static const bool available = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    static const bool available = cpu_vectors_allowed() && __builtin_cpu_supports("avx2") &&
+                                  __builtin_cpu_supports("fma");
     return available;
 }
 
