@@ -12,8 +12,8 @@
 namespace raycastd::engine {
 
 bool triangle_lanes_available() {
-    static const bool available = cpu_vectors_allowed() && __builtin_cpu_supports("avx2") &&
-                                  __builtin_cpu_supports("fma");
+    static const bool available =
+        cpu_vectors_allowed() && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
     return available;
 }
 
