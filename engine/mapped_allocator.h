@@ -58,19 +58,25 @@ struct MappedAllocator {
 #endif
     }
 
-    friend bool operator==(const MappedAllocator&, const MappedAllocator&) {
-        return true;
-    }
-    friend bool operator!=(const MappedAllocator&, const MappedAllocator&) {
-        return false;
-    }
-
   private:
     /// A zero-length mapping is refused: at least a byte (the system rounds up to a page).
     static std::size_t bytes(std::size_t n) {
         return n == 0 ? 1 : n * sizeof(T);
     }
 };
+
+/// Every MappedAllocator frees what any other allocated (they hold nothing), whatever their
+/// element types: templates outside the class, so that MappedAllocator<int> compares with
+/// MappedAllocator<long> (as friends taking the class, the converting constructor made the two
+/// overloads ambiguous).
+template <class T, class U>
+bool operator==(const MappedAllocator<T>&, const MappedAllocator<U>&) {
+    return true;
+}
+template <class T, class U>
+bool operator!=(const MappedAllocator<T>&, const MappedAllocator<U>&) {
+    return false;
+}
 
 /// A build's scratch array (the file comment).
 template <class T>
