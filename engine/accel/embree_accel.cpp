@@ -158,6 +158,14 @@ Hit kept_sphere_hit(const std::optional<Hit>& sphere_hit, bool want_normal) {
 // body of such rays kept the server busy for minutes). Where the move is not possible the ray
 // is answered as it is: the exact BVH, or the scan where the float ray cannot be placed.
 
+/// The first stage of Woop's test for the walk of exact's BVH to pre-test triangles with
+/// (ExactBvh::closest): `woop`, formed for c's ray, where that ray is in the scene's own
+/// coordinates; none for a far ray moved into the centre's frame (RayContext::frame), whose
+/// triangles the double tests translate first.
+const WoopRay* walk_pretest(const RayContext& c, const WoopRay& woop) {
+    return c.frame ? nullptr : &woop;
+}
+
 /// The hit of the moved ray `m` as the client's ray's (far_ray.h's moved_back).
 void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
     engine::moved_back(*a.scene, m, h);
@@ -205,10 +213,14 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
 std::optional<Hit> exact_closest_placed(const Impl& a, const ExactBvh& bvh, bool want_normal,
                                         RayContext& c, const FloatRay& f, FarSpheres* far) {
     c.far_spheres = far;
-    bvh.closest(f, [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
-        keep_candidates(c, object, prim, tfar);  // the closest in c.best
-        return true;
-    });
+    const WoopRay woop = woop_ray(*c.ray);
+    bvh.closest(
+        f,
+        [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
+            keep_candidates(c, object, prim, tfar);  // the closest in c.best
+            return true;
+        },
+        walk_pretest(c, woop));
     if (!c.best)
         return std::nullopt;
     if (far && far->best) {  // a sphere's, decided on the client's ray, with its normal
@@ -298,11 +310,15 @@ bool exact_any(const Impl& a, const Ray& ray, RayFrame frame = RayFrame::world,
     if (!exact_ray_within_padding(a, c))
         return linear_any(*a.scene, far ? *far->client : ray);
     c.far_spheres = far;
+    const WoopRay woop = woop_ray(*c.ray);
     bool hit = false;
-    bvh->any(f, [&c, &hit](std::uint32_t object, std::uint32_t prim, float&) {
-        hit = occludes(c, object, prim);
-        return !hit;
-    });
+    bvh->any(
+        f,
+        [&c, &hit](std::uint32_t object, std::uint32_t prim, float&) {
+            hit = occludes(c, object, prim);
+            return !hit;
+        },
+        walk_pretest(c, woop));
     return hit;
 }
 
@@ -336,10 +352,14 @@ void exact_all(const Impl& a, const Ray& ray, bool want_normal, std::vector<Hit>
         return linear_all(*a.scene, far ? *far->client : ray, want_normal, out);
     c.far_spheres = far;
     // Every candidate goes to c.collect (a far ray's spheres' to far->hits).
-    bvh->any(f, [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
-        keep_candidates(c, object, prim, tfar);
-        return true;
-    });
+    const WoopRay woop = woop_ray(*c.ray);
+    bvh->any(
+        f,
+        [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
+            keep_candidates(c, object, prim, tfar);
+            return true;
+        },
+        walk_pretest(c, woop));
     // Triangles' moved crossings, and then spheres', in the moved ray's frame, for the order.
     std::vector<Hit> moved;
     if (far) {

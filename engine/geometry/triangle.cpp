@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "engine/geometry/target_clones.h"
+#include "engine/geometry/woop_edges.h"
 #include "engine/math/double_double.h"
 #include "engine/math/exact_sign.h"
 #include "engine/math/float_bounds.h"
@@ -16,26 +17,6 @@ namespace raycastd::engine {
 using namespace dd;
 
 namespace {
-
-/// The ray's shear frame: kz is the dominant axis of the direction; kx, ky are chosen so that
-/// the winding (and therefore the sign convention of U, V, W) is preserved (Woop et al. §3).
-struct ShearFrame {
-    std::size_t kx, ky, kz;
-    double sx, sy, sz;
-};
-
-ShearFrame make_shear(const Vec3d& d) {
-    ShearFrame s{};
-    s.kz = max_abs_dimension(d);
-    s.kx = (s.kz + 1) % 3;
-    s.ky = (s.kx + 1) % 3;
-    if (d[s.kz] < 0.0)
-        std::swap(s.kx, s.ky);
-    s.sx = d[s.kx] / d[s.kz];
-    s.sy = d[s.ky] / d[s.kz];
-    s.sz = 1.0 / d[s.kz];
-    return s;
-}
 
 /// The vertex nearest the origin (max norm). Anchoring the plane there makes the numerator's
 /// rounding scale with that distance, and an origin exactly on a vertex gets t = 0 exactly.
@@ -281,15 +262,12 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
     const Vec3d C = tri.c - ray.origin;
     const ShearFrame s = make_shear(ray.direction);
 
-    // Shear the vertices so the ray runs along +z (Woop et al., eq. 2).
-    const double ax = A[s.kx] - s.sx * A[s.kz], ay = A[s.ky] - s.sy * A[s.kz];
-    const double bx = B[s.kx] - s.sx * B[s.kz], by = B[s.ky] - s.sy * B[s.kz];
-    const double cx = C[s.kx] - s.sx * C[s.kz], cy = C[s.ky] - s.sy * C[s.kz];
-
-    // Scaled barycentrics: 2-D edge functions of the sheared triangle at the origin.
-    double u = cx * by - cy * bx;
-    double v = ax * cy - ay * cx;
-    double w = bx * ay - by * ax;
+    // Shear the vertices so the ray runs along +z (Woop et al., eq. 2), and the scaled
+    // barycentrics: 2-D edge functions of the sheared triangle at the origin (woop_edges.h,
+    // whose woop_misses forms the same bits once a ray's frame is known).
+    const ShearedEdges e = sheared_edges(A, B, C, s);
+    const double ax = e.ax, ay = e.ay, bx = e.bx, by = e.by, cx = e.cx, cy = e.cy;
+    double u = e.u, v = e.v, w = e.w;
     if (!rescaled) {
         // The edge functions are products of two lengths, the sheared t and t_err multiply
         // them by a third, and t_err's bound mixes lengths with the sheared z (lengths over the
@@ -298,11 +276,8 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         // one 1e155 across too; one 1e-110 across hit at t = 0 by the sheared t; a direction
         // 1e-100 long had t_err 1e85 times t). Such a triangle and ray are brought to unit
         // scale (woop_scale, unit_scale). Ordinary ones pay four comparisons.
-        // A sum, not std::max, which drops a NaN (inf − inf at a corner of a triangle 1e160
-        // across): the NaN then fails the test and is rescaled.
-        const double m = std::abs(u) + std::abs(v) + std::abs(w);
-        const double dm = std::abs(ray.direction[s.kz]);  // max_abs(direction)
-        if (!(m >= 0x1p-600 && m <= 0x1p600 && dm >= 0x1p-250 && dm <= 0x1p250)) {
+        // (edges_in_scale: the sum of the edge functions' magnitudes and |d_kz| = max_abs(d).)
+        if (!edges_in_scale(e, std::abs(ray.direction[s.kz]))) {
             return woop_rescaled(tri, ray, want_normal, require_inside, t_from, A, B, C, outside);
         }
     }
@@ -315,12 +290,11 @@ std::optional<Hit> woop(const Triangle& tri, const Ray& ray, bool want_normal, b
         // bound is γ₁₆·8 times the product of its two corners' largest coordinates, formed as
         // (m_p·m_q) so that both triangles of an edge round it alike.
         const double ma = max_abs(A), mb = max_abs(B), mc = max_abs(C);
-        constexpr double k = 8.0 * gamma(16);
-        if (!(std::abs(u) > k * (mc * mb)))
+        if (!edge_sign_certain(u, mc, mb))
             u = settle_edge(u, tri.c, tri.b, ray, cx, by, cy, bx);
-        if (!(std::abs(v) > k * (ma * mc)))
+        if (!edge_sign_certain(v, ma, mc))
             v = settle_edge(v, tri.a, tri.c, ray, ax, cy, ay, cx);
-        if (!(std::abs(w) > k * (mb * ma)))
+        if (!edge_sign_certain(w, mb, ma))
             w = settle_edge(w, tri.b, tri.a, ray, bx, ay, by, ax);
     } else if (u == 0.0 || v == 0.0 || w == 0.0) {
         // Not deciding (the plane crossing of a hit decided elsewhere): the value in long

@@ -9,6 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/geometry/target_clones.h"
+#include "engine/geometry/woop_edges.h"
+
 namespace raycastd::engine {
 namespace {
 
@@ -259,6 +262,85 @@ TEST(TriangleLanes, DecidesAsIntersectAndDecideTriangleBitForBit) {
     EXPECT_GT(outsides, 8000);
     EXPECT_GT(misses, 50000);
     EXPECT_GT(decided_hits, 3000);
+}
+
+// woop_edges.h's pre-test, on the same cases: wherever it answers "misses", each of the three
+// kernels answers no hit and leaves the LineCrossing alone; the AVX form answers as the scalar
+// one; and it answers "misses" for most of the kernels' misses, or it would save nothing.
+TEST(WoopMisses, OnlyWhereEveryKernelMissesAndTheSameWithAvx) {
+    Cases cases(20261207);
+    long pretested = 0, kernel_misses = 0, caught = 0, wrong = 0, avx_differs = 0;
+    const bool avx = cpu_has_avx();
+    for (int round = 0; round < 300000; ++round) {
+        Triangle tri = cases.triangle();
+        Ray ray = cases.ray(tri);
+        cases.rescale(tri, &ray, 1);
+        const WoopRay w = woop_ray(ray);
+        const bool misses = woop_misses(tri, w);
+        if (avx && woop_misses_avx(tri.a, tri.b, tri.c, w) != misses && ++avx_differs <= 5)
+            ADD_FAILURE() << "round " << round << ": AVX " << !misses << ", scalar " << misses;
+        const LineCrossing stale{-7.0, 3.0, false};
+        LineCrossing outside = stale, decided_outside = stale;
+        const std::optional<Hit> hit = intersect_triangle(tri, ray, true, &outside);
+        const std::optional<Hit> decided = decide_triangle(tri, ray, &decided_outside);
+        const std::optional<Hit> fast = intersect_triangle_fast(tri, ray, false);
+        if (!hit && !outside.crossed)
+            ++kernel_misses;
+        if (!misses)
+            continue;
+        ++pretested;
+        if (hit || decided || fast || !same(outside, stale) || !same(decided_outside, stale)) {
+            if (++wrong <= 5)
+                ADD_FAILURE() << "round " << round << ": the pre-test misses where a kernel "
+                              << "does not (intersect " << hit.has_value() << ", decide "
+                              << decided.has_value() << ", fast " << fast.has_value() << ")";
+        } else {
+            ++caught;
+        }
+    }
+    EXPECT_EQ(wrong, 0);
+    EXPECT_EQ(avx_differs, 0);
+    // Half the rays are aimed at edges and corners, where a sign may not be certain, and a
+    // third of the triangles are degenerate, slivers or at other scales (2026-12-07: 125,862 of
+    // the kernels' 257,683 misses caught).
+    EXPECT_GT(caught, kernel_misses * 2 / 5) << caught << " of " << kernel_misses;
+    EXPECT_GT(pretested, 50000);
+}
+
+// Lines exactly through the edge two triangles share: its exact edge function is 0, the
+// rounded one (the shear's quotients round) has either sign, and the edge belongs to both
+// triangles (woop's settle_edge). The pre-test must leave those to the kernels: with every
+// nonzero edge function's sign taken as certain it passed over 14,564 of these hits
+// (2026-12-07; OnlyWhereEveryKernelMisses... found 3,628 such in its cases).
+TEST(WoopMisses, ALineThroughASharedEdgeIsLeftToTheKernels) {
+    Cases cases(41);
+    const bool avx = cpu_has_avx();
+    // Eighths of whole numbers: the edge's midpoint and the direction to it are exact.
+    const auto point = [&](int r) {
+        return Vec3d{cases.pick(16 * r) - 8.0 * r, cases.pick(16 * r) - 8.0 * r,
+                     cases.pick(16 * r) - 8.0 * r} /
+               8.0;
+    };
+    int hits = 0, wrong = 0;
+    for (int round = 0; round < 20000; ++round) {
+        const Vec3d a = point(8), b = point(8);
+        const Triangle left{a, b, cases.point(1.0)}, right{b, a, cases.point(1.0)};
+        Ray ray;
+        ray.origin = point(40);
+        ray.direction = (a + b) / 2.0 - ray.origin;
+        const WoopRay w = woop_ray(ray);
+        for (const Triangle& tri : {left, right}) {
+            if (!intersect_triangle(tri, ray, false))
+                continue;
+            ++hits;
+            if (woop_misses(tri, w) || (avx && woop_misses_avx(tri.a, tri.b, tri.c, w))) {
+                if (++wrong <= 5)
+                    ADD_FAILURE() << "round " << round << ": a hit passed over";
+            }
+        }
+    }
+    EXPECT_EQ(wrong, 0);
+    EXPECT_GE(hits, 20000);  // watertight: every such line hits one of the two at least
 }
 
 TEST(TriangleLanes, ATriangleWhoseEdgeCrossIsZeroIsMissed) {

@@ -212,8 +212,8 @@ void ExactBvh::dequantize(const QNode& q, int k, float lo[3], float hi[3]) {
 }
 
 template <bool ordered, bool avx>
-void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn,
-                             void* visit) const {
+void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn, void* visit,
+                             const WoopRay* woop) const {
     Entry stack[kStack];
     int sp = 0;
     std::uint32_t code = root_;
@@ -273,7 +273,17 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
                     : static_cast<std::uint32_t>(std::upper_bound(first_.begin(), first_.end(), g) -
                                                  first_.begin()) -
                           1u;
-            if (!fn(visit, object, g - first_[object], tfar))
+            const std::uint32_t prim = g - first_[object];
+            const TriangleMesh* mesh = woop ? meshes_[object] : nullptr;
+            bool misses = false;
+            if (mesh) {
+                const auto& t = mesh->triangles[prim];
+                const Vec3d *pa = &mesh->positions[t[0]], *pb = &mesh->positions[t[1]],
+                            *pc = &mesh->positions[t[2]];
+                misses = avx ? woop_misses_avx(*pa, *pb, *pc, *woop)
+                             : woop_misses(Triangle{*pa, *pb, *pc}, *woop);
+            }
+            if (!misses && !fn(visit, object, prim, tfar))
                 return;
         }
         // Up: the nearest pushed entry that no hit found since has culled.
@@ -296,27 +306,28 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
 // (llvm/llvm-project#60689): its sanitizer builds still call the box test, with the same answers.
 [[gnu::target("avx"), gnu::flatten]] void ExactBvh::walk_avx(const Lanes& r, float tnear,
                                                              float tfar, bool ordered, VisitFn fn,
-                                                             void* visit) const {
+                                                             void* visit,
+                                                             const WoopRay* woop) const {
     if (ordered)
-        walk_in_order<true, true>(r, tnear, tfar, fn, visit);
+        walk_in_order<true, true>(r, tnear, tfar, fn, visit, woop);
     else
-        walk_in_order<false, true>(r, tnear, tfar, fn, visit);
+        walk_in_order<false, true>(r, tnear, tfar, fn, visit, woop);
 }
 
 [[gnu::flatten]] void ExactBvh::walk_sse(const Lanes& r, float tnear, float tfar, bool ordered,
-                                         VisitFn fn, void* visit) const {
+                                         VisitFn fn, void* visit, const WoopRay* woop) const {
     if (ordered)
-        walk_in_order<true, false>(r, tnear, tfar, fn, visit);
+        walk_in_order<true, false>(r, tnear, tfar, fn, visit, woop);
     else
-        walk_in_order<false, false>(r, tnear, tfar, fn, visit);
+        walk_in_order<false, false>(r, tnear, tfar, fn, visit, woop);
 }
 
-void ExactBvh::walk(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn,
-                    void* visit) const {
+void ExactBvh::walk(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit,
+                    const WoopRay* woop) const {
     if (cpu_has_avx())
-        walk_avx(r, tnear, tfar, ordered, fn, visit);
+        walk_avx(r, tnear, tfar, ordered, fn, visit, woop);
     else
-        walk_sse(r, tnear, tfar, ordered, fn, visit);
+        walk_sse(r, tnear, tfar, ordered, fn, visit, woop);
 }
 
 ExactBvh::Lanes ExactBvh::lanes_of(float ox, float oy, float oz, float dx, float dy, float dz) {
@@ -556,6 +567,7 @@ Status ExactBvh::build(const Impl& a) {
     nodes_.clear();
     bottom_.clear();
     first_.clear();
+    meshes_.clear();
     root_ = kNoChild;
     Status st;
     try {
@@ -568,6 +580,7 @@ Status ExactBvh::build(const Impl& a) {
         std::vector<Node>().swap(nodes_);
         std::vector<QNode>().swap(bottom_);
         std::vector<std::uint32_t>().swap(first_);
+        std::vector<const TriangleMesh*>().swap(meshes_);
         root_ = kNoChild;
     }
     return st;
@@ -585,8 +598,10 @@ Status ExactBvh::build_tree(const Impl& a) {
     MappedVector<Item> items;
     items.reserve(total);
     first_.reserve(scene.objects.size() + 1);
+    meshes_.reserve(scene.objects.size());
     for (const Object& o : scene.objects) {
         first_.push_back(static_cast<std::uint32_t>(items.size()));
+        meshes_.push_back(o.kind == ObjectKind::sphere ? nullptr : o.mesh.get());
         const auto prims = static_cast<std::uint32_t>(o.primitive_count());
         for (std::uint32_t p = 0; p < prims; ++p) {
             Item it;
