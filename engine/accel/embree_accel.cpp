@@ -172,7 +172,8 @@ void moved_back(const Impl& a, const MovedRay& m, Hit& h) {
 }
 
 std::optional<Hit> exact_closest_placed(const Impl& a, const ExactBvh& bvh, bool want_normal,
-                                        RayContext& c, const FloatRay& f, FarSpheres* far);
+                                        RayContext& c, const FloatRay& f, FarSpheres* far,
+                                        const WoopRay* formed = nullptr);
 
 /// `far`, with RayFrame::centre: `ray` is the far ray far->client moved to the scene
 /// (far->moved), and the answer is mapped back to the client's ray (spheres decided on it).
@@ -210,17 +211,32 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
 
 /// exact_closest once prepare_ray has placed the float ray `f` (context `c`) within the
 /// padding: the walk and the answer.
+std::optional<Hit> exact_closest_answer(const Impl& a, bool want_normal, RayContext& c,
+                                        FarSpheres* far);
+
+/// `formed`: woop_ray(*c.ray) where the caller has formed it.
 std::optional<Hit> exact_closest_placed(const Impl& a, const ExactBvh& bvh, bool want_normal,
-                                        RayContext& c, const FloatRay& f, FarSpheres* far) {
+                                        RayContext& c, const FloatRay& f, FarSpheres* far,
+                                        const WoopRay* formed) {
     c.far_spheres = far;
-    const WoopRay woop = woop_ray(*c.ray);
+    WoopRay woop;
+    if (!formed) {
+        woop = woop_ray(*c.ray);
+        formed = &woop;
+    }
     bvh.closest(
         f,
         [&c](std::uint32_t object, std::uint32_t prim, float& tfar) {
             keep_candidates(c, object, prim, tfar);  // the closest in c.best
             return true;
         },
-        walk_pretest(c, woop));
+        walk_pretest(c, *formed));
+    return exact_closest_answer(a, want_normal, c, far);
+}
+
+/// The answer of a walk of exact's BVH that left its closest candidate in c.best.
+std::optional<Hit> exact_closest_answer(const Impl& a, bool want_normal, RayContext& c,
+                                        FarSpheres* far) {
     if (!c.best)
         return std::nullopt;
     if (far && far->best) {  // a sphere's, decided on the client's ray, with its normal
@@ -271,14 +287,60 @@ void exact_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool wan
         alignas(64) RTCRay16 r16;
         alignas(64) int valid[kLanes];
         const unsigned left = backed_off_lanes_avx(a, rays + i, m, want_normal, lanes, r16, valid);
+        // Each half's placed rays that run with its first (ExactBvh::runs_with: a camera's)
+        // walk the tree together (ExactBvh::closest_packet); the others walk it alone.
+        WoopRay woop[kLanes];
+        unsigned alone = 0;
+        for (std::size_t half = 0; half < m; half += ExactBvh::kWidth) {
+            const std::size_t end = std::min(m, half + ExactBvh::kWidth);
+            unsigned members = 0;
+            std::size_t first = end;
+            for (std::size_t k = half; k < end; ++k) {
+                if ((left >> k & 1) || !valid[k])
+                    continue;
+                woop[k] = woop_ray(*lanes[k].ray);
+                if (first == end) {
+                    first = k;
+                    members |= 1u << k;
+                } else if (ExactBvh::runs_with(float_ray_of(r16, first), float_ray_of(r16, k))) {
+                    members |= 1u << k;
+                } else {
+                    alone |= 1u << k;
+                }
+            }
+            if (__builtin_popcount(members) < 2) {
+                alone |= members;
+                continue;
+            }
+            ExactBvh::Packet p;
+            for (unsigned on = members; on; on &= on - 1) {
+                const std::size_t k = static_cast<std::size_t>(__builtin_ctz(on));
+                ExactBvh::add_lane(p, static_cast<int>(k - half), float_ray_of(r16, k), &woop[k]);
+            }
+            bvh->closest_packet(p, [&](int lane, std::uint32_t object, std::uint32_t prim,
+                                       float& tfar) {
+                keep_candidates(lanes[half + static_cast<std::size_t>(lane)], object, prim, tfar);
+                return true;
+            });
+            for (unsigned on = p.active; on; on &= on - 1) {
+                const std::size_t k = half + static_cast<std::size_t>(__builtin_ctz(on));
+                const std::optional<Hit> h =
+                    exact_closest_answer(a, want_normal, lanes[k], nullptr);
+                out[i + k] = h ? *h : Hit{};
+            }
+        }
         for (std::size_t k = 0; k < m; ++k) {
             const Ray& ray = rays[i + k];
             std::optional<Hit> h;
             if (left >> k & 1) {
                 h = exact_closest(a, ray, want_normal);
-            } else if (valid[k]) {  // placed within the padding (else: the bounds are missed)
+            } else if (!valid[k]) {
+                // the ray's segment misses the bounds
+            } else if (alone >> k & 1) {
                 h = exact_closest_placed(a, *bvh, want_normal, lanes[k], float_ray_of(r16, k),
-                                         nullptr);
+                                         nullptr, &woop[k]);
+            } else {
+                continue;  // answered by its packet
             }
             out[i + k] = h ? *h : Hit{};
         }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -633,6 +634,42 @@ TEST(EmbreeAccel, WatertightOnSharedEdgesAndVertices) {
                 fast_leaks, fast_odd, rays);
 }
 
+/// How many of a batch's answers hit (both passes), and how many of those hit the objects named.
+struct BatchHits {
+    int hits = 0, named = 0;
+};
+
+/// exact's batch of `rays` (closest_range) answers as exact's single rays, bit for bit, with and
+/// without normals.
+BatchHits expect_exact_batch_as_single_rays(const Built& b, const std::vector<Ray>& rays,
+                                            const std::set<std::uint32_t>& named) {
+    BatchHits got;
+    for (const bool want_normal : {false, true}) {
+        std::vector<Hit> packed(rays.size());
+        b.accel->closest_range(rays.data(), rays.size(), Precision::exact, want_normal,
+                               packed.data());
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const auto one = b.accel->closest(rays[i], Precision::exact, want_normal);
+            EXPECT_EQ(one.has_value(), packed[i].valid()) << i;
+            if (!one || !packed[i].valid())
+                continue;
+            const Hit& x = *one;
+            const Hit& y = packed[i];
+            ++got.hits;
+            got.named += static_cast<int>(named.count(x.object));
+            EXPECT_TRUE(x.object == y.object && x.primitive == y.primitive &&
+                        testing::same_bits(x.t, y.t) && testing::same_bits(x.t_err, y.t_err) &&
+                        testing::same_bits(x.u, y.u) && testing::same_bits(x.v, y.v) &&
+                        testing::same_bits(x.normal.x, y.normal.x) &&
+                        testing::same_bits(x.normal.y, y.normal.y) &&
+                        testing::same_bits(x.normal.z, y.normal.z) &&
+                        x.front_face == y.front_face && x.on_edge == y.on_edge)
+                << i << " want_normal " << want_normal;
+        }
+    }
+    return got;
+}
+
 // exact's batches (rays set up four at a time: backed_off_lanes_avx) answer as exact's single
 // rays, bit for bit, on a scene with spheres among its meshes, with and without normals, for
 // rays of every branch of prepare_ray (a zero direction component, a far origin, one that
@@ -670,32 +707,55 @@ TEST(EmbreeAccel, ExactBatchesAgreeWithSingleRays) {
         }
         rays.push_back(r);
     }
-    int hits = 0, spheres = 0;
-    for (const bool want_normal : {false, true}) {
-        std::vector<Hit> packed(rays.size());
-        b.accel->closest_range(rays.data(), rays.size(), Precision::exact, want_normal,
-                               packed.data());
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            const auto one = b.accel->closest(rays[i], Precision::exact, want_normal);
-            ASSERT_EQ(one.has_value(), packed[i].valid()) << i;
-            if (!one)
-                continue;
-            const Hit& x = *one;
-            const Hit& y = packed[i];
-            EXPECT_TRUE(x.object == y.object && x.primitive == y.primitive &&
-                        testing::same_bits(x.t, y.t) && testing::same_bits(x.t_err, y.t_err) &&
-                        testing::same_bits(x.u, y.u) && testing::same_bits(x.v, y.v) &&
-                        testing::same_bits(x.normal.x, y.normal.x) &&
-                        testing::same_bits(x.normal.y, y.normal.y) &&
-                        testing::same_bits(x.normal.z, y.normal.z) &&
-                        x.front_face == y.front_face && x.on_edge == y.on_edge)
-                << i << " want_normal " << want_normal;
-            ++hits;
-            spheres += x.object == 1 || x.object == 3;
+    // With and without normals, every answer of the batch as the single ray's, bit for bit.
+    const BatchHits got = expect_exact_batch_as_single_rays(b, rays, {1, 3});  // the spheres
+    EXPECT_GT(got.hits, 1500);
+    EXPECT_GT(got.named, 100);
+}
+
+// The same for a camera's rays, eight neighbours of which walk exact's BVH together
+// (ExactBvh::closest_packet): a narrow field of view, so that eight pixels of a row run within
+// the packet's cone, with every few rows a ray of another branch (a far origin, a short range,
+// a zero direction component, one that misses) among them.
+TEST(EmbreeAccel, ExactCameraBatchesAgreeWithSingleRays) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::icosphere_object(4, {0.2, -0.1, 0.3}, 1.0));
+    s.objects.push_back(testing::sphere("ball", {0.9, 0.4, -0.5}, 0.4, 0));
+    s.objects.push_back(testing::cube_object(0.6, 2.5));
+    Built b = build(s);
+    ASSERT_TRUE(b.accel);
+    const Vec3d eye{0.3, 0.5, -6.0};
+    std::vector<Ray> rays;
+    const int w = 96, h = 64;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            Ray r;
+            r.origin = eye;
+            // 0.02 units a pixel at 1 unit from the eye: about 0.15° between neighbours.
+            r.direction = Vec3d{(x - w / 2) * 0.0026, (y - h / 2) * 0.0026, 1.0};
+            switch ((x * 7 + y * 13) % 53) {
+                case 0:
+                    r.origin = r.origin * 1e12;  // far: moved to the scene by exact_closest
+                    r.direction = Vec3d{0.1, 0.2, 0.0} - r.origin;
+                    break;
+                case 1:
+                    r.tmax = 5.5;  // stops short of some
+                    break;
+                case 2:
+                    r.direction.x = 0.0;
+                    break;
+                case 3:
+                    r.direction = Vec3d{0.0, 1.0, 0.0};  // misses the bounds
+                    break;
+                default:
+                    break;
+            }
+            rays.push_back(r);
         }
-    }
-    EXPECT_GT(hits, 1500);
-    EXPECT_GT(spheres, 100);
+    const BatchHits got = expect_exact_batch_as_single_rays(b, rays, {1});  // the ball
+    EXPECT_GT(got.hits, 4000);
+    EXPECT_GT(got.named, 200);
 }
 
 // Packets (camera rays) and single rays give the same answers; so do exact's batches (their

@@ -172,9 +172,9 @@ namespace detail {
     // Each corner's max_abs relative to the origin (ma, mb, mc), and the bounds
     // k·(mc·mb, ma·mc, mb·ma).
     const __m256d sign = _mm256_set1_pd(-0.0);
-    const __m256d m = _mm256_max_pd(
-        _mm256_max_pd(_mm256_andnot_pd(sign, x), _mm256_andnot_pd(sign, y)),
-        _mm256_andnot_pd(sign, z));
+    const __m256d m =
+        _mm256_max_pd(_mm256_max_pd(_mm256_andnot_pd(sign, x), _mm256_andnot_pd(sign, y)),
+                      _mm256_andnot_pd(sign, z));
     const __m256d m1 = rotate_lanes(m), m2 = rotate_lanes(m1);
     const __m256d bound = _mm256_mul_pd(_mm256_set1_pd(8.0 * gamma(16)), _mm256_mul_pd(m1, m2));
     const __m256d certain = _mm256_cmp_pd(_mm256_andnot_pd(sign, e), bound, _CMP_GT_OQ);

@@ -330,6 +330,176 @@ void ExactBvh::walk(const Lanes& r, float tnear, float tfar, bool ordered, Visit
         walk_sse(r, tnear, tfar, ordered, fn, visit, woop);
 }
 
+void ExactBvh::add_lane(Packet& p, int k, const Lanes& r, float tnear, float tfar,
+                        const WoopRay* woop) {
+    for (int a = 0; a < 3; ++a)
+        p.neg[a] = r.neg[a];  // the same in every lane (runs_with)
+    for (int a = 0; a < 3; ++a) {
+        p.org[a][k] = r.org[a];
+        p.inv[a][k] = r.inv[a];
+    }
+    p.tnear[k] = tnear;
+    p.tfar[k] = tfar;
+    p.woop[k] = woop;
+    p.active |= 1u << k;
+}
+
+std::uint32_t ExactBvh::object_of(std::uint32_t g) const {
+    // The last object whose first primitive is not beyond g (one compare for a single mesh;
+    // objects without primitives are passed over, sharing the next one's first).
+    return first_.size() == 2
+               ? 0u
+               : static_cast<std::uint32_t>(std::upper_bound(first_.begin(), first_.end(), g) -
+                                            first_.begin()) -
+                     1u;
+}
+
+[[gnu::target("avx")]] bool ExactBvh::pretest_misses(std::uint32_t object, std::uint32_t prim,
+                                                     const WoopRay* woop) const {
+    const TriangleMesh* mesh = woop ? meshes_[object] : nullptr;
+    if (!mesh)
+        return false;
+    const auto& t = mesh->triangles[prim];
+    return woop_misses_avx(mesh->positions[t[0]], mesh->positions[t[1]], mesh->positions[t[2]],
+                           *woop);
+}
+
+namespace {
+
+/// A child's box against every lane of a packet: slabs_avx's operations with the lanes across
+/// rays instead of boxes (the box's planes broadcast, each lane's origin, reciprocal and range
+/// its own), so each lane's answer and entry distance are those slabs_avx gives its ray.
+[[gnu::target("avx")]] inline unsigned packet_slabs(const float lo[3], const float hi[3],
+                                                    const ExactBvh::Packet& p, __m256 tfar,
+                                                    __m256& tn) {
+    tn = _mm256_load_ps(p.tnear);
+    __m256 tf = tfar;
+    for (int k = 0; k < 3; ++k) {
+        const __m256 o = _mm256_load_ps(p.org[k]), inv = _mm256_load_ps(p.inv[k]);
+        const __m256 near = _mm256_set1_ps(p.neg[k] ? hi[k] : lo[k]);
+        const __m256 far = _mm256_set1_ps(p.neg[k] ? lo[k] : hi[k]);
+        tn = _mm256_max_ps(tn, _mm256_mul_ps(_mm256_sub_ps(near, o), inv));
+        tf = _mm256_min_ps(tf, _mm256_mul_ps(_mm256_sub_ps(far, o), inv));
+    }
+    tn = _mm256_mul_ps(tn, _mm256_set1_ps(kDown));
+    const __m256 ok = _mm256_cmp_ps(tn, _mm256_mul_ps(tf, _mm256_set1_ps(kUp)), _CMP_LE_OQ);
+    return static_cast<unsigned>(_mm256_movemask_ps(ok));
+}
+
+/// The least of tn's lanes in `mask`: the order a packet's children are walked in.
+[[gnu::target("avx")]] inline float least_lane(__m256 tn, unsigned mask) {
+    alignas(32) float v[8];
+    _mm256_store_ps(v, tn);
+    float least = std::numeric_limits<float>::infinity();
+    for (; mask; mask &= mask - 1)
+        least = std::min(least, v[__builtin_ctz(mask)]);
+    return least;
+}
+
+}  // namespace
+
+[[gnu::target("avx"), gnu::flatten]] void ExactBvh::walk_packet(Packet& p, LaneVisitFn fn,
+                                                                void* visit) const {
+    if (root_ == kNoChild || !p.active)
+        return;
+    // A child met by some lanes: which, their entry distances, and its place in the order.
+    struct alignas(32) PacketEntry {
+        float tnear[kWidth];
+        std::uint32_t code;
+        unsigned mask;
+        float key;
+    };
+    PacketEntry stack[kStack];
+    int sp = 0;
+    std::uint32_t code = root_;
+    unsigned mask = p.active;
+    const auto offer = [&](std::uint32_t leaf, unsigned lanes) {
+        const std::uint32_t g = leaf & ~kLeafBit;
+        const std::uint32_t object = object_of(g);
+        const std::uint32_t prim = g - first_[object];
+        for (; lanes; lanes &= lanes - 1) {
+            const int k = __builtin_ctz(lanes);
+            if (!pretest_misses(object, prim, p.woop[k]) && !fn(visit, k, object, prim, p.tfar[k]))
+                p.active &= ~(1u << k);
+        }
+    };
+    for (;;) {
+        // Down: into the nearest child some lane meets, the others pushed, the nearest on top.
+        while (!(code & kLeafBit)) {
+            float lo[kWidth][3], hi[kWidth][3];
+            const std::uint32_t* child;
+            unsigned present = 0;
+            if (code & kBottomBit) {
+                const QNode& n = bottom_[code & ~kBottomBit];
+                for (int k = 0; k < kWidth; ++k) {
+                    if (n.empty >> k & 1u)
+                        continue;
+                    present |= 1u << k;
+                    dequantize(n, k, lo[k], hi[k]);
+                }
+                child = n.child;
+            } else {
+                const Node& n = nodes_[code];
+                for (int k = 0; k < kWidth; ++k) {
+                    if (n.child[k] == kNoChild)
+                        continue;
+                    present |= 1u << k;
+                    for (int a = 0; a < 3; ++a) {
+                        lo[k][a] = n.lo[a][k];
+                        hi[k][a] = n.hi[a][k];
+                    }
+                }
+                child = n.child;
+            }
+            const __m256 tfar = _mm256_load_ps(p.tfar);
+            const int base = sp;
+            for (; present; present &= present - 1) {
+                const int k = __builtin_ctz(present);
+                __m256 tn;
+                const unsigned met = packet_slabs(lo[k], hi[k], p, tfar, tn) & mask;
+                if (!met)
+                    continue;
+                PacketEntry& e = stack[sp];
+                _mm256_store_ps(e.tnear, tn);
+                e.code = child[k];
+                e.mask = met;
+                e.key = least_lane(tn, met);
+                // Insertion: decreasing key from the base up, the nearest on top.
+                int i = sp++;
+                while (i > base && stack[i - 1].key < stack[i].key) {
+                    std::swap(stack[i - 1], stack[i]);
+                    --i;
+                }
+            }
+            if (sp == base) {
+                code = kNoChild;
+                break;
+            }
+            --sp;
+            code = stack[sp].code;
+            mask = stack[sp].mask;
+        }
+        if (code != kNoChild)
+            offer(code, mask & p.active);
+        // Up: the nearest pushed entry that some lane still needs, the lanes that a hit found
+        // since has culled dropped.
+        for (;;) {
+            if (sp == 0 || !p.active)
+                return;
+            const PacketEntry& e = stack[--sp];
+            const __m256 keep = _mm256_cmp_ps(
+                _mm256_load_ps(e.tnear), _mm256_mul_ps(_mm256_load_ps(p.tfar), _mm256_set1_ps(kUp)),
+                _CMP_LE_OQ);
+            const unsigned m = e.mask & p.active & static_cast<unsigned>(_mm256_movemask_ps(keep));
+            if (m) {
+                code = e.code;
+                mask = m;
+                break;
+            }
+        }
+    }
+}
+
 ExactBvh::Lanes ExactBvh::lanes_of(float ox, float oy, float oz, float dx, float dy, float dz) {
     const auto safe_rcp = [](float d) {
         constexpr float kMin = 1e-18f;  // exact_bvh.h

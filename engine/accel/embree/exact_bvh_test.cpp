@@ -10,7 +10,9 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -88,6 +90,31 @@ FloatRay random_ray(const Impl& a, std::mt19937_64& rng) {
     return f;
 }
 
+/// A closest walk's visitor as the cull tests make it: tfar lowered to the entry of primitive
+/// `prim` of `object`'s box plus a little, as a hit there would.
+void lower_to_entry(const Impl& a, const FloatRay& f, std::uint32_t object, std::uint32_t prim,
+                    float& t) {
+    const double o[3] = {f.org_x, f.org_y, f.org_z}, d[3] = {f.dir_x, f.dir_y, f.dir_z};
+    const double e = entry(primitive_box(a, a.scene->objects[object], prim), 0.0, o, d, f.tnear, t);
+    if (e < 1e300)
+        t = std::min(t, static_cast<float>(e + 0.05));
+}
+
+/// Every primitive whose box `f` meets well before the walk's final `tfar` was offered (`seen`).
+void expect_none_culled(const Impl& a, const FloatRay& f, float tfar, const std::set<Prim>& seen,
+                        const std::string& what) {
+    const double o[3] = {f.org_x, f.org_y, f.org_z}, d[3] = {f.dir_x, f.dir_y, f.dir_z};
+    const Scene& scene = *a.scene;
+    for (std::uint32_t i = 0; i < scene.objects.size(); ++i)
+        for (std::uint32_t p = 0; p < scene.objects[i].primitive_count(); ++p) {
+            const FloatBox box = primitive_box(a, scene.objects[i], p);
+            if (entry(box, -1e-5, o, d, f.tnear, static_cast<double>(tfar) - 1e-5) < 1e300) {
+                EXPECT_TRUE(seen.count({i, p}))
+                    << what << ": object " << i << " primitive " << p << " culled";
+            }
+        }
+}
+
 TEST(ExactBvh, OffersEveryPrimitiveWhoseBoxTheRayMeetsAndNoOther) {
     for (std::uint64_t seed = 1; seed <= 4; ++seed) {
         const Scene scene = mixed_scene(seed);
@@ -142,7 +169,6 @@ TEST(ExactBvh, ClosestWalkCullsOnlyBeyondTheTfarItsVisitorSet) {
     std::mt19937_64 rng(5);
     for (int n = 0; n < 1000; ++n) {
         const FloatRay f = random_ray(a, rng);
-        const double o[3] = {f.org_x, f.org_y, f.org_z}, d[3] = {f.dir_x, f.dir_y, f.dir_z};
         // The visitor lowers tfar to each primitive's box entry plus a little, as a hit there
         // would; every primitive whose box the ray meets well before the final tfar must have
         // been offered.
@@ -150,22 +176,134 @@ TEST(ExactBvh, ClosestWalkCullsOnlyBeyondTheTfarItsVisitorSet) {
         float tfar = f.tfar;
         bvh.closest(f, [&](std::uint32_t object, std::uint32_t prim, float& t) {
             seen.insert({object, prim});
-            const double e =
-                entry(primitive_box(a, scene.objects[object], prim), 0.0, o, d, f.tnear, t);
-            if (e < 1e300)
-                t = std::min(t, static_cast<float>(e + 0.05));
+            lower_to_entry(a, f, object, prim, t);
             tfar = t;
             return true;
         });
-        for (std::uint32_t i = 0; i < scene.objects.size(); ++i)
-            for (std::uint32_t p = 0; p < scene.objects[i].primitive_count(); ++p) {
-                const FloatBox box = primitive_box(a, scene.objects[i], p);
-                if (entry(box, -1e-5, o, d, f.tnear, static_cast<double>(tfar) - 1e-5) < 1e300) {
-                    EXPECT_TRUE(seen.count({i, p}))
-                        << "ray " << n << ": object " << i << " primitive " << p << " culled";
-                }
-            }
+        expect_none_culled(a, f, tfar, seen, "ray " + std::to_string(n));
     }
+}
+
+/// Up to eight rays that run with `first` (ExactBvh::runs_with): its origin, or one a little
+/// off it, its direction turned by up to a few hundredths of a degree (a component zero in
+/// `first` stays zero, so that the signs stay), each its own range.
+std::vector<FloatRay> bundle(const FloatRay& first, std::mt19937_64& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+    std::vector<FloatRay> rays{first};
+    const auto turned = [&](float d) { return static_cast<float>(d * (1.0 + 2e-4 * u(rng))); };
+    while (rays.size() < ExactBvh::kWidth) {
+        FloatRay f = first;
+        if (rng() % 2) {
+            f.org_x += static_cast<float>(1e-3 * u(rng));
+            f.org_y += static_cast<float>(1e-3 * u(rng));
+        }
+        f.dir_x = turned(first.dir_x);
+        f.dir_y = turned(first.dir_y);
+        f.dir_z = turned(first.dir_z);
+        if (rng() % 4 == 0)
+            f.tfar = static_cast<float>(unit(rng) * 1.5);
+        rays.push_back(f);
+    }
+    return rays;
+}
+
+/// f(a, bvh, n, rays, packet) for `count` bundles of rays that run together (and the packet of
+/// them), over mixed_scene(`seed`)'s tree.
+template <class F>
+void for_bundles(std::uint64_t seed, int count, F&& f) {
+    const Scene scene = mixed_scene(seed);
+    Impl a;
+    set_frame(a, scene);
+    ExactBvh bvh;
+    ASSERT_TRUE(bvh.build(a).ok());
+    std::mt19937_64 rng(seed + 100);
+    for (int n = 0; n < count; ++n) {
+        const std::vector<FloatRay> rays = bundle(random_ray(a, rng), rng);
+        ExactBvh::Packet p;
+        for (std::size_t k = 0; k < rays.size(); ++k) {
+            ASSERT_TRUE(ExactBvh::runs_with(rays[0], rays[k])) << n << " " << k;
+            ExactBvh::add_lane(p, static_cast<int>(k), rays[k], nullptr);
+        }
+        f(a, bvh, n, rays, p);
+    }
+}
+
+// The packet walk offers each lane what the lane's own walk offers its ray: with a visitor that
+// lowers nothing, the same primitives (the box test is the same per lane), on bundles of rays
+// that run together.
+TEST(ExactBvh, PacketOffersEachLaneWhatItsOwnWalkOffers) {
+    if (!cpu_has_avx())
+        GTEST_SKIP() << "the packet walk needs AVX";
+    long offered = 0;
+    for_bundles(
+        3, 400,
+        [&](const Impl&, const ExactBvh& bvh, int n, const std::vector<FloatRay>& rays,
+            ExactBvh::Packet& p) {
+            std::vector<std::set<Prim>> together(rays.size()), alone(rays.size());
+            bvh.closest_packet(p, [&](int lane, std::uint32_t object, std::uint32_t prim, float&) {
+                EXPECT_TRUE(together[static_cast<std::size_t>(lane)].insert({object, prim}).second)
+                    << "offered twice";
+                return true;
+            });
+            for (std::size_t k = 0; k < rays.size(); ++k) {
+                bvh.closest(rays[k], [&](std::uint32_t object, std::uint32_t prim, float&) {
+                    alone[k].insert({object, prim});
+                    return true;
+                });
+                EXPECT_EQ(together[k], alone[k]) << "bundle " << n << " lane " << k;
+                offered += static_cast<long>(alone[k].size());
+            }
+        });
+    EXPECT_GT(offered, 2000) << "the rays should meet boxes";  // 4,290 (2026-12-07)
+}
+
+// As ClosestWalkCullsOnlyBeyondTheTfarItsVisitorSet, lane by lane in packets: each lane's
+// visitor lowers that lane's tfar alone, and nothing a lane's ray meets well before its own
+// final tfar is culled.
+TEST(ExactBvh, PacketWalkCullsEachLaneOnlyBeyondItsOwnTfar) {
+    if (!cpu_has_avx())
+        GTEST_SKIP() << "the packet walk needs AVX";
+    for_bundles(11, 300,
+                [&](const Impl& a, const ExactBvh& bvh, int n, const std::vector<FloatRay>& rays,
+                    ExactBvh::Packet& p) {
+                    std::vector<std::set<Prim>> seen(rays.size());
+                    std::vector<float> tfar(rays.size());
+                    for (std::size_t k = 0; k < rays.size(); ++k)
+                        tfar[k] = rays[k].tfar;
+                    bvh.closest_packet(
+                        p, [&](int lane, std::uint32_t object, std::uint32_t prim, float& t) {
+                            const auto k = static_cast<std::size_t>(lane);
+                            seen[k].insert({object, prim});
+                            lower_to_entry(a, rays[k], object, prim, t);
+                            tfar[k] = t;
+                            return true;
+                        });
+                    for (std::size_t k = 0; k < rays.size(); ++k)
+                        expect_none_culled(
+                            a, rays[k], tfar[k], seen[k],
+                            "bundle " + std::to_string(n) + " lane " + std::to_string(k));
+                });
+}
+
+// Rays that diverge are not walked together: a direction beyond the cone, an origin beyond the
+// spread, or a sign of a direction's component not the first's.
+TEST(ExactBvh, OnlyRaysThatRunTogetherShareAWalk) {
+    FloatRay first;
+    first.dir_x = 1.0f, first.dir_y = 0.5f, first.dir_z = -0.25f;
+    FloatRay f = first;
+    EXPECT_TRUE(ExactBvh::runs_with(first, f));
+    f.dir_y = 0.52f;  // 1.0° off
+    EXPECT_FALSE(ExactBvh::runs_with(first, f));
+    f = first;
+    f.dir_y = 0.505f;  // 0.25° off
+    EXPECT_TRUE(ExactBvh::runs_with(first, f));
+    f = first;
+    f.org_z = 0.02f;
+    EXPECT_FALSE(ExactBvh::runs_with(first, f));
+    f = first;
+    first.dir_z = 0.0f;
+    f.dir_z = -0.0f;  // the walk's nearer plane follows the sign of a zero too
+    EXPECT_FALSE(ExactBvh::runs_with(first, f));
 }
 
 /// Whether the float ray o + t·d, t in [0, tfar], meets the float box [lo, hi], decided exactly:
