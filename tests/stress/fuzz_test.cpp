@@ -81,6 +81,50 @@ StressCase spawned_case(const StressCase& base, std::uint64_t seed) {
     return c;
 }
 
+/// Bundles of eight rays that run together as a camera's neighbours do: one origin, directions
+/// within ~0.01° of one another (ExactBvh::runs_with's cone is 0.8°), each aimed at a point near
+/// one feature of the scene (a vertex, an edge, a silhouette), so that exact's batches walk them
+/// as packets (ExactBvh::closest_packet) where random_case's rays each walk alone. Drawn from a
+/// stream of their own into a case of their own, as spawned_case's, and each bundle starts at
+/// a multiple of eight, where a batch's half-groups start.
+StressCase bundled_case(const StressCase& base, std::uint64_t seed) {
+    StressCase c{base.suite + " bundled", base.scene, {}, base.closed};
+    std::mt19937_64 rng(seed ^ 0xD1B54A32D192ED03ull);
+    std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+    auto vec = [&] { return Vec3d{u(rng), u(rng), u(rng)}; };
+    const engine::Bounds3 b = c.scene->bounds();
+    const double size = engine::length(b.diagonal());
+    if (c.scene->objects.empty() || !(size > 0.0) || !std::isfinite(size))
+        return c;
+    for (int bundle = 0; bundle < 4; ++bundle) {
+        const Object& o = c.scene->objects[rng() % c.scene->objects.size()];
+        Vec3d target;
+        if (o.kind == ObjectKind::sphere) {
+            target = o.sphere.center + engine::normalize(vec()) * o.sphere.radius;
+        } else {
+            const engine::TriangleMesh& m = *o.mesh;
+            const engine::Triangle t = m.triangle(rng() % m.size());
+            const double s = u01(rng);
+            target = rng() % 2 ? t.a : t.a + (t.b - t.a) * s;  // a vertex or an edge point
+        }
+        const Vec3d origin = target + engine::normalize(vec()) * (size * (0.5 + 4.0 * u01(rng)));
+        const double reach = engine::length(target - origin);
+        for (int lane = 0; lane < 8; ++lane) {
+            // The first lane at the feature itself, the others up to 1e-4 of the distance off it.
+            const Vec3d aim =
+                lane == 0 ? target
+                          : target + vec() * (reach * std::pow(10.0, -12.0 + 8.0 * u01(rng)));
+            Ray r{origin, (aim - origin) * std::pow(10.0, -2.0 + 4.0 * u01(rng))};
+            if (rng() % 8 == 0)
+                r.tmax = 0.5 + u01(rng);  // in units of the direction: short of some lanes' hits
+            if (!(engine::length(r.direction) > 0))
+                r.direction = target - origin;
+            c.rays.push_back(r);
+        }
+    }
+    return c;
+}
+
 /// A random scene at a random scale and offset, and rays aimed at its features (vertices, edge
 /// points, sphere silhouettes, interiors) with random direction lengths.
 StressCase random_case(std::uint64_t seed) {
@@ -207,12 +251,18 @@ TEST(Fuzz, DifferentialAgainstReference) {
         StressCase padded = base;
         padded.scene = std::make_shared<Scene>(*base.scene);
         pad_for_embree(*padded.scene, padded.closed);
-        // Rays spawned off the surfaces, each scene's in a batch of its own (spawned_case).
+        // Rays spawned off the surfaces, each scene's in a batch of its own (spawned_case), and
+        // bundles of rays that run together (bundled_case), likewise.
         StressCase spawned = spawned_case(base, seed);
         StressCase spawned_padded = padded;
         spawned_padded.rays = spawned.rays;
         spawned_padded.suite = spawned.suite;
-        for (const StressCase* c : {&base, &padded, &spawned, &spawned_padded}) {
+        StressCase bundled = bundled_case(base, seed);
+        StressCase bundled_padded = padded;
+        bundled_padded.rays = bundled.rays;
+        bundled_padded.suite = bundled.suite;
+        for (const StressCase* c :
+             {&base, &padded, &spawned, &spawned_padded, &bundled, &bundled_padded}) {
             if (c->rays.empty())
                 continue;
             ++iterations;
@@ -222,15 +272,20 @@ TEST(Fuzz, DifferentialAgainstReference) {
             if (wrong.empty())
                 continue;
             ++failures;
+            // A bundle's rays are kept whole and in place: alone, a ray walks alone.
+            const bool is_bundled = c == &bundled || c == &bundled_padded;
             StressCase keep = *c;
-            keep.rays.clear();
-            for (std::size_t i : bad)
-                keep.rays.push_back(c->rays[i]);
+            if (!is_bundled) {
+                keep.rays.clear();
+                for (std::size_t i : bad)
+                    keep.rays.push_back(c->rays[i]);
+            }
             std::filesystem::create_directories(dir);
-            const bool on_embree = c == &padded || c == &spawned_padded;
+            const bool on_embree = c == &padded || c == &spawned_padded || c == &bundled_padded;
             const bool is_spawned = c == &spawned || c == &spawned_padded;
-            const auto file = dir / ("fuzz-" + std::to_string(seed) + (on_embree ? "-embree" : "") +
-                                     (is_spawned ? "-spawned" : "") + ".txt");
+            const auto file =
+                dir / ("fuzz-" + std::to_string(seed) + (on_embree ? "-embree" : "") +
+                       (is_spawned ? "-spawned" : "") + (is_bundled ? "-bundled" : "") + ".txt");
             std::ofstream(file) << write_case(
                 keep, "differential fuzz, seed " + std::to_string(seed) + "\n" + wrong);
             ADD_FAILURE() << "disagreement saved to " << file << "\n" << wrong;
