@@ -312,7 +312,7 @@ void exact_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool wan
                 alone |= members;
                 continue;
             }
-            ExactBvh::Packet p;
+            ExactBvh::Packet p{};  // lanes not added hold zeros, read and masked off
             for (unsigned on = members; on; on &= on - 1) {
                 const std::size_t k = static_cast<std::size_t>(__builtin_ctz(on));
                 ExactBvh::add_lane(p, static_cast<int>(k - half), float_ray_of(r16, k), &woop[k]);
@@ -322,8 +322,9 @@ void exact_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool wan
                 keep_candidates(lanes[half + static_cast<std::size_t>(lane)], object, prim, tfar);
                 return true;
             });
-            for (unsigned on = p.active; on; on &= on - 1) {
-                const std::size_t k = half + static_cast<std::size_t>(__builtin_ctz(on));
+            // Every member is answered (a closest visitor never ends a lane's walk early).
+            for (unsigned on = members; on; on &= on - 1) {
+                const auto k = static_cast<std::size_t>(__builtin_ctz(on));
                 const std::optional<Hit> h =
                     exact_closest_answer(a, want_normal, lanes[k], nullptr);
                 out[i + k] = h ? *h : Hit{};

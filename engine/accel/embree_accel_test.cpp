@@ -756,6 +756,18 @@ TEST(EmbreeAccel, ExactCameraBatchesAgreeWithSingleRays) {
     const BatchHits got = expect_exact_batch_as_single_rays(b, rays, {1});  // the ball
     EXPECT_GT(got.hits, 4000);
     EXPECT_GT(got.named, 200);
+    // And as the linear scan, which shares none of the walks or the pre-test.
+    std::vector<Hit> batch(rays.size());
+    b.accel->closest_range(rays.data(), rays.size(), Precision::exact, true, batch.data());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto ref = linear_closest(*b.scene, rays[i], true);
+        ASSERT_EQ(ref.has_value(), batch[i].valid()) << i;
+        if (ref) {
+            EXPECT_TRUE(ref->object == batch[i].object && ref->primitive == batch[i].primitive &&
+                        testing::same_bits(ref->t, batch[i].t))
+                << i;
+        }
+    }
 }
 
 // Packets (camera rays) and single rays give the same answers; so do exact's batches (their

@@ -132,7 +132,8 @@ inline bool woop_misses(const Triangle& tri, const WoopRay& r) {
 
 namespace detail {
 
-/// The lanes (v₂, v₀, v₁, v₃) of v: each edge function's first factor from its second's.
+/// The lanes (v₂, v₀, v₁, v₂) of v (the fourth is never read): each edge function's first
+/// factor from its second's.
 [[gnu::target("avx")]] inline __m256d rotate_lanes(__m256d v) {
     return _mm256_shuffle_pd(_mm256_permute2f128_pd(v, v, 1), v, 0b0100);
 }

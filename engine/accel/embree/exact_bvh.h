@@ -175,9 +175,12 @@ class ExactBvh {
     /// closest(f, visit, woop) for each lane of `p` at once, with AVX (the processor must have
     /// it): visit(lane, object, prim, tfar) for each primitive whose box meets that lane's
     /// [tnear, tfar], nearest boxes first (by their nearest lane); visit may lower the lane's
-    /// tfar. Each lane is offered every primitive closest would offer its ray, and the
-    /// answers, decided by the visitor, are the same; what the lanes share is the walk through
-    /// the nodes that more than one of them meets (coherent rays: a camera's).
+    /// tfar. With a visitor that lowers nothing, each lane is offered exactly what closest
+    /// would offer its ray; one that lowers tfar culls each lane by its own, in an order that
+    /// follows the nearest lane, so what is culled may differ from the lane's own walk, but
+    /// never a primitive the lane meets before its final tfar, and the answer (the first by
+    /// `closer`, a total order, with tfar_for's margin above it) is the same. What the lanes
+    /// share is the walk through the nodes more than one of them meets (a camera's rays).
     template <class Visit>
     void closest_packet(Packet& p, Visit&& visit) const {
         walk_packet(p, &call_lane<std::remove_reference_t<Visit>>, &visit);
