@@ -209,12 +209,11 @@ std::optional<Hit> exact_closest(const Impl& a, const Ray& ray, bool want_normal
     return exact_closest_placed(a, *bvh, want_normal, c, f, far);
 }
 
-/// exact_closest once prepare_ray has placed the float ray `f` (context `c`) within the
-/// padding: the walk and the answer.
 std::optional<Hit> exact_closest_answer(const Impl& a, bool want_normal, RayContext& c,
                                         FarSpheres* far);
 
-/// `formed`: woop_ray(*c.ray) where the caller has formed it.
+/// exact_closest once prepare_ray has placed the float ray `f` (context `c`) within the
+/// padding: the walk and the answer. `formed`: woop_ray(*c.ray), where the caller has formed it.
 std::optional<Hit> exact_closest_placed(const Impl& a, const ExactBvh& bvh, bool want_normal,
                                         RayContext& c, const FloatRay& f, FarSpheres* far,
                                         const WoopRay* formed) {

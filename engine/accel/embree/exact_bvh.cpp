@@ -264,15 +264,7 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
         }
         if (code != kNoChild) {  // a primitive
             const std::uint32_t g = code & ~kLeafBit;
-            // Its object: the last whose first primitive is not beyond it (one compare for a
-            // single mesh; objects without primitives are passed over, sharing the next one's
-            // first).
-            const std::uint32_t object =
-                first_.size() == 2
-                    ? 0u
-                    : static_cast<std::uint32_t>(std::upper_bound(first_.begin(), first_.end(), g) -
-                                                 first_.begin()) -
-                          1u;
+            const std::uint32_t object = object_of(g);
             const std::uint32_t prim = g - first_[object];
             const TriangleMesh* mesh = woop ? meshes_[object] : nullptr;
             bool misses = false;
