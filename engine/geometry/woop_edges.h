@@ -3,12 +3,13 @@
 // Intersection", JCGT 2(1), 2013, §3 and eq. 2): the ray's shear frame, the triangle's corners
 // relative to the origin sheared so that the ray runs along +z, and the three 2-D edge functions
 // U, V, W at the origin. triangle.cpp's woop() forms them with these functions, and so does
-// woop_misses() below, for a caller that meets many triangles with one ray (exact's BVH walk,
-// the scene scan): it forms the ray's part once and rejects, with the same bits and so the same
-// decision, the candidates whose edge functions alone settle a miss, without the rest of woop()
-// (its rescaling checks, the settling of uncertain signs, the plane crossing, a Hit returned
-// through memory). On A's camera rays 1.9 of an exact query's 2.76 candidates a ray are such
-// misses, and woop() took about 226 instructions for each (callgrind, 2026-12-07).
+// woop_misses() below, for a caller that meets many triangles with one ray (exact's BVH walks;
+// not the scene scan, where it cost more than it saved: docs/numerics.md): it forms the ray's
+// part once and rejects, with the same bits and so the same decision, the candidates whose edge
+// functions alone settle a miss, without the rest of woop() (its rescaling checks, the settling
+// of uncertain signs, the plane crossing, a Hit returned through memory). On A's camera rays 1.9 of
+// an exact query's 2.76 candidates a ray are such misses, and woop() took about 226 instructions
+// for each (callgrind, 2026-12-07).
 
 #include <cmath>
 #include <cstddef>
