@@ -292,10 +292,10 @@ TEST(ExactBvh, OnlyRaysThatRunTogetherShareAWalk) {
     first.dir_x = 1.0f, first.dir_y = 0.5f, first.dir_z = -0.25f;
     FloatRay f = first;
     EXPECT_TRUE(ExactBvh::runs_with(first, f));
-    f.dir_y = 0.52f;  // 1.0° off
+    f.dir_y = 0.52f;  // 0.9° off
     EXPECT_FALSE(ExactBvh::runs_with(first, f));
     f = first;
-    f.dir_y = 0.505f;  // 0.25° off
+    f.dir_y = 0.505f;  // 0.22° off
     EXPECT_TRUE(ExactBvh::runs_with(first, f));
     f = first;
     f.org_z = 0.02f;
