@@ -211,6 +211,22 @@ void ExactBvh::dequantize(const QNode& q, int k, float lo[3], float hi[3]) {
     }
 }
 
+// The pre-test of a leaf, for the walks compiled with AVX (which inline woop_misses_avx into
+// themselves: `flatten`) and without.
+template <bool avx>
+bool ExactBvh::pretest_misses(std::uint32_t object, std::uint32_t prim, const WoopRay* woop) const {
+    const TriangleMesh* mesh = woop ? meshes_[object] : nullptr;
+    if (!mesh)
+        return false;
+    const auto& t = mesh->triangles[prim];
+    const Vec3d &pa = mesh->positions[t[0]], &pb = mesh->positions[t[1]],
+                &pc = mesh->positions[t[2]];
+    if constexpr (avx)
+        return woop_misses_avx(pa, pb, pc, *woop);
+    else
+        return woop_misses(Triangle{pa, pb, pc}, *woop);
+}
+
 template <bool ordered, bool avx>
 void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn, void* visit,
                              const WoopRay* woop) const {
@@ -266,16 +282,7 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
             const std::uint32_t g = code & ~kLeafBit;
             const std::uint32_t object = object_of(g);
             const std::uint32_t prim = g - first_[object];
-            const TriangleMesh* mesh = woop ? meshes_[object] : nullptr;
-            bool misses = false;
-            if (mesh) {
-                const auto& t = mesh->triangles[prim];
-                const Vec3d *pa = &mesh->positions[t[0]], *pb = &mesh->positions[t[1]],
-                            *pc = &mesh->positions[t[2]];
-                misses = avx ? woop_misses_avx(*pa, *pb, *pc, *woop)
-                             : woop_misses(Triangle{*pa, *pb, *pc}, *woop);
-            }
-            if (!misses && !fn(visit, object, prim, tfar))
+            if (!pretest_misses<avx>(object, prim, woop) && !fn(visit, object, prim, tfar))
                 return;
         }
         // Up: the nearest pushed entry that no hit found since has culled.
@@ -346,16 +353,6 @@ std::uint32_t ExactBvh::object_of(std::uint32_t g) const {
                      1u;
 }
 
-[[gnu::target("avx")]] bool ExactBvh::pretest_misses(std::uint32_t object, std::uint32_t prim,
-                                                     const WoopRay* woop) const {
-    const TriangleMesh* mesh = woop ? meshes_[object] : nullptr;
-    if (!mesh)
-        return false;
-    const auto& t = mesh->triangles[prim];
-    return woop_misses_avx(mesh->positions[t[0]], mesh->positions[t[1]], mesh->positions[t[2]],
-                           *woop);
-}
-
 namespace {
 
 /// A child's box against every lane of a packet: slabs_avx's operations with the lanes across
@@ -411,7 +408,8 @@ namespace {
         const std::uint32_t prim = g - first_[object];
         for (; lanes; lanes &= lanes - 1) {
             const int k = __builtin_ctz(lanes);
-            if (!pretest_misses(object, prim, p.woop[k]) && !fn(visit, k, object, prim, p.tfar[k]))
+            if (!pretest_misses<true>(object, prim, p.woop[k]) &&
+                !fn(visit, k, object, prim, p.tfar[k]))
                 p.active &= ~(1u << k);
         }
     };

@@ -234,7 +234,9 @@ class ExactBvh {
     void walk_packet(Packet& p, LaneVisitFn fn, void* visit) const;
     /// A primitive's object and its index in it (g: its index among the scene's).
     std::uint32_t object_of(std::uint32_t g) const;
-    /// Whether a lane's pre-test (woop_misses_avx) settles primitive `prim` of `object` as missed.
+    /// Whether the pre-test with `woop` (none: no pre-test) settles primitive `prim` of `object`
+    /// as missed: woop_misses_avx where `avx` (the caller compiled for AVX), else woop_misses.
+    template <bool avx>
     bool pretest_misses(std::uint32_t object, std::uint32_t prim, const WoopRay* woop) const;
     Status build_tree(const Impl& a);
     void walk_avx(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit,
