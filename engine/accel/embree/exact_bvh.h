@@ -238,6 +238,12 @@ class ExactBvh {
     /// as missed: woop_misses_avx where `avx` (the caller compiled for AVX), else woop_misses.
     template <bool avx>
     bool pretest_misses(std::uint32_t object, std::uint32_t prim, const WoopRay* woop) const;
+    /// Prefetches each inner node among the children `mask` picks of `child` (an inner
+    /// node's), every cache line of it.
+    void prefetch_nodes(const std::uint32_t* child, unsigned mask) const;
+    /// Prefetches the index row of each mesh triangle among the leaves `mask` picks of `child`
+    /// (a bottom node's), which the pre-test or the visitor reads first.
+    void prefetch_leaves(const std::uint32_t* child, unsigned mask) const;
     Status build_tree(const Impl& a);
     void walk_avx(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit,
                   const WoopRay* woop) const;
