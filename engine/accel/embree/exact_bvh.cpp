@@ -227,8 +227,9 @@ bool ExactBvh::pretest_misses(std::uint32_t object, std::uint32_t prim, const Wo
         return woop_misses(Triangle{pa, pb, pc}, *woop);
 }
 
-// Inlined by force: as calls, GCC 12 took these for functions without effect (a prefetch has
-// none it models) and removed the calls.
+// Inlined by force: without it, GCC 12's walk_avx held neither the node prefetches nor a call
+// to prefetch_nodes (its object code, checked when the prefetch was added); with it, both walks
+// hold them all.
 [[gnu::always_inline]] inline void ExactBvh::prefetch_nodes(const std::uint32_t* child,
                                                             unsigned mask) const {
     for (; mask; mask &= mask - 1) {
@@ -242,7 +243,7 @@ bool ExactBvh::pretest_misses(std::uint32_t object, std::uint32_t prim, const Wo
             __builtin_prefetch(at);
             __builtin_prefetch(at + 64);
         } else {
-            static_assert(sizeof(Node) <= 4 * 64);
+            static_assert(sizeof(Node) > 3 * 64 && sizeof(Node) <= 4 * 64);
             const char* at = reinterpret_cast<const char*>(&nodes_[c]);
             __builtin_prefetch(at);
             __builtin_prefetch(at + 64);
@@ -274,23 +275,25 @@ void ExactBvh::walk_in_order(const Lanes& r, float tnear, float tfar, VisitFn fn
             alignas(32) float near[kWidth];
             unsigned mask;
             const std::uint32_t* child;
+            // Where several children are met, the walk takes the nearest at once and comes back
+            // to the others after it: what it reads of each first is asked for now (the nearest
+            // too, which is known only once they are sorted below), and arrives meanwhile
+            // (docs/numerics.md: B's random rays, whose walk reads ~51 MB, more than the 32 MB
+            // cache, 0.48–0.49 → 0.55–0.58× rtcIntersect1), where the tree is too large to stay
+            // in the cache (kPrefetchFromBytes).
             if (code & kBottomBit) {
                 const QNode& n = bottom_[code & ~kBottomBit];
                 mask =
                     avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
                 child = n.child;
-                // Several children met: the walk takes the nearest at once and comes back to
-                // the others after it, so what it reads of them first is asked for now and
-                // arrives meanwhile (docs/numerics.md: B's random rays, whose 117 MB exceed the
-                // cache, 0.48–0.49 → 0.55–0.58× rtcIntersect1).
-                if (mask & (mask - 1))
+                if (prefetch_rows_ && (mask & (mask - 1)))
                     prefetch_leaves(child, mask);
             } else {
                 const Node& n = nodes_[code];
                 mask =
                     avx ? meets_avx(n, r, tnear, tfar, near) : meets_sse(n, r, tnear, tfar, near);
                 child = n.child;
-                if (mask & (mask - 1))
+                if (prefetch_nodes_ && (mask & (mask - 1)))
                     prefetch_nodes(child, mask);
             }
             if (!mask) {
@@ -858,6 +861,9 @@ Status ExactBvh::build_tree(const Impl& a) {
         }
     }
     root_ = renamed(root_);
+    prefetch_nodes_ =
+        nodes_.size() * sizeof(Node) + bottom_.size() * sizeof(QNode) >= kPrefetchFromBytes;
+    prefetch_rows_ = prefetch_nodes_ && first_.size() == 2;
     return Status{};
 }
 

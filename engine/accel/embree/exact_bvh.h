@@ -240,10 +240,10 @@ class ExactBvh {
     bool pretest_misses(std::uint32_t object, std::uint32_t prim, const WoopRay* woop) const;
     /// Prefetches each inner node among the children `mask` picks of `child` (an inner
     /// node's), every cache line of it.
-    void prefetch_nodes(const std::uint32_t* child, unsigned mask) const;
+    inline void prefetch_nodes(const std::uint32_t* child, unsigned mask) const;
     /// Prefetches the index row of each mesh triangle among the leaves `mask` picks of `child`
     /// (a bottom node's), which the pre-test or the visitor reads first.
-    void prefetch_leaves(const std::uint32_t* child, unsigned mask) const;
+    inline void prefetch_leaves(const std::uint32_t* child, unsigned mask) const;
     Status build_tree(const Impl& a);
     void walk_avx(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit,
                   const WoopRay* woop) const;
@@ -262,6 +262,15 @@ class ExactBvh {
     /// meshes_[i]: object i's mesh, or null for a sphere (the walk's pre-test of a triangle).
     std::vector<const TriangleMesh*> meshes_;
     std::uint32_t root_ = kNoChild;  ///< an inner node, a leaf, or kNoChild (no primitives)
+    /// The single walk's prefetches (walk_in_order) pay only where the tree does not stay in
+    /// the cache: from this many bytes of nodes (a core's L2 here is 1 MiB; A's tree is 2.2 MB,
+    /// B's 26 MB; the bench's C, 1,000 spheres in a few tens of KB, lost 10–15% of its random
+    /// rays' speed to them: docs/numerics.md).
+    static constexpr std::size_t kPrefetchFromBytes = std::size_t{1} << 20;
+    bool prefetch_nodes_ = false;  ///< the tree has at least kPrefetchFromBytes of nodes
+    /// ... and the scene is one object, whose leaves' index rows are found without object_of's
+    /// search (on C, those searches were about half of the loss).
+    bool prefetch_rows_ = false;
 };
 
 }  // namespace raycastd::engine::embree
