@@ -769,15 +769,16 @@ struct ExactBvhBuilder {
     }
 };
 
-Status ExactBvh::build(const Impl& a) {
+Status ExactBvh::build(const Impl& a, Prefetch prefetch) {
     nodes_.clear();
     bottom_.clear();
     first_.clear();
     meshes_.clear();
     root_ = kNoChild;
+    prefetch_nodes_ = prefetch_rows_ = false;
     Status st;
     try {
-        st = build_tree(a);
+        st = build_tree(a, prefetch);
     } catch (const std::bad_alloc&) {
         // As an Embree build that ran out of memory did: no tree, and the linear scan answers.
         st = Status::error(Code::too_large, "out of memory building exact's BVH");
@@ -792,7 +793,7 @@ Status ExactBvh::build(const Impl& a) {
     return st;
 }
 
-Status ExactBvh::build_tree(const Impl& a) {
+Status ExactBvh::build_tree(const Impl& a, Prefetch prefetch) {
     const Scene& scene = *a.scene;
     std::size_t total = 0;
     for (const Object& o : scene.objects)
@@ -861,9 +862,11 @@ Status ExactBvh::build_tree(const Impl& a) {
         }
     }
     root_ = renamed(root_);
-    prefetch_nodes_ =
+    const bool large =
         nodes_.size() * sizeof(Node) + bottom_.size() * sizeof(QNode) >= kPrefetchFromBytes;
-    prefetch_rows_ = prefetch_nodes_ && first_.size() == 2;
+    prefetch_nodes_ = prefetch == Prefetch::always || (prefetch == Prefetch::when_large && large);
+    prefetch_rows_ = prefetch == Prefetch::always ||
+                     (prefetch == Prefetch::when_large && large && first_.size() == 2);
     return Status{};
 }
 

@@ -53,10 +53,14 @@ class ExactBvh {
   public:
     static constexpr int kWidth = 8;
 
+    /// Whether the single walk prefetches the children it will come back to (walk_in_order):
+    /// where the tree is large enough for it to pay (kPrefetchFromBytes), the default; or
+    /// always or never (tests: the answers are the same either way).
+    enum class Prefetch { when_large, always, never };
     /// The tree over every primitive of a's scene (its spheres, and every triangle of its
     /// meshes); too_large, and no tree, where the scene has more primitives than a leaf's code
     /// can address (2^31 − 1) or the memory runs out (the caller then scans linearly).
-    Status build(const Impl& a);
+    Status build(const Impl& a, Prefetch prefetch = Prefetch::when_large);
 
     /// Walks the tree with `f` (a FloatRay: float_ray.h, which includes the header that
     /// includes this one), nearest box first, calling visit(object, prim, tfar) for each
@@ -244,7 +248,7 @@ class ExactBvh {
     /// Prefetches the index row of each mesh triangle among the leaves `mask` picks of `child`
     /// (a bottom node's), which the pre-test or the visitor reads first.
     inline void prefetch_leaves(const std::uint32_t* child, unsigned mask) const;
-    Status build_tree(const Impl& a);
+    Status build_tree(const Impl& a, Prefetch prefetch);
     void walk_avx(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit,
                   const WoopRay* woop) const;
     void walk_sse(const Lanes& r, float tnear, float tfar, bool ordered, VisitFn fn, void* visit,
@@ -267,9 +271,10 @@ class ExactBvh {
     /// B's 26 MB; the bench's C, 1,000 spheres in a few tens of KB, lost 10–15% of its random
     /// rays' speed to them: docs/numerics.md).
     static constexpr std::size_t kPrefetchFromBytes = std::size_t{1} << 20;
-    bool prefetch_nodes_ = false;  ///< the tree has at least kPrefetchFromBytes of nodes
-    /// ... and the scene is one object, whose leaves' index rows are found without object_of's
-    /// search (on C, those searches were about half of the loss).
+    /// when_large: the tree has at least kPrefetchFromBytes of nodes.
+    bool prefetch_nodes_ = false;
+    /// when_large: that, and the scene is one object, whose leaves' index rows are found
+    /// without object_of's search (on C, those searches were about half of the loss).
     bool prefetch_rows_ = false;
 };
 
