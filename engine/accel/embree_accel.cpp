@@ -314,7 +314,8 @@ void exact_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool wan
             ExactBvh::Packet p{};  // lanes not added hold zeros, read and masked off
             for (unsigned on = members; on; on &= on - 1) {
                 const std::size_t k = static_cast<std::size_t>(__builtin_ctz(on));
-                ExactBvh::add_lane(p, static_cast<int>(k - half), float_ray_of(r16, k), &woop[k]);
+                ExactBvh::add_lane(p, static_cast<int>(k - half), float_ray_of(r16, k),
+                                   walk_pretest(lanes[k], woop[k]));
             }
             bvh->closest_packet(p, [&](int lane, std::uint32_t object, std::uint32_t prim,
                                        float& tfar) {
