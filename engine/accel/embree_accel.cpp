@@ -766,11 +766,12 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
                 },
                 [&](std::size_t k, const RayContext& c, const NativeHit&) {
                     bool escalated = false;
-                    auto h = refined_answer(a, rays[i + k], c, want_normal, escalated);
+                    auto h = c.retrace ? refined_closest(a, rays[i + k], want_normal, escalated)
+                                       : refined_answer(a, rays[i + k], c, want_normal, escalated);
                     escalations += escalated;
                     return h;
                 },
-                out + i);
+                out + i, /*defer=*/true);
         }
         exact_first = !a.certified_misses && escalations > 0;
     }

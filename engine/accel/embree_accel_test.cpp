@@ -887,6 +887,85 @@ TEST(EmbreeAccel, RefinedPacketsAimedAtEdgesAgreeWithExact) {
     EXPECT_GT(hits, 4000);  // every ray aims at the surface; a few graze the silhouette
 }
 
+// refined's packets of random rays defer each lane's first decision to after the traversal
+// (RayContext::defer, settle_pending_lanes); a ray alone decides every candidate when Embree
+// offers it. The answers must be the same bit for bit: the deferred candidate decided as the
+// filter would have decided it, a second candidate only after it, and a lane whose deferred
+// decision would have changed the traversal (a double miss, a hit near an edge) traced again.
+// The rays are mixed in every packet (so none is flagged coherent): random ones, many starting
+// inside the closed meshes (their first candidate is a back face), ones aimed at edges and
+// corners (whose first candidate is often a neighbour's widening, a double miss), and ones whose
+// segment ends, or starts, just before or after the surface (a candidate the float ray offers
+// and the double test rejects for its t: deferred and accepted, it would have hidden what lies
+// beyond).
+TEST(EmbreeAccel, RefinedRandomPacketsAnswerAsSingleRays) {
+    Scene s;
+    s.materials.push_back(Material{});
+    for (int i = 0; i < 8; ++i) {
+        const Vec3d c{(i & 1) * 1.1, (i >> 1 & 1) * 1.1, (i >> 2) * 1.1};
+        s.objects.push_back(testing::icosphere_object(2 + i % 2, c, 0.5));
+    }
+    s.objects.push_back(testing::cube_object(0.3, 0.8));  // overlaps the first sphere
+    s.objects.push_back(testing::mesh_object(             // open: two triangles of a quad
+        "quad", {{-0.5, -0.5, 2.0}, {1.5, -0.5, 2.0}, {1.5, 1.5, 2.3}, {-0.5, 1.5, 2.3}},
+        {{0, 1, 2}, {0, 2, 3}}));
+    Built b = build(s);
+    std::mt19937_64 rng(0xdefe7);
+    std::uniform_real_distribution<double> box(-1.0, 2.5), u(-1.0, 1.0), along(0.0, 1.0);
+    std::uniform_int_distribution<std::size_t> object(0, s.objects.size() - 1), kind(0, 4);
+    std::vector<Ray> rays;
+    int aimed = 0, cut = 0;
+    for (int i = 0; i < 24000; ++i) {
+        const Vec3d from{box(rng), box(rng), box(rng)};
+        const TriangleMesh& mesh = *b.scene->objects[object(rng)].mesh;
+        const Triangle t =
+            mesh.triangle(std::uniform_int_distribution<std::size_t>(0, mesh.size() - 1)(rng));
+        switch (kind(rng)) {
+            case 0:  // a random direction
+                rays.push_back(Ray{from, {u(rng), u(rng), u(rng)}});
+                break;
+            case 1:  // at a point of an edge
+                rays.push_back(Ray{from, t.a + (t.b - t.a) * along(rng) - from});
+                ++aimed;
+                break;
+            case 2:  // at a corner
+                rays.push_back(Ray{from, t.c - from});
+                ++aimed;
+                break;
+            default: {  // at a point inside, the segment ending or starting within a few ulps of it
+                const double wa = along(rng), wb = along(rng) * (1.0 - wa);
+                const Vec3d target = t.a + (t.b - t.a) * wa + (t.c - t.a) * wb;
+                Ray r{from, target - from};
+                (i % 2 ? r.tmax : r.tmin) = 1.0 + (static_cast<double>(i % 9) - 4.0) * 0x1p-50;
+                rays.push_back(r);
+                ++cut;
+            }
+        }
+    }
+    std::vector<Hit> packed(rays.size());
+    b.accel->closest_range(rays.data(), rays.size(), Precision::refined, true, packed.data());
+    int hits = 0, back_faces = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto one = b.accel->closest(rays[i], Precision::refined, true);
+        ASSERT_EQ(one.has_value(), packed[i].valid()) << i;
+        if (!one)
+            continue;
+        ++hits;
+        back_faces += !one->front_face;
+        const Hit& p = packed[i];
+        EXPECT_TRUE(one->object == p.object && one->primitive == p.primitive &&
+                    testing::same_bits(one->t, p.t) && testing::same_bits(one->t_err, p.t_err) &&
+                    testing::same_bits(one->u, p.u) && testing::same_bits(one->v, p.v) &&
+                    one->normal == p.normal && one->front_face == p.front_face)
+            << i << ": object " << one->object << "/" << p.object << ", primitive "
+            << one->primitive << "/" << p.primitive << ", t " << one->t << "/" << p.t;
+    }
+    EXPECT_GT(aimed, 8000);
+    EXPECT_GT(cut, 8000);
+    EXPECT_GT(hits, 14000);
+    EXPECT_GT(back_faces, 1000);
+}
+
 // refined's widened triangles are not kept twice: Embree's leaves hold copies of their vertices,
 // so the buffers it built from are released after the build (embree/build_buffer.h) and no longer
 // counted. Released means mapped without access: every query of this file, and of the stress

@@ -12,6 +12,42 @@ namespace raycastd::engine::embree {
 
 namespace {
 
+/// The deferred candidate of `lane` (RayContext::pending_geom) decided as decide() would have
+/// decided it when Embree offered it: a double hit away from its triangle's edges becomes the
+/// lane's best, exactly as keep_if_closer makes the first hit of a lane, with tfar left at its
+/// float t, which is what Embree did when it accepted the candidate undecided. Anything else
+/// (a double miss, which decide() rejects and Embree would then have traced on beyond it; a hit
+/// near an edge, whose tfar keep_if_closer raises) would have changed the traversal, and
+/// returns false: the lane must be traced again (RayContext::retrace).
+bool settle_pending(RayContext& lane) {
+    const GeomData& g = *lane.pending_geom;
+    lane.pending_geom = nullptr;
+    const Triangle tri = g.accel->scene->objects[g.object].mesh->triangle(lane.pending_prim);
+    LineCrossing outside;
+    auto h = intersect_triangle(tri, *lane.ray, lane.want_normal, &outside);
+    if (!h || near_edge(*h))
+        return false;
+    h->object = g.object;
+    h->primitive = lane.pending_prim;
+    lane.best = *h;
+    lane.best_tf = lane.pending_tf;
+    return true;
+}
+
+/// Before a candidate of a deferring packet's lane is decided: settles the lane's pending
+/// candidate first (it came earlier, and decide() would have decided it then). Returns false
+/// where the lane is to be traced again, whose candidates are then all accepted undecided (the
+/// traversal shortens; nothing of it is used).
+bool ready_to_decide(RayContext& lane) {
+    if (lane.retrace)
+        return false;
+    if (lane.pending_geom && !settle_pending(lane)) {
+        lane.retrace = true;
+        return false;
+    }
+    return true;
+}
+
 /// What decide() does with one lane's double answer `h` on triangle `tri` (primitive `prim`).
 void settle(const RTCFilterFunctionNArguments* args, unsigned i, RayContext& lane,
             const GeomData& g, unsigned prim, const Triangle& tri, std::optional<Hit>& h,
@@ -85,6 +121,8 @@ void decide_packet(const RTCFilterFunctionNArguments* args, RayContext& c, const
             continue;
         const unsigned p = RTCHitN_primID(args->hit, args->N, i);
         RayContext& lane = c.lanes[RTCRayN_id(args->ray, args->N, i)];
+        if (c.defer && !occlusion && !ready_to_decide(lane))
+            continue;
         // One triangle and one want_normal a call of the kernel (Embree reports one triangle a
         // call; nothing here relies on it).
         if (count == 4 || (count > 0 && (p != prim || lane.want_normal != want_normal)))
@@ -131,6 +169,25 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
         // A packet's context carries its lanes; the ray id is the lane (fill_lanes).
         RayContext& lane = c.lanes ? c.lanes[RTCRayN_id(args->ray, args->N, i)] : c;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        if (c.defer && !occlusion) {
+            const float bu = RTCHitN_u(args->hit, args->N, i);
+            const float bv = RTCHitN_v(args->hit, args->N, i);
+            const float inside = std::min({bu, bv, 1.0f - bu - bv});
+            const float nx = RTCHitN_Ng_x(args->hit, args->N, i);
+            const float ny = RTCHitN_Ng_y(args->hit, args->N, i);
+            const float nz = RTCHitN_Ng_z(args->hit, args->N, i);
+            if (!lane.best && !lane.pending_geom && !lane.retrace && !lane.collect &&
+                inside > 0.0f && inside * inside * (nx * nx + ny * ny + nz * nz) > g->defer_band2) {
+                // Accepted undecided: Embree keeps tfar at its float t (settle_pending_lanes).
+                lane.pending_geom = g;
+                lane.pending_prim = prim;
+                lane.pending_tf = RTCRayN_tfar(args->ray, args->N, i);
+                __builtin_prefetch(&mesh.triangles[prim]);
+                continue;
+            }
+            if (!ready_to_decide(lane))
+                continue;
+        }
         const Triangle tri = mesh.triangle(prim);
         // An occlusion query needs only the decision (decide_triangle: the plane crossing only
         // where Woop's t does not settle the range).
@@ -150,6 +207,26 @@ void occluded_filter(const RTCFilterFunctionNArguments* args) {
 }
 
 }  // namespace
+
+void settle_pending_lanes(RayContext* lanes, std::size_t m) {
+    // The index rows were prefetched when the candidates were deferred; the corners of every
+    // lane are asked for before any is read, so that their misses overlap.
+    for (std::size_t k = 0; k < m; ++k) {
+        const RayContext& lane = lanes[k];
+        if (!lane.pending_geom)
+            continue;
+        const TriangleMesh& mesh = *lane.accel->scene->objects[lane.pending_geom->object].mesh;
+        for (const std::uint32_t v : mesh.triangles[lane.pending_prim]) {
+            const char* p = reinterpret_cast<const char*>(&mesh.positions[v]);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + sizeof(Vec3d) - 1);  // a corner may straddle two lines
+        }
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+        if (lanes[k].pending_geom && !settle_pending(lanes[k]))
+            lanes[k].retrace = true;
+    }
+}
 
 bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d, double delta) {
     const Vec3d n = cross(tri.b - tri.a, tri.c - tri.a);
@@ -210,6 +287,8 @@ GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& 
     unsigned* idx;
     if (!share_triangle_buffers(g.get(), buffer, 3 * n, n, v, idx))
         return nullptr;  // no memory (the caller says so)
+    // The longest widened edge, squared (GeomData::defer_band2).
+    double longest2 = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const Triangle t = mesh.triangle(i);
         // Widened in Embree's frame (Impl::frame, an exact scaling): its cross products are of
@@ -221,6 +300,8 @@ GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& 
         if (!is_degenerate(t))  // a degenerate triangle is never hit in double: left as it is
             widen_triangle(rel, widen_by * a.unit, out, capped);
         for (std::size_t k = 0; k < 3; ++k) {
+            const Vec3d e = out[(k + 1) % 3] - out[k];
+            longest2 = std::max(longest2, dot(e, e));
             // to_float: see make_triangle_geometry.
             const Vec3d& q = out[k];
             v[9 * i + 3 * k + 0] = to_float(q.x);
@@ -229,6 +310,8 @@ GeometryHandle make_fat_triangle_geometry(RTCDevice device, const TriangleMesh& 
             idx[3 * i + k] = static_cast<unsigned>(3 * i + k);
         }
     }
+    const double band = 2.0 * widen_by * a.unit * std::sqrt(longest2);
+    data->defer_band2 = static_cast<float>(std::min(band * band, 1e30));
     rtcSetGeometryUserData(g.get(), data);
     rtcSetGeometryIntersectFilterFunction(g.get(), intersect_filter);
     rtcSetGeometryOccludedFilterFunction(g.get(), occluded_filter);

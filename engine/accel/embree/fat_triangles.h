@@ -38,6 +38,7 @@ namespace raycastd::engine::embree {
 
 struct GeomData;
 struct Impl;
+struct RayContext;
 
 /// The in-plane widening of refined's triangles, in units of Impl::pad (8·u_f·S): 32 pads, 256
 /// u_f·S, 16× the float displacement Δ above (sin β ≥ 1/16: β ≥ 3.6°).
@@ -50,6 +51,13 @@ constexpr double kMinCornerSine = 1.0 / 32.0;
 /// corner moves w/sin(α/2) along its bisector, at most w/kMinCornerSine (then `capped` is set).
 /// `tri` must not be degenerate.
 void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped);
+
+/// refined's deferred decisions (RayContext::defer), after the packet's traversal: decides each
+/// of lanes[0..m)'s pending candidate as the hit filter would have when Embree offered it, the
+/// lanes' corners prefetched together first. A lane whose decision would have changed the
+/// traversal (a double miss, a hit near an edge) is marked RayContext::retrace, and its answer
+/// must be traced again without deferral.
+void settle_pending_lanes(RayContext* lanes, std::size_t m);
 
 /// Whether a double hit at barycentrics (u, v) of `tri` (u the weight of b, v of c), on a line
 /// along `d`, crosses at sin β ≥ 1/16 and at least 2Δ/sin β + 2Δ from every edge. The float

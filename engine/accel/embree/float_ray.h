@@ -114,6 +114,13 @@ inline float tfar_for(const RayContext& c, double t) {
     return float_up((t - c.shift) * c.len + c.margin);
 }
 
+/// Whether keep_if_closer leaves tfar a margin above the hit `h`: within 1e-6 of its triangle's
+/// edges in barycentrics, far above the double kernel's rounding (a sphere's u = v = 0 counts).
+inline bool near_edge(const Hit& h) {
+    constexpr double kEdge = 1e-6;
+    return h.u <= kEdge || h.v <= kEdge || 1.0 - h.u - h.v <= kEdge;
+}
+
 /// refined's closest on the native BVH (the fat triangles' hit filter and the spheres'
 /// callback): keeps the double hit `h`, whose float t is `tf`, as c.best if it comes first by
 /// the API's order (`closer`: double t, then the lower object, then the lower primitive) and
@@ -137,9 +144,7 @@ inline bool keep_if_closer(RayContext& c, const Hit& h, float tf, float& tfar) {
         return false;
     c.best = h;
     c.best_tf = tf;
-    constexpr double kEdge = 1e-6;  // barycentric: far above the double kernel's rounding
-    const bool on_edge = h.u <= kEdge || h.v <= kEdge || 1.0 - h.u - h.v <= kEdge;
-    tfar = c.fast || !on_edge ? tf : std::max(tf, tfar_for(c, h.t));
+    tfar = c.fast || !near_edge(h) ? tf : std::max(tf, tfar_for(c, h.t));
     return true;
 }
 

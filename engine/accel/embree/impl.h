@@ -167,6 +167,19 @@ struct RayContext {
     bool rejected() const { return rejected_tf < std::numeric_limits<float>::infinity(); }
     /// A packet's context: the lanes' own contexts, indexed by the Embree ray id.
     RayContext* lanes = nullptr;
+    /// On a packet's context: refined's hit filter may defer a lane's decisions (fat_triangles.h,
+    /// settle_pending_lanes). A lane's first candidate, when the lane has no hit yet, is then
+    /// accepted undecided (its triangle's index row prefetched) and decided after the traversal,
+    /// the packet's lanes together, where their cache misses overlap.
+    bool defer = false;
+    /// The deferred candidate (its object's GeomData, primitive and float t), if any.
+    const GeomData* pending_geom = nullptr;
+    unsigned pending_prim = 0;
+    float pending_tf = 0;
+    /// The deferred decision would have changed the traversal (a double miss, or a hit on an
+    /// edge, which raises tfar): the lane's answer is traced again, every candidate decided
+    /// when offered.
+    bool retrace = false;
 
     /// A packet lane's context (never handed to Embree: packets carry no user geometry).
     RayContext() = default;

@@ -19,6 +19,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "engine/accel/embree/fat_triangles.h"
 #include "engine/accel/embree/float_ray.h"
 #include "engine/accel/embree/impl.h"
 
@@ -159,9 +160,15 @@ void fill_backed_off_lanes(const Impl& a, const Ray* rays, std::size_t m, bool w
 /// lanes from fill(lanes, r16, valid) (fill_lanes, fill_backed_off_lanes); out[k] is answer(k,
 /// context, native_hit) as a Hit (an empty optional: a miss), or Hit{} where the lane is off (the
 /// ray's segment misses the bounds).
+/// With `defer` (refined's packets), a packet that is not flagged coherent lets the hit filter
+/// defer a lane's first decision, and the deferred ones are settled after the traversal
+/// (settle_pending_lanes); a lane then marked RayContext::retrace is the answer's to trace again.
+/// Random rays gain: on workload B, whose triangles are far beyond the cache, each decision had
+/// waited on two dependent misses (the index row, then the corners) inside the traversal.
+/// Camera rays share their triangles, which are in cache; their packets decide as they go.
 template <class Fill, class Answer>
 void closest_packet_filled(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
-                           Fill&& fill, Answer&& answer, Hit* out) {
+                           Fill&& fill, Answer&& answer, Hit* out, bool defer = false) {
     RayContext lanes[kLanes];
     alignas(64) RTCRayHit16 rh;
     alignas(64) int valid[kLanes];
@@ -173,7 +180,10 @@ void closest_packet_filled(const Impl& a, RTCScene scene, const Ray* rays, std::
     RayContext pc(a);
     pc.rtc = packet_context(rays, m, a.float_scale);
     pc.lanes = lanes;
+    pc.defer = defer && !(pc.rtc.flags & RTC_INTERSECT_CONTEXT_FLAG_COHERENT);
     rtcIntersect16(valid, scene, &pc.rtc, &rh);
+    if (pc.defer)
+        settle_pending_lanes(lanes, m);
     for (std::size_t k = 0; k < m; ++k) {
         if (!valid[k]) {
             out[k] = Hit{};  // the segment misses the scene's bounds: nothing can be hit
