@@ -26,9 +26,15 @@ RTCIntersectContext flagged_context(bool together) {
 }  // namespace
 
 RTCIntersectContext packet_context(const Ray* rays, std::size_t m, double scene_scale) {
-    return flagged_context(coherent(
-        m, [rays](std::size_t k) { return rays[k].direction; },
-        [rays](std::size_t k) { return rays[k].origin; }, 0.0025 * scene_scale * scene_scale));
+    const auto dir = [rays](std::size_t k) { return rays[k].direction; };
+    const auto org = [rays](std::size_t k) { return rays[k].origin; };
+    const double spread2 = 0.0025 * scene_scale * scene_scale;
+    // Random rays: the second ray already fails the test, and the whole of it, which has no
+    // early exit, had cost 50 instructions a ray of a refined batch of A's random rays
+    // (callgrind). Asked first, it gives the same answer.
+    if (m >= 2 && !coherent(2, dir, org, spread2))
+        return flagged_context(false);
+    return flagged_context(coherent(m, dir, org, spread2));
 }
 
 namespace {

@@ -447,3 +447,54 @@ TEST(BackedOffLanes, FloatUpOnFourLanesIsFloatUp) {
 
 }  // namespace
 }  // namespace raycastd::engine::embree
+
+namespace raycastd::engine::embree {
+namespace {
+
+// packet_context asks the second ray first (a random packet fails there) and then the whole
+// packet: the flag must be coherent() of the whole packet, whichever ray breaks it. Camera
+// packets, with one ray among them turned away or moved off at each position in turn, and
+// random packets, of every size from 2 to 16.
+TEST(PacketContext, FlagsAsTheWholePacketsTest) {
+    std::mt19937_64 rng(0xc0de);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const double scale = 4.0;
+    int coherent_packets = 0, incoherent_packets = 0;
+    for (int round = 0; round < 3000; ++round) {
+        const std::size_t m = 2 + static_cast<std::size_t>(round % 15);
+        std::vector<Ray> rays;
+        const Vec3d eye{u(rng), u(rng), -8.0};
+        for (std::size_t k = 0; k < m; ++k)
+            rays.push_back(Ray{eye, {0.01 * u(rng), 0.01 * u(rng), 1.0}});
+        const std::size_t odd = static_cast<std::size_t>(round / 15) % (m + 1);  // m: none
+        switch (round % 4) {
+            case 0:  // one ray turned away
+                if (odd < m)
+                    rays[odd].direction = {1.0, 0.0, 0.2};
+                break;
+            case 1:  // one origin moved beyond the spread
+                if (odd < m)
+                    rays[odd].origin = rays[odd].origin + Vec3d{0.5 * scale, 0.0, 0.0};
+                break;
+            case 2:  // random rays
+                for (Ray& r : rays)
+                    r = Ray{{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}};
+                break;
+            default:  // the camera's packet as it is
+                break;
+        }
+        const bool together = coherent(
+            m, [&](std::size_t k) { return rays[k].direction; },
+            [&](std::size_t k) { return rays[k].origin; }, 0.0025 * scale * scale);
+        const RTCIntersectContext ctx = packet_context(rays.data(), m, scale);
+        EXPECT_EQ(ctx.flags, together ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                      : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT)
+            << "round " << round;
+        (together ? coherent_packets : incoherent_packets)++;
+    }
+    EXPECT_GT(coherent_packets, 700);
+    EXPECT_GT(incoherent_packets, 1500);
+}
+
+}  // namespace
+}  // namespace raycastd::engine::embree
