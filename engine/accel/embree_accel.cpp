@@ -766,8 +766,10 @@ void refined_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool w
                 },
                 [&](std::size_t k, const RayContext& c, const NativeHit&) {
                     bool escalated = false;
-                    auto h = c.retrace ? refined_closest(a, rays[i + k], want_normal, escalated)
-                                       : refined_answer(a, rays[i + k], c, want_normal, escalated);
+                    // A far lane goes to the exact path either way (refined_answer).
+                    auto h = c.retrace && !c.far
+                                 ? refined_closest(a, rays[i + k], want_normal, escalated)
+                                 : refined_answer(a, rays[i + k], c, want_normal, escalated);
                     escalations += escalated;
                     return h;
                 },

@@ -168,17 +168,19 @@ struct RayContext {
     /// A packet's context: the lanes' own contexts, indexed by the Embree ray id.
     RayContext* lanes = nullptr;
     /// On a packet's context: refined's hit filter may defer a lane's decisions (fat_triangles.h,
-    /// settle_pending_lanes). A lane's first candidate, when the lane has no hit yet, is then
-    /// accepted undecided (its triangle's index row prefetched) and decided after the traversal,
-    /// the packet's lanes together, where their cache misses overlap.
+    /// settle_pending_lanes). A candidate offered to a lane alone (a call of the filter with one
+    /// lane on), while the lane has no hit, nothing pending and no retrace, is then accepted
+    /// undecided (its triangle's index row prefetched) and decided after the traversal with the
+    /// packet's other deferred lanes, where their cache misses overlap.
     bool defer = false;
     /// The deferred candidate (its object's GeomData, primitive and float t), if any.
     const GeomData* pending_geom = nullptr;
     unsigned pending_prim = 0;
     float pending_tf = 0;
-    /// The deferred decision would have changed the traversal (a double miss, or a hit on an
-    /// edge, which raises tfar): the lane's answer is traced again, every candidate decided
-    /// when offered.
+    /// The deferred decision would have changed the traversal (a double miss, or a hit within
+    /// 1e-6 of an edge in barycentrics, whose tfar keep_if_closer raises): the lane's answer is
+    /// traced again as a ray alone, every candidate decided when offered, and nothing of this
+    /// traversal is used for it.
     bool retrace = false;
 
     /// A packet lane's context (never handed to Embree: packets carry no user geometry).

@@ -161,8 +161,13 @@ void fill_backed_off_lanes(const Impl& a, const Ray* rays, std::size_t m, bool w
 /// context, native_hit) as a Hit (an empty optional: a miss), or Hit{} where the lane is off (the
 /// ray's segment misses the bounds).
 /// With `defer` (refined's packets), a packet that is not flagged coherent lets the hit filter
-/// defer a lane's first decision, and the deferred ones are settled after the traversal
-/// (settle_pending_lanes); a lane then marked RayContext::retrace is the answer's to trace again.
+/// defer a lane's first decision (RayContext::defer), and the deferred ones are settled after the
+/// traversal (settle_pending_lanes); a lane then marked RayContext::retrace is the answer's to
+/// trace again, and its native_hit means nothing (Embree committed what was accepted undecided).
+/// Such a lane's tfar also differed from what deciding as it went would have left, which may
+/// change the order in which Embree offers the packet's other lanes their candidates; their
+/// answers depend on that order only where refined's already do (a back face after a rejection
+/// behind it, coplanar faces of two objects: docs/numerics.md).
 /// Random rays gain: on workload B, whose triangles are far beyond the cache, each decision had
 /// waited on two dependent misses (the index row, then the corners) inside the traversal.
 /// Camera rays share their triangles, which are in cache; their packets decide as they go.
