@@ -1,7 +1,8 @@
 // fast's packets (packets.h): lanes filled four at a time in AVX's registers are the lanes
 // filled one ray at a time, bit for bit, with the same coherence flag and the same refusals; and
 // answers made four lanes at a time are the Hits fast_hit makes lane by lane. refined's lanes
-// set up four at a time are prepare_ray's, lane by lane, context and float ray alike.
+// set up four at a time are prepare_ray's, lane by lane, context and float ray alike. And
+// packet_context flags a packet as coherent() of the whole packet says.
 
 #include "engine/accel/embree/packets.h"
 
@@ -444,12 +445,6 @@ TEST(BackedOffLanes, FloatUpOnFourLanesIsFloatUp) {
         }
     }
 }
-
-}  // namespace
-}  // namespace raycastd::engine::embree
-
-namespace raycastd::engine::embree {
-namespace {
 
 // packet_context asks the second ray first (a random packet fails there) and then the whole
 // packet: the flag must be coherent() of the whole packet, whichever ray breaks it. Camera
