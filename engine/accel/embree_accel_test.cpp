@@ -657,14 +657,7 @@ BatchHits expect_exact_batch_as_single_rays(const Built& b, const std::vector<Ra
             const Hit& y = packed[i];
             ++got.hits;
             got.named += static_cast<int>(named.count(x.object));
-            EXPECT_TRUE(x.object == y.object && x.primitive == y.primitive &&
-                        testing::same_bits(x.t, y.t) && testing::same_bits(x.t_err, y.t_err) &&
-                        testing::same_bits(x.u, y.u) && testing::same_bits(x.v, y.v) &&
-                        testing::same_bits(x.normal.x, y.normal.x) &&
-                        testing::same_bits(x.normal.y, y.normal.y) &&
-                        testing::same_bits(x.normal.z, y.normal.z) &&
-                        x.front_face == y.front_face && x.on_edge == y.on_edge)
-                << i << " want_normal " << want_normal;
+            EXPECT_TRUE(testing::same_hit(x, y)) << i << " want_normal " << want_normal;
         }
     }
     return got;
@@ -812,13 +805,7 @@ TEST(EmbreeAccel, PacketsAgreeWithSingleRays) {
             EXPECT_EQ(one->t, packed[i].t);
             EXPECT_EQ(one->normal, packed[i].normal);
             if (p == Precision::exact) {
-                EXPECT_TRUE(testing::same_bits(one->t, packed[i].t) &&
-                            testing::same_bits(one->t_err, packed[i].t_err) &&
-                            testing::same_bits(one->u, packed[i].u) &&
-                            testing::same_bits(one->v, packed[i].v) &&
-                            one->front_face == packed[i].front_face &&
-                            one->on_edge == packed[i].on_edge)
-                    << i;
+                EXPECT_TRUE(testing::same_hit(*one, packed[i])) << i;
             }
         }
         EXPECT_LT(edge_ties, 64);
@@ -953,10 +940,7 @@ TEST(EmbreeAccel, RefinedRandomPacketsAnswerAsSingleRays) {
         ++hits;
         back_faces += !one->front_face;
         const Hit& p = packed[i];
-        EXPECT_TRUE(one->object == p.object && one->primitive == p.primitive &&
-                    testing::same_bits(one->t, p.t) && testing::same_bits(one->t_err, p.t_err) &&
-                    testing::same_bits(one->u, p.u) && testing::same_bits(one->v, p.v) &&
-                    one->normal == p.normal && one->front_face == p.front_face)
+        EXPECT_TRUE(testing::same_hit(*one, p))
             << i << ": object " << one->object << "/" << p.object << ", primitive "
             << one->primitive << "/" << p.primitive << ", t " << one->t << "/" << p.t;
     }

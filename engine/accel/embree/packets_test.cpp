@@ -205,12 +205,7 @@ TEST(FastLanes, AvxAnswersAsOneByOne) {
             for (std::size_t k = 0; k < m; ++k) {
                 const Hit& x = one[k];
                 const Hit& y = avx[k];
-                EXPECT_TRUE(
-                    same_bits(x.t, y.t) && same_bits(x.t_err, y.t_err) && x.object == y.object &&
-                    x.primitive == y.primitive && same_bits(x.u, y.u) && same_bits(x.v, y.v) &&
-                    same_bits(x.normal.x, y.normal.x) && same_bits(x.normal.y, y.normal.y) &&
-                    same_bits(x.normal.z, y.normal.z) && x.front_face == y.front_face &&
-                    x.on_edge == y.on_edge)
+                EXPECT_TRUE(testing::same_hit(x, y))
                     << "round " << round << " lane " << k << ": t " << x.t << " / " << y.t;
                 (x.valid() ? hits : misses) += 1;
                 clamped += x.valid() && (x.t == rays[k].tmin || x.t == rays[k].tmax);
