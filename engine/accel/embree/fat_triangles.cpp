@@ -12,6 +12,12 @@ namespace raycastd::engine::embree {
 
 namespace {
 
+/// The mesh of `lane`'s deferred candidate.
+const TriangleMesh& pending_mesh(const RayContext& lane) {
+    const GeomData& g = *lane.pending_geom;
+    return *g.accel->scene->objects[g.object].mesh;
+}
+
 /// The deferred candidate of `lane` (RayContext::pending_geom) decided as decide() would have
 /// decided it when Embree offered it: a double hit away from its triangle's edges becomes the
 /// lane's best, exactly as keep_if_closer makes the first hit of a lane, with tfar left at its
@@ -24,8 +30,8 @@ bool settle_pending(RayContext& lane) {
     // on the lane settles it first (ready_to_decide). Spheres' callbacks would not: packets are
     // traced only in scenes without spheres (packets_apply, embree_accel.cpp).
     const GeomData& g = *lane.pending_geom;
+    const Triangle tri = pending_mesh(lane).triangle(lane.pending_prim);
     lane.pending_geom = nullptr;
-    const Triangle tri = g.accel->scene->objects[g.object].mesh->triangle(lane.pending_prim);
     LineCrossing outside;
     auto h = intersect_triangle(tri, *lane.ray, lane.want_normal, &outside);
     if (!h || near_edge(*h))
@@ -225,7 +231,7 @@ void settle_pending_lanes(RayContext* lanes, std::size_t m) {
         const RayContext& lane = lanes[k];
         if (!lane.pending_geom)
             continue;
-        const TriangleMesh& mesh = *lane.accel->scene->objects[lane.pending_geom->object].mesh;
+        const TriangleMesh& mesh = pending_mesh(lane);
         for (const std::uint32_t v : mesh.triangles[lane.pending_prim]) {
             const char* p = reinterpret_cast<const char*>(&mesh.positions[v]);
             __builtin_prefetch(p);
