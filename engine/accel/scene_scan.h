@@ -41,6 +41,10 @@ struct TrianglePlane {
     /// `a`: the first corner of the triangle this plane was made `of` (not kept here: the scan
     /// holds the triangle beside it).
     bool left_behind(const Ray& ray, const Vec3d& a) const;
+    /// Whether the ray certainly misses for this plane alone: left_behind, or the line crosses
+    /// ahead but beyond tmax by more than the kernels' rounding of that crossing (the scan's
+    /// test; neither kernel reports a hit for it either).
+    bool missed(const Ray& ray, const Vec3d& a) const;
 };
 
 namespace detail {

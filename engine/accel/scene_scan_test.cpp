@@ -194,6 +194,74 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
     EXPECT_GT(left_behind, 150);  // the shortcut taken: rays 1e-13 off the plane, leaving it
 }
 
+// The scan's second shortcut: a plane crossed ahead but beyond tmax. Rays aimed at random
+// triangles of every scale from a few sizes away, their tmax set within a few ulps of the
+// exact kernel's t (and t_err) either side: wherever the plane says missed, the exact kernel
+// and decide_triangle miss too, and the fast kernel's sheared t, if it hits, is within its
+// t_err of the exact t; and the scan at exact stays the linear scan bit for bit. Fails when
+// the test drops its margin (the factor or s_bound).
+TEST(SceneScan, CrossingsBeyondTmaxAreTheKernelsMisses) {
+    std::mt19937_64 rng(2026);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), dir(-1.0, 1.0);
+    int missed = 0, close = 0;
+    for (const double scale : {1e-120, 1e-3, 1.0, 1e5, 1e150}) {
+        Scene s;
+        s.materials.push_back(Material{});
+        add_random_triangles(s, rng, scale, 8);
+        const SceneScan scan(s, false);
+        for (int k = 0; k < 6000; ++k) {
+            const Triangle t = s.objects[k % 8].mesh->triangle(0);
+            const TrianglePlane plane = TrianglePlane::of(t);
+            const double u = unit(rng), v = unit(rng) * (1.0 - u);
+            const Vec3d target = t.a + (t.b - t.a) * u + (t.c - t.a) * v;
+            Ray r;
+            r.origin = target + Vec3d{dir(rng), dir(rng), dir(rng)} * (scale * (1 + 4 * unit(rng)));
+            r.direction = (target - r.origin) * (k % 3 == 0 ? 1.0 : 1.0 / (scale * (k % 5 + 1)));
+            const auto h = intersect_triangle(t, r);
+            if (!h)
+                continue;
+            // tmax from far below t to just above it, in ulps and in t_err.
+            const double steps[] = {-2.0, -1.0, -0.5, 0.0};
+            for (int j = 0; j < 16; ++j) {
+                Ray q = r;
+                if (j < 4)
+                    q.tmax = h->t - steps[j] * h->t * 0x1p-40;
+                else if (j < 8)
+                    q.tmax = h->t + steps[j - 4] * h->t_err;
+                else
+                    q.tmax = std::nextafter(h->t, 0.0) * (1.0 - (j - 8) * 0x1p-50);
+                q.tmax = std::max(q.tmax, 0.0);
+                if (!plane.missed(q, t.a))
+                    continue;
+                ++missed;
+                close += q.tmax > h->t * (1.0 - 0x1p-36);
+                EXPECT_FALSE(intersect_triangle(t, q)) << scale << " " << k << " " << j;
+                EXPECT_FALSE(decide_triangle(t, q)) << scale << " " << k << " " << j;
+                if (const auto f = intersect_triangle_fast(t, q)) {
+                    EXPECT_GE(f->t + f->t_err, h->t - h->t_err) << scale << " " << k << " " << j;
+                }
+                Scene one;
+                one.materials.push_back(Material{});
+                one.objects.push_back(s.objects[k % 8]);
+                EXPECT_FALSE(SceneScan(one, false).closest(q, false)) << scale << " " << k;
+                EXPECT_FALSE(SceneScan(one, false).any(q)) << scale << " " << k;
+            }
+            for (const double f : {0.999, 1.0, 1.001}) {
+                Ray q = r;
+                q.tmax = h->t * f;
+                const auto want = linear_closest(s, q, true);
+                const auto got = scan.closest(q, true);
+                ASSERT_EQ(got.has_value(), want.has_value()) << scale << " " << k;
+                if (got)
+                    expect_identical(*got, *want, k);
+                EXPECT_EQ(scan.any(q), linear_any(s, q)) << scale << " " << k;
+            }
+        }
+    }
+    EXPECT_GT(missed, 6000);
+    EXPECT_GT(close, 3000);  // within 2⁻³⁶ of the crossing: the margin itself is tested
+}
+
 // Where plane_t's numerator is below its double-double resolution it rounds to 0 and the exact
 // kernel reports t = 0: an origin 1e-33 off a triangle through the world origin (a helper's
 // case), and scenes at 2⁻³⁵⁵ (~1e-107), where the normal's products underflow. The shortcut
