@@ -13,6 +13,7 @@
 
 #include "engine/accel/embree/build_buffer.h"
 #include "engine/accel/embree/device.h"
+#include "engine/accel/embree/fat_triangles.h"
 #include "engine/accel/far_ray.h"
 #include "engine/accel/linear_accel.h"
 #include "engine/accel/scene_scan.h"
@@ -930,7 +931,9 @@ TEST(EmbreeAccel, RefinedRandomPacketsAnswerAsSingleRays) {
         }
     }
     std::vector<Hit> packed(rays.size());
+    embree::deferral_counts() = {};
     b.accel->closest_range(rays.data(), rays.size(), Precision::refined, true, packed.data());
+    const embree::DeferralCounts counts = embree::deferral_counts();
     int hits = 0, back_faces = 0;
     for (std::size_t i = 0; i < rays.size(); ++i) {
         const auto one = b.accel->closest(rays[i], Precision::refined, true);
@@ -948,6 +951,11 @@ TEST(EmbreeAccel, RefinedRandomPacketsAnswerAsSingleRays) {
     EXPECT_GT(cut, 8000);
     EXPECT_GT(hits, 14000);
     EXPECT_GT(back_faces, 1000);
+    // The deferral is taken (18,463 candidates when written), and so are the retraces it sends
+    // back (2,521: segments ending at the surface, edges): the same answers without it would
+    // pass everything above.
+    EXPECT_GT(counts.deferred, 10000u);
+    EXPECT_GT(counts.retraced, 1000u);
 }
 
 // refined's widened triangles are not kept twice: Embree's leaves hold copies of their vertices,

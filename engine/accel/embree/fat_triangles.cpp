@@ -12,6 +12,8 @@ namespace raycastd::engine::embree {
 
 namespace {
 
+thread_local DeferralCounts t_deferral_counts;
+
 /// The mesh of `lane`'s deferred candidate.
 const TriangleMesh& pending_mesh(const RayContext& lane) {
     const GeomData& g = *lane.pending_geom;
@@ -52,6 +54,7 @@ bool ready_to_decide(RayContext& lane) {
         return false;
     if (lane.pending_geom && !settle_pending(lane)) {
         lane.retrace = true;
+        ++t_deferral_counts.retraced;
         return false;
     }
     return true;
@@ -198,6 +201,7 @@ void decide(const RTCFilterFunctionNArguments* args, bool occlusion) {
                 lane.pending_geom = g;
                 lane.pending_prim = prim;
                 lane.pending_tf = RTCRayN_tfar(args->ray, args->N, i);
+                ++t_deferral_counts.deferred;
                 __builtin_prefetch(&mesh.triangles[prim]);
                 continue;
             }
@@ -239,9 +243,15 @@ void settle_pending_lanes(RayContext* lanes, std::size_t m) {
         }
     }
     for (std::size_t k = 0; k < m; ++k) {
-        if (lanes[k].pending_geom && !settle_pending(lanes[k]))
+        if (lanes[k].pending_geom && !settle_pending(lanes[k])) {
             lanes[k].retrace = true;
+            ++t_deferral_counts.retraced;
+        }
     }
+}
+
+DeferralCounts& deferral_counts() {
+    return t_deferral_counts;
 }
 
 bool crossed_well_inside(const Triangle& tri, double u, double v, const Vec3d& d, double delta) {

@@ -59,6 +59,17 @@ void widen_triangle(const Triangle& tri, double w, Vec3d out[3], bool& capped);
 /// must be traced again without deferral.
 void settle_pending_lanes(RayContext* lanes, std::size_t m);
 
+/// What refined's deferred decisions did on this thread: candidates accepted undecided, and
+/// lanes marked to be traced again. The answers are the same with or without the deferral, so
+/// nothing but these counts tells that it is taken at all: tests read them
+/// (EmbreeAccel.RefinedRandomPacketsAnswerAsSingleRays). An increment a deferral, on a counter of
+/// the thread's own.
+struct DeferralCounts {
+    std::uint64_t deferred = 0;
+    std::uint64_t retraced = 0;
+};
+DeferralCounts& deferral_counts();
+
 /// Whether a double hit at barycentrics (u, v) of `tri` (u the weight of b, v of c), on a line
 /// along `d`, crosses at sin β ≥ 1/16 and at least 2Δ/sin β + 2Δ from every edge. The float
 /// line, within Δ of the double one relative to the float triangle, then crosses its plane at
