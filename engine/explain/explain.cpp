@@ -59,6 +59,12 @@ constexpr const char* kOutOfRange =
     "1e-308 to 1.8e308), so they are not written out: the engine's kernels rescale the "
     "coordinates by a power of two first and decide";
 
+/// The reason given for a sphere sphere_roots cannot resolve (SphereRoots::unresolved).
+constexpr const char* kUnresolved =
+    "the sphere's radius is below 2^-900 of its distance from the ray's origin (or of the "
+    "origin's coordinates): double precision cannot tell there whether the line passes within "
+    "it, and every precision takes it as missed";
+
 /// The reason given for a crossing whose t is past double's largest value.
 constexpr const char* kTBeyondRange =
     "the ray crosses it at a t beyond double precision's range (about 1.8e308): not a hit that "
@@ -90,8 +96,12 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     sw.discriminant = 4.0 * sw.a * ((s.radius - len_l) * (s.radius + len_l));
     // Past ~1e154 (or below ~1e-154) the squares leave double's range: written out they were
     // "inf" and "nan". The roots do not need them: sphere_roots scales lengths first.
+    // A discriminant that underflowed (a sphere 1e-300 across: 4e-600 written as 0, beside
+    // roots or a miss that contradict it) is out of range too; an exact 0 (r = |l|) is not.
+    const bool disc_in_range =
+        sw.discriminant == 0.0 ? s.radius == len_l : std::abs(sw.discriminant) >= kSmallestSquare;
     sw.representable = std::isfinite(sw.a) && std::isfinite(sw.b) && std::isfinite(sw.c) &&
-                       std::isfinite(sw.discriminant) && sw.a >= kSmallestSquare;
+                       std::isfinite(sw.discriminant) && sw.a >= kSmallestSquare && disc_in_range;
     if (sw.representable) {
         w.steps.push_back(quadratic(sw.a, sw.b, sw.c));
         w.steps.push_back("discriminant B^2-4AC = " + num(sw.discriminant));
@@ -111,7 +121,10 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
         else
             ++overflowed;
     }
-    if (r.count == 0) {
+    if (r.count == 0 && r.unresolved) {
+        w.reason = kUnresolved;
+        w.steps.push_back(w.reason);
+    } else if (r.count == 0) {
         w.reason = "no real roots: the ray misses";
         w.steps.push_back(w.reason);
     } else if (sw.roots.empty()) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/query/intersect.h"
 #include "engine/testing/scenes.h"
 
 namespace raycastd::engine {
@@ -180,6 +181,37 @@ TEST(Explain, ProductsBeyondDoublesRangeAreNotWrittenOut) {
     const Explanation near =
         explain(testing::tutorial_spheres(), Ray{{0, 0, 0}, {0, 0, 1}}).value();
     EXPECT_TRUE(near.objects[0].sphere->representable);
+}
+
+// A sphere 1e-300 across, 5 away, on the line: its discriminant, 4e-600, underflowed and was
+// written "discriminant B^2-4AC = 0" above "no real roots: the ray misses", which contradict each
+// other. The engine takes it as missed because it lies below double's resolution there
+// (SphereRoots::unresolved), and the solution now says that; one 1e-170 across, which the
+// kernel scales up and hits, has its underflowed discriminant left out instead.
+TEST(Explain, ASphereBelowDoublesResolutionSaysWhyItIsMissed) {
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::sphere("speck", {0, 0, 5}, 1e-300, 0));
+    s.objects.push_back(testing::sphere("grain", {0, 0, 9}, 1e-170, 0));
+    const Explanation ex = explain(s, Ray{{0, 0, 0}, {0, 0, 1}}).value();
+    const ObjectWork& speck = ex.objects[0];
+    EXPECT_FALSE(speck.hit);
+    EXPECT_NE(speck.reason.find("below 2^-900 of its distance"), std::string::npos) << speck.reason;
+    EXPECT_FALSE(speck.sphere->representable);
+    for (const std::string& step : speck.steps)
+        EXPECT_EQ(step.find("discriminant"), std::string::npos) << step;
+    const ObjectWork& grain = ex.objects[1];
+    EXPECT_TRUE(grain.hit);
+    EXPECT_EQ(*grain.t, 9.0);
+    EXPECT_FALSE(grain.sphere->representable);
+    ASSERT_TRUE(ex.first_hit);
+    EXPECT_EQ(ex.first_hit->object, 1u);
+    // The intersectors agree: the speck is missed, the grain hit.
+    const auto engine = QueryEngine::build(std::make_shared<const Scene>(s));
+    ASSERT_TRUE(engine.ok());
+    const auto hit = (*engine)->closest(Ray{{0, 0, 0}, {0, 0, 1}}, Precision::exact, false);
+    ASSERT_TRUE(hit);
+    EXPECT_EQ(hit->object, 1u);
 }
 
 TEST(Explain, ARootPastTheLargestDoubleLeavesTheOther) {

@@ -147,8 +147,11 @@ std::optional<SphereRoots> sphere_roots_rescaled(const Sphere& s, const Ray& ray
         // inf, and the scaled call recursed until the stack ran out (r = 2⁻¹⁰⁷⁴ with an origin
         // as small: a helper's review). From 2¹⁰⁰⁰ the radius is 2⁻⁷⁴ or more: not tiny.
         k = std::min(k, 0x1p1000);
-        if (!(s.radius * k >= 0x1p-400))
-            return SphereRoots{};
+        if (!(s.radius * k >= 0x1p-400)) {
+            SphereRoots none;
+            none.unresolved = true;
+            return none;
+        }
         return times(sphere_roots(sphere_times(s, k), origin_times(ray, k)), 1.0 / k);
     }
     if (extreme_products(s, ray)) {

@@ -37,6 +37,11 @@ struct Sphere {
 /// discriminant is exactly zero) or 2. Roots are not clipped to [tmin, tmax].
 struct SphereRoots {
     int count = 0;
+    /// No roots because the sphere is smaller than 2⁻⁹⁰⁰ of its distance or of the origin's
+    /// coordinates (sphere_roots' tiny-radius rescaling): below double's resolution there, it is
+    /// taken as missed whatever the line does. Set by sphere_roots only, for the worked solution
+    /// (explain), which says so rather than "no real roots".
+    bool unresolved = false;
     double t[2] = {0.0, 0.0};
     double t_err = 0.0;  ///< a bound on the absolute error of each root
 };

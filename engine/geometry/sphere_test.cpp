@@ -415,6 +415,21 @@ TEST(Sphere, SmallestRadiusIsAnsweredWithoutRecursingForEver) {
     EXPECT_EQ(r.t[1], 0x1p-1073);
 }
 
+// Below 2⁻⁹⁰⁰ of its distance a sphere is taken as missed, even by a line through its centre
+// (docs/numerics.md), and says so: the worked solution gives that reason rather than "no real
+// roots". Ordinary misses, and a small sphere that can be scaled up, are not flagged.
+TEST(Sphere, SpheresBelowDoublesResolutionAreFlagged) {
+    const SphereRoots lost = sphere_roots({{0, 0, 5}, 1e-300}, ray_z());
+    EXPECT_EQ(lost.count, 0);
+    EXPECT_TRUE(lost.unresolved);
+    const SphereRoots scaled = sphere_roots({{0, 0, 5}, 1e-200}, ray_z());
+    EXPECT_EQ(scaled.count, 2);
+    EXPECT_FALSE(scaled.unresolved);
+    const SphereRoots missed = sphere_roots({{3, 0, 5}, 1}, ray_z());
+    EXPECT_EQ(missed.count, 0);
+    EXPECT_FALSE(missed.unresolved);
+}
+
 TEST(Sphere, ErrorBoundCoversFarSphere) {
     SphereRoots r = sphere_roots({{0, 0, 1e8}, 1}, ray_z());
     EXPECT_GT(r.t_err, 0.0);
