@@ -42,8 +42,10 @@ struct TrianglePlane {
     /// holds the triangle beside it).
     bool left_behind(const Ray& ray, const Vec3d& a) const;
     /// Whether the ray certainly misses for this plane alone: left_behind, or the line crosses
-    /// ahead but beyond tmax by more than the kernels' rounding of that crossing (the scan's
-    /// test; neither kernel reports a hit for it either).
+    /// ahead but beyond tmax by more than plane_t's rounding of that crossing (the scan's test;
+    /// intersect_triangle and decide_triangle report no hit for it either, and
+    /// intersect_triangle_fast only where its sheared t, within t_err of the crossing, falls
+    /// inside tmax: a grazing ray, whose miss here is the crossing's true side).
     bool missed(const Ray& ray, const Vec3d& a) const;
 };
 

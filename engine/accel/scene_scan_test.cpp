@@ -197,9 +197,13 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
 // The scan's second shortcut: a plane crossed ahead but beyond tmax. Rays aimed at random
 // triangles of every scale from a few sizes away, their tmax set within a few ulps of the
 // exact kernel's t (and t_err) either side: wherever the plane says missed, the exact kernel
-// and decide_triangle miss too, and the fast kernel's sheared t, if it hits, is within its
-// t_err of the exact t; and the scan at exact stays the linear scan bit for bit. Fails when
-// the test drops its margin (the factor or s_bound).
+// and decide_triangle miss too, the fast kernel's sheared t, if it hits, is within its t_err
+// of the exact t, and the scan misses at both precisions; and the scan at exact stays the
+// linear scan bit for bit. Fails when the crossing is compared as computed, without s_bound,
+// sd_bound and the factor; s_bound alone (~10u of the terms) is already wider than plane_t's
+// error, so dropping the factor alone is not caught. At 1e-120 and 1e150 the plane's products
+// underflow below 2⁻¹⁰⁰⁰ or overflow, and the test leaves every ray to the kernels: the rays
+// passed over come from the three scales between.
 TEST(SceneScan, CrossingsBeyondTmaxAreTheKernelsMisses) {
     std::mt19937_64 rng(2026);
     std::uniform_real_distribution<double> unit(0.0, 1.0), dir(-1.0, 1.0);
@@ -220,12 +224,13 @@ TEST(SceneScan, CrossingsBeyondTmaxAreTheKernelsMisses) {
             const auto h = intersect_triangle(t, r);
             if (!h)
                 continue;
-            // tmax from far below t to just above it, in ulps and in t_err.
+            // tmax from below t by a few times the factor's 2⁻⁴⁰, by t_err, and by ulps.
+            const double below[] = {4.0, 2.0, 1.0, 0.5};
             const double steps[] = {-2.0, -1.0, -0.5, 0.0};
             for (int j = 0; j < 16; ++j) {
                 Ray q = r;
                 if (j < 4)
-                    q.tmax = h->t - steps[j] * h->t * 0x1p-40;
+                    q.tmax = h->t - below[j] * h->t * 0x1p-40;
                 else if (j < 8)
                     q.tmax = h->t + steps[j - 4] * h->t_err;
                 else
@@ -243,8 +248,10 @@ TEST(SceneScan, CrossingsBeyondTmaxAreTheKernelsMisses) {
                 Scene one;
                 one.materials.push_back(Material{});
                 one.objects.push_back(s.objects[k % 8]);
-                EXPECT_FALSE(SceneScan(one, false).closest(q, false)) << scale << " " << k;
-                EXPECT_FALSE(SceneScan(one, false).any(q)) << scale << " " << k;
+                for (const bool fast : {false, true}) {
+                    EXPECT_FALSE(SceneScan(one, fast).closest(q, false)) << scale << " " << k;
+                    EXPECT_FALSE(SceneScan(one, fast).any(q)) << scale << " " << k;
+                }
             }
             for (const double f : {0.999, 1.0, 1.001}) {
                 Ray q = r;
@@ -258,8 +265,8 @@ TEST(SceneScan, CrossingsBeyondTmaxAreTheKernelsMisses) {
             }
         }
     }
-    EXPECT_GT(missed, 6000);
-    EXPECT_GT(close, 3000);  // within 2⁻³⁶ of the crossing: the margin itself is tested
+    EXPECT_GT(missed, 30000);
+    EXPECT_GT(close, 25000);  // within 2⁻³⁶ of the crossing: the margin itself is tested
 }
 
 // Where plane_t's numerator is below its double-double resolution it rounds to 0 and the exact

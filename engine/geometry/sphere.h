@@ -38,9 +38,11 @@ struct Sphere {
 struct SphereRoots {
     int count = 0;
     /// No roots because the sphere is smaller than 2⁻⁹⁰⁰ of its distance or of the origin's
-    /// coordinates (sphere_roots' tiny-radius rescaling): below double's resolution there, it is
-    /// taken as missed whatever the line does. Set by sphere_roots only, for the worked solution
-    /// (explain), which says so rather than "no real roots".
+    /// coordinates (sphere_roots' tiny-radius rescaling gives up): below double's resolution
+    /// there, it is taken as missed whatever the line does. Set by sphere_roots only, for the
+    /// worked solution (explain), which says so rather than "no real roots". Not set where the
+    /// lengths pass 2⁵⁰⁰ and are scaled down first: a radius that small then rounds to 0, and
+    /// the sphere is a point, hit (as a tangent) only by a line through its centre exactly.
     bool unresolved = false;
     double t[2] = {0.0, 0.0};
     double t_err = 0.0;  ///< a bound on the absolute error of each root

@@ -62,8 +62,9 @@ void settle_pending_lanes(RayContext* lanes, std::size_t m);
 /// What refined's deferred decisions did on this thread: candidates accepted undecided, and
 /// lanes marked to be traced again. The answers are the same with or without the deferral, so
 /// nothing but these counts tells that it is taken at all: tests read them
-/// (EmbreeAccel.RefinedRandomPacketsAnswerAsSingleRays). An increment a deferral, on a counter of
-/// the thread's own.
+/// (EmbreeAccel.RefinedRandomPacketsAnswerAsSingleRays). Each thread counts on its own counters,
+/// one increment a deferral. The counts depend on the processor: decide_packet, which decides
+/// several lanes at once where the processor has AVX2 and FMA, never defers.
 struct DeferralCounts {
     std::uint64_t deferred = 0;
     std::uint64_t retraced = 0;
