@@ -195,9 +195,10 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
 }
 
 // The scan's second shortcut: a plane crossed ahead but beyond tmax. Rays aimed at random
-// triangles of every scale from a few sizes away, their tmax set within a few ulps of the
-// exact kernel's t (and t_err) either side: wherever the plane says missed, the exact kernel
-// and decide_triangle miss too, the fast kernel's sheared t, if it hits, is within its t_err
+// triangles of five scales from a few sizes away, their tmax set a little below the exact
+// kernel's t (by multiples of 2⁻⁴⁰ of t, of t_err, and by ulps), then just below, at and just
+// above it for the comparison with the linear scan: wherever the plane says missed, the exact
+// kernel and decide_triangle miss too, the fast kernel's sheared t, if it hits, is within its t_err
 // of the exact t, and the scan misses at both precisions; and the scan at exact stays the
 // linear scan bit for bit. Fails when the crossing is compared as computed, without s_bound,
 // sd_bound and the factor; s_bound alone (~10u of the terms) is already wider than plane_t's

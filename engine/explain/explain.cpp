@@ -96,7 +96,7 @@ ObjectWork work_sphere(const Sphere& s, const Ray& ray) {
     sw.discriminant = 4.0 * sw.a * ((s.radius - len_l) * (s.radius + len_l));
     // Past ~1e154 (or below ~1e-154) the squares leave double's range: written out they were
     // "inf" and "nan". The roots do not need them: sphere_roots scales lengths first.
-    // A discriminant that underflowed (a sphere 1e-300 across: 4e-600 written as 0, beside
+    // A discriminant that underflowed (a sphere of radius 1e-300: 4e-600 written as 0, beside
     // roots or a miss that contradict it) is out of range too; an exact 0 (r = |l|) is not.
     const bool disc_in_range =
         sw.discriminant == 0.0 ? s.radius == len_l : std::abs(sw.discriminant) >= kSmallestSquare;

@@ -183,10 +183,10 @@ TEST(Explain, ProductsBeyondDoublesRangeAreNotWrittenOut) {
     EXPECT_TRUE(near.objects[0].sphere->representable);
 }
 
-// A sphere 1e-300 across, 5 away, on the line: its discriminant, 4e-600, underflowed and was
+// A sphere of radius 1e-300, 5 away, on the line: its discriminant, 4e-600, underflowed and was
 // written "discriminant B^2-4AC = 0" above "no real roots: the ray misses", which contradict each
 // other. The engine takes it as missed because it lies below double's resolution there
-// (SphereRoots::unresolved), and the solution now says that; one 1e-170 across, which the
+// (SphereRoots::unresolved), and the solution now says that; one of radius 1e-170, which the
 // kernel scales up and hits, has its underflowed discriminant left out instead.
 TEST(Explain, ASphereBelowDoublesResolutionSaysWhyItIsMissed) {
     Scene s;
