@@ -7,8 +7,10 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <limits>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -91,6 +93,22 @@ void expect_identical(const Hit& got, const Hit& want, std::size_t i) {
     EXPECT_EQ(got.on_edge, want.on_edge) << i;
 }
 
+/// The scan's closest (asked with each of `normals`) and any on `ray` against linear_closest
+/// and linear_any on `s`, bit for bit; `where` names the ray in a failure.
+void expect_as_linear_scan(const SceneScan& scan, const Scene& s, const Ray& ray,
+                           std::initializer_list<bool> normals, const std::string& where) {
+    for (const bool want_normal : normals) {
+        const auto want = linear_closest(s, ray, want_normal);
+        const auto got = scan.closest(ray, want_normal);
+        ASSERT_EQ(got.has_value(), want.has_value()) << where;
+        if (got) {
+            SCOPED_TRACE(where);
+            expect_identical(*got, *want, 0);
+        }
+    }
+    EXPECT_EQ(scan.any(ray), linear_any(s, ray)) << where;
+}
+
 /// `count` one-triangle meshes added to `s`, their corners drawn within `scale` of the origin
 /// on every axis (a corner may be up to twice that away).
 void add_random_triangles(Scene& s, std::mt19937_64& rng, double scale, int count) {
@@ -110,14 +128,7 @@ TEST(SceneScan, ExactIsTheLinearScanBitForBit) {
     const std::vector<Ray> rays = aimed_rays(s, 5, 6000);
     int hits = 0, twins = 0, on_edge = 0;
     for (std::size_t i = 0; i < rays.size(); ++i) {
-        for (bool want_normal : {true, false}) {
-            const auto want = linear_closest(s, rays[i], want_normal);
-            const auto got = scan.closest(rays[i], want_normal);
-            ASSERT_EQ(got.has_value(), want.has_value()) << i;
-            if (got)
-                expect_identical(*got, *want, i);
-        }
-        EXPECT_EQ(scan.any(rays[i]), linear_any(s, rays[i])) << i;
+        expect_as_linear_scan(scan, s, rays[i], {true, false}, std::to_string(i));
         if (const auto h = linear_closest(s, rays[i], false)) {
             ++hits;
             twins += h->object == 0 || h->object == 3;  // a twin later in the list ties with it
@@ -169,14 +180,9 @@ TEST(SceneScan, RaysLeavingSurfacesAsTheLinearScan) {
                         ray.direction - n * dot(ray.direction, n) * (k % 10 ? 1.0 : 0.999);
                 if (k % 7 == 0)
                     ray.origin = ray.origin + n * (k % 2 ? 1e-13 : -1e-13);
-                for (bool want_normal : {true, false}) {
-                    const auto want = linear_closest(s, ray, want_normal);
-                    const auto got = exact.closest(ray, want_normal);
-                    ASSERT_EQ(got.has_value(), want.has_value()) << obj << " " << p << " " << k;
-                    if (got)
-                        expect_identical(*got, *want, k);
-                }
-                EXPECT_EQ(exact.any(ray), linear_any(s, ray)) << obj << " " << p << " " << k;
+                expect_as_linear_scan(
+                    exact, s, ray, {true, false},
+                    std::to_string(obj) + " " + std::to_string(p) + " " + std::to_string(k));
                 if (plane.left_behind(ray, t.a)) {
                     ++left_behind;
                     EXPECT_FALSE(intersect_triangle(t, ray)) << obj << " " << p << " " << k;
@@ -257,12 +263,8 @@ TEST(SceneScan, CrossingsBeyondTmaxAreTheKernelsMisses) {
             for (const double f : {0.999, 1.0, 1.001}) {
                 Ray q = r;
                 q.tmax = h->t * f;
-                const auto want = linear_closest(s, q, true);
-                const auto got = scan.closest(q, true);
-                ASSERT_EQ(got.has_value(), want.has_value()) << scale << " " << k;
-                if (got)
-                    expect_identical(*got, *want, k);
-                EXPECT_EQ(scan.any(q), linear_any(s, q)) << scale << " " << k;
+                expect_as_linear_scan(scan, s, q, {true},
+                                      std::to_string(scale) + " " + std::to_string(k));
             }
         }
     }
@@ -304,13 +306,9 @@ TEST(SceneScan, OriginsWithinTheKernelsResolutionAreLeftToThem) {
             const double u = unit(rng), v = unit(rng) * (1.0 - u);
             const Ray r{t.a + (t.b - t.a) * u + (t.c - t.a) * v,
                         Vec3d{dir(rng), dir(rng), dir(rng)}};
-            const auto w = linear_closest(s, r, false);
-            const auto g = scan.closest(r, false);
-            ASSERT_EQ(g.has_value(), w.has_value()) << scale << " " << k;
-            if (g)
-                expect_identical(*g, *w, k);
-            EXPECT_EQ(scan.any(r), linear_any(s, r)) << scale << " " << k;
-            hits += w.has_value();
+            expect_as_linear_scan(scan, s, r, {false},
+                                  std::to_string(scale) + " " + std::to_string(k));
+            hits += linear_closest(s, r, false).has_value();
         }
         EXPECT_GT(hits, 100) << scale;
     }
@@ -367,16 +365,9 @@ TEST(SceneScan, ExactIsTheLinearScanAtEveryScale) {
                 Ray r;
                 r.origin = target + normalize(Vec3d{dir(rng), dir(rng), dir(rng)}) * (away * scale);
                 r.direction = (target - r.origin) * (k % 3 == 0 ? 1.0 / scale : 1.0);
-                for (const bool want_normal : {true, false}) {
-                    const auto want = linear_closest(s, r, want_normal);
-                    const auto got = scan.closest(r, want_normal);
-                    ASSERT_EQ(got.has_value(), want.has_value())
-                        << "scale " << scale << " away " << away << " ray " << k;
-                    if (got)
-                        expect_identical(*got, *want, static_cast<std::size_t>(k));
-                }
-                EXPECT_EQ(scan.any(r), linear_any(s, r))
-                    << "scale " << scale << " away " << away << " ray " << k;
+                expect_as_linear_scan(scan, s, r, {true, false},
+                                      "scale " + std::to_string(scale) + " away " +
+                                          std::to_string(away) + " ray " + std::to_string(k));
                 hits += linear_any(s, r);
                 ++rays;
             }
