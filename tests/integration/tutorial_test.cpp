@@ -110,5 +110,30 @@ TEST_F(Tutorial, ExplainMissIsNull) {
     EXPECT_TRUE(Json::parse(res->body).at("first_hit").is_null());
 }
 
+// A sphere of radius 1e-300 five units down the ray is below double's resolution there, and
+// every precision takes it as missed: the worked solution says so, with no discriminant written
+// (it had read "discriminant B^2-4AC = 0" above "no real roots"), and /v1/intersect agrees.
+TEST_F(Tutorial, ExplainSaysWhyASphereBelowDoublesResolutionIsMissed) {
+    const Json scene = {
+        {"objects", {{{"type", "sphere"}, {"center", {0, 0, 5}}, {"radius", 1e-300}}}}};
+    const Json ray = {{"origin", {0, 0, 0}}, {"direction", {0, 0, 1}}};
+    auto res = server_->client()->Post("/v1/explain", Json{{"scene", scene}, {"ray", ray}}.dump(),
+                                       "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    const Json work = Json::parse(res->body).at("objects").at(0);
+    EXPECT_FALSE(work.at("hit").get<bool>());
+    EXPECT_NE(work.at("reason").get<std::string>().find("below 2^-900 of its distance"),
+              std::string::npos)
+        << res->body;
+    EXPECT_TRUE(work.at("discriminant").is_null()) << res->body;
+    EXPECT_TRUE(work.at("out_of_range").get<bool>()) << res->body;
+    res = server_->client()->Post("/v1/intersect", Json{{"scene", scene}, {"rays", {ray}}}.dump(),
+                                  "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    EXPECT_FALSE(Json::parse(res->body).at("hits").at(0).at("hit").get<bool>()) << res->body;
+}
+
 }  // namespace
 }  // namespace raycastd
