@@ -79,11 +79,12 @@ struct Frame {
         return {};
     }
 
-    /// The camera ray of sample s of pixel (x, y): the pixel centre for one sample, else
-    /// jittered inside cell (s mod nx, s div nx) of an nx × ny grid over the pixel (stratified).
-    Ray sample_ray(int x, int y, int s) const {
+    /// The camera ray of sample s of pixel (x, y), written into `r`: the pixel centre for one
+    /// sample, else jittered inside cell (s mod nx, s div nx) of an nx × ny grid over the pixel
+    /// (stratified).
+    void sample_ray(Ray& r, int x, int y, int s) const {
         if (opt.spp == 1)
-            return camera.ray(x + 0.5, y + 0.5);
+            return camera.ray(r, x + 0.5, y + 0.5);
         const std::uint64_t key =
             ((static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(opt.width) +
               static_cast<std::uint64_t>(x)) *
@@ -91,7 +92,7 @@ struct Frame {
              static_cast<std::uint64_t>(s)) *
             2;
         const int cx = s % strata_x, cy = s / strata_x;
-        return camera.ray(x + (cx + hash01(key)) / strata_x, y + (cy + hash01(key + 1)) / strata_y);
+        camera.ray(r, x + (cx + hash01(key)) / strata_x, y + (cy + hash01(key + 1)) / strata_y);
     }
 };
 
@@ -112,8 +113,11 @@ void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s
     std::vector<std::uint32_t> where;
     const int w = x1 - x0;
     const std::size_t n = static_cast<std::size_t>(w * (y1 - y0) * (s1 - s0));
-    rays.reserve(n);
-    where.reserve(n);
+    // Sized for every sample, each ray written into its slot (CameraRays::ray), and cut to the
+    // samples wanted after.
+    rays.resize(n);
+    where.resize(n);
+    std::size_t wanted = 0;
     for (int by = y0; by < y1; by += 4) {
         for (int bx = x0; bx < x1; bx += 4) {
             for (int s = s0; s < s1; ++s) {
@@ -121,13 +125,15 @@ void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s
                     for (int x = bx; x < std::min(bx + 4, x1); ++x) {
                         if (!want(x, y))
                             continue;
-                        rays.push_back(f.sample_ray(x, y, s));
-                        where.push_back(static_cast<std::uint32_t>((y - y0) * w + (x - x0)));
+                        f.sample_ray(rays[wanted], x, y, s);
+                        where[wanted++] = static_cast<std::uint32_t>((y - y0) * w + (x - x0));
                     }
                 }
             }
         }
     }
+    rays.resize(wanted);
+    where.resize(wanted);
     if (rays.empty())
         return;
     std::vector<Hit> hits;

@@ -190,6 +190,9 @@ class Whitted {
         bool total_internal_reflection = false;
     };
     struct TreeBuild;  // a ray tree being built, and its token (whitted.cpp)
+    /// The hit's vertex normals interpolated (shading_normal's sum), not yet normalized, in
+    /// `n`; false where the hit has none (spheres, lone triangles).
+    bool interpolated_normal(const Hit& hit, Vec3d& n) const;
     /// A surface point's unit direction to one light and whether its shadow ray is blocked
     /// (traced by shade_batch for direct()).
     struct ToLight {
