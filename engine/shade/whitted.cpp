@@ -483,7 +483,6 @@ Vec3d Whitted::headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) 
     return lit_by(sp, l, h.intensity);
 }
 
-
 Whitted::SecondaryRays Whitted::secondary_rays(const Surface& sp) const {
     SecondaryRays out;
     // Leaving a transparent object: its internal reflection is not traced (the tutorial).
