@@ -83,8 +83,29 @@ struct Frame {
     /// sample, else jittered inside cell (s mod nx, s div nx) of an nx × ny grid over the pixel
     /// (stratified).
     void sample_ray(Ray& r, int x, int y, int s) const {
-        if (opt.spp == 1)
-            return camera.ray(r, x + 0.5, y + 0.5);
+        double px, py;
+        sample_point(x, y, s, px, py);
+        camera.ray(r, px, py);
+    }
+
+    /// sample_ray for pixels x … x + 3 of row y, into out[0..4), the same bits
+    /// (CameraRays::rays4). The jitter's two divisions stay one point at a time: done four
+    /// lanes at a time as well, making camera rays took 10% longer, not less (rdtsc, three
+    /// alternating pairs, 2026-12-07).
+    void sample_rays4(Ray* out, int x, int y, int s) const {
+        double px[4], py[4];
+        for (int j = 0; j < 4; ++j)
+            sample_point(x + j, y, s, px[j], py[j]);
+        camera.rays4(out, px, py);
+    }
+
+    /// The image point sample_ray traces through.
+    void sample_point(int x, int y, int s, double& px, double& py) const {
+        if (opt.spp == 1) {
+            px = x + 0.5;
+            py = y + 0.5;
+            return;
+        }
         const std::uint64_t key =
             ((static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(opt.width) +
               static_cast<std::uint64_t>(x)) *
@@ -92,7 +113,8 @@ struct Frame {
              static_cast<std::uint64_t>(s)) *
             2;
         const int cx = s % strata_x, cy = s / strata_x;
-        camera.ray(r, x + (cx + hash01(key)) / strata_x, y + (cy + hash01(key + 1)) / strata_y);
+        px = x + (cx + hash01(key)) / strata_x;
+        py = y + (cy + hash01(key + 1)) / strata_y;
     }
 };
 
@@ -122,6 +144,14 @@ void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s
         for (int bx = x0; bx < x1; bx += 4) {
             for (int s = s0; s < s1; ++s) {
                 for (int y = by; y < std::min(by + 4, y1); ++y) {
+                    // A whole row of the block wanted: its four rays at once.
+                    if (bx + 4 <= x1 && want(bx, y) && want(bx + 1, y) && want(bx + 2, y) &&
+                        want(bx + 3, y)) {
+                        f.sample_rays4(&rays[wanted], bx, y, s);
+                        for (int x = bx; x < bx + 4; ++x)
+                            where[wanted++] = static_cast<std::uint32_t>((y - y0) * w + (x - x0));
+                        continue;
+                    }
                     for (int x = bx; x < std::min(bx + 4, x1); ++x) {
                         if (!want(x, y))
                             continue;

@@ -1,7 +1,10 @@
 #include "engine/render/render.h"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <memory>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -214,6 +217,67 @@ TEST(Render, CameraRaysAtExtremeViewLengths) {
         EXPECT_TRUE(is_finite(corner.direction)) << len;
         EXPECT_GT(corner.direction.y, 0.0) << len;  // the top row looks up
     }
+}
+
+// CameraRays::rays4 is ray() four at a time in AVX's registers on processors that have it: the
+// same bits, lane by lane, for points inside and far outside the image (directions whose length
+// overflows and is rescaled), and for a camera that looks nowhere (look_at at its position: zero
+// directions) or at NaN.
+TEST(Render, CameraRaysFourAtATimeAreOneByOnes) {
+    const auto bits = [](double v) {
+        std::uint64_t b;
+        std::memcpy(&b, &v, sizeof b);
+        return b;
+    };
+    const auto same = [&](const Vec3d& a, const Vec3d& b) {
+        return bits(a.x) == bits(b.x) && bits(a.y) == bits(b.y) && bits(a.z) == bits(b.z);
+    };
+    std::vector<Camera> cameras;
+    Camera c;
+    c.position = {1.9, 2.2, -1.9};
+    c.look_at = {0.13, 0.8, -0.04};
+    c.up = {0, 1, 0};
+    c.fov_y_deg = 40;
+    cameras.push_back(c);
+    c.fov_y_deg = 179.9;  // tan(fov/2) near 1e3
+    cameras.push_back(c);
+    c.look_at = c.position;
+    cameras.push_back(c);
+    c.look_at = {std::nan(""), 0, 0};
+    cameras.push_back(c);
+    std::uint64_t state = 7;
+    const auto next = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1p-53;
+    };
+    std::size_t rescaled = 0, compared = 0;
+    for (const Camera& cam : cameras) {
+        const CameraRays rays(cam, 1024, 768);
+        for (int i = 0; i < 2000; ++i) {
+            double x[4], y[4];
+            for (int j = 0; j < 4; ++j) {
+                // Mostly inside the image; every fifth point 1e150 to 1e300 pixels away, where
+                // the direction's squared length overflows.
+                const bool far = (i + j) % 5 == 0;
+                x[j] = far ? (next() - 0.5) * 1e300 : next() * 1024;
+                y[j] = far ? (next() - 0.5) * 1e150 : next() * 768;
+            }
+            Ray four[4];
+            rays.rays4(four, x, y);
+            for (int j = 0; j < 4; ++j) {
+                const Ray one = rays.ray(x[j], y[j]);
+                ++compared;
+                rescaled += !(std::abs(x[j]) < 1e100) && is_finite(one.direction);
+                ASSERT_TRUE(same(four[j].origin, one.origin)) << i << " " << j;
+                ASSERT_TRUE(same(four[j].direction, one.direction))
+                    << i << " " << j << " " << x[j] << " " << y[j];
+                ASSERT_EQ(bits(four[j].tmin), bits(one.tmin));
+                ASSERT_EQ(bits(four[j].tmax), bits(one.tmax));
+            }
+        }
+    }
+    EXPECT_EQ(compared, 4u * 2000u * 4u);
+    EXPECT_GT(rescaled, 1000u);  // the lanes normalize() rescales were reached
 }
 
 TEST(Render, NoLightsTracesNoShadowRays) {

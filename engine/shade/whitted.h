@@ -233,7 +233,7 @@ class Whitted {
     Vec3d headlight_terms(const Surface& sp, RayCounts& counts, bool& lit) const;
     /// The diffuse and specular terms of a light in unit direction `l` (phong_light() with
     /// the surface's textured kd).
-    Vec3d lit_by(const Surface& sp, const Vec3d& l, const Vec3d& intensity) const;
+    inline Vec3d lit_by(const Surface& sp, const Vec3d& l, const Vec3d& intensity) const;
     /// The weighted reflected and refracted rays (below max_depth); children go into node k.
     Vec3d indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
                    std::size_t k) const;
