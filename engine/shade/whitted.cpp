@@ -231,10 +231,23 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
     return Surface{hit, m, mi, ka, kd, ks, d, p, ng, n, p_err, depth == 1};
 }
 
-// Inline, as the in-place shadow_ray below: shade_batch calls both per light per hit.
-inline Vec3d Whitted::to_light(const Surface& sp, const Light& light, std::size_t k) const {
-    return light.type == LightType::point ? normalize(light.position - sp.p)
-                                          : plan_.towards_directional[k];
+// Inline, as the in-place shadow_ray below: shade_batch calls both per light per hit. A point
+// light's side is decided on the direction before it is normalised, as surface() decides its
+// normals' sides (the same sign but for rounding where the product is within its error of 0),
+// so that the choice, and the shadow ray's branch on it, do not wait for the square root and
+// the divisions.
+inline Whitted::ToLight Whitted::towards_light(const Surface& sp, const Light& light,
+                                               std::size_t k) const {
+    ToLight t;
+    if (light.type == LightType::point) {
+        const Vec3d v = light.position - sp.p;
+        t.facing = dot(sp.n, v) > 0.0;
+        t.l = normalize(v);
+    } else {
+        t.l = plan_.towards_directional[k];
+        t.facing = dot(sp.n, t.l) > 0.0;
+    }
+    return t;
 }
 
 inline void Whitted::shadow_ray(Ray& r, const Surface& sp, const Light& light,
@@ -307,8 +320,8 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
         const Light& light = scene().lights[plan_.shadow_lights[k]];
         for (std::size_t h = 0; h < surfaces.size(); ++h) {
             ToLight& t = towards[h * lights + k];
-            t.l = to_light(surfaces[h], light, k);
-            if (dot(surfaces[h].n, t.l) > 0.0) {  // direct()'s `facing`
+            t = towards_light(surfaces[h], light, k);
+            if (t.facing) {
                 shadow_ray(shadow[traced], surfaces[h], light, t.l);
                 slot[traced++] = h * lights + k;
             }
@@ -435,10 +448,11 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
     for (std::size_t k = 0; k < plan_.shadow_lights.size(); ++k) {
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
-        const Vec3d l = traced ? traced[k].l : to_light(sp, light, k);
+        const ToLight t = traced ? traced[k] : towards_light(sp, light, k);
+        const Vec3d& l = t.l;
         ShadowRayRecord rec;
         rec.light = li;
-        rec.facing = dot(sp.n, l) > 0.0;
+        rec.facing = t.facing;
         if (rec.facing) {
             bool blocked;
             if (traced) {

@@ -193,10 +193,12 @@ class Whitted {
     /// The hit's vertex normals interpolated (shading_normal's sum), not yet normalized, in
     /// `n`; false where the hit has none (spheres, lone triangles).
     bool interpolated_normal(const Hit& hit, Vec3d& n) const;
-    /// A surface point's unit direction to one light and whether its shadow ray is blocked
-    /// (traced by shade_batch for direct()).
+    /// A surface point's unit direction to one light, whether the light is in front of its
+    /// shading normal, and whether its shadow ray is blocked (traced by shade_batch for
+    /// direct()).
     struct ToLight {
         Vec3d l;
+        bool facing = false;
         bool blocked = false;
     };
 
@@ -214,17 +216,18 @@ class Whitted {
     /// The same, written into `r` (a batch's own slot: spawn.h says why).
     static void spawn(Ray& r, const Surface& sp, const Vec3d& w);
     /// The unit direction from a surface point to plan().shadow_lights[k], a point or
-    /// directional light.
-    inline Vec3d to_light(const Surface& sp, const Light& light, std::size_t k) const;
-    /// The shadow ray from a surface point to a light whose direction is `l` (to_light()); only
-    /// traced when the light is in front of the shading normal.
+    /// directional light, and whether the light is in front of the shading normal (`blocked`
+    /// left false).
+    inline ToLight towards_light(const Surface& sp, const Light& light, std::size_t k) const;
+    /// The shadow ray from a surface point to a light whose direction is `l` (towards_light());
+    /// only traced when the light is in front of the shading normal.
     Ray shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const;
     /// The same, written into `r`.
     inline void shadow_ray(Ray& r, const Surface& sp, const Light& light, const Vec3d& l) const;
     /// Emission, ambient, and the diffuse and specular terms of each light whose shadow ray is
     /// free; `lit` says whether any light contributed. Records shadow rays in `node` if given.
-    /// `traced`, when given, holds for each plan().shadow_lights[k] its to_light() direction
-    /// and whether its shadow ray is blocked, already traced (and counted) by the caller; else
+    /// `traced`, when given, holds for each plan().shadow_lights[k] its towards_light() and
+    /// whether its shadow ray is blocked, already traced (and counted) by the caller; else
     /// direct() computes and traces them.
     Vec3d direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool& lit,
                  const ToLight* traced = nullptr) const;
