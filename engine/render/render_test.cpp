@@ -256,8 +256,8 @@ TEST(Render, CameraRaysFourAtATimeAreOneByOnes) {
         for (int i = 0; i < 2000; ++i) {
             double x[4], y[4];
             for (int j = 0; j < 4; ++j) {
-                // Mostly inside the image; every fifth point 1e150 to 1e300 pixels away, where
-                // the direction's squared length overflows.
+                // Mostly inside the image; every fifth point up to 5e299 pixels across and 5e149
+                // down, where the direction's squared length overflows.
                 const bool far = (i + j) % 5 == 0;
                 x[j] = far ? (next() - 0.5) * 1e300 : next() * 1024;
                 y[j] = far ? (next() - 0.5) * 1e150 : next() * 768;
