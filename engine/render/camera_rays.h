@@ -50,8 +50,8 @@ class CameraRays {
     /// ray(out[j], x[j], y[j]) for j < 4, the same bits, four rays to an instruction in AVX's
     /// registers where the processor has AVX (one by one elsewhere). A camera ray takes five
     /// divisions and a square root here, which one ray at a time queue on the divider: making
-    /// camera rays was 8.6% of the cycles of a Duck render at fast, and 7.2% four at a time
-    /// (rdtsc around the loop, three alternating pairs, 2026-12-07).
+    /// camera rays was 8.6% of the timestamp ticks counted around a Duck render's phases at
+    /// fast, and 7.2% four at a time (rdtsc, three alternating pairs, 2026-12-07).
     void rays4(Ray* out, const double* x, const double* y) const;
 
   private:

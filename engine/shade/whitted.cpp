@@ -233,15 +233,18 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
 
 // Inline, as the in-place shadow_ray below: shade_batch calls both per light per hit. A point
 // light's side is decided on the direction before it is normalised, as surface() decides its
-// normals' sides (the same sign but for rounding where the product is within its error of 0),
-// so that the choice, and the shadow ray's branch on it, do not wait for the square root and
-// the divisions.
+// normals' sides, so that the choice, and the shadow ray's branch on it, do not wait for the
+// square root and the divisions. The sign is the normalised direction's but for rounding where
+// the product is within its error of 0 (a grazing light, whose terms then round to nothing
+// either way), and where the products underflow (a light within ~1e-308 of the point). A
+// direction with an infinite component (a light near double's range from the point) is not
+// facing, as its normalised form, NaN, was not: such a shadow ray would not be a valid ray.
 inline Whitted::ToLight Whitted::towards_light(const Surface& sp, const Light& light,
                                                std::size_t k) const {
     ToLight t;
     if (light.type == LightType::point) {
         const Vec3d v = light.position - sp.p;
-        t.facing = dot(sp.n, v) > 0.0;
+        t.facing = dot(sp.n, v) > 0.0 && is_finite(v);
         t.l = normalize(v);
     } else {
         t.l = plan_.towards_directional[k];
