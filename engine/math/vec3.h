@@ -93,6 +93,13 @@ template <class T>
     const Vec3<T> w = v / m;              // exact in direction: its largest component is ±1
     return w / length(w);
 }
+/// The lengths normalize() divides by as they are; outside [min, max] (and for 0 and NaN) it
+/// rescales first. Named for code that normalises in vector lanes and must take the same branch
+/// (CameraRays::rays4).
+template <class T>
+inline constexpr T kNormalizePlainMin = T(sizeof(T) == sizeof(float) ? 0x1p-60 : 0x1p-500);
+template <class T>
+inline constexpr T kNormalizePlainMax = T(sizeof(T) == sizeof(float) ? 0x1p60 : 0x1p500);
 /// v / |v|; the zero vector stays zero rather than becoming NaN. Where |v|² overflows or
 /// underflows (double components past ~1e150 or below ~1e-150, float past ~1e18 or below
 /// ~1e-18), v is divided by its largest component first, so that the answer is still a unit
@@ -101,10 +108,8 @@ template <class T>
 /// branch and are divided as before, bit for bit.
 template <class T>
 inline Vec3<T> normalize(const Vec3<T>& v) {
-    constexpr T kSmall = T(sizeof(T) == sizeof(float) ? 0x1p-60 : 0x1p-500);
-    constexpr T kLarge = T(sizeof(T) == sizeof(float) ? 0x1p60 : 0x1p500);
     const T len = length(v);
-    if (len >= kSmall && len <= kLarge)
+    if (len >= kNormalizePlainMin<T> && len <= kNormalizePlainMax<T>)
         return v / len;
     return normalize_rescaled(v, len);
 }

@@ -37,9 +37,9 @@ namespace {
     // normalize(): length √((x² + y²) + z²), then each component divided by it.
     const __m256d len = _mm256_sqrt_pd(_mm256_add_pd(
         _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
-    const int plain =
-        _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(len, _mm256_set1_pd(0x1p-500), _CMP_GE_OQ),
-                                         _mm256_cmp_pd(len, _mm256_set1_pd(0x1p500), _CMP_LE_OQ)));
+    const int plain = _mm256_movemask_pd(
+        _mm256_and_pd(_mm256_cmp_pd(len, _mm256_set1_pd(kNormalizePlainMin<double>), _CMP_GE_OQ),
+                      _mm256_cmp_pd(len, _mm256_set1_pd(kNormalizePlainMax<double>), _CMP_LE_OQ)));
     alignas(32) double ux[4], uy[4], uz[4], vx[4], vy[4], vz[4];
     _mm256_store_pd(ux, _mm256_div_pd(dx, len));
     _mm256_store_pd(uy, _mm256_div_pd(dy, len));

@@ -140,6 +140,9 @@ void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s
     rays.resize(n);
     where.resize(n);
     std::size_t wanted = 0;
+    const auto pixel = [&](int x, int y) {
+        return static_cast<std::uint32_t>((y - y0) * w + (x - x0));
+    };
     for (int by = y0; by < y1; by += 4) {
         for (int bx = x0; bx < x1; bx += 4) {
             for (int s = s0; s < s1; ++s) {
@@ -149,14 +152,14 @@ void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s
                         want(bx + 3, y)) {
                         f.sample_rays4(&rays[wanted], bx, y, s);
                         for (int x = bx; x < bx + 4; ++x)
-                            where[wanted++] = static_cast<std::uint32_t>((y - y0) * w + (x - x0));
+                            where[wanted++] = pixel(x, y);
                         continue;
                     }
                     for (int x = bx; x < std::min(bx + 4, x1); ++x) {
                         if (!want(x, y))
                             continue;
                         f.sample_ray(rays[wanted], x, y, s);
-                        where[wanted++] = static_cast<std::uint32_t>((y - y0) * w + (x - x0));
+                        where[wanted++] = pixel(x, y);
                     }
                 }
             }
