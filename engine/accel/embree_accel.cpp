@@ -549,12 +549,12 @@ void fast_closest_range(const Impl& a, const Ray* rays, std::size_t n, bool want
     }
 }
 
-void fast_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) {
+void fast_any_range(const Impl& a, const Ray* rays, std::size_t n, std::uint8_t* out) {
     for (std::size_t i = 0; i < n; i += kLanes) {
         const std::size_t m = std::min(kLanes, n - i);
         if (!packets_apply(a, m)) {
             for (std::size_t k = 0; k < m; ++k)
-                out[i + k] = any_answer(fast_any(a, rays[i + k]));
+                out[i + k] = fast_any(a, rays[i + k]) ? 1 : 0;
             continue;
         }
         RTCScene s = a.fast_scene();
@@ -788,7 +788,7 @@ bool group_maybe_far(const Impl& a, const Ray* rays, std::size_t m) {
     return false;
 }
 
-void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) {
+void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, std::uint8_t* out) {
     bool exact_first = false;
     for (std::size_t i = 0; i < n; i += kLanes) {
         const std::size_t m = std::min(kLanes, n - i);
@@ -799,7 +799,7 @@ void refined_any_range(const Impl& a, const Ray* rays, std::size_t n, Hit* out) 
             for (std::size_t k = 0; k < m; ++k) {
                 const Ray& ray = rays[i + k];
                 const bool hit = exact_first ? exact_any(a, ray) : refined_any(a, ray);
-                out[i + k] = any_answer(hit);
+                out[i + k] = hit ? 1 : 0;
                 if (!hit && enters_bounds(a, ray))
                     ++escalations;
             }
@@ -939,7 +939,8 @@ bool EmbreeAccel::any(const Ray& ray, Precision precision) const {
     return false;
 }
 
-void EmbreeAccel::any_range(const Ray* rays, std::size_t n, Precision precision, Hit* out) const {
+void EmbreeAccel::any_range(const Ray* rays, std::size_t n, Precision precision,
+                            std::uint8_t* out) const {
     switch (precision) {
         case Precision::fast:
             return embree::fast_any_range(*impl_, rays, n, out);
@@ -947,7 +948,7 @@ void EmbreeAccel::any_range(const Ray* rays, std::size_t n, Precision precision,
             return embree::refined_any_range(*impl_, rays, n, out);
         case Precision::exact:
             for (std::size_t i = 0; i < n; ++i)
-                out[i] = embree::any_answer(embree::exact_any(*impl_, rays[i]));
+                out[i] = embree::exact_any(*impl_, rays[i]) ? 1 : 0;
             return;
     }
 }

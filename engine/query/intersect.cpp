@@ -390,17 +390,42 @@ void QueryEngine::intersect_span(const Ray* rays, std::size_t n, const QueryOpti
         });
         return;
     }
+    // An `any` answer as a Hit: valid() says whether the ray hits anything; nothing else is
+    // filled in (query_result.h).
+    const auto answer = [](bool blocked) {
+        Hit h;
+        if (blocked)
+            h.object = 0;
+        return h;
+    };
     if (accel) {
         for_each_block(n, opt.cancel, [&](std::size_t b, std::size_t e) {
-            accel->any_range(rays + b, e - b, p, hits + b);
+            std::uint8_t blocked[kBlockRays];
+            accel->any_range(rays + b, e - b, p, blocked);
+            for (std::size_t i = b; i < e; ++i)
+                hits[i] = answer(blocked[i - b] != 0);
         });
         return;
     }
     for_each_ray(n, opt.cancel, [&](std::size_t i) {
         // `any` never looks for the closest: it stops at the first hit found.
-        hits[i] = Hit{};
-        if (linear_any_from_afar(*scene_, *ball_, rays[i]))
-            hits[i].object = 0;
+        hits[i] = answer(linear_any_from_afar(*scene_, *ball_, rays[i]));
+    });
+}
+
+void QueryEngine::occluded_batch(const Ray* rays, std::size_t n, Precision precision,
+                                 std::uint8_t* blocked) const {
+    const Precision p = effective_precision(precision);
+    const CancelToken never;
+    if (const EmbreeAccel* accel = accel_.get()) {
+        // The blocks of intersect_span, so the same answers as a batch in mode `any`.
+        for_each_block(n, never, [&](std::size_t b, std::size_t e) {
+            accel->any_range(rays + b, e - b, p, blocked + b);
+        });
+        return;
+    }
+    for_each_ray(n, never, [&](std::size_t i) {
+        blocked[i] = linear_any_from_afar(*scene_, *ball_, rays[i]) ? 1 : 0;
     });
 }
 

@@ -87,6 +87,11 @@ class QueryEngine {
     /// `precision` (EmbreeAccel::any: refined is one traversal whose misses need no
     /// confirmation, except in a scene with slivers, where it takes the exact path).
     bool occluded(const Ray& ray, Precision precision) const;
+    /// occluded() of rays[0..n) into blocked[0..n) (1 blocked, 0 free): the answers of
+    /// intersect() in mode `any`, a byte a ray instead of a 72-byte Hit (a render's shadow
+    /// rays, which ask nothing else). Never cancelled; the rays must be valid.
+    void occluded_batch(const Ray* rays, std::size_t n, Precision precision,
+                        std::uint8_t* blocked) const;
     /// The float frame of the path that answers `precision` (math/float_frame.h): Embree's for
     /// fast and refined on a BVH, none (scale 0) where the answer is decided in double.
     FloatFrame float_frame(Precision precision) const;

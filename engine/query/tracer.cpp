@@ -45,22 +45,19 @@ void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) 
     out.swap(result.hits);
 }
 
-void Tracer::occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
+void Tracer::occluded_batch(const std::vector<Ray>& rays,
+                            std::vector<std::uint8_t>& blocked) const {
+    blocked.resize(rays.size());
     if (scan_) {
-        out.resize(rays.size());
         for (std::size_t i = 0; i < rays.size(); ++i) {
-            out[i] = Hit{};
-            if (scan_->far(rays[i]) ? engine_.occluded(rays[i], precision_) : scan_->any(rays[i]))
-                out[i].object = 0;  // an `any` answer: valid() says blocked (query_result.h)
+            blocked[i] =
+                (scan_->far(rays[i]) ? engine_.occluded(rays[i], precision_) : scan_->any(rays[i]))
+                    ? 1
+                    : 0;
         }
         return;
     }
-    QueryOptions q;
-    q.precision = precision_;
-    q.mode = Mode::any;
-    QueryResult result;
-    engine_.intersect(rays, q, result);
-    out.swap(result.hits);
+    engine_.occluded_batch(rays.data(), rays.size(), precision_, blocked.data());
 }
 
 bool Tracer::occluded(const Ray& ray) const {

@@ -11,6 +11,7 @@
 // refined through the Embree BVH this replaced 2,545-3,020 ms, scanned 1,423-1,798 ms; fast
 // 1.2x faster.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -55,10 +56,10 @@ class Tracer {
     /// Whether anything lies along `ray` within [tmin, tmax]: QueryEngine::occluded, or the
     /// tracer's own scan.
     bool occluded(const Ray& ray) const;
-    /// occluded() for a batch: out[i].valid() says whether rays[i] is blocked (out is resized).
-    /// Runs of 16 coherent rays go through Embree's occlusion packets (rtcOccluded16) where
-    /// that is faster; at `refined` a float miss is confirmed as for single rays.
-    void occluded_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
+    /// occluded() for a batch: blocked[i] is 1 where rays[i] is blocked, else 0 (blocked is
+    /// resized). Runs of 16 coherent rays go through Embree's occlusion packets (rtcOccluded16)
+    /// where that is faster (QueryEngine::occluded_batch).
+    void occluded_batch(const std::vector<Ray>& rays, std::vector<std::uint8_t>& blocked) const;
 
   private:
     const QueryEngine& engine_;

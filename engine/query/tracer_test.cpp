@@ -41,17 +41,34 @@ void expect_same(const Hit& got, const Hit& want) {
     EXPECT_EQ(got.front_face, want.front_face);
 }
 
+// Batches too: closest_batch as intersect(), and occluded_batch's bytes as intersect()'s `any`
+// answers, over more than two of its blocks of 1,024 rays (traced in parallel), on a BVH and by
+// brute force.
 TEST(Tracer, SingleRaysAnswerAsABatchOfOne) {
     for (const Scene& s : {testing::random_scene(11), testing::tutorial_spheres()}) {
         auto engine = build(s);
         for (Precision p : {Precision::fast, Precision::refined, Precision::exact}) {
             const Tracer tracer(*engine, p, BuildHint::few_rays);
             EXPECT_EQ(tracer.precision(), engine->effective_precision(p));
-            const std::vector<Ray> rays = some_rays(12, 500);
+            const std::vector<Ray> rays = some_rays(12, 2500);
             const QueryResult closest = engine->intersect(rays, QueryOptions{Mode::closest, p});
+            const QueryResult any = engine->intersect(rays, QueryOptions{Mode::any, p});
             std::vector<Hit> batch;
             tracer.closest_batch(rays, batch);
             ASSERT_EQ(batch.size(), rays.size());
+            std::vector<std::uint8_t> blocked(7, 2);  // resized, every byte written
+            tracer.occluded_batch(rays, blocked);
+            ASSERT_EQ(blocked.size(), rays.size());
+            int hits = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const bool one_blocked = engine->occluded(rays[i], p);
+                EXPECT_EQ(any.hits[i].valid(), one_blocked) << i;
+                EXPECT_EQ(blocked[i], one_blocked ? 1 : 0) << i;
+                EXPECT_EQ(tracer.occluded(rays[i]), one_blocked) << i;
+                hits += one_blocked;
+            }
+            EXPECT_GT(hits, 40);  // 62 on the tutorial's spheres
+            EXPECT_LT(hits, 2400);
             for (std::size_t i = 0; i < rays.size(); ++i) {
                 const std::optional<Hit> one = engine->closest(rays[i], p, true);
                 ASSERT_EQ(one.has_value(), closest.hits[i].valid()) << i;
@@ -101,7 +118,8 @@ TEST(Tracer, ManyRaysScanATinyScene) {
         EXPECT_EQ(many.precision(), p == Precision::fast ? p : Precision::exact);
         EXPECT_EQ(many.float_frame().scale, 0.0);
         const std::vector<Ray> rays = some_rays(15, 5000);
-        std::vector<Hit> batch, blocked;
+        std::vector<Hit> batch;
+        std::vector<std::uint8_t> blocked;
         many.closest_batch(rays, batch);
         many.occluded_batch(rays, blocked);
         int hits = 0;
@@ -110,7 +128,7 @@ TEST(Tracer, ManyRaysScanATinyScene) {
             const std::optional<Hit> got = many.closest(rays[i], true);
             ASSERT_EQ(got.has_value(), want.has_value());
             EXPECT_EQ(many.occluded(rays[i]), few.occluded(rays[i]));
-            EXPECT_EQ(blocked[i].valid(), few.occluded(rays[i]));
+            EXPECT_EQ(blocked[i], few.occluded(rays[i]) ? 1 : 0);
             ASSERT_EQ(batch[i].valid(), got.has_value());
             if (!got)
                 continue;
@@ -177,7 +195,8 @@ TEST(Tracer, ManyRaysAnswerFarRaysAsTheBruteForce) {
         const Tracer few(*engine, p, BuildHint::few_rays);
         const Tracer many(*engine, p, BuildHint::many_rays);
         ASSERT_TRUE(many.scans());
-        std::vector<Hit> batch, blocked;
+        std::vector<Hit> batch;
+        std::vector<std::uint8_t> blocked;
         many.closest_batch(rays, batch);
         many.occluded_batch(rays, blocked);
         for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -188,7 +207,7 @@ TEST(Tracer, ManyRaysAnswerFarRaysAsTheBruteForce) {
             expect_same(*got, *few.closest(rays[i], true));
             expect_same(batch[i], *got);
             EXPECT_TRUE(many.occluded(rays[i]));
-            EXPECT_TRUE(blocked[i].valid());
+            EXPECT_EQ(blocked[i], 1);
         }
         // A line from 2^50 away that passes 0.25 beside the triangle's edge (x = 0.5 at y = 0;
         // the far kernels err by ~u·2^50 = 0.125 there) and then through the ball.

@@ -333,11 +333,11 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     shadow.resize(traced);
     slot.resize(traced);
     if (!shadow.empty()) {
-        std::vector<Hit> occluders;
-        tracer_.occluded_batch(shadow, occluders);
+        std::vector<std::uint8_t> blocked;
+        tracer_.occluded_batch(shadow, blocked);
         counts.shadow += shadow.size();
         for (std::size_t j = 0; j < shadow.size(); ++j)
-            towards[slot[j]].blocked = occluders[j].valid();
+            towards[slot[j]].blocked = blocked[j] != 0;
     }
     std::vector<Vec3d> direct_color(surfaces.size());
     for (std::size_t h = 0; h < surfaces.size(); ++h) {

@@ -207,13 +207,4 @@ inline bool occluded_tfar(float tfar) {
     return tfar == -std::numeric_limits<float>::infinity();
 }
 
-/// An `any` answer as a Hit: valid() says whether the ray hits anything; nothing else is filled
-/// in (query_result.h).
-inline Hit any_answer(bool hit) {
-    Hit h;
-    if (hit)
-        h.object = 0;
-    return h;
-}
-
 }  // namespace raycastd::engine::embree

@@ -502,7 +502,8 @@ bool fast_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, 
     return true;
 }
 
-bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Hit* out) {
+bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
+                     std::uint8_t* out) {
     alignas(64) RTCRay16 r16;
     alignas(64) int valid[kLanes];
     std::optional<RTCIntersectContext> ctx = fill_fast_lanes(a, rays, m, r16, valid);
@@ -510,7 +511,7 @@ bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t
         return false;
     rtcOccluded16(valid, scene, &*ctx, &r16);
     for (std::size_t k = 0; k < m; ++k)
-        out[k] = any_answer(occluded_tfar(r16.tfar[k]));  // fast takes a float miss as it is
+        out[k] = occluded_tfar(r16.tfar[k]) ? 1 : 0;  // fast takes a float miss as it is
     return true;
 }
 

@@ -15,6 +15,7 @@
 // float on the filled lanes (fast_packet), from the same template.
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 
 #include <embree3/rtcore.h>
@@ -91,12 +92,13 @@ bool fast_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, 
                  Hit* out);
 
 /// fast_packet's `any`: the occlusion packet of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene)
-/// on `scene` with lanes filled straight from the double rays, each answer any_answer(Embree's
-/// float answer). Renders trace their shadow rays through it: the general any_packet's 16
+/// on `scene` with lanes filled straight from the double rays, out[k] = 1 where Embree's float
+/// answer is a hit, else 0. Renders trace their shadow rays through it: the general any_packet's 16
 /// RayContexts and coherence test in double had been 9% of a Duck render (perf). False, with
 /// nothing written, when some ray needs prepare_ray. `scene` is fast's own BVH, which has no
 /// hit filter (the packet's context is a plain one).
-bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Hit* out);
+bool fast_any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m,
+                     std::uint8_t* out);
 
 /// Lane k of a packet as fill_lanes makes it.
 template <class Prepare>
@@ -211,12 +213,12 @@ void closest_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t 
         answer, out);
 }
 
-/// `any` answers (any_answer) of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one occlusion
-/// packet on `scene`, lanes as in closest_packet_filled; a lane that met the bounds but found
-/// nothing is answered by confirm_miss(k, its context).
+/// `any` answers (1: blocked, 0: free) of rays[0..m) (4 ≤ m ≤ 16, a triangle-only scene) as one
+/// occlusion packet on `scene`, lanes as in closest_packet_filled; a lane that met the bounds but
+/// found nothing is answered by confirm_miss(k, its context).
 template <class Fill, class ConfirmMiss>
 void any_packet_filled(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Fill&& fill,
-                       ConfirmMiss&& confirm_miss, Hit* out) {
+                       ConfirmMiss&& confirm_miss, std::uint8_t* out) {
     RayContext lanes[kLanes];
     alignas(64) RTCRay16 r16;
     alignas(64) int valid[kLanes];
@@ -229,14 +231,14 @@ void any_packet_filled(const Impl& a, RTCScene scene, const Ray* rays, std::size
         bool hit = valid[k] && occluded_tfar(r16.tfar[k]);
         if (valid[k] && !hit)
             hit = confirm_miss(k, lanes[k]);
-        out[k] = any_answer(hit);
+        out[k] = hit ? 1 : 0;
     }
 }
 
 /// any_packet_filled with the lanes from prepare(ray, context, float_ray) (fill_lanes).
 template <class Prepare, class ConfirmMiss>
 void any_packet(const Impl& a, RTCScene scene, const Ray* rays, std::size_t m, Prepare&& prepare,
-                ConfirmMiss&& confirm_miss, Hit* out) {
+                ConfirmMiss&& confirm_miss, std::uint8_t* out) {
     any_packet_filled(
         a, scene, rays, m,
         [&](RayContext* lanes, RTCRay16& r16, int* valid) {
