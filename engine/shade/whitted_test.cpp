@@ -283,6 +283,53 @@ TEST(Whitted, TotalInternalReflectionIsReportedAndTransmitsNothing) {
     EXPECT_EQ(t.nodes[0].reflected, -1);
 }
 
+// shade_hits() (batches, the renderer's path) against shade_hit() (one hit at a time) at exact,
+// where both decide every ray in double: the same colours, bit for bit, compared in double (a
+// float image would hide a last-bit difference). A light 1e200 away takes normalize()'s
+// rescaling branch. Mutants of a four-at-a-time direction to the point lights (tried
+// 2026-12-07, docs/rendering.md) that multiplied by 1/|v| instead of dividing, or skipped the
+// rescaling, failed here.
+TEST(Whitted, BatchesShadeAsOneHitAtATimeBitForBit) {
+    Scene s;
+    s.materials = {Material{}, Material{}};
+    s.materials[0].specular = {0.5, 0.5, 0.5};
+    s.materials[1].reflectivity = 0.3;
+    s.objects.push_back(testing::icosphere_object(3, {0, 0, 0}, 1.0));
+    s.objects.push_back(testing::icosphere_object(2, {2.5, 0.3, 0.5}, 0.8));
+    s.objects.back().material = 1;
+    s.lights = {ambient_light(0.1), point_light({3, 4, -5}), point_light({-2, 1, -3}),
+                point_light(Vec3d{-1, 2, -2} * 1e200)};
+    auto engine = prepare(std::move(s));
+    ASSERT_FALSE(engine->brute_force());
+    WhittedOptions o;
+    o.precision = Precision::exact;
+    const Whitted w(*engine, o);
+    std::vector<Ray> rays;
+    for (int y = 0; y < 40; ++y) {
+        for (int x = 0; x < 61; ++x)  // 61: a batch that is not a multiple of four
+            rays.push_back(Ray{{0.5, 0.2, -6}, {(x - 30) * 0.013, (y - 20) * 0.011, 1}});
+    }
+    std::vector<Hit> hits;
+    w.closest_batch(rays, hits);
+    std::vector<Vec3d> colors;
+    RayCounts batched;
+    w.shade_hits(rays, hits, colors, batched);
+    ASSERT_EQ(colors.size(), rays.size());
+    RayCounts single;
+    int shaded = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        if (!hits[i].valid())
+            continue;
+        ++shaded;
+        const Vec3d c = w.shade_hit(rays[i], hits[i], single);
+        EXPECT_EQ(colors[i], c) << i;
+    }
+    EXPECT_GT(shaded, 800);  // 936
+    EXPECT_EQ(batched.shadow, single.shadow);
+    EXPECT_GT(batched.shadow, 2000u);
+    EXPECT_GT(batched.reflected, 50u);
+}
+
 TEST(Whitted, PlanSkipsWhatTheSceneDoesNotNeed) {
     Scene s = testing::tutorial_spheres();
     s.materials[0].specular = {0, 0, 0};
