@@ -27,9 +27,14 @@ std::optional<Hit> Tracer::closest(const Ray& ray, bool want_normal) const {
 }
 
 void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
+    out.resize(rays.size());
+    closest_batch(rays.data(), rays.size(), out.data());
+}
+
+void Tracer::closest_batch(const Ray* rays, std::size_t n, Hit* out) const {
     if (scan_) {
-        out.assign(rays.size(), Hit{});
-        for (std::size_t i = 0; i < rays.size(); ++i) {
+        for (std::size_t i = 0; i < n; ++i) {
+            out[i] = Hit{};
             if (!scan_->far(rays[i])) {
                 scan_->closest(rays[i], /*want_normal=*/true, out[i]);
             } else if (const auto h = engine_.closest(rays[i], precision_, true)) {
@@ -40,16 +45,18 @@ void Tracer::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) 
     }
     QueryOptions q;
     q.precision = precision_;
-    QueryResult result;
-    engine_.intersect(rays, q, result);
-    out.swap(result.hits);
+    engine_.intersect_span(rays, n, q, out);  // intersect()'s answers (intersect.h)
 }
 
 void Tracer::occluded_batch(const std::vector<Ray>& rays,
                             std::vector<std::uint8_t>& blocked) const {
     blocked.resize(rays.size());
+    occluded_batch(rays.data(), rays.size(), blocked.data());
+}
+
+void Tracer::occluded_batch(const Ray* rays, std::size_t n, std::uint8_t* blocked) const {
     if (scan_) {
-        for (std::size_t i = 0; i < rays.size(); ++i) {
+        for (std::size_t i = 0; i < n; ++i) {
             blocked[i] =
                 (scan_->far(rays[i]) ? engine_.occluded(rays[i], precision_) : scan_->any(rays[i]))
                     ? 1
@@ -57,7 +64,7 @@ void Tracer::occluded_batch(const std::vector<Ray>& rays,
         }
         return;
     }
-    engine_.occluded_batch(rays.data(), rays.size(), precision_, blocked.data());
+    engine_.occluded_batch(rays, n, precision_, blocked);
 }
 
 bool Tracer::occluded(const Ray& ray) const {

@@ -53,6 +53,9 @@ class Tracer {
     /// Closest hits (normals included) of a batch into out[0..n) (resized; a miss leaves an
     /// invalid Hit). Runs of 16 coherent rays go through Embree's packets where that is faster.
     void closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
+    /// The same for rays[0..n) into out[0..n), every element written (a caller's reused
+    /// buffer: engine/thread_scratch.h).
+    void closest_batch(const Ray* rays, std::size_t n, Hit* out) const;
     /// Whether anything lies along `ray` within [tmin, tmax]: QueryEngine::occluded, or the
     /// tracer's own scan.
     bool occluded(const Ray& ray) const;
@@ -60,6 +63,8 @@ class Tracer {
     /// resized). Runs of 16 coherent rays go through Embree's occlusion packets (rtcOccluded16)
     /// where that is faster (QueryEngine::occluded_batch).
     void occluded_batch(const std::vector<Ray>& rays, std::vector<std::uint8_t>& blocked) const;
+    /// The same for rays[0..n) into blocked[0..n).
+    void occluded_batch(const Ray* rays, std::size_t n, std::uint8_t* blocked) const;
 
   private:
     const QueryEngine& engine_;

@@ -12,6 +12,7 @@
 
 #include "engine/render/camera_rays.h"
 #include "engine/render/image.h"
+#include "engine/thread_scratch.h"
 
 namespace raycastd::engine {
 
@@ -123,22 +124,35 @@ struct Frame {
 /// as one batch ordered in 4 × 4 pixel blocks, sample by sample, so that each run of 16 rays is
 /// coherent (the engine traces such runs as Embree packets where that is faster); then each hit
 /// is shaded.
-template <class Want>
-void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s1, const Want& want,
-                   std::vector<Vec3d>& sums, RayCounts& counts) {
-    // Per call, not per thread: while this thread waits inside the batch's own parallel loop,
-    // TBB may hand it another tile.
+/// trace_samples' buffers, leased for each call (engine/thread_scratch.h): they keep their size
+/// from one tile to the next, and a tile writes its own elements over what is left there.
+struct SampleScratch {
     std::vector<Ray> rays;
     // Each sample's pixel as its index into sums: one 4-byte store. An {x, y} pair was written
     // in two 4-byte pieces and read back in one 8-byte one when pushed, a store-forwarding
     // stall per camera ray (perf annotate).
     std::vector<std::uint32_t> where;
+    std::vector<Hit> hits;
+    std::vector<Vec3d> colors;
+
+    std::size_t bytes() const {
+        return capacity_bytes(rays) + capacity_bytes(where) + capacity_bytes(hits) +
+               capacity_bytes(colors);
+    }
+};
+
+template <class Want>
+void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s1, const Want& want,
+                   std::vector<Vec3d>& sums, RayCounts& counts) {
+    // Leased, not one per thread: while this thread waits inside the batch's own parallel loop,
+    // TBB may hand it another tile.
+    ThreadScratch<SampleScratch> scratch;
     const int w = x1 - x0;
     const std::size_t n = static_cast<std::size_t>(w * (y1 - y0) * (s1 - s0));
-    // Sized for every sample, each ray written into its slot (CameraRays::ray), and cut to the
-    // samples wanted after.
-    rays.resize(n);
-    where.resize(n);
+    // Sized for every sample, each ray written into its slot (CameraRays::ray); only the samples
+    // wanted are traced.
+    Ray* const rays = slots(scratch->rays, n);
+    std::uint32_t* const where = slots(scratch->where, n);
     std::size_t wanted = 0;
     const auto pixel = [&](int x, int y) {
         return static_cast<std::uint32_t>((y - y0) * w + (x - x0));
@@ -165,22 +179,20 @@ void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s
             }
         }
     }
-    rays.resize(wanted);
-    where.resize(wanted);
-    if (rays.empty())
+    if (wanted == 0)
         return;
-    std::vector<Hit> hits;
-    f.whitted.closest_batch(rays, hits);
-    counts.primary += rays.size();
-    std::vector<Vec3d> colors;
+    Hit* const hits = slots(scratch->hits, wanted);
+    f.whitted.closest_batch(rays, wanted, hits);
+    counts.primary += wanted;
+    Vec3d* const colors = slots(scratch->colors, wanted);
     if (f.opt.shading == ShadingMode::phong) {
-        f.whitted.shade_hits(rays, hits, colors, counts);  // generation by generation, in packets
+        // Generation by generation, in packets.
+        f.whitted.shade_hits(rays, hits, wanted, colors, counts);
     } else {
-        colors.resize(rays.size());
-        for (std::size_t i = 0; i < rays.size(); ++i)
+        for (std::size_t i = 0; i < wanted; ++i)
             colors[i] = f.shade(rays[i], hits[i], counts);
     }
-    for (std::size_t i = 0; i < rays.size(); ++i)
+    for (std::size_t i = 0; i < wanted; ++i)
         sums[where[i]] += colors[i];
 }
 

@@ -1,10 +1,12 @@
 #include "engine/shade/whitted.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
 #include "engine/shade/optics.h"
 #include "engine/shade/phong.h"
+#include "engine/thread_scratch.h"
 
 namespace raycastd::engine {
 
@@ -82,6 +84,10 @@ std::optional<Hit> Whitted::closest(const Ray& ray) const {
 
 void Whitted::closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const {
     tracer_.closest_batch(rays, out);
+}
+
+void Whitted::closest_batch(const Ray* rays, std::size_t n, Hit* out) const {
+    tracer_.closest_batch(rays, n, out);
 }
 
 bool Whitted::occluded(const Ray& ray) const {
@@ -264,29 +270,57 @@ inline void Whitted::shadow_ray(Ray& r, const Surface& sp, const Light& light,
 
 void Whitted::shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                          std::vector<Vec3d>& out, RayCounts& counts) const {
+    out.resize(rays.size());
+    shade_hits(rays.data(), hits.data(), rays.size(), out.data(), counts);
+}
+
+void Whitted::shade_hits(const Ray* rays, const Hit* hits, std::size_t n, Vec3d* out,
+                         RayCounts& counts) const {
     // A scene small enough for the tracer to scan itself traces ray by ray: batches exist for
     // Embree's packets, which a scan does not have (with the BVH the scan replaced, batches
     // had cost more than they saved there too: bench_render, tutorial_like at fast, 460 ms
     // batched against 215 ms ray by ray at spp 1), while the Duck's mesh gains 1.29–1.33×.
     if (!options_.trace_in_batches || tracer_.scans()) {
-        out.assign(rays.size(), options_.background);
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            if (hits[i].valid())
-                out[i] = shade_hit(rays[i], hits[i], counts);
-        }
+        for (std::size_t i = 0; i < n; ++i)
+            out[i] = hits[i].valid() ? shade_hit(rays[i], hits[i], counts) : options_.background;
         return;
     }
-    shade_batch(rays, hits, 1, out, counts);
+    shade_batch(rays, hits, n, 1, out, counts);
 }
 
-void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& hits, int depth,
-                          std::vector<Vec3d>& out, RayCounts& counts) const {
-    const std::size_t n = rays.size();
-    out.assign(n, options_.background);
+/// shade_batch's buffers, leased for each batch (engine/thread_scratch.h): each keeps its size
+/// from one batch to the next, and a batch writes its own elements over what is left there.
+struct Whitted::BatchScratch {
     std::vector<Surface> surfaces;
-    surfaces.reserve(n);
     std::vector<std::size_t> hit_of;  // surfaces[h] is the hit of rays[hit_of[h]]
-    hit_of.reserve(n);
+    std::vector<Ray> shadow;
+    std::vector<std::size_t> slot;  // shadow[j] answers towards[slot[j]]
+    std::vector<ToLight> towards;
+    std::vector<std::uint8_t> blocked;
+    std::vector<Vec3d> direct_color, indirect_color;
+    std::vector<Ray> next[2];
+    std::vector<std::size_t> owner[2];
+    std::vector<Hit> next_hits;
+    std::vector<Vec3d> next_color;
+
+    std::size_t bytes() const {
+        std::size_t b = capacity_bytes(surfaces) + capacity_bytes(hit_of) + capacity_bytes(shadow) +
+                        capacity_bytes(slot) + capacity_bytes(towards) + capacity_bytes(blocked) +
+                        capacity_bytes(direct_color) + capacity_bytes(indirect_color) +
+                        capacity_bytes(next_hits) + capacity_bytes(next_color);
+        for (int kind = 0; kind < 2; ++kind)
+            b += capacity_bytes(next[kind]) + capacity_bytes(owner[kind]);
+        return b;
+    }
+};
+
+void Whitted::shade_batch(const Ray* rays, const Hit* hits, std::size_t n, int depth, Vec3d* out,
+                          RayCounts& counts) const {
+    ThreadScratch<BatchScratch> scratch;
+    std::vector<Surface>& surfaces = scratch->surfaces;
+    surfaces.clear();  // a Surface holds references: built anew in each batch
+    surfaces.reserve(n);
+    std::size_t* const hit_of = slots(scratch->hit_of, n);
     // Each Surface is built in its slot: emplace_back constructs the element from the prvalue
     // the conversion returns, which GCC and Clang elide into the slot (CWG 2327; the standard
     // does not promise it, and a copy would only cost time), where push_back(surface(...)) had
@@ -299,29 +333,30 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
         operator Surface() const { return w.surface(ray, hit, depth); }
     };
     for (std::size_t i = 0; i < n; ++i) {
-        if (!hits[i].valid())
+        if (!hits[i].valid()) {
+            out[i] = options_.background;
             continue;
+        }
+        hit_of[surfaces.size()] = i;
         surfaces.emplace_back(InSlot{*this, rays[i], hits[i], depth});
-        hit_of.push_back(i);
     }
+    const std::size_t count = surfaces.size();
     // Shadow rays light by light, so that the rays of neighbouring hits to one light sit side
     // by side.
     const std::size_t lights = plan_.shadow_lights.size();
-    std::vector<Ray> shadow;
-    std::vector<std::size_t> slot;  // shadow[j] answers towards[slot[j]]
-    // Sized for every surface and light, each ray written into its slot, and cut to the rays
-    // traced after: emplace_back, which LTO left out of line, cost a call and a check a ray
+    // Sized for every surface and light, each ray written into its slot, and only the rays
+    // traced handed on: emplace_back, which LTO left out of line, cost a call and a check a ray
     // (the shadow rays' loop took 6% less time, the secondary rays' 13%: rdtsc around each in
     // shade_batch, the Duck, four alternating pairs, 2026-12-07).
-    shadow.resize(surfaces.size() * lights);
-    slot.resize(surfaces.size() * lights);
+    Ray* const shadow = slots(scratch->shadow, count * lights);
+    std::size_t* const slot = slots(scratch->slot, count * lights);
     std::size_t traced = 0;
     // Each surface's direction to each light, kept for direct() so that it is not computed
-    // twice.
-    std::vector<ToLight> towards(surfaces.size() * lights);
+    // twice; towards_light() writes every field.
+    ToLight* const towards = slots(scratch->towards, count * lights);
     for (std::size_t k = 0; k < lights; ++k) {
         const Light& light = scene().lights[plan_.shadow_lights[k]];
-        for (std::size_t h = 0; h < surfaces.size(); ++h) {
+        for (std::size_t h = 0; h < count; ++h) {
             ToLight& t = towards[h * lights + k];
             t = towards_light(surfaces[h], light, k);
             if (t.facing) {
@@ -330,17 +365,15 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
             }
         }
     }
-    shadow.resize(traced);
-    slot.resize(traced);
-    if (!shadow.empty()) {
-        std::vector<std::uint8_t> blocked;
-        tracer_.occluded_batch(shadow, blocked);
-        counts.shadow += shadow.size();
-        for (std::size_t j = 0; j < shadow.size(); ++j)
+    if (traced > 0) {
+        std::uint8_t* const blocked = slots(scratch->blocked, traced);
+        tracer_.occluded_batch(shadow, traced, blocked);
+        counts.shadow += traced;
+        for (std::size_t j = 0; j < traced; ++j)
             towards[slot[j]].blocked = blocked[j] != 0;
     }
-    std::vector<Vec3d> direct_color(surfaces.size());
-    for (std::size_t h = 0; h < surfaces.size(); ++h) {
+    Vec3d* const direct_color = slots(scratch->direct_color, count);
+    for (std::size_t h = 0; h < count; ++h) {
         bool lit = false;
         direct_color[h] =
             direct(surfaces[h], counts, nullptr, lit, lights ? &towards[h * lights] : nullptr);
@@ -349,22 +382,23 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
     // ray, each shaded by the same function one level deeper. Summed in indirect()'s order
     // (reflection, then refraction, then onto the direct light), so that the colours are
     // shade_hit()'s to the last bit wherever the rays' answers are.
-    std::vector<Vec3d> indirect_color(surfaces.size());
     if (depth < options_.max_depth) {
+        Vec3d* const indirect_color = slots(scratch->indirect_color, count);
+        std::fill(indirect_color, indirect_color + count, Vec3d{});
         // Written into their slots as the shadow rays are. Only a kind the plan traces is sized:
         // secondary_rays() gives a reflected ray only under plan_.reflection and a refracted
         // one only under plan_.refraction.
-        std::vector<Ray> next[2];
-        std::vector<std::size_t> owner[2];
+        Ray* next[2] = {nullptr, nullptr};
+        std::size_t* owner[2] = {nullptr, nullptr};
         std::size_t spawned[2] = {0, 0};
         const bool kinds[2] = {plan_.reflection, plan_.refraction};
         for (int kind = 0; kind < 2; ++kind) {
             if (kinds[kind]) {
-                next[kind].resize(surfaces.size());
-                owner[kind].resize(surfaces.size());
+                next[kind] = slots(scratch->next[kind], count);
+                owner[kind] = slots(scratch->owner[kind], count);
             }
         }
-        for (std::size_t h = 0; h < surfaces.size(); ++h) {
+        for (std::size_t h = 0; h < count; ++h) {
             const SecondaryRays sec = secondary_rays(surfaces[h]);
             if (sec.reflected) {
                 spawn(next[0][spawned[0]], surfaces[h], *sec.reflected);
@@ -375,32 +409,28 @@ void Whitted::shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& 
                 owner[1][spawned[1]++] = h;
             }
         }
+        counts.reflected += spawned[0];
+        counts.refracted += spawned[1];
         for (int kind = 0; kind < 2; ++kind) {
-            next[kind].resize(spawned[kind]);
-            owner[kind].resize(spawned[kind]);
-        }
-        counts.reflected += next[0].size();
-        counts.refracted += next[1].size();
-        for (int kind = 0; kind < 2; ++kind) {
-            if (next[kind].empty())
+            const std::size_t m = spawned[kind];
+            if (m == 0)
                 continue;
-            std::vector<Hit> next_hits;
-            closest_batch(next[kind], next_hits);
-            std::vector<Vec3d> next_color;
-            shade_batch(next[kind], next_hits, depth + 1, next_color, counts);
-            for (std::size_t j = 0; j < next[kind].size(); ++j) {
-                const Material& m = surfaces[owner[kind][j]].m;
+            Hit* const next_hits = slots(scratch->next_hits, m);
+            tracer_.closest_batch(next[kind], m, next_hits);
+            Vec3d* const next_color = slots(scratch->next_color, m);
+            shade_batch(next[kind], next_hits, m, depth + 1, next_color, counts);
+            for (std::size_t j = 0; j < m; ++j) {
+                const Material& mat = surfaces[owner[kind][j]].m;
                 indirect_color[owner[kind][j]] +=
-                    next_color[j] * (kind == 0 ? m.reflectivity : m.transparency);
+                    next_color[j] * (kind == 0 ? mat.reflectivity : mat.transparency);
             }
         }
+        for (std::size_t h = 0; h < count; ++h)
+            out[hit_of[h]] = direct_color[h] + indirect_color[h];
+        return;
     }
-    for (std::size_t h = 0; h < surfaces.size(); ++h) {
-        Vec3d color = direct_color[h];
-        if (depth < options_.max_depth)
-            color += indirect_color[h];
-        out[hit_of[h]] = color;
-    }
+    for (std::size_t h = 0; h < count; ++h)
+        out[hit_of[h]] = direct_color[h];
 }
 
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,

@@ -142,6 +142,8 @@ class Whitted {
     /// Closest hits of a batch (a tile's camera rays, coherent in runs of 16) into out[0..n);
     /// a miss leaves an invalid Hit.
     void closest_batch(const std::vector<Ray>& rays, std::vector<Hit>& out) const;
+    /// The same for rays[0..n) into out[0..n) (a caller's reused buffer).
+    void closest_batch(const Ray* rays, std::size_t n, Hit* out) const;
     /// Whether anything lies along `ray` within [tmin, tmax].
     bool occluded(const Ray& ray) const;
 
@@ -159,6 +161,9 @@ class Whitted {
     /// `exact`).
     void shade_hits(const std::vector<Ray>& rays, const std::vector<Hit>& hits,
                     std::vector<Vec3d>& out, RayCounts& counts) const;
+    /// The same for rays[0..n) and hits[0..n) into out[0..n).
+    void shade_hits(const Ray* rays, const Hit* hits, std::size_t n, Vec3d* out,
+                    RayCounts& counts) const;
     /// The ray tree of one ray, with the blocking object of each shadow ray named;
     /// Code::cancelled once `cancel` has fired (it is asked once per node).
     Result<RayTree> tree(const Ray& ray, const CancelToken& cancel = {}) const;
@@ -208,8 +213,9 @@ class Whitted {
     /// The hit made ready for shading.
     Surface surface(const Ray& ray, const Hit& hit, int depth) const;
     /// shade_hits() at `depth` (1: camera hits).
-    void shade_batch(const std::vector<Ray>& rays, const std::vector<Hit>& hits, int depth,
-                     std::vector<Vec3d>& out, RayCounts& counts) const;
+    void shade_batch(const Ray* rays, const Hit* hits, std::size_t n, int depth, Vec3d* out,
+                     RayCounts& counts) const;
+    struct BatchScratch;  // shade_batch's buffers, reused batch after batch (whitted.cpp)
     SecondaryRays secondary_rays(const Surface& sp) const;
     /// The ray leaving a surface point in direction `w` (spawn_ray from its robust origin).
     static Ray spawn(const Surface& sp, const Vec3d& w);

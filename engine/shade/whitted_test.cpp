@@ -328,6 +328,15 @@ TEST(Whitted, BatchesShadeAsOneHitAtATimeBitForBit) {
     EXPECT_EQ(batched.shadow, single.shadow);
     EXPECT_GT(batched.shadow, 2000u);
     EXPECT_GT(batched.reflected, 50u);
+    // Batches reuse their buffers (engine/thread_scratch.h): a later, smaller batch in another
+    // order, over what the first left there, gets the same colours.
+    std::vector<Ray> later(rays.rbegin() + 300, rays.rend());
+    std::vector<Hit> later_hits(hits.rbegin() + 300, hits.rend());
+    std::vector<Vec3d> later_colors;
+    w.shade_hits(later, later_hits, later_colors, batched);
+    ASSERT_EQ(later_colors.size(), later.size());
+    for (std::size_t i = 0; i < later.size(); ++i)
+        EXPECT_EQ(later_colors[i], colors[rays.size() - 301 - i]) << i;
 }
 
 TEST(Whitted, PlanSkipsWhatTheSceneDoesNotNeed) {
