@@ -14,12 +14,13 @@
 // back at the scope's end. A lease, not one T per thread: while a thread waits inside a parallel
 // loop (a batch traced in blocks, a BVH built on first use), TBB may hand it another tile, whose
 // batches then lease another T rather than overwrite the one still in use below them on the
-// stack. No lock: the list is the thread's own. A T whose buffers have grown beyond
-// kKeptBytes (a batch of an unusually large tile, a high spp) is freed rather than kept, so a
-// thread holds at most a few of these, each at most that size, between renders.
+// stack. No lock: the list is the thread's own. What a thread keeps is bounded
+// (ThreadScratch::kKeptBytes for all its Ts of one type together; beyond that a T given back is
+// freed), and a render empties its calling thread's list when it returns (release_all).
 
 #include <cstddef>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace raycastd::engine {
@@ -45,25 +46,32 @@ std::size_t capacity_bytes(const std::vector<T>& v) {
 template <class T>
 class ThreadScratch {
   public:
-    /// A T that is kept for reuse only while bytes() is at most this.
-    static constexpr std::size_t kKeptBytes = std::size_t{1} << 20;
+    /// What one thread keeps of T between leases, all its Ts together; a T given back beyond
+    /// that is freed. The Duck's render batches at spp 4 hold about 0.65 MiB each, one per
+    /// depth of reflection.
+    static constexpr std::size_t kKeptBytes = std::size_t{4} << 20;
 
     ThreadScratch() {
-        std::vector<std::unique_ptr<T>>& free = free_list();
-        if (free.empty()) {
+        Kept& kept = this_thread();
+        if (kept.items.empty()) {
             item_ = std::make_unique<T>();
         } else {
-            item_ = std::move(free.back());
-            free.pop_back();
+            item_ = std::move(kept.items.back().first);
+            kept.bytes -= kept.items.back().second;
+            kept.items.pop_back();
         }
     }
     ~ThreadScratch() {
-        if (item_->bytes() > kKeptBytes)
+        Kept& kept = this_thread();
+        const std::size_t bytes = item_->bytes();
+        if (bytes > kKeptBytes - kept.bytes)
             return;  // freed with item_
         try {
-            free_list().push_back(std::move(item_));
+            kept.items.emplace_back(std::move(item_), bytes);
+            kept.bytes += bytes;
         } catch (...) {
-            // Out of memory for the list's own growth: the T is freed instead of kept.
+            // Out of memory for the list's own growth: the T is freed instead of kept (item_
+            // is left as it was when emplace_back throws).
         }
     }
     ThreadScratch(const ThreadScratch&) = delete;
@@ -72,10 +80,25 @@ class ThreadScratch {
     T& operator*() { return *item_; }
     T* operator->() { return item_.get(); }
 
+    /// Frees the Ts this thread keeps (those leased out are not in the list, and are kept or
+    /// freed when their leases end). A render calls it on its way out, so that a thread that
+    /// asked for one render (an HTTP connection's) does not keep buffers until it exits; the
+    /// task pool's threads keep theirs, up to kKeptBytes each.
+    static void release_all() {
+        Kept& kept = this_thread();
+        kept.items.clear();
+        kept.items.shrink_to_fit();
+        kept.bytes = 0;
+    }
+
   private:
-    static std::vector<std::unique_ptr<T>>& free_list() {
-        thread_local std::vector<std::unique_ptr<T>> free;
-        return free;
+    struct Kept {
+        std::vector<std::pair<std::unique_ptr<T>, std::size_t>> items;  ///< with bytes() at return
+        std::size_t bytes = 0;                                          ///< their sum
+    };
+    static Kept& this_thread() {
+        thread_local Kept kept;
+        return kept;
     }
     std::unique_ptr<T> item_;
 };

@@ -1,6 +1,7 @@
 // ThreadScratch: a lease is reused by the next one on the same thread, leases alive at once are
 // distinct (a tile TBB hands a waiting thread must not write over the one below it), each
-// thread has its own, and an oversized one is freed rather than kept.
+// thread has its own, what a thread keeps is bounded, and release_all frees it. Each test
+// starts from an empty list (release_all), so that the tests hold in any order and repeated.
 
 #include "engine/thread_scratch.h"
 
@@ -15,17 +16,20 @@ struct Buffers {
     std::vector<double> v;
     std::size_t bytes() const { return capacity_bytes(v); }
 };
+using Lease = ThreadScratch<Buffers>;
 
 TEST(ThreadScratch, LeasesAreReusedAndNeverShared) {
+    Lease::release_all();
     const Buffers* first = nullptr;
     {
-        ThreadScratch<Buffers> a;
+        Lease a;
         first = &*a;
+        EXPECT_TRUE(a->v.empty());
         double* p = slots(a->v, 100);
         p[99] = 7.0;
     }
     {
-        ThreadScratch<Buffers> b;
+        Lease b;
         EXPECT_EQ(&*b, first);  // the same buffers, with their size and contents
         ASSERT_EQ(b->v.size(), 100u);
         EXPECT_EQ(b->v[99], 7.0);
@@ -38,30 +42,42 @@ TEST(ThreadScratch, LeasesAreReusedAndNeverShared) {
         EXPECT_EQ(b->v[149], 0.0);
         // A lease taken while b is held (a nested batch, or another tile run by this thread
         // while it waits) gets buffers of its own.
-        ThreadScratch<Buffers> c;
+        Lease c;
         EXPECT_NE(&*c, &*b);
+        EXPECT_TRUE(c->v.empty());
     }
     // Another thread has its own list.
-    const Buffers* other = nullptr;
     std::thread([&] {
-        ThreadScratch<Buffers> d;
-        other = &*d;
+        Lease d;
         EXPECT_TRUE(d->v.empty());
     }).join();
-    EXPECT_NE(other, first);
+    // release_all frees what the thread keeps: the next lease starts empty.
+    Lease::release_all();
+    Lease e;
+    EXPECT_TRUE(e->v.empty());
 }
 
-TEST(ThreadScratch, OversizedBuffersAreFreedNotKept) {
+TEST(ThreadScratch, WhatAThreadKeepsIsBounded) {
+    Lease::release_all();
+    const std::size_t doubles = Lease::kKeptBytes / sizeof(double);
     {
-        ThreadScratch<Buffers> a;
-        ThreadScratch<Buffers> keep;  // held, so that the list has one left after a is dropped
-        slots(a->v, ThreadScratch<Buffers>::kKeptBytes / sizeof(double) + 1);
+        Lease a;  // grown beyond what a thread keeps: freed when given back
+        slots(a->v, doubles + 1);
     }
-    // Both leases ended: `keep` went back to the list, a was freed. Two new leases at once
-    // find one kept T and make another; neither holds a's oversized buffer.
-    ThreadScratch<Buffers> x, y;
-    EXPECT_LE(x->bytes(), ThreadScratch<Buffers>::kKeptBytes);
-    EXPECT_LE(y->bytes(), ThreadScratch<Buffers>::kKeptBytes);
+    {
+        Lease b;
+        EXPECT_TRUE(b->v.empty());
+    }
+    {
+        // Three of 40% each: two are kept, the third given back is freed.
+        Lease x, y, z;
+        slots(x->v, doubles * 2 / 5);
+        slots(y->v, doubles * 2 / 5);
+        slots(z->v, doubles * 2 / 5);
+    }
+    Lease p, q, r;
+    const int kept = !p->v.empty() + !q->v.empty() + !r->v.empty();
+    EXPECT_EQ(kept, 2);
 }
 
 }  // namespace

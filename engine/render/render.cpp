@@ -387,6 +387,15 @@ std::size_t tile_count(const RenderOptions& o) {
 Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
                             RenderProgress* progress) {
     const auto start = std::chrono::steady_clock::now();
+    // The calling thread runs tiles too: on the way out (cancelled or not) it frees the batch
+    // buffers it kept (engine/thread_scratch.h), so that a thread that asked for one render, an
+    // HTTP connection's, does not hold them until it exits.
+    struct ReleaseScratch {
+        ~ReleaseScratch() {
+            ThreadScratch<SampleScratch>::release_all();
+            Whitted::release_thread_scratch();
+        }
+    } release_scratch;
     const Scene& scene = engine.scene();
     const Camera cam = resolve_camera(scene, opt.camera, opt.width, opt.height);
     const Lighting lighting = resolve_lighting(scene, opt.lighting);

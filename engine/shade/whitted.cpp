@@ -314,6 +314,10 @@ struct Whitted::BatchScratch {
     }
 };
 
+void Whitted::release_thread_scratch() {
+    ThreadScratch<BatchScratch>::release_all();
+}
+
 void Whitted::shade_batch(const Ray* rays, const Hit* hits, std::size_t n, int depth, Vec3d* out,
                           RayCounts& counts) const {
     ThreadScratch<BatchScratch> scratch;

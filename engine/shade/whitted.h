@@ -164,6 +164,9 @@ class Whitted {
     /// The same for rays[0..n) and hits[0..n) into out[0..n).
     void shade_hits(const Ray* rays, const Hit* hits, std::size_t n, Vec3d* out,
                     RayCounts& counts) const;
+    /// Frees the batch buffers shade_hits() keeps on the calling thread for its next batches
+    /// (engine/thread_scratch.h: ThreadScratch::release_all).
+    static void release_thread_scratch();
     /// The ray tree of one ray, with the blocking object of each shadow ray named;
     /// Code::cancelled once `cancel` has fired (it is asked once per node).
     Result<RayTree> tree(const Ray& ray, const CancelToken& cancel = {}) const;
