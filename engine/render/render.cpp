@@ -119,11 +119,6 @@ struct Frame {
     }
 };
 
-/// Traces samples [s0, s1) of the pixels of [x0, x1) × [y0, y1) for which want(x, y) holds and
-/// adds each sample's colour to sums[(y − y0)·(x1 − x0) + (x − x0)]. The camera rays are traced
-/// as one batch ordered in 4 × 4 pixel blocks, sample by sample, so that each run of 16 rays is
-/// coherent (the engine traces such runs as Embree packets where that is faster); then each hit
-/// is shaded.
 /// trace_samples' buffers, leased for each call (engine/thread_scratch.h): they keep their size
 /// from one tile to the next, and a tile writes its own elements over what is left there.
 struct SampleScratch {
@@ -141,6 +136,11 @@ struct SampleScratch {
     }
 };
 
+/// Traces samples [s0, s1) of the pixels of [x0, x1) × [y0, y1) for which want(x, y) holds and
+/// adds each sample's colour to sums[(y − y0)·(x1 − x0) + (x − x0)]. The camera rays are traced
+/// as one batch ordered in 4 × 4 pixel blocks, sample by sample, so that each run of 16 rays is
+/// coherent (the engine traces such runs as Embree packets where that is faster); then each hit
+/// is shaded.
 template <class Want>
 void trace_samples(const Frame& f, int x0, int y0, int x1, int y1, int s0, int s1, const Want& want,
                    std::vector<Vec3d>& sums, RayCounts& counts) {
