@@ -386,8 +386,9 @@ void Whitted::shade_batch(const Ray* rays, const Hit* hits, std::size_t n, int d
     // ray, each shaded by the same function one level deeper. Summed in indirect()'s order
     // (reflection, then refraction, then onto the direct light), so that the colours are
     // shade_hit()'s to the last bit wherever the rays' answers are.
+    Vec3d* indirect_color = nullptr;  // below max_depth only
     if (depth < options_.max_depth) {
-        Vec3d* const indirect_color = slots(scratch->indirect_color, count);
+        indirect_color = slots(scratch->indirect_color, count);
         std::fill(indirect_color, indirect_color + count, Vec3d{});
         // Written into their slots as the shadow rays are. Only a kind the plan traces is sized:
         // secondary_rays() gives a reflected ray only under plan_.reflection and a refracted
@@ -429,12 +430,9 @@ void Whitted::shade_batch(const Ray* rays, const Hit* hits, std::size_t n, int d
                     next_color[j] * (kind == 0 ? mat.reflectivity : mat.transparency);
             }
         }
-        for (std::size_t h = 0; h < count; ++h)
-            out[hit_of[h]] = direct_color[h] + indirect_color[h];
-        return;
     }
     for (std::size_t h = 0; h < count; ++h)
-        out[hit_of[h]] = direct_color[h];
+        out[hit_of[h]] = indirect_color ? direct_color[h] + indirect_color[h] : direct_color[h];
 }
 
 Vec3d Whitted::shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts,
@@ -493,7 +491,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
         if (rec.facing) {
             bool blocked;
             if (traced) {
-                blocked = traced[k].blocked;
+                blocked = t.blocked;
             } else if (node) {
                 ++counts.shadow;
                 // The tree names the blocker, so it asks for the closest one.
