@@ -12,8 +12,10 @@
 // reported: the renderer's rays per second against raw Embree tracing the Duck scene's primary rays
 // (bench/raw_embree.h), the ceiling for rays.
 //
-// Each row's time is the median of --runs runs (3 by default), POV-Ray's too (since
-// 2026-12-05; before, POV-Ray ran once per scene and spp).
+// Each row's time is the median of --runs runs (1 by default; the figures in docs/ are of
+// --runs 3), POV-Ray's too (since 2026-12-05; before, POV-Ray ran once per scene and spp). Since
+// 2026-12-07 the runs are interleaved: run k of POV-Ray, then run k of every raycastd variant of
+// that scene and spp, so that both medians come from the same minutes of a shared host.
 //   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
 //                [--scenes tutorial_like,duck] [--precisions refined,fast] [--single-rays]
 // --write-pov writes each scene's .pov (1024×768) into DIR and renders nothing.
@@ -240,61 +242,79 @@ int main(int argc, char** argv) {
             continue;
         }
         for (int spp : a.smoke ? std::vector<int>{1} : std::vector<int>{1, 4}) {
-            // POV-Ray per scene and spp, compared with both precisions (fast is the render
-            // default, refined what intersect defaults to): the median of --runs runs, as for
-            // raycastd's rows (one run had made the ratio's denominator move by a few percent
-            // between otherwise equal runs of the bench).
-            double pov = -1;
-            if (a.povray != "none" && !a.smoke) {
-                const std::string scene_pov = bench::to_pov(engine->scene(), cam, w, h, 5);
-                std::vector<double> pov_ms;
-                for (int run = 0; run < a.runs; ++run)
-                    pov_ms.push_back(run_povray(a, scene_pov, w, h, spp));
-                pov = std::count(pov_ms.begin(), pov_ms.end(), -1.0) > 0 ? -1.0 : median(pov_ms);
-            }
+            // The variants of this scene and spp, each compared with the same POV-Ray figure
+            // (fast is the render default, refined what intersect defaults to).
             struct Variant {
                 engine::Precision p;
                 bool batch, adaptive;
             };
-            for (auto [p, batch, adaptive] :
+            std::vector<Variant> variants;
+            for (const Variant& v :
                  std::vector<Variant>{{engine::Precision::fast, true, false},
                                       {engine::Precision::fast, true, true},
                                       {engine::Precision::fast, false, false},
                                       {engine::Precision::refined, true, false},
                                       {engine::Precision::refined, true, true},
                                       {engine::Precision::refined, false, false}}) {
-                if (!listed(a.precisions, engine::to_string(p)) || (!batch && !a.single_rays) ||
-                    (adaptive && spp == 1))
+                if (!listed(a.precisions, engine::to_string(v.p)) || (!v.batch && !a.single_rays) ||
+                    (v.adaptive && spp == 1))
                     continue;
+                variants.push_back(v);
+                if (a.smoke)
+                    break;
+            }
+            const auto options = [&](const Variant& v) {
                 engine::RenderOptions o;
                 o.width = w;
                 o.height = h;
                 o.spp = spp;
-                o.adaptive = adaptive;
+                o.adaptive = v.adaptive;
                 o.whitted.max_depth = 5;
-                o.whitted.precision = p;
-                o.whitted.trace_in_batches = batch;
-                std::vector<double> ms;
-                engine::RenderResult r;
-                for (int k = 0; k < a.runs; ++k) {
-                    r = engine::render(*engine, o).value();
-                    ms.push_back(r.render_ms);
+                o.whitted.precision = v.p;
+                o.whitted.trace_in_batches = v.batch;
+                return o;
+            };
+            // Run by run, POV-Ray first and then every variant once, so that each renderer's
+            // median is taken over the same minutes: the host's load moves by tens of percent
+            // within minutes, and with POV-Ray's runs all before raycastd's the ratio had
+            // moved with it (a quiet run put tutorial_like's spp 4 row at 6.5×, a busy moment
+            // minutes later at 4.2×, with the same code: 2026-12-07).
+            const bool with_povray = a.povray != "none" && !a.smoke;
+            const std::string scene_pov =
+                with_povray ? bench::to_pov(engine->scene(), cam, w, h, 5) : std::string();
+            std::vector<double> pov_ms;
+            std::vector<std::vector<double>> ms(variants.size());
+            std::vector<engine::RenderResult> last(variants.size());
+            for (int run = 0; run < a.runs; ++run) {
+                if (with_povray)
+                    pov_ms.push_back(run_povray(a, scene_pov, w, h, spp));
+                for (std::size_t k = 0; k < variants.size(); ++k) {
+                    last[k] = engine::render(*engine, options(variants[k])).value();
+                    ms[k].push_back(last[k].render_ms);
                 }
-                const double m = median(ms);
+            }
+            // The median of --runs runs, POV-Ray's too (since 2026-12-05; before, POV-Ray ran
+            // once per scene and spp, which had moved the ratio by a few percent between
+            // otherwise equal runs of the bench); −1 if POV-Ray did not run or failed once.
+            const double pov = pov_ms.empty() || std::count(pov_ms.begin(), pov_ms.end(), -1.0) > 0
+                                   ? -1.0
+                                   : median(pov_ms);
+            for (std::size_t k = 0; k < variants.size(); ++k) {
+                const Variant& v = variants[k];
+                const engine::RenderResult& r = last[k];
+                const double m = median(ms[k]);
                 std::string precision = engine::to_string(r.precision);
-                if (p == engine::Precision::fast && batch && !adaptive)
+                if (v.p == engine::Precision::fast && v.batch && !v.adaptive)
                     precision += " (default)";
-                if (adaptive)
+                if (v.adaptive)
                     precision += ", adaptive";
-                if (!batch)
+                if (!v.batch)
                     precision += ", single rays";
                 rows.push_back(
                     {name, precision, spp, m, r.counts.total() / m / 1e3, pov, r.counts});
-                if (name == "duck" && spp == 4 && p == engine::Precision::fast && batch &&
-                    !adaptive)
+                if (name == "duck" && spp == 4 && v.p == engine::Precision::fast && v.batch &&
+                    !v.adaptive)
                     write_preview(a, r.image, extra);
-                if (a.smoke)
-                    break;
             }
         }
         if (!a.smoke && name == "duck") {

@@ -1,5 +1,8 @@
 #include "engine/shade/spawn.h"
 
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -56,6 +59,54 @@ TEST(Spawn, ShadowRayToAPointStopsShortOfIt) {
     EXPECT_GT(r.origin.y, 0.0);
     EXPECT_LT(r.tmax, 1.0);
     EXPECT_NEAR(r.at(1.0).y, 10.0, 1e-12);
+}
+
+// moved_away's step without a branch is next_up's and next_down's, bit for bit: on random sums
+// of both signs and magnitudes, and where the branch-free step does not apply (a zero offset,
+// a sum of zero, subnormal, huge, infinite or NaN, an offset that is NaN). A mutant stepping
+// the wrong way, or forgetting the sign of the sum, fails on the random pairs.
+TEST(Spawn, MovedAwayStepsAsNextUpAndNextDown) {
+    const auto reference = [](double p, double offset) {
+        const double po = p + offset;
+        return offset > 0.0 ? next_up(po) : offset < 0.0 ? next_down(po) : po;
+    };
+    const auto same_bits = [](double a, double b) {
+        return std::memcmp(&a, &b, sizeof a) == 0 || (std::isnan(a) && std::isnan(b));
+    };
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-1074, 1023);
+    int checked = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const double p = std::ldexp(mantissa(rng), exponent(rng));
+        // Offsets near p's size (the sum of either sign) and far from it.
+        const double offset =
+            i % 2 == 0 ? std::ldexp(mantissa(rng), exponent(rng)) : p * mantissa(rng) * 2.0;
+        ASSERT_TRUE(same_bits(detail::moved_away(p, offset), reference(p, offset)))
+            << p << " + " << offset;
+        ++checked;
+    }
+    constexpr double kMax = std::numeric_limits<double>::max();
+    constexpr double kMin = std::numeric_limits<double>::denorm_min();
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double specials[] = {0.0, -0.0, kMin, -kMin, 1.0, -1.0, kMax, -kMax, kInf, -kInf, nan};
+    for (double p : specials) {
+        for (double offset : specials) {
+            EXPECT_TRUE(same_bits(detail::moved_away(p, offset), reference(p, offset)))
+                << p << " + " << offset;
+            ++checked;
+        }
+    }
+    // Sums that land on 0, on ±max (the step up reaches ∞) and on the smallest subnormals.
+    for (double p : {1.5, -1.5, kMax, -kMax, 2 * kMin, -2 * kMin}) {
+        for (double offset : {-p, -p * 0.5, p * 0.5, kMin, -kMin}) {
+            EXPECT_TRUE(same_bits(detail::moved_away(p, offset), reference(p, offset)))
+                << p << " + " << offset;
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, 200000 + 121 + 30);
 }
 
 }  // namespace

@@ -245,13 +245,16 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
 // either way), and where the products underflow (a light within ~1e-308 of the point). A
 // direction with an infinite component (a light near double's range from the point) is not
 // facing, as its normalised form, NaN, was not: such a shadow ray would not be a valid ray.
+// The direction is normalised only where it is used, by direct() for a facing light whose
+// shadow ray is free (unit_towards): the shadow ray needs only the light's position, and in
+// the bench's tutorial_like render most of the point lights' directions were normalised for
+// nothing (a light behind the surface, or a blocked shadow ray).
 inline Whitted::ToLight Whitted::towards_light(const Surface& sp, const Light& light,
                                                std::size_t k) const {
     ToLight t;
     if (light.type == LightType::point) {
-        const Vec3d v = light.position - sp.p;
-        t.facing = dot(sp.n, v) > 0.0 && is_finite(v);
-        t.l = normalize(v);
+        t.l = light.position - sp.p;
+        t.facing = dot(sp.n, t.l) > 0.0 && is_finite(t.l);
     } else {
         t.l = plan_.towards_directional[k];
         t.facing = dot(sp.n, t.l) > 0.0;
@@ -484,7 +487,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
         const ToLight t = traced ? traced[k] : towards_light(sp, light, k);
-        const Vec3d& l = t.l;
+        const Vec3d& l = t.l;  // normalised below, where the light counts
         ShadowRayRecord rec;
         rec.light = li;
         rec.facing = t.facing;
@@ -505,7 +508,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
             }
             if (!blocked) {
                 lit = true;
-                color += lit_by(sp, l, light.intensity);
+                color += lit_by(sp, unit_towards(t, light), light.intensity);
             }
         }
         if (node)

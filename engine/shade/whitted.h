@@ -201,10 +201,12 @@ class Whitted {
     /// The hit's vertex normals interpolated (shading_normal's sum), not yet normalized, in
     /// `n`; false where the hit has none (spheres, lone triangles).
     bool interpolated_normal(const Hit& hit, Vec3d& n) const;
-    /// A surface point's unit direction to one light, whether the light is in front of its
-    /// shading normal, and whether its shadow ray is blocked (traced by shade_batch for
-    /// direct()).
+    /// A surface point's direction to one light, whether the light is in front of its shading
+    /// normal, and whether its shadow ray is blocked (traced by shade_batch for direct()).
     struct ToLight {
+        /// Towards the light: a directional light's unit direction, or for a point light the
+        /// light's position minus the point, not yet normalised (unit_towards() normalises it
+        /// where it is used: a facing light whose shadow ray is free).
         Vec3d l;
         bool facing = false;
         bool blocked = false;
@@ -224,12 +226,16 @@ class Whitted {
     static Ray spawn(const Surface& sp, const Vec3d& w);
     /// The same, written into `r` (a batch's own slot: spawn.h says why).
     static void spawn(Ray& r, const Surface& sp, const Vec3d& w);
-    /// The unit direction from a surface point to plan().shadow_lights[k], a point or
-    /// directional light, and whether the light is in front of the shading normal (`blocked`
+    /// The direction from a surface point to plan().shadow_lights[k], a point or directional
+    /// light (ToLight::l), and whether the light is in front of the shading normal (`blocked`
     /// left false).
     inline ToLight towards_light(const Surface& sp, const Light& light, std::size_t k) const;
-    /// The shadow ray from a surface point to a light whose direction is `l` (towards_light());
-    /// only traced when the light is in front of the shading normal.
+    /// The unit direction to `light` of a towards_light() answer.
+    static Vec3d unit_towards(const ToLight& t, const Light& light) {
+        return light.type == LightType::point ? normalize(t.l) : t.l;
+    }
+    /// The shadow ray from a surface point to a light whose direction is `l` (towards_light()'s
+    /// ToLight::l); only traced when the light is in front of the shading normal.
     Ray shadow_ray(const Surface& sp, const Light& light, const Vec3d& l) const;
     /// The same, written into `r`.
     inline void shadow_ray(Ray& r, const Surface& sp, const Light& light, const Vec3d& l) const;
