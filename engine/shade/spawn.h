@@ -44,7 +44,9 @@ namespace detail {
 /// without a branch. The offset's sign follows the normal's components, which a renderer's
 /// rays leave to chance, and a floor's normal has two zero components: the branches on them
 /// had been mispredicted (cachegrind's branch simulation of bench_render --smoke: 14,925 in
-/// offset_ray_origin with them, 28,399 with a branch on a zero offset alone, none without).
+/// offset_ray_origin with them, 28,399 with a branch on a zero offset alone, 201 without; and
+/// offset_ray_origin 100 times over 65,536 origins, half off a floor and half off random
+/// normals: 148–153 ms with the branches, 80–87 ms without, five alternating runs).
 inline double moved_away(double p, double offset) {
     const double po = p + offset;
     std::uint64_t bits, offset_bits;
