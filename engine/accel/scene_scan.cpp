@@ -111,6 +111,11 @@ bool TrianglePlane::missed(const Ray& ray, const Vec3d& a) const {
     return engine::left_behind<true>(*this, ray, a);
 }
 
+namespace {
+/// The rule's function for `lanes`: four taken as two where the processor has no AVX.
+detail::RuledOut ruled_out_in(SceneScan::Lanes lanes);
+}  // namespace
+
 SceneScan::SceneScan(const Scene& scene, bool fast) : ball_(scene_ball(scene)), fast_(fast) {
     std::uint32_t spheres = 0;
     for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
@@ -140,17 +145,11 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : ball_(scene_ball(scene)), 
                                        static_cast<std::uint32_t>(p), false, p + 1 == mesh.size()});
         }
     }
+    ruled_out_ = ruled_out_in(widest_lanes());
+    quads_ = std::min<std::size_t>(spheres_.size(), 8);
 }
 
 namespace {
-
-/// What sphere_candidates' rule needs of the ray.
-struct CandidateRay {
-    double ox, oy, oz, dx, dy, dz;
-    double a;        ///< d·d
-    bool behind_ok;  ///< tmin ≥ 0: roots before the origin are out of range
-    bool a_normal;   ///< d·d ≥ 2⁻¹⁰²⁰
-};
 
 /// W doubles in one vector, and the lanes of their comparisons (0 or −1). GCC takes no
 /// vector_size that depends on a template's parameter.
@@ -167,6 +166,54 @@ struct VectorOf<4> {
     using Masks = long long __attribute__((vector_size(32)));
 };
 
+/// What the rule needs of the ray, in all W lanes. Made by ruled_out_sse2 and ruled_out_avx,
+/// each in its own instruction set: the origin and direction read from the ray into every lane
+/// at once (SSE2's movddup, AVX's vbroadcastsd), and d·d formed in the lanes by the scalar's own
+/// operations, so the same bits. Copied to scalars first and spread from registers, as until
+/// 2026-12-07, each had taken two instructions under AVX (which has no broadcast from a
+/// register) and added stack spills: cachegrind of bench_render --smoke counted 5.86M
+/// instructions in ruled_out_avx before, 4.81M after.
+template <int W>
+struct LaneRay {
+    typename VectorOf<W>::Doubles ox, oy, oz, dx, dy, dz;
+    typename VectorOf<W>::Doubles a;  ///< d·d
+    bool behind_ok;                   ///< tmin ≥ 0: roots before the origin are out of range
+};
+
+/// d·d in the lanes of a LaneRay whose components are in place, and the range's side.
+template <int W>
+[[gnu::always_inline]] inline void finish_lane_ray(const Ray& in, LaneRay<W>& r) {
+    r.a = r.dx * r.dx + r.dy * r.dy + r.dz * r.dz;
+    r.behind_ok = in.tmin >= 0.0;
+}
+
+/// The ray in two lanes: each component loaded into both (movddup from memory). Its twin for
+/// four lanes, lane_ray4, is compiled for AVX: an AVX intrinsic cannot be inlined into a
+/// template shared with SSE2, and written as a loop over the lanes GCC formed d·d in one lane
+/// and spread it again, from a register.
+[[gnu::always_inline]] inline void lane_ray2(const Ray& in, LaneRay<2>& r) {
+    const double* from[6] = {&in.origin.x,    &in.origin.y,    &in.origin.z,
+                             &in.direction.x, &in.direction.y, &in.direction.z};
+    VectorOf<2>::Doubles* to[6] = {&r.ox, &r.oy, &r.oz, &r.dx, &r.dy, &r.dz};
+    for (int k = 0; k < 6; ++k) {
+        const __m128d x = _mm_load1_pd(from[k]);
+        std::memcpy(to[k], &x, sizeof x);
+    }
+    finish_lane_ray(in, r);
+}
+
+/// The ray in four lanes: each component loaded into all four (vbroadcastsd from memory).
+[[gnu::always_inline, gnu::target("avx")]] inline void lane_ray4(const Ray& in, LaneRay<4>& r) {
+    const double* from[6] = {&in.origin.x,    &in.origin.y,    &in.origin.z,
+                             &in.direction.x, &in.direction.y, &in.direction.z};
+    VectorOf<4>::Doubles* to[6] = {&r.ox, &r.oy, &r.oz, &r.dx, &r.dy, &r.dz};
+    for (int k = 0; k < 6; ++k) {
+        const __m256d x = _mm256_broadcast_sd(from[k]);
+        std::memcpy(to[k], &x, sizeof x);
+    }
+    finish_lane_ray(in, r);
+}
+
 /// The rule of SceneScan::sphere_candidates on W spheres side by side (centres cx..cz and r²
 /// r2s, W of each), in GCC's vector extension (which clang also compiles): lane k of `miss` is
 /// −1 where sphere k is ruled out, else 0. Inlined into each caller, so that its W-wide vectors are
@@ -174,7 +221,7 @@ struct VectorOf<4> {
 template <int W>
 [[gnu::always_inline]] inline void ruled_out_in_lanes(const double* cx, const double* cy,
                                                       const double* cz, const double* r2s,
-                                                      const CandidateRay& ray,
+                                                      const LaneRay<W>& ray,
                                                       typename VectorOf<W>::Masks& miss) {
     using vd = typename VectorOf<W>::Doubles;
     // Loaded by memcpy (no function returns a vector: an AVX vector's ABI differs outside AVX).
@@ -184,7 +231,7 @@ template <int W>
     std::memcpy(&z, cz, sizeof z);
     std::memcpy(&r2, r2s, sizeof r2);
     constexpr double kMax = std::numeric_limits<double>::max();
-    const vd a = vd{} + ray.a;
+    const vd& a = ray.a;
     const vd fx = ray.ox - x;
     const vd fy = ray.oy - y;
     const vd fz = ray.oz - z;
@@ -199,7 +246,10 @@ template <int W>
     const vd bound = 128.0 * kDoubleUnitRoundoff * (fa + ar2) + 0x1p-900;
     // Lanes are −1 where the line certainly misses (all terms finite, so the comparisons are
     // false on a NaN or an overflow), d·d permitting.
-    miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax) & (ray.a_normal ? -1 : 0);
+    // Below 2⁻¹⁰²⁰, d·d has lost its relative precision to the subnormal grid, and a·r² (r²
+    // up to 2¹⁰⁰⁰) with it: no line is ruled out (a helper's review found a hit at fast with
+    // |d| ≈ 3e-162 and r = 1e100 that the test had ruled out).
+    miss = (ar2 - cc < -bound) & (bound <= kMax) & (cc <= kMax) & (a >= 0x1p-1020);
     if (ray.behind_ok) {
         // Or where the sphere lies behind: the origin outside it (γ = |f|² − r² > 0) and the
         // ray moving away from its centre (β = f·d > 0). Both roots (−β ± √(β² − aγ))/a are
@@ -213,31 +263,10 @@ template <int W>
     }
 }
 
-/// What the rule needs of `in`, made inside each of the functions below (inlined there, so
-/// that it stays in registers). Made by their caller and passed by reference, it was stored to
-/// the stack and loaded back: about a third of sphere_candidates' samples (perf annotate), and
-/// moved in here, bench_render's tutorial_like rows at fast took 5% less task-clock (six
-/// alternating pairs: 4,996–5,037 ms before, 4,717–4,781 after).
-[[gnu::always_inline]] inline CandidateRay candidate_ray(const Ray& in) {
-    CandidateRay r;
-    r.ox = in.origin.x;
-    r.oy = in.origin.y;
-    r.oz = in.origin.z;
-    r.dx = in.direction.x;
-    r.dy = in.direction.y;
-    r.dz = in.direction.z;
-    r.a = r.dx * r.dx + r.dy * r.dy + r.dz * r.dz;
-    r.behind_ok = in.tmin >= 0.0;
-    // Below 2⁻¹⁰²⁰, d·d has lost its relative precision to the subnormal grid, and a·r² (r²
-    // up to 2¹⁰⁰⁰) with it: no line is ruled out (a helper's review found a hit at fast with
-    // |d| ≈ 3e-162 and r = 1e100 that the test had ruled out).
-    r.a_normal = r.a >= 0x1p-1020;
-    return r;
-}
-
 /// The rule over every quad of spheres (at most 8: 32 bits), two lanes at a time.
 std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n, const Ray& in) {
-    const CandidateRay ray = candidate_ray(in);
+    LaneRay<2> ray;
+    lane_ray2(in, ray);
     std::uint32_t out = 0;
     for (std::size_t j = 0; j < n; ++j) {
         const detail::SphereQuad& q = quads[j];
@@ -257,7 +286,8 @@ std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n, con
 /// processor has it.
 [[gnu::target("avx")]] std::uint32_t ruled_out_avx(const detail::SphereQuad* quads, std::size_t n,
                                                    const Ray& in) {
-    const CandidateRay ray = candidate_ray(in);
+    LaneRay<4> ray;
+    lane_ray4(in, ray);
     std::uint32_t out = 0;
     for (std::size_t j = 0; j < n; ++j) {
         const detail::SphereQuad& q = quads[j];
@@ -267,6 +297,16 @@ std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n, con
                << (4 * j);
     }
     return out;
+}
+
+}  // namespace
+
+namespace {
+
+detail::RuledOut ruled_out_in(SceneScan::Lanes lanes) {
+    return lanes == SceneScan::Lanes::four && SceneScan::widest_lanes() == SceneScan::Lanes::four
+               ? ruled_out_avx
+               : ruled_out_sse2;
 }
 
 }  // namespace
@@ -300,10 +340,7 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {
         return ~std::uint32_t{0};
     const SphereQuad* quads = spheres_.data();
     const std::size_t n = std::min<std::size_t>(spheres_.size(), 8);
-    const std::uint32_t ruled_out = lanes == Lanes::four && widest_lanes() == Lanes::four
-                                        ? ruled_out_avx(quads, n, ray)
-                                        : ruled_out_sse2(quads, n, ray);
-    return ~(ruled_out & cullable_);
+    return ~(ruled_out_in(lanes)(quads, n, ray) & cullable_);
 }
 
 SphereRoots SceneScan::roots(const Sphere& s, const Ray& ray) const {
