@@ -122,8 +122,9 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : ball_(scene_ball(scene)), 
         const Object& o = scene.objects[i];
         if (o.kind == ObjectKind::sphere) {
             const std::uint32_t k = spheres++;
-            prims_.push_back(
-                Primitive{Triangle{}, Vec3d{}, TrianglePlane{}, o.sphere, i, k, true, true});
+            sphere_list_.push_back(ScanSphere{o.sphere, i});
+            if (k < 32)
+                sphere_bits_ |= std::uint32_t{1} << k;
             if (k % 4 == 0)
                 spheres_.push_back(SphereQuad{});
             SphereQuad& quad = spheres_.back();
@@ -141,8 +142,8 @@ SceneScan::SceneScan(const Scene& scene, bool fast) : ball_(scene_ball(scene)), 
         const TriangleMesh& mesh = *o.mesh;
         for (std::size_t p = 0; p < mesh.size(); ++p) {
             const Triangle t = mesh.triangle(p);
-            prims_.push_back(Primitive{t, triangle_normal(t), TrianglePlane::of(t), Sphere{}, i,
-                                       static_cast<std::uint32_t>(p), false, p + 1 == mesh.size()});
+            prims_.push_back(Primitive{t, triangle_normal(t), TrianglePlane::of(t), i,
+                                       static_cast<std::uint32_t>(p), p + 1 == mesh.size()});
         }
     }
     ruled_out_ = ruled_out_in(widest_lanes());
@@ -412,42 +413,45 @@ std::optional<Hit> SceneScan::closest(const Ray& ray, bool want_normal) const {
 }
 
 bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
-    // linear_closest's loop, flattened: the scene-wide best so far bounds the spheres and each
-    // mesh (tmax inclusive, so that an exact tie with a later object is still seen and `closer`
-    // decides it); a mesh's own triangles narrow its bound further and keep the lower index on an
-    // exact tie. One copy of the ray, whose tmax is set to the bound before each test: two Rays
-    // copied whole (one per bound, and the second again at each mesh) read back 16 bytes at a
-    // time what had just been written 8 at a time, store-forwarding stalls that were a fifth of
-    // this function's samples in the tutorial_like render (perf annotate).
+    // linear_closest's loop, flattened: the best so far bounds each sphere and each mesh (tmax
+    // inclusive, so that an exact tie with another object is still seen and `closer` decides
+    // it); a mesh's own triangles narrow its bound further and keep the lower index on an exact
+    // tie. The spheres come first, then the meshes (prims_' comment says why the order does not
+    // change the answer). One copy of the ray, whose tmax is set to the bound before each test:
+    // two Rays copied whole (one per bound, and the second again at each mesh) read back 16
+    // bytes at a time what had just been written 8 at a time, store-forwarding stalls that were
+    // a fifth of this function's samples in the tutorial_like render (perf annotate).
     Ray r = ray_in;
     Best best{ray_in.tmax}, mesh_best{ray_in.tmax};
-    const Primitive* winner = nullptr;
+    const ScanSphere* sphere_winner = nullptr;
+    const Primitive* winner = nullptr;  // a triangle; at most one of the two is set
+    const auto sphere = [&](const ScanSphere& sp) {
+        // intersect_sphere without the normal (filled below for the winner): its first root in
+        // range, primitive 0.
+        r.tmax = best.t;
+        const SphereRoots roots_of = roots(sp.sphere, r);
+        const int k = first_root_in_range(roots_of, r);
+        if (k >= 0 && (!sphere_winner || best.beaten_by(roots_of.t[k], sp.object, 0))) {
+            best.t = roots_of.t[k];
+            best.t_err = roots_of.t_err;
+            best.u = best.v = 0.0;
+            best.object = sp.object;
+            best.primitive = 0;
+            best.front_face = true;
+            best.on_edge = false;
+            best.side = root_side(roots_of, k);
+            sphere_winner = &sp;
+        }
+    };
+    // The candidates' bits, lowest first (a sphere's bit k is its place in sphere_list_), then
+    // any sphere past the 32 the bits hold.
+    for (std::uint32_t bits = sphere_candidates(ray_in) & sphere_bits_; bits != 0; bits &= bits - 1)
+        sphere(sphere_list_[static_cast<std::size_t>(__builtin_ctz(bits))]);
+    for (std::size_t k = 32; k < sphere_list_.size(); ++k)
+        sphere(sphere_list_[k]);
     const Primitive* mesh_winner = nullptr;
     bool new_object = true;
-    const std::uint32_t candidates = sphere_candidates(ray_in);
     for (const Primitive& p : prims_) {
-        if (p.is_sphere) {
-            new_object = true;
-            if (!may_hit(candidates, p.index))
-                continue;
-            // intersect_sphere without the normal (filled below for the winner): its first
-            // root in range, primitive 0.
-            r.tmax = best.t;
-            const SphereRoots roots_of = roots(p.sphere, r);
-            const int k = first_root_in_range(roots_of, r);
-            if (k >= 0 && (!winner || best.beaten_by(roots_of.t[k], p.object, 0))) {
-                best.t = roots_of.t[k];
-                best.t_err = roots_of.t_err;
-                best.u = best.v = 0.0;
-                best.object = p.object;
-                best.primitive = 0;
-                best.front_face = true;
-                best.on_edge = false;
-                best.side = root_side(roots_of, k);
-                winner = &p;
-            }
-            continue;
-        }
         if (new_object) {
             mesh_best.t = best.t;
             mesh_winner = nullptr;
@@ -463,19 +467,21 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
         }
         new_object = p.last_of_object;
         if (p.last_of_object && mesh_winner &&
-            (!winner || best.beaten_by(mesh_best.t, mesh_best.object, mesh_best.primitive))) {
+            ((!winner && !sphere_winner) ||
+             best.beaten_by(mesh_best.t, mesh_best.object, mesh_best.primitive))) {
             best = mesh_best;
             winner = mesh_winner;
+            sphere_winner = nullptr;
         }
     }
-    if (!winner)
+    if (!winner && !sphere_winner)
         return false;
     // Written into the caller's Hit, for the stall that a Hit made here and copied out had
     // (Best's comment).
     best.put(out);
     if (want_normal) {
-        if (winner->is_sphere)
-            sphere_normal(winner->sphere, ray_in, out.t, best.side, out);
+        if (sphere_winner)
+            sphere_normal(sphere_winner->sphere, ray_in, out.t, best.side, out);
         else
             out.normal = winner->normal;
     }
@@ -483,14 +489,18 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
 }
 
 bool SceneScan::any(const Ray& ray) const {
-    const std::uint32_t candidates = sphere_candidates(ray);
-    for (const Primitive& p : prims_) {
-        if (p.is_sphere) {
-            if (may_hit(candidates, p.index) && first_root_in_range(roots(p.sphere, ray), ray) >= 0)
-                return true;
-        } else if (!left_behind<true>(p.plane, ray, p.tri.a) && hits_triangle(p.tri, ray)) {
+    for (std::uint32_t bits = sphere_candidates(ray) & sphere_bits_; bits != 0; bits &= bits - 1) {
+        const Sphere& s = sphere_list_[static_cast<std::size_t>(__builtin_ctz(bits))].sphere;
+        if (first_root_in_range(roots(s, ray), ray) >= 0)
             return true;
-        }
+    }
+    for (std::size_t k = 32; k < sphere_list_.size(); ++k) {
+        if (first_root_in_range(roots(sphere_list_[k].sphere, ray), ray) >= 0)
+            return true;
+    }
+    for (const Primitive& p : prims_) {
+        if (!left_behind<true>(p.plane, ray, p.tri.a) && hits_triangle(p.tri, ray))
+            return true;
     }
     return false;
 }

@@ -566,6 +566,46 @@ TEST(SceneScan, SpheresRuledOutBeforeTheKernelAreTheKernelsMisses) {
     EXPECT_TRUE(SceneScan(big, true).any(grazing));
 }
 
+// The scan tests the spheres before the meshes, whatever the objects' order: a sphere and a
+// triangle that a ray meets at exactly the same t (a plane tangent to the sphere where the ray
+// touches it, t = 4 in both kernels) go to the lower object in both orders, as `closer` and
+// linear_closest give them, at both precisions; rays beside that point are linear_closest's
+// bit for bit at exact. Fails if a mesh's hit stops being compared with a sphere found before
+// it, or if a sphere's normal is kept for a triangle that beat it.
+TEST(SceneScan, TiesBetweenASphereAndAMeshGoToTheLowerObject) {
+    const Object ball = sphere("ball", {0, 0, 0}, 1.0, 0);
+    const Object wall = mesh_object("wall", {{-1, -4, -4}, {-1, 4, -4}, {-1, 0, 4}}, {{0, 1, 2}});
+    for (const bool wall_first : {true, false}) {
+        Scene s;
+        s.materials.push_back(Material{});
+        s.objects.push_back(wall_first ? wall : ball);
+        s.objects.push_back(wall_first ? ball : wall);
+        const Ray tie{{-5, 0, 0}, {1, 0, 0}};
+        for (const bool fast : {false, true}) {
+            const SceneScan scan(s, fast);
+            const auto h = scan.closest(tie, true);
+            ASSERT_TRUE(h.has_value()) << wall_first << fast;
+            EXPECT_EQ(h->t, 4.0) << wall_first << fast;
+            EXPECT_EQ(h->object, 0u) << wall_first << fast;
+            // The wall's (b − a)×(c − a) is +x, the ball's outward normal there −x.
+            EXPECT_EQ(h->normal, (Vec3d{wall_first ? 1.0 : -1.0, 0, 0})) << wall_first << fast;
+            EXPECT_TRUE(scan.any(tie));
+        }
+        const SceneScan exact(s, /*fast=*/false);
+        expect_as_linear_scan(exact, s, tie, {true, false}, "the tie");
+        std::mt19937_64 rng(wall_first ? 3 : 4);
+        std::uniform_real_distribution<double> off(-1.0, 1.0);
+        for (int i = 0; i < 2000; ++i) {
+            // Beside the point of contact by 1e-12 to 1e-1, and some through the ball.
+            const double scale = std::pow(10.0, -1.0 - 11.0 * (i % 12) / 11.0);
+            Ray r{{-5, off(rng) * scale, off(rng) * scale}, {1, off(rng) * scale, 0}};
+            if (i % 5 == 0)
+                r.origin.y += 0.5;
+            expect_as_linear_scan(exact, s, r, {true, false}, std::to_string(i));
+        }
+    }
+}
+
 TEST(SceneScan, FortySpheresAreRuledOnUpToTheThirtySecond) {
     // Ten quads of spheres: the rule covers the first 32 (eight quads, bit k for sphere k) and
     // leaves the rest to the kernels. Rays from around and inside the cluster: every bit is the
