@@ -416,8 +416,8 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
     // linear_closest's loop, flattened: the best so far bounds each sphere and each mesh (tmax
     // inclusive, so that an exact tie with another object is still seen and `closer` decides
     // it); a mesh's own triangles narrow its bound further and keep the lower index on an exact
-    // tie. The spheres come first, then the meshes (prims_' comment says why the order does not
-    // change the answer). One copy of the ray, whose tmax is set to the bound before each test:
+    // tie. The spheres come first, then the meshes (prims_' comment says what the order changes:
+    // nothing at exact). One copy of the ray, whose tmax is set to the bound before each test:
     // two Rays copied whole (one per bound, and the second again at each mesh) read back 16
     // bytes at a time what had just been written 8 at a time, store-forwarding stalls that were
     // a fifth of this function's samples in the tutorial_like render (perf annotate).

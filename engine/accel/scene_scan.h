@@ -7,11 +7,12 @@
 // scene (four spheres and a floor) spends its time in the kernels rather than around them.
 //
 // At `exact` the answers are linear_closest's and linear_any's bit for bit: the same kernels
-// (sphere_roots, intersect_triangle), objects in index order, triangles in file order, the
-// same tie rules (`closer` across objects, strictly closer within one). At `fast` a sphere is
-// decided by the plain-double kernel (sphere_roots_fast), as fast's Embree path decides it,
-// and a triangle by Woop's watertight test with t from its own shear (intersect_triangle_fast,
-// no double-double plane crossing): still double, and within fast's error bounds.
+// (sphere_roots, intersect_triangle), the same tie rules (`closer` across objects, strictly
+// closer within one), each mesh's triangles in file order; the spheres are tested before the
+// meshes, which at exact does not change the answer (prims_). At `fast` a sphere is decided by
+// the plain-double kernel (sphere_roots_fast), as fast's Embree path decides it, and a triangle
+// by Woop's watertight test with t from its own shear (intersect_triangle_fast, no
+// double-double plane crossing): still double, and within fast's error bounds.
 
 #include <cstdint>
 #include <optional>
@@ -130,11 +131,16 @@ class SceneScan {
 
     SceneBall ball_;  ///< for far()
     /// The meshes' triangles, object by object, each mesh's in file order. The spheres are
-    /// tested first, each candidate only (sphere_candidates), and then the triangles: the
-    /// answers do not depend on the order (`closer` decides between objects, every bound is
-    /// inclusive), and a loop over every primitive had spent a test and a branch on each
-    /// sphere of every ray (in bench_render's tutorial_like, four spheres, of which most rays
-    /// are candidates for none).
+    /// tested first, each candidate only (sphere_candidates), and then the triangles, where a
+    /// loop over every primitive in object order had spent a test and a branch on each sphere
+    /// of every ray (in bench_render's tutorial_like, four spheres, of which most rays are
+    /// candidates for none). At exact the answer does not depend on the order: `closer`
+    /// decides between objects, and every bound is inclusive. At fast it can, within fast's
+    /// bounds, between a mesh listed before a sphere and that sphere where their crossings lie
+    /// within the fast kernels' error of each other: the mesh now gets the sphere's t as its
+    /// bound, and TrianglePlane::missed culls it by its exact crossing where the fast kernel's t
+    /// may come earlier (SceneScan.FastNearTiesOfAMeshListedBeforeASphereStayWithinTheBounds).
+    /// The spheres listed first, as in the bench's scenes, nothing changes.
     std::vector<Primitive> prims_;
     std::vector<ScanSphere> sphere_list_;  ///< the spheres, in object order
     /// Bit k set for each of the first 32 spheres (the bits sphere_candidates() holds).

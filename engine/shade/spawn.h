@@ -36,6 +36,13 @@ Vec3d float_tracer_error(const Vec3d& p, const FloatFrame& frame);
 
 namespace detail {
 
+/// moved_away's step where the sum is ±0, ±inf or NaN. Out of line and cold: inlined, GCC
+/// threaded its comparisons of the offset with zero into moved_away's common path and made
+/// branches of it again.
+[[gnu::noinline, gnu::cold]] inline double moved_away_rarely(double po, double offset) {
+    return offset > 0.0 ? next_up(po) : offset < 0.0 ? next_down(po) : po;
+}
+
 /// p + offset rounded once more away from p, so that the addition cannot land back inside the
 /// error box: next_up(p + offset) for a positive offset, next_down for a negative one, the
 /// sum itself for a zero one. Where p + offset is finite and not zero (every spawned origin but
@@ -47,13 +54,6 @@ namespace detail {
 /// offset_ray_origin with them, 28,399 with a branch on a zero offset alone, 117 without; and
 /// offset_ray_origin 100 times over 65,536 origins, half off a floor and half off random
 /// normals: 148–151 ms with the branches, 71–84 ms without, five alternating runs).
-/// moved_away's step where the sum is ±0, ±inf or NaN. Out of line and cold: inlined, GCC
-/// threaded its comparisons of the offset with zero into moved_away's common path and made
-/// branches of it again.
-[[gnu::noinline, gnu::cold]] inline double moved_away_rarely(double po, double offset) {
-    return offset > 0.0 ? next_up(po) : offset < 0.0 ? next_down(po) : po;
-}
-
 inline double moved_away(double p, double offset) {
     const double po = p + offset;
     std::uint64_t bits, offset_bits;

@@ -487,7 +487,7 @@ Vec3d Whitted::direct(const Surface& sp, RayCounts& counts, TreeNode* node, bool
         const std::uint32_t li = plan_.shadow_lights[k];
         const Light& light = s.lights[li];
         const ToLight t = traced ? traced[k] : towards_light(sp, light, k);
-        const Vec3d& l = t.l;  // normalised below, where the light counts
+        const Vec3d& l = t.l;  // unnormalised for a point light: unit_towards() below
         ShadowRayRecord rec;
         rec.light = li;
         rec.facing = t.facing;
