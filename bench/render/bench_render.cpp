@@ -285,12 +285,21 @@ int main(int argc, char** argv) {
             std::vector<double> pov_ms;
             std::vector<std::vector<double>> ms(variants.size());
             std::vector<engine::RenderResult> last(variants.size());
+            // The Duck preview's variant keeps its image for write_preview; the others' images
+            // (9 MB each at 1024×768) are dropped as soon as they are timed.
+            const auto is_preview = [&](const Variant& v) {
+                return name == "duck" && spp == 4 && v.p == engine::Precision::fast && v.batch &&
+                       !v.adaptive;
+            };
             for (int run = 0; run < a.runs; ++run) {
-                if (with_povray)
+                // A POV-Ray that failed once is not run again: the row reports no figure.
+                if (with_povray && std::count(pov_ms.begin(), pov_ms.end(), -1.0) == 0)
                     pov_ms.push_back(run_povray(a, scene_pov, w, h, spp));
                 for (std::size_t k = 0; k < variants.size(); ++k) {
                     last[k] = engine::render(*engine, options(variants[k])).value();
                     ms[k].push_back(last[k].render_ms);
+                    if (!is_preview(variants[k]))
+                        last[k].image = engine::Image();
                 }
             }
             // The median of --runs runs, POV-Ray's too (since 2026-12-05; before, POV-Ray ran
@@ -312,8 +321,7 @@ int main(int argc, char** argv) {
                     precision += ", single rays";
                 rows.push_back(
                     {name, precision, spp, m, r.counts.total() / m / 1e3, pov, r.counts});
-                if (name == "duck" && spp == 4 && v.p == engine::Precision::fast && v.batch &&
-                    !v.adaptive)
+                if (is_preview(v))
                     write_preview(a, r.image, extra);
             }
         }
