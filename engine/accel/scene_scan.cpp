@@ -300,10 +300,6 @@ std::uint32_t ruled_out_sse2(const detail::SphereQuad* quads, std::size_t n, con
     return out;
 }
 
-}  // namespace
-
-namespace {
-
 detail::RuledOut ruled_out_in(SceneScan::Lanes lanes) {
     return lanes == SceneScan::Lanes::four && SceneScan::widest_lanes() == SceneScan::Lanes::four
                ? ruled_out_avx

@@ -246,9 +246,9 @@ Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) con
 // direction with an infinite component (a light near double's range from the point) is not
 // facing, as its normalised form, NaN, was not: such a shadow ray would not be a valid ray.
 // The direction is normalised only where it is used, by direct() for a facing light whose
-// shadow ray is free (unit_towards): the shadow ray needs only the light's position, and in
-// the bench's tutorial_like render most of the point lights' directions were normalised for
-// nothing (a light behind the surface, or a blocked shadow ray).
+// shadow ray is free (unit_towards): the shadow ray needs only the light's position, and a
+// light behind the surface, or one whose shadow ray is blocked, had its direction normalised
+// for nothing.
 inline Whitted::ToLight Whitted::towards_light(const Surface& sp, const Light& light,
                                                std::size_t k) const {
     ToLight t;
