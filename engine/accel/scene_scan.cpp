@@ -335,9 +335,7 @@ std::uint32_t SceneScan::sphere_candidates(const Ray& ray, Lanes lanes) const {
     // docs/rendering.md.
     if (spheres_.empty())
         return ~std::uint32_t{0};
-    const SphereQuad* quads = spheres_.data();
-    const std::size_t n = std::min<std::size_t>(spheres_.size(), 8);
-    return ~(ruled_out_in(lanes)(quads, n, ray) & cullable_);
+    return ~(ruled_out_in(lanes)(spheres_.data(), quads_, ray) & cullable_);
 }
 
 SphereRoots SceneScan::roots(const Sphere& s, const Ray& ray) const {
