@@ -90,6 +90,9 @@ class ThreadScratch {
         kept.items.shrink_to_fit();
         kept.bytes = 0;
     }
+    /// What this thread keeps of T between leases (the bytes() of the Ts in its list): what
+    /// release_all() frees.
+    static std::size_t kept_bytes() { return this_thread().bytes; }
 
   private:
     struct Kept {

@@ -21,6 +21,7 @@ using Lease = ThreadScratch<Buffers>;
 TEST(ThreadScratch, LeasesAreReusedAndNeverShared) {
     Lease::release_all();
     const Buffers* first = nullptr;
+    std::size_t b_bytes = 0;
     {
         Lease a;
         first = &*a;
@@ -45,14 +46,19 @@ TEST(ThreadScratch, LeasesAreReusedAndNeverShared) {
         Lease c;
         EXPECT_NE(&*c, &*b);
         EXPECT_TRUE(c->v.empty());
+        b_bytes = capacity_bytes(b->v);
     }
     // Another thread has its own list.
     std::thread([&] {
         Lease d;
         EXPECT_TRUE(d->v.empty());
     }).join();
-    // release_all frees what the thread keeps: the next lease starts empty.
+    // kept_bytes counts what the thread keeps (b's allocation and c's none, given back), and
+    // release_all frees it: the next lease starts empty.
+    EXPECT_EQ(Lease::kept_bytes(), b_bytes);
+    EXPECT_GE(b_bytes, 150 * sizeof(double));
     Lease::release_all();
+    EXPECT_EQ(Lease::kept_bytes(), 0u);
     Lease e;
     EXPECT_TRUE(e->v.empty());
 }
@@ -75,9 +81,11 @@ TEST(ThreadScratch, WhatAThreadKeepsIsBounded) {
         slots(y->v, doubles * 2 / 5);
         slots(z->v, doubles * 2 / 5);
     }
+    EXPECT_EQ(Lease::kept_bytes(), 2 * (doubles * 2 / 5) * sizeof(double));
     Lease p, q, r;
     const int kept = !p->v.empty() + !q->v.empty() + !r->v.empty();
     EXPECT_EQ(kept, 2);
+    EXPECT_EQ(Lease::kept_bytes(), 0u);  // both leased out again
 }
 
 }  // namespace

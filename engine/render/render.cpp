@@ -384,6 +384,10 @@ std::size_t tile_count(const RenderOptions& o) {
     return tiles(o.width) * tiles(o.height);
 }
 
+std::size_t thread_scratch_bytes() {
+    return ThreadScratch<SampleScratch>::kept_bytes() + Whitted::thread_scratch_bytes();
+}
+
 Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& opt,
                             RenderProgress* progress) {
     const auto start = std::chrono::steady_clock::now();

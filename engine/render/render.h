@@ -87,4 +87,9 @@ std::size_t tile_count(const RenderOptions& options);
 Result<RenderResult> render(const QueryEngine& engine, const RenderOptions& options,
                             RenderProgress* progress = nullptr);
 
+/// The bytes of batch buffers (engine/thread_scratch.h) that the calling thread keeps for its
+/// next tiles: 0 once a render() called on this thread has returned, which frees them, so that
+/// a thread that asked for one render (an HTTP connection's) does not hold them until it exits.
+std::size_t thread_scratch_bytes();
+
 }  // namespace raycastd::engine

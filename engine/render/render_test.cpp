@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include "engine/geometry/target_clones.h"
 #include "engine/render/camera_rays.h"
@@ -600,6 +601,40 @@ TEST(Render, RaysInBatchesGiveTheImageOfSingleRays) {
         } else {
             EXPECT_LE(differ, batched.image.rgb.size() / 200);
         }
+    }
+}
+
+// A render frees the batch buffers its calling thread kept (engine/thread_scratch.h) when it
+// returns, cancelled or not: a server thread that asked for one render does not hold them
+// until it exits. In an arena of one thread the calling thread traces every tile, so that it
+// leases (and, without the release, would keep) both kinds of buffer: the camera samples'
+// and the shading batches'.
+TEST(Render, ReturnsWithTheCallingThreadsBatchBuffersFreed) {
+    Scene s = lit_spheres(0.4);
+    s.objects.push_back(testing::icosphere_object(2, {3.2, -1, 9}, 1.2));
+    s.objects.push_back(testing::cube_object(-6, -2.5));
+    auto engine = prepare(std::move(s));
+    ASSERT_FALSE(engine->brute_force());  // batches: a scanned scene traces ray by ray
+    tbb::task_arena one_thread(1);
+    for (bool cancelled : {false, true}) {
+        SCOPED_TRACE(cancelled ? "cancelled" : "finished");
+        RenderOptions o = small();
+        o.spp = 2;
+        RenderProgress progress;
+        if (cancelled) {
+            // Fired once a few tiles are done (as TokenFiredMidwayStopsTheRender): those
+            // tiles leased the buffers.
+            o.width = o.height = 512;
+            o.tile_size = 8;
+            o.cancel =
+                CancelToken::make(std::nullopt, [&] { return progress.tiles_done.load() >= 4; });
+        }
+        std::optional<Result<RenderResult>> r;
+        one_thread.execute([&] { r = render(*engine, o, &progress); });
+        ASSERT_TRUE(r.has_value());
+        EXPECT_EQ(r->ok(), !cancelled);
+        EXPECT_GT(progress.tiles_done.load(), 0u);
+        EXPECT_EQ(thread_scratch_bytes(), 0u);
     }
 }
 

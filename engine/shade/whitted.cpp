@@ -321,6 +321,10 @@ void Whitted::release_thread_scratch() {
     ThreadScratch<BatchScratch>::release_all();
 }
 
+std::size_t Whitted::thread_scratch_bytes() {
+    return ThreadScratch<BatchScratch>::kept_bytes();
+}
+
 void Whitted::shade_batch(const Ray* rays, const Hit* hits, std::size_t n, int depth, Vec3d* out,
                           RayCounts& counts) const {
     ThreadScratch<BatchScratch> scratch;

@@ -167,6 +167,8 @@ class Whitted {
     /// Frees the batch buffers shade_hits() keeps on the calling thread for its next batches
     /// (engine/thread_scratch.h: ThreadScratch::release_all).
     static void release_thread_scratch();
+    /// The bytes of those buffers the calling thread keeps (0 after release_thread_scratch()).
+    static std::size_t thread_scratch_bytes();
     /// The ray tree of one ray, with the blocking object of each shadow ray named;
     /// Code::cancelled once `cancel` has fired (it is asked once per node).
     Result<RayTree> tree(const Ray& ray, const CancelToken& cancel = {}) const;
