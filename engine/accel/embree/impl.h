@@ -76,6 +76,14 @@ struct Impl {
     void set_frame(const Bounds3& b);
     void build_exact() const;
     void build_fast() const;
+    // fast_scene() and exact_bvh() build on first use, often inside a task of a parallel batch
+    // or render, under call_once without tbb::this_task_arena::isolate (which PerObjectOnce
+    // needs, query/per_object_once.h): a thread waiting in a build's own parallel loop could
+    // otherwise take another task of the batch, which would call again on the flag it holds.
+    // Neither build can: exact's is serial, and Embree 3.13 runs rtcCommitScene's build in a
+    // tbb::isolated_task_group where TBB is 2019 Update 9 or later (Debian 12 has oneTBB
+    // 2021.8; Embree's TASKING_TBB_USE_TASK_ISOLATION: Debian's libembree3 imports TBB's
+    // isolate_within_arena, nm -D). A build made parallel here must isolate.
     /// The scene fast's closest and any trace: the non-robust one, or `native` if it could not
     /// be built.
     RTCScene fast_scene() const {
