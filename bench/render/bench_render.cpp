@@ -18,8 +18,11 @@
 // that scene and spp, so that both medians come from the same minutes of a shared host.
 //   bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke] [--write-pov DIR]
 //                [--scenes tutorial_like,duck] [--precisions refined,fast] [--single-rays]
+//                [--size WxH]
 // --write-pov writes each scene's .pov (1024×768) into DIR and renders nothing.
 // --single-rays adds rows with every ray traced one at a time (no batches, no packets).
+// --size renders at W×H instead of 1024×768 (--smoke: 128×96): a small render of the Duck for
+// callgrind, whose instruction counts are deterministic where this shared host's times are not.
 
 #include <algorithm>
 #include <chrono>
@@ -54,6 +57,7 @@ struct Args {
     /// Also render each case with every ray traced one at a time (the renderer before rays
     /// were traced generation by generation in packets), to measure what the batching gives.
     bool single_rays = false;
+    int width = 0, height = 0;  ///< --size (0: 1024×768, or --smoke's 128×96)
 };
 
 std::string read_file(const std::string& path) {
@@ -198,11 +202,17 @@ int main(int argc, char** argv) {
             a.scenes = argv[++i];
         } else if (s == "--precisions" && i + 1 < argc) {
             a.precisions = argv[++i];
+        } else if (s == "--size" && i + 1 < argc) {
+            if (std::sscanf(argv[++i], "%dx%d", &a.width, &a.height) != 2 || a.width < 1 ||
+                a.height < 1 || a.width > 8192 || a.height > 8192) {
+                std::cerr << "bench_render: --size takes WxH, each from 1 to 8192\n";
+                return 2;
+            }
         } else {
             std::cerr
                 << "usage: bench_render [--runs N] [--povray PATH|none] [--out FILE] [--smoke]\n"
                    "                    [--scenes tutorial_like,duck] [--precisions "
-                   "refined,fast] [--single-rays]\n";
+                   "refined,fast] [--single-rays] [--size WxH]\n";
             return 2;
         }
     }
@@ -216,7 +226,8 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    const int w = a.smoke ? 128 : 1024, h = a.smoke ? 96 : 768;
+    const int w = a.width > 0 ? a.width : a.smoke ? 128 : 1024;
+    const int h = a.height > 0 ? a.height : a.smoke ? 96 : 768;
     const std::vector<std::string> scenes = a.smoke
                                                 ? std::vector<std::string>{"tutorial_like"}
                                                 : std::vector<std::string>{"tutorial_like", "duck"};

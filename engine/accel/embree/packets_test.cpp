@@ -89,6 +89,10 @@ TEST(FastLanes, AvxFillsTheLanesOneByOneFills) {
             rays[rng() % m].tmax = 1e300;  // past float's range: +inf in both
         if (round % 11 == 5)
             rays[rng() % m].tmax = std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
+        if (round % 17 == 8)
+            rays[rng() % m].tmax = -1e300;  // an empty range, below float's: −inf in both
+        if (round % 19 == 9)
+            rays[rng() % m].tmax = -std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
         if (round % 13 == 6) {  // tnear past float's range too
             Ray& r = rays[rng() % m];
             r.tmin = std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
