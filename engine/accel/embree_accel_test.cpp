@@ -958,6 +958,84 @@ TEST(EmbreeAccel, RefinedRandomPacketsAnswerAsSingleRays) {
     EXPECT_GT(counts.retraced, 1000u);
 }
 
+// A deferred candidate that is a double hit within 1e-6 (in barycentrics) of an edge must send its
+// lane to a second traversal (settle_pending_lanes): a ray alone raises tfar past such a hit
+// (keep_if_closer), and a triangle crossed just before it, whose float t lies above the deferred
+// candidate's, is offered only then. A candidate is deferred only when Embree's float barycentrics
+// put it twice the widening (32 pads, here 7.1e-5) inside its widened triangle, more than the
+// widening inside the triangle itself: 72 times the 1e-6 band (9.8e-7 from the floor's edge ab
+// below). Only a grazing ray gets there, whose float crossing of the plane lies the float line's
+// offset (a few float ulps of the scene) over sin β from the double one. Rays here skim the floor
+// at sin β from 1e-6 to 1e-4 (in a probe, none above 1e-3 was deferred) and cross it in double
+// within 1e-6 of ab, from the inside outwards: a float crossing well inside is then earlier on the
+// ray by about the widening. Just before the edge, 2e-6 inside it, stands a wall, which every ray
+// crosses first, by far less than that: settled without the retrace, the floor would be the answer.
+// Every ray crosses both in double, the wall away from its edges, so every retraced lane here is a
+// deferred floor hit near its edge (656 of the 2,048 rays when written, all settled after the
+// traversal). A packet that kept the settled hit answered the floor on those 656 rays;
+// EmbreeAccel.RefinedRandomPacketsAnswerAsSingleRays passed with it.
+TEST(EmbreeAccel, RefinedPacketsRetraceDeferredHitsNearAnEdge) {
+    const Vec3d a{0, 0, 0}, b{1, 0.1, 0.05}, c{0.2, 1, -0.1};
+    const Triangle floor_tri{a, b, c};
+    const Vec3d n = normalize(cross(b - a, c - a));
+    const Vec3d along_edge = normalize(b - a);
+    const Vec3d inward = cross(n, along_edge);  // in the floor's plane, across ab towards c
+    const double edge = length(b - a);
+    const double altitude = length(cross(b - a, c - a)) / edge;  // of c over ab: v = 1 there
+    const Vec3d foot = a + inward * (2e-6 * altitude);
+    Scene s;
+    s.materials.push_back(Material{});
+    s.objects.push_back(testing::mesh_object("floor", {a, b, c}, {{0, 1, 2}}));
+    s.objects.push_back(testing::mesh_object(  // facing the rays (its normal along `inward`)
+        "wall",
+        {foot - along_edge * (0.5 * edge) - n * 0.2, foot + along_edge * (0.5 * edge) + n * 0.2,
+         foot + along_edge * (1.5 * edge) - n * 0.2},
+        {{0, 1, 2}}));
+    Built built = build(s);
+    ASSERT_TRUE(built.accel);
+    std::mt19937_64 rng(0x9a2e);
+    std::uniform_real_distribution<double> at(0.25, 0.75), inset(0.1, 0.9), log_sine(-6.0, -4.0),
+        sideways(0.3, 0.8);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 2048; ++i) {
+        // One draw a statement: the operands of + are evaluated in no set order.
+        const double where = at(rng), in_by = inset(rng) * 1e-6 * altitude;
+        const double lean = (i % 2 ? 1.0 : -1.0) * sideways(rng);
+        const double sine = std::pow(10.0, log_sine(rng));
+        // Crossing the floor at p, 1e-7 to 9e-7 of it from ab in barycentrics. Neighbouring
+        // lanes lean to opposite sides along the edge, 33° apart at least: no packet is flagged
+        // coherent (which would not defer).
+        const Vec3d p = a + (b - a) * where + inward * in_by;
+        const Vec3d d = -inward + along_edge * lean - n * sine;
+        rays.push_back(Ray{p - d * 2.0, d});
+    }
+    std::vector<Hit> packed(rays.size());
+    embree::deferral_counts() = {};
+    built.accel->closest_range(rays.data(), rays.size(), Precision::refined, true, packed.data());
+    const embree::DeferralCounts counts = embree::deferral_counts();
+    std::printf("[ info ] %llu of %zu grazing rays deferred a candidate, %llu retraced\n",
+                static_cast<unsigned long long>(counts.deferred), rays.size(),
+                static_cast<unsigned long long>(counts.retraced));
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto on_floor = intersect_triangle(floor_tri, rays[i]);
+        ASSERT_TRUE(on_floor && on_floor->v <= 1e-6) << i;  // v: the weight of c, 0 on ab
+        const auto one = built.accel->closest(rays[i], Precision::refined, true);
+        const auto exact = built.accel->closest(rays[i], Precision::exact, true);
+        ASSERT_TRUE(one && exact) << i;
+        ASSERT_EQ(exact->object, 1u) << i;  // the wall, crossed first
+        EXPECT_TRUE(std::min({exact->u, exact->v, 1.0 - exact->u - exact->v}) > 1e-6) << i;
+        EXPECT_TRUE(exact->front_face) << i;
+        const Hit& p = packed[i];
+        EXPECT_TRUE(testing::same_hit(*one, p))
+            << i << ": object " << one->object << "/" << p.object << ", primitive "
+            << one->primitive << "/" << p.primitive << ", t " << one->t << "/" << p.t << ", u "
+            << one->u << "/" << p.u << ", v " << one->v << "/" << p.v;
+        EXPECT_EQ(p.object, exact->object) << i;
+        EXPECT_EQ(p.primitive, exact->primitive) << i;
+    }
+    EXPECT_GT(counts.retraced, 300u);
+}
+
 // refined's widened triangles are not kept twice: Embree's leaves hold copies of their vertices,
 // so the buffers it built from are released after the build (embree/build_buffer.h) and no longer
 // counted. Released means mapped without access: every query of this file, and of the stress
