@@ -86,12 +86,19 @@ inline double moved_away(double p, double offset) {
 // caller copying it into its batch (those copies were the hottest stores of shade_batch on the
 // Duck, perf annotate); inline, a Duck render took 1–2% less time in paired runs.
 
-/// The origin for a ray leaving p (error `p_err`) in direction `w`: p moved along the unit
-/// geometric normal `n`, to the side of `w`, past the error box, rounded away from p.
-inline Vec3d offset_ray_origin(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
+/// Which side of the unit geometric normal `n` a ray leaving in direction `w` starts on:
+/// behind it (true) where w points against n.
+inline bool leaves_behind(const Vec3d& n, const Vec3d& w) {
+    return dot(w, n) < 0.0;
+}
+
+/// offset_ray_origin for a ray on the side `behind` says (leaves_behind): it depends on w only
+/// through that side, so that a surface point that sends several rays (a shadow ray to each
+/// light, a reflected ray) forms each side's origin once (Whitted's Surface keeps them).
+inline Vec3d offset_ray_origin_on(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, bool behind) {
     const double d = dot(abs(n), p_err);
     Vec3d offset = n * d;
-    if (dot(w, n) < 0.0)
+    if (behind)
         offset = -offset;
     // Component by component, not through an indexed loop over a Vec3d: GCC kept that one in
     // memory, and reading it back whole after writing one component stalled store forwarding
@@ -99,6 +106,43 @@ inline Vec3d offset_ray_origin(const Vec3d& p, const Vec3d& p_err, const Vec3d& 
     return {detail::moved_away(p.x, offset.x), detail::moved_away(p.y, offset.y),
             detail::moved_away(p.z, offset.z)};
 }
+
+/// The origin for a ray leaving p (error `p_err`) in direction `w`: p moved along the unit
+/// geometric normal `n`, to the side of `w`, past the error box, rounded away from p.
+inline Vec3d offset_ray_origin(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
+    return offset_ray_origin_on(p, p_err, n, leaves_behind(n, w));
+}
+
+/// offset_ray_origin's two answers for one point, each formed by the first ray that needs it:
+/// a shaded point sends a shadow ray to each facing light and a reflected ray, most of them from
+/// the side the normal points to, and each had formed the same origin again (offset_ray_origin
+/// had been 6–8% of the renders' instructions: callgrind of bench_render, 2026-12-08). Every
+/// call must pass the same p, p_err and n (Whitted's Surface keeps one for its point).
+class SpawnOrigins {
+  public:
+    /// Nothing formed. The origins themselves are left unset: set to zero with every shaded
+    /// point, as Vec3d's initialisers would, they had cost a Duck render more stores than
+    /// they saved.
+    SpawnOrigins() : formed_(0) {}
+
+    /// offset_ray_origin(p, p_err, n, w), bit for bit.
+    Vec3d towards(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
+        const unsigned side = leaves_behind(n, w) ? 1u : 0u;
+        double* const at = at_[side];
+        if (!(formed_ >> side & 1u)) {
+            const Vec3d o = offset_ray_origin_on(p, p_err, n, side != 0);
+            at[0] = o.x;
+            at[1] = o.y;
+            at[2] = o.z;
+            formed_ |= 1u << side;
+        }
+        return {at[0], at[1], at[2]};
+    }
+
+  private:
+    double at_[2][3];  ///< in front of n [0], behind it [1]; set where formed_ has the bit
+    unsigned formed_;
+};
 
 /// A ray leaving the hit in direction `w` (tmin 0, tmax ∞), written into `r`. A batch writes
 /// its rays in place this way: built on the stack and copied in, each was written in 8-byte
@@ -116,16 +160,21 @@ inline Ray spawn_ray(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const V
     return r;
 }
 
+/// The shadow ray of spawn_ray_to from its origin `o` (offset_ray_origin's for target − p).
+inline void spawn_ray_to_from(Ray& r, const Vec3d& o, const Vec3d& target) {
+    r.origin = o;
+    r.direction = target - o;
+    r.tmin = 0.0;
+    // Stop short of the light: something exactly at the light's position does not shadow it.
+    r.tmax = 1.0 - gamma(4);
+}
+
 /// A shadow ray from the hit towards the point `target` (a point light), written into `r`: the
 /// direction is target − origin and tmax is just below 1, so the segment stops short of the
 /// light itself.
 inline void spawn_ray_to(Ray& r, const Vec3d& p, const Vec3d& p_err, const Vec3d& n,
                          const Vec3d& target) {
-    r.origin = offset_ray_origin(p, p_err, n, target - p);
-    r.direction = target - r.origin;
-    r.tmin = 0.0;
-    // Stop short of the light: something exactly at the light's position does not shadow it.
-    r.tmax = 1.0 - gamma(4);
+    spawn_ray_to_from(r, offset_ray_origin(p, p_err, n, target - p), target);
 }
 
 inline Ray spawn_ray_to(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& target) {

@@ -109,5 +109,37 @@ TEST(Spawn, MovedAwayStepsAsNextUpAndNextDown) {
     EXPECT_EQ(checked, 200000 + 121 + 30);
 }
 
+// SpawnOrigins keeps each side's origin once formed: every ray of a point, in whatever order
+// its sides come (a shadow ray, a reflected ray, a refracted one behind the surface, another
+// shadow ray), gets offset_ray_origin's origin for its own direction, bit for bit. Points on a
+// floor (two zero normal components) and on random normals; directions on both sides and in
+// the plane (w·n = 0, in front as offset_ray_origin takes it).
+TEST(Spawn, OriginsFormedOnceASideAreOffsetRayOrigins) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const auto same = [](const Vec3d& a, const Vec3d& b) {
+        return std::memcmp(&a.x, &b.x, sizeof(double)) == 0 &&
+               std::memcmp(&a.y, &b.y, sizeof(double)) == 0 &&
+               std::memcmp(&a.z, &b.z, sizeof(double)) == 0;
+    };
+    int sides[2] = {0, 0};
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3d p{u(rng) * 8.0, i % 2 ? 0.0 : u(rng), u(rng) * 8.0};
+        const Vec3d n = i % 2 ? Vec3d{0, 1, 0} : normalize(Vec3d{u(rng), u(rng), u(rng)});
+        const Vec3d p_err = abs(p) * 4e-16 + Vec3d{1e-300, 1e-300, 1e-300};
+        SpawnOrigins origins;
+        for (int k = 0, rays = 1 + static_cast<int>(rng() % 6); k < rays; ++k) {
+            Vec3d w{u(rng), u(rng), u(rng)};
+            if (rng() % 8 == 0)
+                w = w - n * dot(w, n);  // along the plane, or as near as rounding leaves it
+            ++sides[leaves_behind(n, w) ? 1 : 0];
+            EXPECT_TRUE(same(origins.towards(p, p_err, n, w), offset_ray_origin(p, p_err, n, w)))
+                << "point " << i << ", ray " << k;
+        }
+    }
+    EXPECT_GT(sides[0], 20000);
+    EXPECT_GT(sides[1], 20000);
+}
+
 }  // namespace
 }  // namespace raycastd::engine

@@ -197,6 +197,11 @@ struct Whitted::Surface {
     Vec3d n;          ///< shading normal, on the same side
     Vec3d p_err;      ///< error bound of p (shade/spawn.h)
     bool camera_hit;  ///< depth 1: the camera ray's own hit
+    /// The robust origins of the rays leaving this point, each side's formed once (spawn.h).
+    mutable SpawnOrigins origins{};
+
+    /// offset_ray_origin(p, p_err, ng, w), bit for bit.
+    Vec3d origin_towards(const Vec3d& w) const { return origins.towards(p, p_err, ng, w); }
 };
 
 Whitted::Surface Whitted::surface(const Ray& ray, const Hit& hit, int depth) const {
@@ -265,7 +270,7 @@ inline Whitted::ToLight Whitted::towards_light(const Surface& sp, const Light& l
 inline void Whitted::shadow_ray(Ray& r, const Surface& sp, const Light& light,
                                 const Vec3d& l) const {
     if (light.type == LightType::point) {
-        spawn_ray_to(r, sp.p, sp.p_err, sp.ng, light.position);
+        spawn_ray_to_from(r, sp.origin_towards(light.position - sp.p), light.position);
     } else {
         spawn(r, sp, l);
     }
@@ -559,11 +564,17 @@ Whitted::SecondaryRays Whitted::secondary_rays(const Surface& sp) const {
 }
 
 Ray Whitted::spawn(const Surface& sp, const Vec3d& w) {
-    return spawn_ray(sp.p, sp.p_err, sp.ng, w);
+    Ray r;
+    spawn(r, sp, w);
+    return r;
 }
 
+// spawn_ray(r, sp.p, sp.p_err, sp.ng, w), with the surface's origin for w's side.
 void Whitted::spawn(Ray& r, const Surface& sp, const Vec3d& w) {
-    spawn_ray(r, sp.p, sp.p_err, sp.ng, w);
+    r.origin = sp.origin_towards(w);
+    r.direction = w;
+    r.tmin = 0.0;
+    r.tmax = kInfinity;
 }
 
 Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,
