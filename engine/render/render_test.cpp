@@ -1,5 +1,6 @@
 #include "engine/render/render.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -621,19 +622,22 @@ TEST(Render, ReturnsWithTheCallingThreadsBatchBuffersFreed) {
         RenderOptions o = small();
         o.spp = 2;
         RenderProgress progress;
-        if (cancelled) {
-            // Fired once a few tiles are done (as TokenFiredMidwayStopsTheRender): those
-            // tiles leased the buffers.
-            o.width = o.height = 512;
-            o.tile_size = 8;
-            o.cancel =
-                CancelToken::make(std::nullopt, [&] { return progress.tiles_done.load() >= 4; });
-        }
+        // What the calling thread kept between tiles, read by the token's poll, which the
+        // render asks between tiles on this (its only) thread: the buffers the test is about.
+        std::size_t kept_while_rendering = 0;
+        o.width = o.height = 256;  // tens of milliseconds: the poll is first asked after 10
+        o.tile_size = 8;
+        o.cancel = CancelToken::make(std::nullopt, [&] {
+            kept_while_rendering = std::max(kept_while_rendering, thread_scratch_bytes());
+            // Cancelled: fired once a few tiles are done (as TokenFiredMidwayStopsTheRender).
+            return cancelled && progress.tiles_done.load() >= 4;
+        });
         std::optional<Result<RenderResult>> r;
         one_thread.execute([&] { r = render(*engine, o, &progress); });
         ASSERT_TRUE(r.has_value());
         EXPECT_EQ(r->ok(), !cancelled);
         EXPECT_GT(progress.tiles_done.load(), 0u);
+        EXPECT_GT(kept_while_rendering, 0u);
         EXPECT_EQ(thread_scratch_bytes(), 0u);
     }
 }

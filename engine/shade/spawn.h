@@ -81,7 +81,7 @@ inline double moved_away(double p, double offset) {
 
 }  // namespace detail
 
-// The three below are inline: a renderer spawns millions of rays, and a Ray returned from a
+// Everything below is inline: a renderer spawns millions of rays, and a Ray returned from a
 // call in another file was written in 8-byte pieces and read back in 16-byte ones by the
 // caller copying it into its batch (those copies were the hottest stores of shade_batch on the
 // Duck, perf annotate); inline, a Duck render took 1–2% less time in paired runs.
@@ -115,14 +115,14 @@ inline Vec3d offset_ray_origin(const Vec3d& p, const Vec3d& p_err, const Vec3d& 
 
 /// offset_ray_origin's two answers for one point, each formed by the first ray that needs it:
 /// a shaded point sends a shadow ray to each facing light and a reflected ray, most of them from
-/// the side the normal points to, and each had formed the same origin again (offset_ray_origin
-/// had been 6–8% of the renders' instructions: callgrind of bench_render, 2026-12-08). Every
-/// call must pass the same p, p_err and n (Whitted's Surface keeps one for its point).
+/// the side the normal points to, and each had formed the same origin again (the spawns' lines
+/// were 8% of a Duck render's instructions: callgrind of bench_render, 2026-12-08). Every call
+/// must pass the same p, p_err and n (Whitted's Surface keeps one for its point).
 class SpawnOrigins {
   public:
     /// Nothing formed. The origins themselves are left unset: set to zero with every shaded
-    /// point, as Vec3d's initialisers would, they had cost a Duck render more stores than
-    /// they saved.
+    /// point, as Vec3d's initialisers would, the stores took back 26M of the 38M instructions
+    /// the cache saved in a 256×192 Duck render (callgrind).
     SpawnOrigins() : formed_(0) {}
 
     /// offset_ray_origin(p, p_err, n, w), bit for bit.
@@ -144,14 +144,20 @@ class SpawnOrigins {
     unsigned formed_;
 };
 
-/// A ray leaving the hit in direction `w` (tmin 0, tmax ∞), written into `r`. A batch writes
-/// its rays in place this way: built on the stack and copied in, each was written in 8-byte
-/// pieces and read back in 16-byte ones (shade_batch's hottest stores, perf annotate).
-inline void spawn_ray(Ray& r, const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
-    r.origin = offset_ray_origin(p, p_err, n, w);
+/// The ray of spawn_ray from its origin `o` (offset_ray_origin's for w), written into `r`: a
+/// batch writes its rays in place (Whitted::spawn, with its point's SpawnOrigins). Built on the
+/// stack and copied in, each was written in 8-byte pieces and read back in 16-byte ones
+/// (shade_batch's hottest stores, perf annotate).
+inline void spawn_ray_from(Ray& r, const Vec3d& o, const Vec3d& w) {
+    r.origin = o;
     r.direction = w;
     r.tmin = 0.0;
     r.tmax = kInfinity;
+}
+
+/// A ray leaving the hit in direction `w` (tmin 0, tmax ∞), written into `r`.
+inline void spawn_ray(Ray& r, const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {
+    spawn_ray_from(r, offset_ray_origin(p, p_err, n, w), w);
 }
 
 inline Ray spawn_ray(const Vec3d& p, const Vec3d& p_err, const Vec3d& n, const Vec3d& w) {

@@ -198,6 +198,8 @@ struct Whitted::Surface {
     Vec3d p_err;      ///< error bound of p (shade/spawn.h)
     bool camera_hit;  ///< depth 1: the camera ray's own hit
     /// The robust origins of the rays leaving this point, each side's formed once (spawn.h).
+    /// Mutable, and formed by const spawns: a Surface belongs to the thread that built it
+    /// (shade()'s local, or shade_batch's leased buffers, which its loops walk one at a time).
     mutable SpawnOrigins origins{};
 
     /// offset_ray_origin(p, p_err, ng, w), bit for bit.
@@ -571,10 +573,7 @@ Ray Whitted::spawn(const Surface& sp, const Vec3d& w) {
 
 // spawn_ray(r, sp.p, sp.p_err, sp.ng, w), with the surface's origin for w's side.
 void Whitted::spawn(Ray& r, const Surface& sp, const Vec3d& w) {
-    r.origin = sp.origin_towards(w);
-    r.direction = w;
-    r.tmin = 0.0;
-    r.tmax = kInfinity;
+    spawn_ray_from(r, sp.origin_towards(w), w);
 }
 
 Vec3d Whitted::indirect(const Surface& sp, int depth, RayCounts& counts, TreeBuild* tree,

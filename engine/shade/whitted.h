@@ -224,7 +224,8 @@ class Whitted {
                      RayCounts& counts) const;
     struct BatchScratch;  // shade_batch's buffers, reused batch after batch (whitted.cpp)
     SecondaryRays secondary_rays(const Surface& sp) const;
-    /// The ray leaving a surface point in direction `w` (spawn_ray from its robust origin).
+    /// The ray leaving a surface point in direction `w` (spawn_ray's, from the point's robust
+    /// origin for w's side, formed once a side: SpawnOrigins).
     static Ray spawn(const Surface& sp, const Vec3d& w);
     /// The same, written into `r` (a batch's own slot: spawn.h says why).
     static void spawn(Ray& r, const Surface& sp, const Vec3d& w);

@@ -62,9 +62,9 @@ static_assert(sizeof(Ray) == 8 * sizeof(double) && offsetof(Ray, direction) == 3
               "Ray's layout as fill_fast_lanes_avx reads it");
 
 /// to_float on four lanes: beyond float's range, ±∞. In bit operations on the comparisons'
-/// masks rather than _mm256_blendv_pd: GCC 12 (with LTO) turned the blends of a constant into
-/// four scalar branches a blend, 16 in fill_fast_lanes_avx, which callgrind counted at about
-/// 900 instructions a call of 16 rays in a Duck render (objdump showed no vblendvpd left).
+/// masks rather than _mm256_blendv_pd: GCC 12 (with LTO) turned each blend of a constant into
+/// four scalar branches, one per lane, 16 in fill_fast_lanes_avx, which callgrind counted at
+/// about 900 instructions a call of 16 rays in a Duck render (objdump showed no vblendvpd left).
 [[gnu::target("avx"), gnu::always_inline]] inline __m256d saturated_avx(__m256d t) {
     const __m256d above =
         _mm256_cmp_pd(t, _mm256_set1_pd(std::numeric_limits<float>::max()), _CMP_GT_OQ);

@@ -93,6 +93,11 @@ TEST(FastLanes, AvxFillsTheLanesOneByOneFills) {
             rays[rng() % m].tmax = -1e300;  // an empty range, below float's: −inf in both
         if (round % 19 == 9)
             rays[rng() % m].tmax = -std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
+        if (round % 23 == 10)  // exactly ±FLT_MAX in the frame (unit is a power of two): kept
+            rays[rng() % m].tmax =
+                (round % 2 ? 1.0 : -1.0) * std::numeric_limits<float>::max() / a.unit;
+        if (round % 29 == 11)  // NaN: neither beyond, left as it is
+            rays[rng() % m].tmax = std::numeric_limits<double>::quiet_NaN();
         if (round % 13 == 6) {  // tnear past float's range too
             Ray& r = rays[rng() % m];
             r.tmin = std::numeric_limits<float>::max() / a.unit * (1 + 1e-12);
