@@ -625,7 +625,7 @@ TEST(Render, ReturnsWithTheCallingThreadsBatchBuffersFreed) {
         // What the calling thread kept between tiles, read by the token's poll, which the
         // render asks between tiles on this (its only) thread: the buffers the test is about.
         std::size_t kept_while_rendering = 0;
-        o.width = o.height = 256;  // tens of milliseconds: the poll is first asked after 10
+        o.width = o.height = 256;  // tens of ms on one thread; the poll starts after 10 ms
         o.tile_size = 8;
         o.cancel = CancelToken::make(std::nullopt, [&] {
             kept_while_rendering = std::max(kept_while_rendering, thread_scratch_bytes());
