@@ -352,6 +352,19 @@ bool SceneScan::hits_triangle(const Triangle& tri, const Ray& ray) const {
                  : decide_triangle(tri, ray).has_value();
 }
 
+template <class F>
+bool SceneScan::find_sphere(const Ray& ray, F&& f) const {
+    for (std::uint32_t bits = sphere_candidates(ray) & sphere_bits_; bits != 0; bits &= bits - 1) {
+        if (f(sphere_list_[static_cast<std::size_t>(__builtin_ctz(bits))]))
+            return true;
+    }
+    for (std::size_t k = 32; k < sphere_list_.size(); ++k) {
+        if (f(sphere_list_[k]))
+            return true;
+    }
+    return false;
+}
+
 namespace {
 
 /// A closest hit being looked for, kept in scalars: whole Hits copied from the kernels' answers
@@ -419,9 +432,9 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
     Best best{ray_in.tmax}, mesh_best{ray_in.tmax};
     const ScanSphere* sphere_winner = nullptr;
     const Primitive* winner = nullptr;  // a triangle; at most one of the two is set
-    const auto sphere = [&](const ScanSphere& sp) {
-        // intersect_sphere without the normal (filled below for the winner): its first root in
-        // range, primitive 0.
+    // Each candidate sphere: intersect_sphere without the normal (filled below for the
+    // winner), its first root in range, primitive 0.
+    find_sphere(ray_in, [&](const ScanSphere& sp) {
         r.tmax = best.t;
         const SphereRoots roots_of = roots(sp.sphere, r);
         const int k = first_root_in_range(roots_of, r);
@@ -436,13 +449,8 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
             best.side = root_side(roots_of, k);
             sphere_winner = &sp;
         }
-    };
-    // The candidates' bits, lowest first (a sphere's bit k is its place in sphere_list_), then
-    // any sphere past the 32 the bits hold.
-    for (std::uint32_t bits = sphere_candidates(ray_in) & sphere_bits_; bits != 0; bits &= bits - 1)
-        sphere(sphere_list_[static_cast<std::size_t>(__builtin_ctz(bits))]);
-    for (std::size_t k = 32; k < sphere_list_.size(); ++k)
-        sphere(sphere_list_[k]);
+        return false;  // every candidate is tested
+    });
     const Primitive* mesh_winner = nullptr;
     bool new_object = true;
     for (const Primitive& p : prims_) {
@@ -483,15 +491,10 @@ bool SceneScan::closest(const Ray& ray_in, bool want_normal, Hit& out) const {
 }
 
 bool SceneScan::any(const Ray& ray) const {
-    for (std::uint32_t bits = sphere_candidates(ray) & sphere_bits_; bits != 0; bits &= bits - 1) {
-        const Sphere& s = sphere_list_[static_cast<std::size_t>(__builtin_ctz(bits))].sphere;
-        if (first_root_in_range(roots(s, ray), ray) >= 0)
-            return true;
-    }
-    for (std::size_t k = 32; k < sphere_list_.size(); ++k) {
-        if (first_root_in_range(roots(sphere_list_[k].sphere, ray), ray) >= 0)
-            return true;
-    }
+    if (find_sphere(ray, [&](const ScanSphere& sp) {
+            return first_root_in_range(roots(sp.sphere, ray), ray) >= 0;
+        }))
+        return true;
     for (const Primitive& p : prims_) {
         if (!left_behind<true>(p.plane, ray, p.tri.a) && hits_triangle(p.tri, ray))
             return true;

@@ -128,6 +128,11 @@ class SceneScan {
     /// Whether triangle() would hit, for `any`: at refined and exact decide_triangle, which
     /// decides as intersect_triangle without its plane crossing where Woop's t settles the range.
     bool hits_triangle(const Triangle& tri, const Ray& ray) const;
+    /// Calls `f(sphere)` on each sphere the ray may hit, in object order (the candidates among
+    /// the first 32, by their bits in sphere_candidates(), then every sphere past them), until
+    /// f returns true; returns whether it did. closest() and any() walk the spheres this way.
+    template <class F>
+    bool find_sphere(const Ray& ray, F&& f) const;
 
     SceneBall ball_;  ///< for far()
     /// The meshes' triangles, object by object, each mesh's in file order. The spheres are

@@ -272,7 +272,8 @@ inline Whitted::ToLight Whitted::towards_light(const Surface& sp, const Light& l
 inline void Whitted::shadow_ray(Ray& r, const Surface& sp, const Light& light,
                                 const Vec3d& l) const {
     if (light.type == LightType::point) {
-        spawn_ray_to_from(r, sp.origin_towards(light.position - sp.p), light.position);
+        // l is light.position − sp.p (towards_light), spawn_ray_to's own target − p.
+        spawn_ray_to_from(r, sp.origin_towards(l), light.position);
     } else {
         spawn(r, sp, l);
     }
