@@ -64,9 +64,9 @@ constexpr Sizes kFull{"full", 6, 200, 4, 1000, 1024, std::size_t{1} << 20, 1.5, 
 constexpr Sizes kQuick{"quick", 4, 50, 3, 200, 256, std::size_t{1} << 16, 0.3, 3};
 constexpr Sizes kSmoke{"smoke", 2, 8, 1, 20, 64, 4096, 0.02, 1};
 
-constexpr std::uint64_t kFieldSeed = 0x5eed0001;
-constexpr std::uint64_t kSphereSeed = 0x5eed0002;
-constexpr std::uint64_t kRaySeed = 0x5eed0003;
+using rb::kFieldSeed;
+using rb::kRaySeed;
+using rb::kSphereSeed;
 constexpr std::uint32_t kMiss = 0xFFFFFFFFu;
 /// The smoke test fails below this agreement with Embree. Not 1: Embree's single-precision test
 /// and the engine may legitimately disagree on rays that graze an edge or a silhouette.

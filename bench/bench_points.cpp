@@ -74,7 +74,7 @@ struct Sizes {
 constexpr Sizes kFull{"full", 6, 200, 4, std::size_t{1} << 20};
 constexpr Sizes kQuick{"quick", 4, 50, 3, std::size_t{1} << 16};
 constexpr Sizes kSmoke{"smoke", 3, 8, 2, 4096};
-constexpr std::uint64_t kFieldSeed = 0x5eed0001;  // bench_intersect's workload B
+using rb::kFieldSeed;  // bench_intersect's workload B
 constexpr std::uint64_t kPointSeed = 0x5eed0018;
 /// Calls timed on A, ours and the peers': the median of this many after a warm-up.
 constexpr int kPeerReps = 3;

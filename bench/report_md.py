@@ -673,6 +673,7 @@ bench/run_all.py --quick                              # small sizes, ~1 min; wri
 bench/run_all.py --wait-quiet 10                      # first wait (up to 10 min) for the load average to fall below 1
 bench/run_all.py --render-only build/release/bench/data-full/results.json   # re-render, measure nothing
 ctest --test-dir build/release -R bench_smoke         # < 1 s: the intersect bench on tiny sizes
+ctest --test-dir build/release -R bench_probe_smoke   # < 1 s: the probe's batches against single rays
 ```
 `run_all.py` builds nothing and must run under Debian's `/usr/bin/python3` (its shebang). Pieces
 run alone: `build/release/bench/bench_intersect [--quick|--smoke] [--workloads AB] [--json F]
@@ -680,7 +681,14 @@ run alone: `build/release/bench/bench_intersect [--quick|--smoke] [--workloads A
 `LD_PRELOAD=build/release/bench/libembree_mask_shim.so bench/peers/open3d_peer.py --data-dir D
 --workload A` (Open3D, on files `bench_intersect --data-dir D` wrote);
 `build/release/bench/bench_http_load --port P --path /v1/scenes/ID/intersect --body-file F`
-(small requests against a running server). Every intermediate file, including `results.json`
+(small requests against a running server);
+`build/release/bench/bench_probe [--workload A|B|C] [--rays camera|random] [--precision P]
+[--mode closest|any] [--repeats N] [--threads N] [--check]` (one ray set through one precision,
+one thread by default: the best and median of N batches, and the hits and sum of t to compare
+two builds' answers by; `--check` asks every ray again alone and fails at `exact` on any
+difference. A change to one path is judged by two builds' probes run in turn: on this host a
+figure moves by ±20% from minute to minute, and bench_intersect's rows share both cores).
+Every intermediate file, including `results.json`
 with every figure, goes to `build/release/bench/data-<preset>/` and is never committed."""
 
 COLUMNS = """\

@@ -27,6 +27,12 @@ struct RayRecord {
 };
 static_assert(sizeof(RayRecord) == 32, "RayRecord must match the binary API record");
 
+/// The seeds of bench_intersect's workloads B and C and of its random rays, which bench_points
+/// and bench_probe make again.
+constexpr std::uint64_t kFieldSeed = 0x5eed0001;
+constexpr std::uint64_t kSphereSeed = 0x5eed0002;
+constexpr std::uint64_t kRaySeed = 0x5eed0003;
+
 /// The far end of every generated ray. Finite, because JSON cannot carry +inf; far beyond any
 /// workload, so it clips nothing.
 constexpr float kRayTmax = 1e30f;
