@@ -47,26 +47,17 @@ using nlohmann::json;
 
 namespace {
 
-/// The sizes of one preset.
-struct Sizes {
+/// The sizes of one preset: its workloads' and ray sets' (rb::WorkloadSizes), and its timing.
+struct Sizes : rb::WorkloadSizes {
     const char* name;
-    int ico_level;            ///< A: 20·4^level triangles
-    int field_count;          ///< B: this many icospheres ...
-    int field_level;          ///< ... of this level
-    int spheres;              ///< C
-    int image;                ///< coherent rays: image × image pixels
-    std::size_t random_rays;  ///< incoherent rays
-    double budget_s;          ///< per engine measurement
-    int reps;                 ///< timed repetitions of each raw Embree measurement
+    double budget_s;  ///< per engine measurement
+    int reps;         ///< timed repetitions of each raw Embree measurement
 };
 
-constexpr Sizes kFull{"full", 6, 200, 4, 1000, 1024, std::size_t{1} << 20, 1.5, 5};
-constexpr Sizes kQuick{"quick", 4, 50, 3, 200, 256, std::size_t{1} << 16, 0.3, 3};
-constexpr Sizes kSmoke{"smoke", 2, 8, 1, 20, 64, 4096, 0.02, 1};
+constexpr Sizes kFull{rb::kFullSizes, "full", 1.5, 5};
+constexpr Sizes kQuick{rb::kQuickSizes, "quick", 0.3, 3};
+constexpr Sizes kSmoke{rb::kSmokeSizes, "smoke", 0.02, 1};
 
-using rb::kFieldSeed;
-using rb::kRaySeed;
-using rb::kSphereSeed;
 constexpr std::uint32_t kMiss = 0xFFFFFFFFu;
 /// The smoke test fails below this agreement with Embree. Not 1: Embree's single-precision test
 /// and the engine may legitimately disagree on rays that graze an edge or a silhouette.
@@ -422,29 +413,11 @@ double bench_engine(Report& report, const rb::Workload& w, const std::string& ra
     return worst;
 }
 
-rb::Workload make_workload(char name, const Sizes& s) {
-    switch (name) {
-        case 'A':
-            return rb::make_icosphere(s.ico_level);
-        case 'B':
-            return rb::make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
-        default:
-            return rb::make_sphere_field(s.spheres, kSphereSeed);
-    }
-}
-
 bool write_workload_files(const std::string& dir, const rb::Workload& w) {
     const std::string stem = dir + "/" + w.name;
     if (!w.spheres.empty())
         return rb::write_sphere_scene(stem + "_scene.json", w);
     return rb::write_ply(stem + ".ply", w) && rb::write_mesh_arrays(stem, w);
-}
-
-/// Everything for one workload. Returns false on an error that makes its figures meaningless.
-std::vector<rb::RayRecord> make_rays(const rb::Workload& w, const std::string& rays_name,
-                                     const Sizes& s) {
-    return rays_name == "coherent" ? rb::camera_rays(w, s.image, s.image)
-                                   : rb::random_rays(w, s.random_rays, kRaySeed);
 }
 
 /// --ceiling-only: raw rtcIntersect1 on both ray sets and nothing else, so that run_all.py can
@@ -458,7 +431,7 @@ bool bench_ceiling_only(Report& report, const rb::Workload& w, const Args& args)
     }
     report.meta()["workloads"][w.name] = {{"description", w.description}};
     for (const std::string rays_name : {"coherent", "incoherent"}) {
-        const auto rays = make_rays(w, rays_name, args.sizes);
+        const auto rays = rb::ray_set(w, rays_name == "coherent", args.sizes);
         rb::RawHits hits;
         hits.prepare(rays.size());
         const double s = rb::median_seconds(3, [&] { embree->intersect1(rays, hits); });
@@ -470,6 +443,7 @@ bool bench_ceiling_only(Report& report, const rb::Workload& w, const Args& args)
 
 void bench_memory(Report& report, const std::string& self, const Sizes& sizes, char name);
 
+/// Everything for one workload. Returns false on an error that makes its figures meaningless.
 bool bench_workload(Report& report, const rb::Workload& w, const Args& args, double& worst) {
     const Sizes& s = args.sizes;
     json& meta = report.meta()["workloads"][w.name];
@@ -535,7 +509,7 @@ bool bench_workload(Report& report, const rb::Workload& w, const Args& args, dou
     }
 
     for (const std::string rays_name : {"coherent", "incoherent"}) {
-        const auto rays = make_rays(w, rays_name, s);
+        const auto rays = rb::ray_set(w, rays_name == "coherent", s);
         meta["rays"][rays_name] = rays.size();
         const RaySetRefs refs = bench_raw(report, w, rays_name, rays, *embree, *robust, s.reps);
         if (!args.data_dir.empty()) {
@@ -571,7 +545,7 @@ bool trim_heap() {
 /// as one JSON line. A small scene is built and queried first, so that Embree's device, TBB's
 /// threads and the allocator's first arenas are not counted.
 int memory_probe(char name, const Sizes& sizes, bool trimmed) {
-    const rb::Workload warm = make_workload('A', kSmoke);
+    const rb::Workload warm = rb::make_workload('A', kSmoke);
     const re::Ray probe{{0.0, 0.0, -10.0}, {0.0, 0.0, 1.0}};
     for (re::Precision p : {re::Precision::refined, re::Precision::exact}) {
         auto e =
@@ -579,7 +553,7 @@ int memory_probe(char name, const Sizes& sizes, bool trimmed) {
         if (e.ok())
             (*e)->intersect({probe}, re::QueryOptions{re::Mode::closest, p});
     }
-    const rb::Workload w = make_workload(name, sizes);
+    const rb::Workload w = rb::make_workload(name, sizes);
     const auto bs = w.bounding_sphere();
     const re::Ray ray{{bs[0], bs[1], bs[2] - 2.0 * bs[3]}, {0.0, 0.0, 1.0}};
     // `trimmed` (--memory-probe-trimmed): the heap freed so far given back before the first
@@ -660,7 +634,7 @@ int main(int argc, char** argv) {
     double worst = 1.0;
     bool ok = true;
     for (char name : args.workloads) {
-        const rb::Workload w = make_workload(name, args.sizes);
+        const rb::Workload w = rb::make_workload(name, args.sizes);
         std::printf("-- %s: %s\n", w.name.c_str(), w.description.c_str());
         ok = (args.ceiling_only ? bench_ceiling_only(report, w, args)
                                 : bench_workload(report, w, args, worst)) &&

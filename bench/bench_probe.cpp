@@ -12,19 +12,23 @@
 //   bench_probe [--workload A|B|C] [--rays camera|random] [--precision fast|refined|exact]
 //               [--mode closest|any] [--repeats N] [--threads N] [--quick|--smoke] [--check]
 //
-//   --check    the same rays are then asked one at a time (a batch of one each), and the probe
-//              exits 1 where any answer differs from the batch's in t, object or primitive. At
-//              `exact` they must agree bit for bit (a batch walks its rays in packets, a single
-//              ray alone: EmbreeAccel.PacketsAgreeWithSingleRays); at `fast` and `refined` a
-//              packet's float traversal may settle a graze differently, so the count is printed
-//              and only `exact` fails on it. CTest runs it on tiny sizes (bench_probe_smoke_*).
+//   --check    every ray is then asked again on its own, through QueryEngine::closest (or
+//              ::occluded for --mode any), the single-ray entry points that trace no packet
+//              and walk no group, and the probe exits 1 where any answer differs from the
+//              batch's in t, object or primitive (or in blocked for any) at `exact`, where they
+//              must agree bit for bit (EmbreeAccel.PacketsAgreeWithSingleRays). At `fast` and
+//              `refined` a packet's float traversal may settle a graze differently, so the count
+//              is printed and does not fail. CTest runs it on tiny sizes (bench_probe_smoke_*).
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,26 +43,14 @@ namespace re = raycastd::engine;
 
 namespace {
 
-/// bench_intersect's sizes (its kFull, kQuick and kSmoke).
-struct Sizes {
-    int ico_level;
-    int field_count, field_level;
-    int spheres;
-    int image;
-    std::size_t random_rays;
-};
-constexpr Sizes kFull{6, 200, 4, 1000, 1024, std::size_t{1} << 20};
-constexpr Sizes kQuick{4, 50, 3, 200, 256, std::size_t{1} << 16};
-constexpr Sizes kSmoke{2, 8, 1, 20, 64, 4096};
-
 struct Args {
-    std::string workload = "A";
+    char workload = 'A';
     std::string rays = "random";
     re::Precision precision = re::Precision::exact;
     re::Mode mode = re::Mode::closest;
     int repeats = 5;
     int threads = 1;
-    Sizes sizes = kFull;
+    rb::WorkloadSizes sizes = rb::kFullSizes;
     bool check = false;
 };
 
@@ -72,12 +64,13 @@ struct Args {
     std::exit(2);
 }
 
-/// A positive integer, the whole argument (so "5x" and "0" are refused).
-int positive(const char* s) {
+/// The value of `option`, a positive integer up to 10⁶, the whole argument (so "5x" and "0" are
+/// refused).
+int positive(const std::string& option, const char* s) {
     char* end = nullptr;
     const long v = std::strtol(s, &end, 10);
     if (end == s || *end != '\0' || v < 1 || v > 1000000)
-        usage("expected a positive integer");
+        usage((option + " takes a whole number from 1 to 1000000").c_str());
     return static_cast<int>(v);
 }
 
@@ -102,9 +95,10 @@ Args parse(int argc, char** argv) {
             return argv[++i];
         };
         if (arg == "--workload") {
-            a.workload = value();
-            if (a.workload != "A" && a.workload != "B" && a.workload != "C")
+            const std::string w = value();
+            if (w != "A" && w != "B" && w != "C")
                 usage("--workload is A, B or C");
+            a.workload = w[0];
         } else if (arg == "--rays") {
             a.rays = value();
             if (a.rays != "camera" && a.rays != "random")
@@ -120,13 +114,13 @@ Args parse(int argc, char** argv) {
                 named<re::Mode>(value(), {{"closest", re::Mode::closest}, {"any", re::Mode::any}},
                                 "--mode is closest or any");
         } else if (arg == "--repeats") {
-            a.repeats = positive(value());
+            a.repeats = positive(arg, value());
         } else if (arg == "--threads") {
-            a.threads = positive(value());
+            a.threads = positive(arg, value());
         } else if (arg == "--quick") {
-            a.sizes = kQuick;
+            a.sizes = rb::kQuickSizes;
         } else if (arg == "--smoke") {
-            a.sizes = kSmoke;
+            a.sizes = rb::kSmokeSizes;
         } else if (arg == "--check") {
             a.check = true;
         } else {
@@ -136,27 +130,34 @@ Args parse(int argc, char** argv) {
     return a;
 }
 
-rb::Workload make_workload(const Args& a) {
-    if (a.workload == "A")
-        return rb::make_icosphere(a.sizes.ico_level);
-    if (a.workload == "B")
-        return rb::make_icosphere_field(a.sizes.field_count, a.sizes.field_level, rb::kFieldSeed);
-    return rb::make_sphere_field(a.sizes.spheres, rb::kSphereSeed);
-}
-
-/// What the probe prints of a batch's answers: hits, and the sum of their t (closest only).
+/// What the probe prints of a batch's answers: the hits, the sum of their t (closest only), and
+/// a hash of every answer's validity, object, primitive and t bits (FNV-1a), which tells two
+/// builds' answers apart where the sums agree (two hits swapped, a primitive for its neighbour).
 struct Checksum {
     std::size_t hits = 0;
     double t_sum = 0.0;
+    std::uint64_t hash = 0xcbf29ce484222325u;
+
+    void add(std::uint64_t v) {
+        for (int byte = 0; byte < 8; ++byte) {
+            hash ^= (v >> (8 * byte)) & 0xFFu;
+            hash *= 0x100000001b3u;
+        }
+    }
 };
 
 Checksum checksum(const std::vector<re::Hit>& hits) {
     Checksum c;
     for (const re::Hit& h : hits) {
-        if (h.valid()) {
-            ++c.hits;
-            c.t_sum += h.t;
-        }
+        c.add(h.valid() ? 1u : 0u);
+        if (!h.valid())
+            continue;
+        ++c.hits;
+        c.t_sum += h.t;
+        std::uint64_t t_bits;
+        std::memcpy(&t_bits, &h.t, sizeof t_bits);
+        c.add(t_bits);
+        c.add(std::uint64_t{h.object} << 32 | h.primitive);
     }
     return c;
 }
@@ -167,10 +168,13 @@ int main(int argc, char** argv) {
     const Args a = parse(argc, argv);
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 static_cast<std::size_t>(a.threads));
-    const rb::Workload w = make_workload(a);
-    const std::vector<re::Ray> rays = rb::to_engine_rays(
-        a.rays == "camera" ? rb::camera_rays(w, a.sizes.image, a.sizes.image)
-                           : rb::random_rays(w, a.sizes.random_rays, rb::kRaySeed));
+    const rb::Workload w = rb::make_workload(a.workload, a.sizes);
+    const std::vector<re::Ray> rays =
+        rb::to_engine_rays(rb::ray_set(w, a.rays == "camera", a.sizes));
+    if (rays.empty()) {
+        std::fprintf(stderr, "bench_probe: the ray set is empty\n");
+        return 1;
+    }
     auto built = re::QueryEngine::build(std::make_shared<const re::Scene>(rb::to_engine_scene(w)));
     if (!built.ok()) {
         std::fprintf(stderr, "bench_probe: QueryEngine::build: %s\n",
@@ -179,48 +183,51 @@ int main(int argc, char** argv) {
     }
     const re::QueryEngine& engine = **built;
     const re::QueryOptions opt{a.mode, a.precision, /*want_normal=*/true};
-    // The first query of a precision builds what it needs (exact's or fast's BVH): not timed.
+    // One batch untimed: the first query of a precision builds what it needs (exact's or fast's
+    // BVH), and the answer's buffers reach their size, so that no timed batch pays their page
+    // faults (72 MB of hits for 1M rays).
     re::QueryResult out;
-    if (!engine.intersect({rays.front()}, opt, out).ok())
-        return 1;
     std::vector<double> seconds;
-    for (int r = 0; r < a.repeats; ++r) {
+    for (int r = 0; r <= a.repeats; ++r) {
         const auto start = std::chrono::steady_clock::now();
         const re::Status s = engine.intersect(rays, opt, out);
-        seconds.push_back(
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        const double t =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (!s.ok()) {
             std::fprintf(stderr, "bench_probe: intersect: %s\n", s.message.c_str());
             return 1;
         }
+        if (r > 0)
+            seconds.push_back(t);
     }
     std::sort(seconds.begin(), seconds.end());
     const double n = static_cast<double>(rays.size());
     const Checksum c = checksum(out.hits);
     std::printf(
-        "%s %s rays (%zu), %s %s, %d thread%s: best %.3f Mrays/s, median %.3f of %d; "
+        "%c %s rays (%zu), %s %s, %d thread%s: best %.3f Mrays/s, median %.3f of %d; "
         "%zu hits",
-        a.workload.c_str(), a.rays.c_str(), rays.size(), re::to_string(a.precision),
-        re::to_string(a.mode), a.threads, a.threads == 1 ? "" : "s", n / seconds.front() / 1e6,
+        a.workload, a.rays.c_str(), rays.size(), re::to_string(a.precision), re::to_string(a.mode),
+        a.threads, a.threads == 1 ? "" : "s", n / seconds.front() / 1e6,
         n / seconds[seconds.size() / 2] / 1e6, a.repeats, c.hits);
     // An `any` answer says only whether the ray is blocked (its t is not a distance).
     if (a.mode == re::Mode::closest)
         std::printf(", sum of t %.17g", c.t_sum);
-    std::printf("\n");
+    std::printf(", answers' hash %016llx\n", static_cast<unsigned long long>(c.hash));
     if (!a.check)
         return 0;
     std::size_t differ = 0;
-    re::QueryResult one;
     for (std::size_t i = 0; i < rays.size(); ++i) {
-        if (!engine.intersect({rays[i]}, opt, one).ok())
-            return 1;
         const re::Hit& b = out.hits[i];
-        const re::Hit& s = one.hits.front();
-        if (b.valid() != s.valid() ||
-            (b.valid() && (b.t != s.t || b.object != s.object || b.primitive != s.primitive)))
+        if (a.mode == re::Mode::any) {
+            differ += b.valid() != engine.occluded(rays[i], a.precision) ? 1 : 0;
+            continue;
+        }
+        const std::optional<re::Hit> h = engine.closest(rays[i], a.precision, opt.want_normal);
+        if (b.valid() != h.has_value() ||
+            (h && (b.t != h->t || b.object != h->object || b.primitive != h->primitive)))
             ++differ;
     }
-    std::printf("one ray at a time: %zu of %zu answers differ from the batch's\n", differ,
+    std::printf("each ray on its own: %zu of %zu answers differ from the batch's\n", differ,
                 rays.size());
     return differ > 0 && a.precision == re::Precision::exact ? 1 : 0;
 }

@@ -551,7 +551,8 @@ ISSUE_17_NOTE = (
     "rounding can move a ray, and a hit filter decides every float candidate in double, so a "
     "float miss no longer needs the exact BVH (docs/numerics.md). Since the night of "
     "2026-12-06 the filter decides a packet's lanes on one triangle four at a time in AVX2 "
-    "(bit for bit as one at a time), which took it past Open3D on camera rays. On random rays "
+    "(bit for bit as one at a time), which took A's camera rays past Open3D; B's have stayed "
+    "just below it (0.92-0.95× Open3D in the runs of 2026-12-07 and 08). On random rays "
     "a call has one lane, and what still separates refined from Open3D, which is raw float "
     "Embree, is that double decision of each candidate and of the answer: the double "
     "triangle's read alone was 12% of refined's time there (perf, 1M rays on A), a cache miss "
@@ -562,7 +563,10 @@ ISSUE_17_NOTE = (
     "cache) did not move. On B Open3D runs at 0.8-0.95× raw Embree, and refined's ROBUST "
     "traversal alone at 0.85-0.98×; its own work (the clipped ray's set-up, the double "
     "decision, the answer) makes most of the rest (one thread, 1M random rays: 3.0 Mrays/s "
-    "against `fast`'s 4.9; docs/numerics.md). "
+    "against `fast`'s 4.9; docs/numerics.md). In the run of 2026-12-08 Open3D read 0.87× (A) "
+    "and 0.95× (B) `rtcIntersect1` on random rays, above the 0.80× and 0.86× of the ROBUST "
+    "traversal that refined's float pass rides on: there refined would miss the target even "
+    "with its double decisions free. "
     "`exact` decides every candidate in double; "
     "since 2026-12-06 its BVH is our own (eight-wide, a leaf's primitive in its parent's child "
     "code) instead of Embree's user geometry, with its bottom nodes full and quantized since "
@@ -575,15 +579,15 @@ ISSUE_17_NOTE = (
     "misses and the double decision of the answer. Since the morning of 2026-12-07 a walk that "
     "meets several children of a node prefetches them, which took B's random rays, whose walk "
     "reads ~51 MB, more than the cache, from 0.48-0.49× to 0.55-0.58× in paired runs; A's "
-    "random rows, whose ~4 MB fit, have read 0.43-0.54× from run to run with or without it "
+    "random rows, whose ~4 MB fit, have read 0.41-0.54× from run to run with or without it "
     "(docs/numerics.md). Since the afternoon of 2026-12-07 the release build links with LTO "
     "(CMakeLists.txt, docs/testing.md): three alternating pairs of `bench_intersect "
     "--workloads A --modes closest` without and with it put `exact`'s camera rays at 7.55-7.65 "
-    "→ 8.19-8.34 Mrays/s, `fast` and `refined` unchanged within the host's noise. The run "
-    "above was on a host slower than the one before it (raw `rtcIntersect16` on A's camera "
-    "rays 51.8 against 65.3 Mrays/s), which moves the ratios against `rtcIntersect1` too: "
-    "`fast`'s coherent rows read 2.67× and 1.86× where the earlier run read 3.21× and 2.14×, "
-    "with the same code on those paths. "
+    "→ 8.19-8.34 Mrays/s, `fast` and `refined` unchanged within the host's noise. The host "
+    "moves every row: raw `rtcIntersect16` on A's camera rays has read from 49.8 to 65.3 "
+    "Mrays/s in the runs of 2026-12-06 to 08 with the same Embree, and the ratios against "
+    "`rtcIntersect1` move with it (`fast`'s coherent row on A from 2.42× to 3.21×, with the "
+    "same code on that path). "
     "The memory row is the resident growth of a process of its own (`bench_intersect "
     "--memory-probe W`) from before the scene is made to after one `refined` and one `exact` "
     "query: the scene's vertices and indices (~24 B a triangle), the native BVH over the "
@@ -683,10 +687,10 @@ run alone: `build/release/bench/bench_intersect [--quick|--smoke] [--workloads A
 `build/release/bench/bench_http_load --port P --path /v1/scenes/ID/intersect --body-file F`
 (small requests against a running server);
 `build/release/bench/bench_probe [--workload A|B|C] [--rays camera|random] [--precision P]
-[--mode closest|any] [--repeats N] [--threads N] [--check]` (one ray set through one precision,
-one thread by default: the best and median of N batches, and the hits and sum of t to compare
-two builds' answers by; `--check` asks every ray again alone and fails at `exact` on any
-difference. A change to one path is judged by two builds' probes run in turn: on this host a
+[--mode closest|any] [--repeats N] [--threads N] [--quick|--smoke] [--check]` (one ray set
+through one precision, one thread by default: the best and median of N batches, and the hits,
+sum of t and a hash of the answers to compare two builds' answers by; `--check` asks every ray
+again on its own and fails at `exact` on any difference. A change to one path is judged by two builds' probes run in turn: on this host a
 figure moves by ±20% from minute to minute, and bench_intersect's rows share both cores).
 Every intermediate file, including `results.json`
 with every figure, goes to `build/release/bench/data-<preset>/` and is never committed."""

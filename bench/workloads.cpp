@@ -268,6 +268,21 @@ std::vector<RayRecord> random_rays(const Workload& w, std::size_t n, std::uint64
     return rays;
 }
 
+Workload make_workload(char name, const WorkloadSizes& s) {
+    switch (name) {
+        case 'A':
+            return make_icosphere(s.ico_level);
+        case 'B':
+            return make_icosphere_field(s.field_count, s.field_level, kFieldSeed);
+        default:
+            return make_sphere_field(s.spheres, kSphereSeed);
+    }
+}
+
+std::vector<RayRecord> ray_set(const Workload& w, bool coherent, const WorkloadSizes& s) {
+    return coherent ? camera_rays(w, s.image, s.image) : random_rays(w, s.random_rays, kRaySeed);
+}
+
 engine::Scene to_engine_scene(const Workload& w) {
     engine::Scene scene;
     scene.materials.push_back(engine::Material{});

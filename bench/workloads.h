@@ -33,6 +33,20 @@ constexpr std::uint64_t kFieldSeed = 0x5eed0001;
 constexpr std::uint64_t kSphereSeed = 0x5eed0002;
 constexpr std::uint64_t kRaySeed = 0x5eed0003;
 
+/// The sizes of the workloads and their ray sets in one of bench_intersect's presets (the full
+/// run, --quick, --smoke), which bench_probe takes too.
+struct WorkloadSizes {
+    int ico_level;            ///< A: 20·4^level triangles
+    int field_count;          ///< B: this many icospheres ...
+    int field_level;          ///< ... of this level
+    int spheres;              ///< C
+    int image;                ///< coherent rays: image × image pixels
+    std::size_t random_rays;  ///< incoherent rays
+};
+constexpr WorkloadSizes kFullSizes{6, 200, 4, 1000, 1024, std::size_t{1} << 20};
+constexpr WorkloadSizes kQuickSizes{4, 50, 3, 200, 256, std::size_t{1} << 16};
+constexpr WorkloadSizes kSmokeSizes{2, 8, 1, 20, 64, 4096};
+
 /// The far end of every generated ray. Finite, because JSON cannot carry +inf; far beyond any
 /// workload, so it clips nothing.
 constexpr float kRayTmax = 1e30f;
@@ -74,6 +88,11 @@ std::vector<RayRecord> camera_rays(const Workload& w, int width, int height);
 std::vector<RayRecord> random_rays(const Workload& w, std::size_t n, std::uint64_t seed);
 
 /// The workload as an engine scene: one mesh object (A, B) or one object per sphere (C).
+/// Workload 'A', 'B' or 'C' (any other letter: C) at sizes `s`, with the seeds above.
+Workload make_workload(char name, const WorkloadSizes& s);
+/// Its camera rays (`coherent`) or its random rays at sizes `s`.
+std::vector<RayRecord> ray_set(const Workload& w, bool coherent, const WorkloadSizes& s);
+
 engine::Scene to_engine_scene(const Workload& w);
 
 /// The rays as engine rays (floats widened to double, exactly).
