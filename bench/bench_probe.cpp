@@ -5,9 +5,10 @@
 // a run's figures move by ±20% from minute to minute (docs/benchmarks.md). A change to one path
 // is better judged on that path alone, with two builds run alternately: the probe times one
 // QueryEngine::intersect batch at a time, reusing its answer's buffers (no page faults in the
-// timing), and prints the number of hits and the sum of their t, so that two builds that must
-// answer alike can be seen to (docs/numerics.md reports its figures as "the single-threaded
-// probe"). It uses bench_intersect's workloads, seeds and sizes.
+// timing), and prints the number of hits, the sum of their t and a hash of every answer, so
+// that two builds that must answer alike can be seen to (docs/numerics.md reports its figures
+// as "the single-threaded probe"). It uses bench_intersect's workloads, seeds and sizes
+// (bench/workloads.h).
 //
 //   bench_probe [--workload A|B|C] [--rays camera|random] [--precision fast|refined|exact]
 //               [--mode closest|any] [--repeats N] [--threads N] [--quick|--smoke] [--check]
@@ -74,7 +75,7 @@ int positive(const std::string& option, const char* s) {
     return static_cast<int>(v);
 }
 
-/// The value of `names` whose name is `s`.
+/// The value of `names` whose name is `s`; usage(why) where none is.
 template <class T>
 T named(const std::string& s, std::initializer_list<std::pair<const char*, T>> names,
         const char* why) {
