@@ -1,6 +1,7 @@
 #include "bench/workloads.h"
 
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <utility>
 
@@ -121,6 +122,27 @@ TEST(EngineScene, CarriesTheSameGeometry) {
     const engine::Scene t = to_engine_scene(spheres);
     EXPECT_EQ(t.sphere_count(), 5u);
     EXPECT_EQ(t.objects[4].sphere.radius, double{spheres.spheres[4][3]});
+}
+
+// The presets' workloads and ray sets, as bench_intersect and bench_probe make them: the sizes
+// each preset gives, and the seeds that make every program's B, C and random rays the same ones.
+TEST(Presets, MakeTheirWorkloadsAndRaySets) {
+    const WorkloadSizes& s = kSmokeSizes;
+    const Workload a = make_workload('A', s);
+    EXPECT_EQ(a.triangles.size(), 20u * 16u);  // 20·4^2
+    const Workload b = make_workload('B', s);
+    EXPECT_EQ(b.triangles.size(), 8u * 80u);  // 8 icospheres of level 1
+    EXPECT_EQ(b.positions, make_icosphere_field(8, 1, kFieldSeed).positions);
+    const Workload c = make_workload('C', s);
+    ASSERT_EQ(c.spheres.size(), 20u);
+    EXPECT_EQ(c.spheres, make_sphere_field(20, kSphereSeed).spheres);
+    EXPECT_EQ(ray_set(a, /*coherent=*/true, s).size(), 64u * 64u);
+    const std::vector<RayRecord> random = ray_set(b, /*coherent=*/false, s);
+    ASSERT_EQ(random.size(), 4096u);
+    const std::vector<RayRecord> again = random_rays(b, 4096, kRaySeed);
+    EXPECT_EQ(std::memcmp(random.data(), again.data(), random.size() * sizeof(RayRecord)), 0);
+    EXPECT_EQ(make_workload('A', kQuickSizes).triangles.size(), 20u * 256u);  // 20·4^4
+    EXPECT_EQ(kFullSizes.random_rays, std::size_t{1} << 20);
 }
 
 }  // namespace
