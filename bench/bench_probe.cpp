@@ -22,7 +22,6 @@
 //              is printed and does not fail. CTest runs it on tiny sizes (bench_probe_smoke_*).
 
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -36,6 +35,7 @@
 
 #include <tbb/global_control.h>
 
+#include "bench/timing.h"
 #include "bench/workloads.h"
 #include "engine/query/intersect.h"
 
@@ -188,28 +188,26 @@ int main(int argc, char** argv) {
     // BVH), and the answer's buffers reach their size, so that no timed batch pays their page
     // faults (72 MB of hits for 1M rays).
     re::QueryResult out;
-    std::vector<double> seconds;
+    std::vector<double> times;
     for (int r = 0; r <= a.repeats; ++r) {
-        const auto start = std::chrono::steady_clock::now();
-        const re::Status s = engine.intersect(rays, opt, out);
-        const double t =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        re::Status s;
+        const double t = rb::seconds([&] { s = engine.intersect(rays, opt, out); });
         if (!s.ok()) {
             std::fprintf(stderr, "bench_probe: intersect: %s\n", s.message.c_str());
             return 1;
         }
         if (r > 0)
-            seconds.push_back(t);
+            times.push_back(t);
     }
-    std::sort(seconds.begin(), seconds.end());
+    std::sort(times.begin(), times.end());
     const double n = static_cast<double>(rays.size());
     const Checksum c = checksum(out.hits);
     std::printf(
         "%c %s rays (%zu), %s %s, %d thread%s: best %.3f Mrays/s, median %.3f of %d; "
         "%zu hits",
         a.workload, a.rays.c_str(), rays.size(), re::to_string(a.precision), re::to_string(a.mode),
-        a.threads, a.threads == 1 ? "" : "s", n / seconds.front() / 1e6,
-        n / seconds[seconds.size() / 2] / 1e6, a.repeats, c.hits);
+        a.threads, a.threads == 1 ? "" : "s", n / times.front() / 1e6,
+        n / times[times.size() / 2] / 1e6, a.repeats, c.hits);
     // An `any` answer says only whether the ray is blocked (its t is not a distance).
     if (a.mode == re::Mode::closest)
         std::printf(", sum of t %.17g", c.t_sum);
